@@ -1,0 +1,61 @@
+//! Typed integrator errors.
+
+/// What went wrong, independent of the integrator.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ErrorKind {
+    /// The step budget (`max_steps`) ran out before the output time.
+    #[error("too much work: max_steps reached before the output time (raise max_steps)")]
+    TooMuchWork,
+    /// The requested accuracy is below what double precision allows at this state.
+    #[error("accuracy not attainable: tolerances too tight for double precision (loosen rtol/atol)")]
+    AccuracyNotAttainable,
+    /// The local error test failed repeatedly, or with |h| = min_step.
+    #[error("repeated local error-test failures (singularity or tolerances too tight?)")]
+    ErrorTestFailures,
+    /// The nonlinear (Newton) solver failed to converge repeatedly.
+    #[error("repeated nonlinear convergence failures")]
+    ConvergenceFailures,
+    /// The linear solver failed (e.g. a singular iteration matrix).
+    #[error("linear solver failure")]
+    LinearSolver,
+    /// The right-hand side failed (returned non-finite values) unrecoverably or repeatedly.
+    #[error("right-hand side failure (non-finite values that a smaller step did not cure)")]
+    RhsFailure,
+    /// The root (event) function failed or returned non-finite values.
+    #[error("root-function failure")]
+    RootFunctionFailure,
+    /// The step fell below the floating-point spacing of t ("t + h = t").
+    #[error("step underflow: t + h = t (the step is below the spacing of t; re-base time)")]
+    StepUnderflow,
+    /// A user callback panicked; the panic message is in the error message.
+    #[error("a user callback panicked")]
+    CallbackPanic,
+    /// Invalid input (options, initial state, output time, dense-output request).
+    #[error("invalid input")]
+    InvalidInput,
+    /// Any other failure reported by the integrator (the code is in the message).
+    #[error("integrator failure")]
+    Other,
+}
+
+/// A failed integration: what, where (t and state) and the integrator's own message.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{solver} failed at t = {t:e} (state {state:?}): {kind}{}", detail(.message))]
+pub struct SolverError {
+    /// Integrator name, e.g. "CVODE" or "ARKStep".
+    pub solver: &'static str,
+    /// Classification of the failure.
+    pub kind: ErrorKind,
+    /// Time reached when the failure occurred.
+    pub t: f64,
+    /// State at `t` (empty when no state was available).
+    pub state: Vec<f64>,
+    /// The integrator's return code (0 when the error was raised before calling it).
+    pub flag: i32,
+    /// The integrator's message, or ours.
+    pub message: String,
+}
+
+fn detail(message: &str) -> String {
+    if message.is_empty() { String::new() } else { format!(" — {message}") }
+}

@@ -1,0 +1,43 @@
+//! The integration contract shared by every integrator (SUNDIALS' CVODE and ARKODE today, the
+//! homemade methods later): what a problem provides, which options a solver takes, the
+//! statistics it reports and the typed errors it returns.
+
+mod error;
+mod options;
+mod problem;
+mod stats;
+
+pub use error::{ErrorKind, SolverError};
+pub use options::{Options, Tolerance};
+pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
+pub use stats::Stats;
+
+/// How far one call to a solver's `advance` goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Task {
+    /// Integrate past `tout` internally and return the solution interpolated at `tout`.
+    Normal,
+    /// Take one internal step and return.
+    OneStep,
+}
+
+/// Why a call to `advance` returned.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StepEvent {
+    /// `tout` (task [`Task::Normal`]) or the end of one internal step (task [`Task::OneStep`]).
+    Reached,
+    /// The stop time was reached exactly.
+    StopTime,
+    /// One or more root functions changed sign. For each root function: `0` no root,
+    /// `+1` rising through zero, `-1` falling through zero.
+    Root(Vec<i32>),
+}
+
+/// The outcome of one successful call to `advance`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// Time of the returned state.
+    pub t: f64,
+    /// Why the call returned.
+    pub event: StepEvent,
+}

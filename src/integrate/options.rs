@@ -1,0 +1,116 @@
+//! Options common to all integrators.
+
+/// Absolute tolerance: one value for every component, or one per component.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Tolerance {
+    /// The same absolute tolerance for every component.
+    Scalar(f64),
+    /// One absolute tolerance per component (length = system dimension).
+    PerComponent(Vec<f64>),
+}
+
+/// Integrator options. `None` keeps the integrator's own default.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Relative tolerance (> 0).
+    pub rtol: f64,
+    /// Absolute tolerance (≥ 0, finite).
+    pub atol: Tolerance,
+    /// Maximum number of internal steps per call to `advance` (SUNDIALS default: 500).
+    pub max_steps: Option<i64>,
+    /// Maximum method order (CVODE: ≤ 5 for BDF, ≤ 12 for Adams).
+    pub max_order: Option<i32>,
+    /// First step size to try.
+    pub initial_step: Option<f64>,
+    /// Lower bound on |h|.
+    pub min_step: Option<f64>,
+    /// Upper bound on |h|.
+    pub max_step: Option<f64>,
+    /// Time the integrator must not step past.
+    pub stop_time: Option<f64>,
+    /// Maximum error-test failures in one step.
+    pub max_err_test_fails: Option<i32>,
+    /// Maximum nonlinear iterations per step attempt.
+    pub max_nonlin_iters: Option<i32>,
+    /// Maximum nonlinear convergence failures in one step.
+    pub max_conv_fails: Option<i32>,
+    /// Safety factor in the nonlinear convergence test.
+    pub nonlin_conv_coef: Option<f64>,
+    /// When true, a step below the spacing of t ("t + h = t") makes `advance` fail with
+    /// [`crate::integrate::ErrorKind::StepUnderflow`]; when false it is counted in
+    /// [`crate::integrate::Stats::step_underflow_warnings`] and integration goes on.
+    pub fail_on_step_underflow: bool,
+}
+
+impl Options {
+    /// Options with the given tolerances and every other setting at its default.
+    pub fn new(rtol: f64, atol: Tolerance) -> Self {
+        Self {
+            rtol,
+            atol,
+            max_steps: None,
+            max_order: None,
+            initial_step: None,
+            min_step: None,
+            max_step: None,
+            stop_time: None,
+            max_err_test_fails: None,
+            max_nonlin_iters: None,
+            max_conv_fails: None,
+            nonlin_conv_coef: None,
+            fail_on_step_underflow: true,
+        }
+    }
+
+    /// Checks the options against a system of dimension `dim`; the error names the field.
+    pub fn validate(&self, dim: usize) -> Result<(), String> {
+        if !(self.rtol.is_finite() && self.rtol > 0.0) {
+            return Err(format!("rtol = {} must be finite and > 0 (e.g. 1e-8)", self.rtol));
+        }
+        match &self.atol {
+            Tolerance::Scalar(a) if !(a.is_finite() && *a >= 0.0) => {
+                return Err(format!("atol = {a} must be finite and ≥ 0"));
+            }
+            Tolerance::PerComponent(v) if v.len() != dim => {
+                return Err(format!("atol has {} components; the system has {dim}", v.len()));
+            }
+            Tolerance::PerComponent(v) if v.iter().any(|a| !(a.is_finite() && *a >= 0.0)) => {
+                return Err(format!("atol = {v:?}: every component must be finite and ≥ 0"));
+            }
+            _ => {}
+        }
+        let positive = [
+            ("initial_step", self.initial_step),
+            ("min_step", self.min_step),
+            ("max_step", self.max_step),
+            ("nonlin_conv_coef", self.nonlin_conv_coef),
+        ];
+        for (name, value) in positive {
+            if let Some(v) = value {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(format!("{name} = {v} must be finite and > 0"));
+                }
+            }
+        }
+        if let Some(t) = self.stop_time {
+            if !t.is_finite() {
+                return Err(format!("stop_time = {t} must be finite"));
+            }
+        }
+        let counts = [
+            ("max_order", self.max_order.map(i64::from)),
+            ("max_err_test_fails", self.max_err_test_fails.map(i64::from)),
+            ("max_nonlin_iters", self.max_nonlin_iters.map(i64::from)),
+            ("max_conv_fails", self.max_conv_fails.map(i64::from)),
+            ("max_steps", self.max_steps),
+        ];
+        for (name, value) in counts {
+            if let Some(v) = value {
+                if v < 1 {
+                    return Err(format!("{name} = {v} must be ≥ 1"));
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,114 @@
+//! What a problem provides to an integrator.
+
+/// An ODE system dy/dt = f(t, y) of fixed dimension.
+///
+/// Requirements: `rhs` must be a pure function of `(t, y)`. Writing a non-finite value is
+/// allowed: the integrator treats it as a recoverable failure and retries with a smaller step,
+/// and reports a typed error if that does not help.
+pub trait OdeSystem {
+    /// Number of components of y.
+    fn dim(&self) -> usize;
+
+    /// Writes f(t, y) into `dydt`.
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+
+    /// Whether [`OdeSystem::jacobian`] is implemented. When false, implicit solvers build the
+    /// Jacobian by finite differences.
+    fn has_jacobian(&self) -> bool {
+        false
+    }
+
+    /// Writes ∂f/∂y at (t, y) into `jac` (which arrives zeroed). Called only when
+    /// [`OdeSystem::has_jacobian`] returns true.
+    fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut JacobianMatrix<'_>) {}
+}
+
+/// A system split as f = f_E + f_I for implicit–explicit (IMEX) methods: f_E is integrated
+/// explicitly (non-stiff part), f_I implicitly (stiff part).
+pub trait ImexSystem: OdeSystem {
+    /// Writes the explicit (non-stiff) part f_E(t, y).
+    fn rhs_explicit(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+
+    /// Writes the implicit (stiff) part f_I(t, y).
+    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]);
+
+    /// Whether [`ImexSystem::implicit_jacobian`] is implemented (finite differences otherwise).
+    fn has_implicit_jacobian(&self) -> bool {
+        false
+    }
+
+    /// Writes ∂f_I/∂y into `jac` (which arrives zeroed).
+    fn implicit_jacobian(&self, _t: f64, _y: &[f64], _jac: &mut JacobianMatrix<'_>) {}
+}
+
+/// A dense square matrix in column-major storage, as handed to a Jacobian callback.
+#[derive(Debug)]
+pub struct JacobianMatrix<'a> {
+    data: &'a mut [f64],
+    n: usize,
+}
+
+impl<'a> JacobianMatrix<'a> {
+    /// Wraps column-major storage of an `n`×`n` matrix.
+    ///
+    /// # Panics
+    /// If `data.len() != n * n`.
+    pub fn new(data: &'a mut [f64], n: usize) -> Self {
+        assert_eq!(data.len(), n * n, "JacobianMatrix storage must hold n*n values");
+        Self { data, n }
+    }
+
+    /// Matrix dimension n.
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Sets entry (row, col) = ∂f_row/∂y_col.
+    pub fn set(&mut self, row: usize, col: usize, value: f64) {
+        self.data[col * self.n + row] = value;
+    }
+
+    /// Entry (row, col).
+    pub fn get(&self, row: usize, col: usize) -> f64 {
+        self.data[col * self.n + row]
+    }
+
+    /// Whether every entry is finite.
+    pub fn is_finite(&self) -> bool {
+        self.data.iter().all(|v| v.is_finite())
+    }
+}
+
+/// A vector-valued root (event) function g(t, y): writes one value per root into its last
+/// argument. A root is located where a component changes sign.
+pub type RootFunction = Box<dyn FnMut(f64, &[f64], &mut [f64])>;
+
+/// Root functions and the crossing directions to report.
+pub struct Roots {
+    /// Number of components of g.
+    pub count: usize,
+    /// Per component: `+1` report only rising crossings, `-1` only falling ones, `0` both.
+    /// Empty means "both" for every component.
+    pub directions: Vec<i32>,
+    /// The root function g(t, y).
+    pub function: RootFunction,
+}
+
+impl Roots {
+    /// Root functions reporting crossings in both directions.
+    pub fn new(count: usize, function: impl FnMut(f64, &[f64], &mut [f64]) + 'static) -> Self {
+        Self { count, directions: Vec::new(), function: Box::new(function) }
+    }
+
+    /// Restricts the reported crossing directions (one entry per component).
+    pub fn with_directions(mut self, directions: Vec<i32>) -> Self {
+        self.directions = directions;
+        self
+    }
+}
+
+impl std::fmt::Debug for Roots {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Roots").field("count", &self.count).field("directions", &self.directions).finish()
+    }
+}

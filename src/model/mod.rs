@@ -1,0 +1,3 @@
+//! Models: ODE systems with their Jacobians and events.
+
+pub mod robertson;

@@ -1,0 +1,317 @@
+//! ARKODE's ARKStep: diagonally implicit (DIRK), implicit–explicit (IMEX) and explicit (ERK)
+//! Runge–Kutta methods with embedded error estimates.
+
+use super::callbacks;
+use super::ffi;
+use super::solver::{Api, Creation, Solver};
+use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
+use std::ffi::{c_int, c_long, c_void};
+
+/// Implicit (DIRK) Butcher tables of the linked ARKODE, by name without the `ARKODE_` prefix.
+const DIRK_TABLES: &[(&str, c_int)] = &[
+    ("SDIRK_2_1_2", ffi::ARKODE_DIRKTableID_ARKODE_SDIRK_2_1_2),
+    ("BILLINGTON_3_3_2", ffi::ARKODE_DIRKTableID_ARKODE_BILLINGTON_3_3_2),
+    ("TRBDF2_3_3_2", ffi::ARKODE_DIRKTableID_ARKODE_TRBDF2_3_3_2),
+    ("KVAERNO_4_2_3", ffi::ARKODE_DIRKTableID_ARKODE_KVAERNO_4_2_3),
+    ("ARK324L2SA_DIRK_4_2_3", ffi::ARKODE_DIRKTableID_ARKODE_ARK324L2SA_DIRK_4_2_3),
+    ("CASH_5_2_4", ffi::ARKODE_DIRKTableID_ARKODE_CASH_5_2_4),
+    ("CASH_5_3_4", ffi::ARKODE_DIRKTableID_ARKODE_CASH_5_3_4),
+    ("SDIRK_5_3_4", ffi::ARKODE_DIRKTableID_ARKODE_SDIRK_5_3_4),
+    ("KVAERNO_5_3_4", ffi::ARKODE_DIRKTableID_ARKODE_KVAERNO_5_3_4),
+    ("ARK436L2SA_DIRK_6_3_4", ffi::ARKODE_DIRKTableID_ARKODE_ARK436L2SA_DIRK_6_3_4),
+    ("KVAERNO_7_4_5", ffi::ARKODE_DIRKTableID_ARKODE_KVAERNO_7_4_5),
+    ("ARK548L2SA_DIRK_8_4_5", ffi::ARKODE_DIRKTableID_ARKODE_ARK548L2SA_DIRK_8_4_5),
+    ("ARK437L2SA_DIRK_7_3_4", ffi::ARKODE_DIRKTableID_ARKODE_ARK437L2SA_DIRK_7_3_4),
+    ("ARK548L2SAb_DIRK_8_4_5", ffi::ARKODE_DIRKTableID_ARKODE_ARK548L2SAb_DIRK_8_4_5),
+    ("ESDIRK324L2SA_4_2_3", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK324L2SA_4_2_3),
+    ("ESDIRK325L2SA_5_2_3", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK325L2SA_5_2_3),
+    ("ESDIRK32I5L2SA_5_2_3", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK32I5L2SA_5_2_3),
+    ("ESDIRK436L2SA_6_3_4", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK436L2SA_6_3_4),
+    ("ESDIRK43I6L2SA_6_3_4", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK43I6L2SA_6_3_4),
+    ("QESDIRK436L2SA_6_3_4", ffi::ARKODE_DIRKTableID_ARKODE_QESDIRK436L2SA_6_3_4),
+    ("ESDIRK437L2SA_7_3_4", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK437L2SA_7_3_4),
+    ("ESDIRK547L2SA_7_4_5", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK547L2SA_7_4_5),
+    ("ESDIRK547L2SA2_7_4_5", ffi::ARKODE_DIRKTableID_ARKODE_ESDIRK547L2SA2_7_4_5),
+];
+
+/// Explicit (ERK) Butcher tables of the linked ARKODE, by name without the `ARKODE_` prefix.
+const ERK_TABLES: &[(&str, c_int)] = &[
+    ("HEUN_EULER_2_1_2", ffi::ARKODE_ERKTableID_ARKODE_HEUN_EULER_2_1_2),
+    ("BOGACKI_SHAMPINE_4_2_3", ffi::ARKODE_ERKTableID_ARKODE_BOGACKI_SHAMPINE_4_2_3),
+    ("ARK324L2SA_ERK_4_2_3", ffi::ARKODE_ERKTableID_ARKODE_ARK324L2SA_ERK_4_2_3),
+    ("ZONNEVELD_5_3_4", ffi::ARKODE_ERKTableID_ARKODE_ZONNEVELD_5_3_4),
+    ("ARK436L2SA_ERK_6_3_4", ffi::ARKODE_ERKTableID_ARKODE_ARK436L2SA_ERK_6_3_4),
+    ("SAYFY_ABURUB_6_3_4", ffi::ARKODE_ERKTableID_ARKODE_SAYFY_ABURUB_6_3_4),
+    ("CASH_KARP_6_4_5", ffi::ARKODE_ERKTableID_ARKODE_CASH_KARP_6_4_5),
+    ("FEHLBERG_6_4_5", ffi::ARKODE_ERKTableID_ARKODE_FEHLBERG_6_4_5),
+    ("DORMAND_PRINCE_7_4_5", ffi::ARKODE_ERKTableID_ARKODE_DORMAND_PRINCE_7_4_5),
+    ("ARK548L2SA_ERK_8_4_5", ffi::ARKODE_ERKTableID_ARKODE_ARK548L2SA_ERK_8_4_5),
+    ("VERNER_8_5_6", ffi::ARKODE_ERKTableID_ARKODE_VERNER_8_5_6),
+    ("FEHLBERG_13_7_8", ffi::ARKODE_ERKTableID_ARKODE_FEHLBERG_13_7_8),
+    ("KNOTH_WOLKE_3_3", ffi::ARKODE_ERKTableID_ARKODE_KNOTH_WOLKE_3_3),
+    ("ARK437L2SA_ERK_7_3_4", ffi::ARKODE_ERKTableID_ARKODE_ARK437L2SA_ERK_7_3_4),
+    ("ARK548L2SAb_ERK_8_4_5", ffi::ARKODE_ERKTableID_ARKODE_ARK548L2SAb_ERK_8_4_5),
+];
+
+macro_rules! table_type {
+    ($(#[$doc:meta])* $name:ident, $list:ident) => {
+        $(#[$doc])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub struct $name(c_int);
+
+        impl $name {
+            /// Looks a table up by its ARKODE name without the `ARKODE_` prefix.
+            pub fn from_name(name: &str) -> Option<Self> {
+                $list.iter().find(|(n, _)| *n == name).map(|&(_, id)| Self(id))
+            }
+
+            /// The table's ARKODE name (without the `ARKODE_` prefix).
+            pub fn name(self) -> &'static str {
+                $list.iter().find(|(_, id)| *id == self.0).map_or("?", |(n, _)| n)
+            }
+
+            /// Names of every table of this kind in the linked ARKODE.
+            pub fn names() -> impl Iterator<Item = &'static str> {
+                $list.iter().map(|(n, _)| *n)
+            }
+        }
+    };
+}
+
+table_type!(
+    /// A diagonally implicit Runge–Kutta table, e.g. `DirkTable::from_name("SDIRK_5_3_4")`.
+    DirkTable,
+    DIRK_TABLES
+);
+table_type!(
+    /// An explicit Runge–Kutta table, e.g. `ErkTable::from_name("DORMAND_PRINCE_7_4_5")`.
+    ErkTable,
+    ERK_TABLES
+);
+
+impl Default for DirkTable {
+    /// SDIRK-5-3-4 (Hairer–Wanner): order 4, L-stable and stiffly accurate; ARKODE's own
+    /// default implicit table.
+    fn default() -> Self {
+        Self(ffi::ARKODE_DIRKTableID_ARKODE_SDIRK_5_3_4)
+    }
+}
+
+impl Default for ErkTable {
+    /// Zonneveld-5-3-4, ARKODE's default order-4 explicit table.
+    fn default() -> Self {
+        Self(ffi::ARKODE_ERKTableID_ARKODE_ZONNEVELD_5_3_4)
+    }
+}
+
+/// Which ARKStep form to use on a plain [`OdeSystem`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArkMethod {
+    /// Fully implicit DIRK (stiff problems), Newton with a dense direct linear solver.
+    Dirk(DirkTable),
+    /// Fully explicit Runge–Kutta (non-stiff problems).
+    Erk(ErkTable),
+}
+
+impl Default for ArkMethod {
+    fn default() -> Self {
+        ArkMethod::Dirk(DirkTable::default())
+    }
+}
+
+/// ARKStep-only settings.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ArkSettings {
+    /// Implicit-stage predictor (ARKStepSetPredictorMethod: 0 trivial … 5); `None` keeps
+    /// ARKODE's default.
+    pub predictor_method: Option<i32>,
+}
+
+fn classify(flag: c_int) -> ErrorKind {
+    match flag {
+        ffi::ARK_TOO_MUCH_WORK => ErrorKind::TooMuchWork,
+        ffi::ARK_TOO_MUCH_ACC => ErrorKind::AccuracyNotAttainable,
+        ffi::ARK_ERR_FAILURE => ErrorKind::ErrorTestFailures,
+        ffi::ARK_CONV_FAILURE | ffi::ARK_NLS_INIT_FAIL | ffi::ARK_NLS_SETUP_FAIL | ffi::ARK_NLS_OP_ERR => {
+            ErrorKind::ConvergenceFailures
+        }
+        ffi::ARK_LINIT_FAIL | ffi::ARK_LSETUP_FAIL | ffi::ARK_LSOLVE_FAIL => ErrorKind::LinearSolver,
+        ffi::ARK_RHSFUNC_FAIL | ffi::ARK_FIRST_RHSFUNC_ERR | ffi::ARK_REPTD_RHSFUNC_ERR | ffi::ARK_UNREC_RHSFUNC_ERR => {
+            ErrorKind::RhsFailure
+        }
+        ffi::ARK_RTFUNC_FAIL => ErrorKind::RootFunctionFailure,
+        ffi::ARK_ILL_INPUT | ffi::ARK_BAD_K | ffi::ARK_BAD_T | ffi::ARK_BAD_DKY | ffi::ARK_TOO_CLOSE
+        | ffi::ARK_NO_MALLOC | ffi::ARK_INVALID_TABLE => ErrorKind::InvalidInput,
+        _ => ErrorKind::Other,
+    }
+}
+
+/// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
+/// for ERK) leave their counter at zero.
+unsafe fn read_stats(m: *mut c_void) -> Stats {
+    let mut s = Stats::default();
+    let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
+        let mut v: c_long = 0;
+        // SAFETY: `m` is live ARKStep memory (caller's guarantee); the getter writes one long.
+        unsafe { get(m, &mut v) };
+        v.max(0) as u64
+    };
+    s.steps = count(ffi::ARKStepGetNumSteps);
+    s.step_attempts = count(ffi::ARKStepGetNumStepAttempts);
+    s.lin_setups = count(ffi::ARKStepGetNumLinSolvSetups);
+    s.err_test_fails = count(ffi::ARKStepGetNumErrTestFails);
+    s.step_solve_fails = count(ffi::ARKStepGetNumStepSolveFails);
+    s.nonlin_iters = count(ffi::ARKStepGetNumNonlinSolvIters);
+    s.nonlin_conv_fails = count(ffi::ARKStepGetNumNonlinSolvConvFails);
+    s.jac_evals = count(ffi::ARKStepGetNumJacEvals);
+    s.rhs_evals_jacobian = count(ffi::ARKStepGetNumLinRhsEvals);
+    s.root_evals = count(ffi::ARKStepGetNumGEvals);
+    let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
+    let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =
+        (std::ptr::null_mut(), std::ptr::null_mut());
+    // SAFETY: as above; each getter writes values of the pointed-to types. The Butcher-table
+    // pointers refer to ARKStep's own tables (or are null before the first step) and are only
+    // read here, while the memory is alive.
+    unsafe {
+        ffi::ARKStepGetNumRhsEvals(m, &mut nfe, &mut nfi);
+        ffi::ARKStepGetLastStep(m, &mut s.last_step);
+        ffi::ARKStepGetCurrentStep(m, &mut s.current_step);
+        ffi::ARKStepGetActualInitStep(m, &mut s.initial_step);
+        ffi::ARKStepGetCurrentButcherTables(m, &mut implicit, &mut explicit);
+        let table = if implicit.is_null() { explicit } else { implicit };
+        if !table.is_null() {
+            s.last_order = (*table).q;
+        }
+    }
+    s.rhs_evals = nfi.max(0) as u64;
+    s.rhs_evals_explicit = nfe.max(0) as u64;
+    s
+}
+
+static ARKSTEP: Api = Api {
+    name: "ARKStep",
+    free: ffi::ARKStepFree,
+    evolve: ffi::ARKStepEvolve,
+    get_dky: ffi::ARKStepGetDky,
+    set_user_data: ffi::ARKStepSetUserData,
+    set_err_handler: ffi::ARKStepSetErrHandlerFn,
+    ss_tolerances: ffi::ARKStepSStolerances,
+    sv_tolerances: ffi::ARKStepSVtolerances,
+    set_linear_solver: ffi::ARKStepSetLinearSolver,
+    set_jac_fn: ffi::ARKStepSetJacFn,
+    root_init: ffi::ARKStepRootInit,
+    set_root_direction: ffi::ARKStepSetRootDirection,
+    get_root_info: ffi::ARKStepGetRootInfo,
+    set_stop_time: ffi::ARKStepSetStopTime,
+    set_max_num_steps: ffi::ARKStepSetMaxNumSteps,
+    set_init_step: ffi::ARKStepSetInitStep,
+    set_min_step: ffi::ARKStepSetMinStep,
+    set_max_step: ffi::ARKStepSetMaxStep,
+    set_max_err_test_fails: ffi::ARKStepSetMaxErrTestFails,
+    set_max_nonlin_iters: ffi::ARKStepSetMaxNonlinIters,
+    set_max_conv_fails: ffi::ARKStepSetMaxConvFails,
+    set_nonlin_conv_coef: ffi::ARKStepSetNonlinConvCoef,
+    // ARKStepReset keeps options and counters; only time, state and step history restart.
+    reinit: ffi::ARKStepReset,
+    reinit_resets_counters: false,
+    read_stats,
+    classify,
+};
+
+fn dimension_error(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+    if y0.len() == dim {
+        return Ok(());
+    }
+    Err(SolverError {
+        solver: ARKSTEP.name,
+        kind: ErrorKind::InvalidInput,
+        t: t0,
+        state: y0.to_vec(),
+        flag: 0,
+        message: format!("y0 has {} components; the system has {dim}", y0.len()),
+    })
+}
+
+impl<S> Solver<S> {
+    fn finish_arkstep(&mut self, options: &Options, settings: ArkSettings, tables: (c_int, c_int)) -> Result<(), SolverError> {
+        let m = self.mem();
+        if let Some(order) = options.max_order {
+            let message = format!("max_order = {order} applies to CVODE; ARKStep's order is that of its Butcher table");
+            return Err(SolverError { solver: ARKSTEP.name, kind: ErrorKind::InvalidInput, t: self.t(), state: self.state().to_vec(), flag: 0, message });
+        }
+        // SAFETY: live ARKStep memory; the ids name built-in tables of this ARKODE.
+        self.check(unsafe { ffi::ARKStepSetTableNum(m, tables.0, tables.1) })?;
+        if let Some(p) = settings.predictor_method {
+            // SAFETY: live ARKStep memory; stores a scalar.
+            self.check(unsafe { ffi::ARKStepSetPredictorMethod(m, p) })?;
+        }
+        Ok(())
+    }
+}
+
+impl<S: OdeSystem> Solver<S> {
+    /// ARKStep on the whole right-hand side: implicit DIRK (dense Newton, the analytic
+    /// Jacobian when the system has one) or explicit ERK.
+    pub fn arkstep(
+        system: S,
+        method: ArkMethod,
+        settings: ArkSettings,
+        t0: f64,
+        y0: &[f64],
+        options: &Options,
+    ) -> Result<Self, SolverError> {
+        dimension_error(system.dim(), t0, y0)?;
+        let implicit = matches!(method, ArkMethod::Dirk(_));
+        let jacobian: ffi::CVLsJacFn =
+            if implicit && system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: implicit, jacobian };
+        let f: ffi::ARKRhsFn = Some(callbacks::rhs::<S>);
+        let (fe, fi) = if implicit { (None, f) } else { (f, None) };
+        let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {
+            // SAFETY: creates ARKStep memory in a live context; ARKStepCreate copies `y`.
+            unsafe { ffi::ARKStepCreate(fe, fi, t0, y.raw(), ctx.raw()) }
+        })?;
+        let tables = match method {
+            ArkMethod::Dirk(t) => (t.0, ffi::ARKODE_ERKTableID_ARKODE_ERK_NONE),
+            ArkMethod::Erk(t) => (ffi::ARKODE_DIRKTableID_ARKODE_DIRK_NONE, t.0),
+        };
+        solver.finish_arkstep(options, settings, tables)?;
+        Ok(solver)
+    }
+}
+
+impl<S: ImexSystem> Solver<S> {
+    /// ARKStep IMEX: f_E explicit with `explicit`, f_I implicit with `implicit` (the tables
+    /// must form an ARK pair, e.g. ARK436L2SA_DIRK_6_3_4 with ARK436L2SA_ERK_6_3_4).
+    #[allow(clippy::too_many_arguments)]
+    pub fn arkstep_imex(
+        system: S,
+        implicit: DirkTable,
+        explicit: ErkTable,
+        settings: ArkSettings,
+        t0: f64,
+        y0: &[f64],
+        options: &Options,
+    ) -> Result<Self, SolverError> {
+        dimension_error(system.dim(), t0, y0)?;
+        let jacobian: ffi::CVLsJacFn =
+            if system.has_implicit_jacobian() { Some(callbacks::implicit_jacobian::<S>) } else { None };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian };
+        let (fe, fi): (ffi::ARKRhsFn, ffi::ARKRhsFn) =
+            (Some(callbacks::rhs_explicit::<S>), Some(callbacks::rhs_implicit::<S>));
+        let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {
+            // SAFETY: creates ARKStep memory in a live context; ARKStepCreate copies `y`.
+            unsafe { ffi::ARKStepCreate(fe, fi, t0, y.raw(), ctx.raw()) }
+        })?;
+        solver.finish_arkstep(options, settings, (implicit.0, explicit.0))?;
+        Ok(solver)
+    }
+}
+
+/// The default IMEX pair: Kennedy & Carpenter's ARK4(3)6L[2]SA (L-stable implicit part).
+pub fn default_imex_tables() -> (DirkTable, ErkTable) {
+    (
+        DirkTable(ffi::ARKODE_DIRKTableID_ARKODE_ARK436L2SA_DIRK_6_3_4),
+        ErkTable(ffi::ARKODE_ERKTableID_ARKODE_ARK436L2SA_ERK_6_3_4),
+    )
+}

@@ -1,0 +1,235 @@
+//! The `extern "C"` trampolines SUNDIALS calls, and the per-solver data they reach.
+//!
+//! Every trampoline catches panics (a panic must never unwind into C): the payload is stored
+//! and −1 (unrecoverable) is returned; the solver turns it into
+//! [`ErrorKind::CallbackPanic`](crate::integrate::ErrorKind) once SUNDIALS has returned.
+//! Non-finite right-hand-side or Jacobian values are reported as recoverable (+1).
+
+use super::ffi;
+use super::vector::{slice, slice_mut};
+use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction};
+use std::ffi::{c_char, c_int, c_void, CStr};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// What SUNDIALS and the callbacks reported, outside the return codes.
+#[derive(Debug, Default)]
+pub(crate) struct Diagnostics {
+    /// Last error message from SUNDIALS' error handler (function, message).
+    pub last_error: Option<String>,
+    /// Warnings since the solver was created (at most [`MAX_KEPT_WARNINGS`] are kept).
+    pub warnings: Vec<String>,
+    /// "t + h = t" warnings since the solver was created.
+    pub step_underflows: u64,
+    /// Value of `step_underflows` when the current `advance` call started.
+    pub step_underflows_at_call: u64,
+    /// Message of a panic caught in a callback, not yet reported.
+    pub panic: Option<String>,
+    /// RHS calls that produced non-finite values.
+    pub nonfinite_rhs: u64,
+    /// Why the root function failed, if it did.
+    pub root_failure: Option<String>,
+}
+
+const MAX_KEPT_WARNINGS: usize = 64;
+
+impl Diagnostics {
+    /// Runs a user callback, catching a panic. Returns false if it panicked (or an earlier
+    /// panic is pending, in which case `f` is not run).
+    fn guarded(&mut self, f: impl FnOnce()) -> bool {
+        if self.panic.is_some() {
+            return false;
+        }
+        match catch_unwind(AssertUnwindSafe(f)) {
+            Ok(()) => true,
+            Err(payload) => {
+                let text = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "non-string panic payload".to_string());
+                self.panic = Some(text);
+                false
+            }
+        }
+    }
+}
+
+/// The data behind SUNDIALS' `user_data` pointer: the system, the current root functions and
+/// the diagnostics. Boxed by the solver so its address never changes.
+pub(crate) struct Shared<S> {
+    pub system: S,
+    pub dim: usize,
+    pub roots: Option<RootFunction>,
+    pub root_count: usize,
+    pub diag: Diagnostics,
+}
+
+/// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.
+fn rhs_code(diag: &mut Diagnostics, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
+    if !diag.guarded(|| f(&mut *dydt)) {
+        return -1;
+    }
+    if dydt.iter().all(|v| v.is_finite()) {
+        0
+    } else {
+        diag.nonfinite_rhs += 1;
+        1
+    }
+}
+
+/// f(t, y) for CVODE, and for ARKStep's fully implicit or fully explicit forms.
+pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
+    t: f64,
+    y: ffi::N_Vector,
+    ydot: ffi::N_Vector,
+    data: *mut c_void,
+) -> c_int {
+    // SAFETY: `data` is the `Shared<S>` registered as user data, alive for the solver's life;
+    // `y` and `ydot` are distinct serial vectors of length `dim` owned by SUNDIALS for the
+    // duration of this call.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
+    let system = &shared.system;
+    rhs_code(&mut shared.diag, dy, |dy| system.rhs(t, y, dy))
+}
+
+/// f_E(t, y) for ARKStep IMEX.
+pub(crate) unsafe extern "C" fn rhs_explicit<S: ImexSystem>(
+    t: f64,
+    y: ffi::N_Vector,
+    ydot: ffi::N_Vector,
+    data: *mut c_void,
+) -> c_int {
+    // SAFETY: as in `rhs`.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
+    let system = &shared.system;
+    rhs_code(&mut shared.diag, dy, |dy| system.rhs_explicit(t, y, dy))
+}
+
+/// f_I(t, y) for ARKStep IMEX.
+pub(crate) unsafe extern "C" fn rhs_implicit<S: ImexSystem>(
+    t: f64,
+    y: ffi::N_Vector,
+    ydot: ffi::N_Vector,
+    data: *mut c_void,
+) -> c_int {
+    // SAFETY: as in `rhs`.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
+    let system = &shared.system;
+    rhs_code(&mut shared.diag, dy, |dy| system.rhs_implicit(t, y, dy))
+}
+
+/// Fills a dense Jacobian through `fill` and maps the outcome to a return code.
+///
+/// # Safety
+/// `data` must be the registered `Shared<S>`, `y` a serial vector of length `dim` and `jac` a
+/// dense `dim`×`dim` SUNMatrix, all valid for the duration of the call.
+unsafe fn jacobian_code<S>(
+    y: ffi::N_Vector,
+    jac: ffi::SUNMatrix,
+    data: *mut c_void,
+    fill: impl FnOnce(&S, &[f64], &mut JacobianMatrix<'_>),
+) -> c_int {
+    // SAFETY: guaranteed by the caller.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let n = shared.dim;
+    let y = unsafe { slice(y, n) };
+    // SAFETY: a dense SUNMatrix stores n*n reals contiguously in column-major order.
+    let storage = unsafe { std::slice::from_raw_parts_mut(ffi::SUNDenseMatrix_Data(jac), n * n) };
+    storage.fill(0.0);
+    let mut matrix = JacobianMatrix::new(storage, n);
+    let system = &shared.system;
+    if !shared.diag.guarded(|| fill(system, y, &mut matrix)) {
+        return -1;
+    }
+    if matrix.is_finite() { 0 } else { 1 }
+}
+
+/// Dense ∂f/∂y (CVLsJacFn / ARKLsJacFn signature).
+pub(crate) unsafe extern "C" fn jacobian<S: OdeSystem>(
+    t: f64,
+    y: ffi::N_Vector,
+    _fy: ffi::N_Vector,
+    jac: ffi::SUNMatrix,
+    data: *mut c_void,
+    _tmp1: ffi::N_Vector,
+    _tmp2: ffi::N_Vector,
+    _tmp3: ffi::N_Vector,
+) -> c_int {
+    // SAFETY: SUNDIALS passes the registered user data, the current state and the dense
+    // matrix attached at construction.
+    unsafe { jacobian_code::<S>(y, jac, data, |s, y, m| s.jacobian(t, y, m)) }
+}
+
+/// Dense ∂f_I/∂y for ARKStep IMEX.
+pub(crate) unsafe extern "C" fn implicit_jacobian<S: ImexSystem>(
+    t: f64,
+    y: ffi::N_Vector,
+    _fy: ffi::N_Vector,
+    jac: ffi::SUNMatrix,
+    data: *mut c_void,
+    _tmp1: ffi::N_Vector,
+    _tmp2: ffi::N_Vector,
+    _tmp3: ffi::N_Vector,
+) -> c_int {
+    // SAFETY: as in `jacobian`.
+    unsafe { jacobian_code::<S>(y, jac, data, |s, y, m| s.implicit_jacobian(t, y, m)) }
+}
+
+/// Root functions g(t, y) (CVRootFn / ARKRootFn signature).
+pub(crate) unsafe extern "C" fn roots<S>(
+    t: f64,
+    y: ffi::N_Vector,
+    gout: *mut f64,
+    data: *mut c_void,
+) -> c_int {
+    // SAFETY: `data` is the registered `Shared<S>`; `gout` has room for the `root_count`
+    // values declared to SUNDIALS in the root-init call that installed this trampoline.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let y = unsafe { slice(y, shared.dim) };
+    let g = unsafe { std::slice::from_raw_parts_mut(gout, shared.root_count) };
+    let Some(function) = shared.roots.as_mut() else {
+        shared.diag.root_failure = Some("root function called but none is set".into());
+        return -1;
+    };
+    if !shared.diag.guarded(|| function(t, y, g)) {
+        return -1;
+    }
+    if let Some(i) = g.iter().position(|v| !v.is_finite()) {
+        shared.diag.root_failure = Some(format!("root function {i} returned {} at t = {t:e}", g[i]));
+        return -1;
+    }
+    0
+}
+
+/// SUNDIALS' error handler (CVErrHandlerFn / ARKErrHandlerFn): records messages instead of
+/// printing them.
+pub(crate) unsafe extern "C" fn error_handler(
+    error_code: c_int,
+    _module: *const c_char,
+    function: *const c_char,
+    msg: *mut c_char,
+    data: *mut c_void,
+) {
+    let text = |p: *const c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            // SAFETY: SUNDIALS passes NUL-terminated strings valid for this call.
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    // SAFETY: `data` is the `Diagnostics` inside the registered `Shared<S>`.
+    let diag = unsafe { &mut *(data as *mut Diagnostics) };
+    let message = format!("{}: {}", text(function), text(msg));
+    if message.contains("t + h = t") {
+        diag.step_underflows += 1;
+    }
+    if error_code < 0 {
+        diag.last_error = Some(message);
+    } else if diag.warnings.len() < MAX_KEPT_WARNINGS {
+        diag.warnings.push(message);
+    }
+}

@@ -1,0 +1,165 @@
+//! CVODE: variable-order BDF (stiff) and Adams–Moulton (non-stiff) multistep methods.
+
+use super::callbacks;
+use super::ffi;
+use super::solver::{Api, Creation, Solver};
+use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
+use std::ffi::{c_int, c_long, c_void};
+
+/// CVODE's linear multistep family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CvodeMethod {
+    /// Backward differentiation formulas, orders 1–5 (stiff problems).
+    Bdf,
+    /// Adams–Moulton, orders 1–12 (non-stiff problems).
+    Adams,
+}
+
+/// CVODE-only settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CvodeSettings {
+    /// BDF or Adams.
+    pub method: CvodeMethod,
+    /// BDF stability-limit detection (ignored by Adams).
+    pub stability_limit_detection: bool,
+}
+
+impl Default for CvodeSettings {
+    fn default() -> Self {
+        Self { method: CvodeMethod::Bdf, stability_limit_detection: false }
+    }
+}
+
+fn classify(flag: c_int) -> ErrorKind {
+    match flag {
+        ffi::CV_TOO_MUCH_WORK => ErrorKind::TooMuchWork,
+        ffi::CV_TOO_MUCH_ACC => ErrorKind::AccuracyNotAttainable,
+        ffi::CV_ERR_FAILURE => ErrorKind::ErrorTestFailures,
+        ffi::CV_CONV_FAILURE | ffi::CV_NLS_FAIL | ffi::CV_NLS_INIT_FAIL | ffi::CV_NLS_SETUP_FAIL => {
+            ErrorKind::ConvergenceFailures
+        }
+        ffi::CV_LINIT_FAIL | ffi::CV_LSETUP_FAIL | ffi::CV_LSOLVE_FAIL => ErrorKind::LinearSolver,
+        ffi::CV_RHSFUNC_FAIL | ffi::CV_FIRST_RHSFUNC_ERR | ffi::CV_REPTD_RHSFUNC_ERR | ffi::CV_UNREC_RHSFUNC_ERR => {
+            ErrorKind::RhsFailure
+        }
+        ffi::CV_RTFUNC_FAIL => ErrorKind::RootFunctionFailure,
+        ffi::CV_ILL_INPUT | ffi::CV_BAD_K | ffi::CV_BAD_T | ffi::CV_BAD_DKY | ffi::CV_TOO_CLOSE | ffi::CV_NO_MALLOC => {
+            ErrorKind::InvalidInput
+        }
+        _ => ErrorKind::Other,
+    }
+}
+
+/// Reads CVODE's counters. Getters that do not apply (no root functions, no linear solver)
+/// leave their counter at zero.
+unsafe fn read_stats(m: *mut c_void) -> Stats {
+    let mut s = Stats::default();
+    let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
+        let mut v: c_long = 0;
+        // SAFETY: `m` is live CVODE memory (caller's guarantee); the getter writes one long.
+        unsafe { get(m, &mut v) };
+        v.max(0) as u64
+    };
+    s.steps = count(ffi::CVodeGetNumSteps);
+    s.rhs_evals = count(ffi::CVodeGetNumRhsEvals);
+    s.lin_setups = count(ffi::CVodeGetNumLinSolvSetups);
+    s.err_test_fails = count(ffi::CVodeGetNumErrTestFails);
+    s.step_solve_fails = count(ffi::CVodeGetNumStepSolveFails);
+    s.nonlin_iters = count(ffi::CVodeGetNumNonlinSolvIters);
+    s.nonlin_conv_fails = count(ffi::CVodeGetNumNonlinSolvConvFails);
+    s.jac_evals = count(ffi::CVodeGetNumJacEvals);
+    s.rhs_evals_jacobian = count(ffi::CVodeGetNumLinRhsEvals);
+    s.root_evals = count(ffi::CVodeGetNumGEvals);
+    s.stab_lim_order_reductions = count(ffi::CVodeGetNumStabLimOrderReds);
+    s.step_attempts = s.steps + s.err_test_fails + s.step_solve_fails;
+    // SAFETY: as above; each getter writes one value of the pointed-to type.
+    unsafe {
+        ffi::CVodeGetLastStep(m, &mut s.last_step);
+        ffi::CVodeGetCurrentStep(m, &mut s.current_step);
+        ffi::CVodeGetActualInitStep(m, &mut s.initial_step);
+        ffi::CVodeGetLastOrder(m, &mut s.last_order);
+    }
+    s
+}
+
+static CVODE: Api = Api {
+    name: "CVODE",
+    free: ffi::CVodeFree,
+    evolve: ffi::CVode,
+    get_dky: ffi::CVodeGetDky,
+    set_user_data: ffi::CVodeSetUserData,
+    set_err_handler: ffi::CVodeSetErrHandlerFn,
+    ss_tolerances: ffi::CVodeSStolerances,
+    sv_tolerances: ffi::CVodeSVtolerances,
+    set_linear_solver: ffi::CVodeSetLinearSolver,
+    set_jac_fn: ffi::CVodeSetJacFn,
+    root_init: ffi::CVodeRootInit,
+    set_root_direction: ffi::CVodeSetRootDirection,
+    get_root_info: ffi::CVodeGetRootInfo,
+    set_stop_time: ffi::CVodeSetStopTime,
+    set_max_num_steps: ffi::CVodeSetMaxNumSteps,
+    set_init_step: ffi::CVodeSetInitStep,
+    set_min_step: ffi::CVodeSetMinStep,
+    set_max_step: ffi::CVodeSetMaxStep,
+    set_max_err_test_fails: ffi::CVodeSetMaxErrTestFails,
+    set_max_nonlin_iters: ffi::CVodeSetMaxNonlinIters,
+    set_max_conv_fails: ffi::CVodeSetMaxConvFails,
+    set_nonlin_conv_coef: ffi::CVodeSetNonlinConvCoef,
+    reinit: ffi::CVodeReInit,
+    reinit_resets_counters: true,
+    read_stats,
+    classify,
+};
+
+impl<S: OdeSystem> Solver<S> {
+    /// CVODE with a dense direct linear solver, the system's analytic Jacobian when it has one
+    /// (finite differences otherwise), starting at (t0, y0).
+    pub fn cvode(
+        system: S,
+        settings: CvodeSettings,
+        t0: f64,
+        y0: &[f64],
+        options: &Options,
+    ) -> Result<Self, SolverError> {
+        if y0.len() != system.dim() {
+            return Err(SolverError {
+                solver: CVODE.name,
+                kind: ErrorKind::InvalidInput,
+                t: t0,
+                state: y0.to_vec(),
+                flag: 0,
+                message: format!("y0 has {} components; the system has {}", y0.len(), system.dim()),
+            });
+        }
+        let jacobian: ffi::CVLsJacFn =
+            if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian };
+        let lmm = match settings.method {
+            CvodeMethod::Bdf => ffi::CV_BDF,
+            CvodeMethod::Adams => ffi::CV_ADAMS,
+        };
+        let mut solver = Solver::build(&CVODE, creation, options, |y, ctx| {
+            // SAFETY: creates CVODE memory in a live context, then initialises it with our
+            // RHS trampoline; CVodeInit copies `y`.
+            unsafe {
+                let m = ffi::CVodeCreate(lmm, ctx.raw());
+                if !m.is_null() && ffi::CVodeInit(m, Some(callbacks::rhs::<S>), t0, y.raw()) != 0 {
+                    let mut m = m;
+                    ffi::CVodeFree(&mut m);
+                    return std::ptr::null_mut();
+                }
+                m
+            }
+        })?;
+        let m = solver.mem();
+        if let Some(order) = options.max_order {
+            // SAFETY: live CVODE memory; stores a scalar.
+            solver.check(unsafe { ffi::CVodeSetMaxOrd(m, order) })?;
+        }
+        if settings.stability_limit_detection && settings.method == CvodeMethod::Bdf {
+            // SAFETY: live CVODE memory; stores a flag.
+            solver.check(unsafe { ffi::CVodeSetStabLimDet(m, 1) })?;
+        }
+        Ok(solver)
+    }
+}

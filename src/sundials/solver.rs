@@ -1,0 +1,402 @@
+//! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
+//! table of their functions ([`Api`]) lets a single implementation drive either.
+
+use super::callbacks::{self, Diagnostics, Shared};
+use super::context::Context;
+use super::dense::DenseLinearSolver;
+use super::ffi;
+use super::vector::SerialVector;
+use crate::integrate::{ErrorKind, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
+use std::ffi::{c_int, c_long, c_void};
+use std::ptr::NonNull;
+
+type Mem = *mut c_void;
+
+/// The SUNDIALS functions one solver family provides (CVODE or ARKStep).
+pub(crate) struct Api {
+    pub name: &'static str,
+    pub free: unsafe extern "C" fn(*mut Mem),
+    pub evolve: unsafe extern "C" fn(Mem, f64, ffi::N_Vector, *mut f64, c_int) -> c_int,
+    pub get_dky: unsafe extern "C" fn(Mem, f64, c_int, ffi::N_Vector) -> c_int,
+    pub set_user_data: unsafe extern "C" fn(Mem, *mut c_void) -> c_int,
+    pub set_err_handler: unsafe extern "C" fn(Mem, ffi::CVErrHandlerFn, *mut c_void) -> c_int,
+    pub ss_tolerances: unsafe extern "C" fn(Mem, f64, f64) -> c_int,
+    pub sv_tolerances: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
+    pub set_linear_solver: unsafe extern "C" fn(Mem, ffi::SUNLinearSolver, ffi::SUNMatrix) -> c_int,
+    pub set_jac_fn: unsafe extern "C" fn(Mem, ffi::CVLsJacFn) -> c_int,
+    pub root_init: unsafe extern "C" fn(Mem, c_int, ffi::CVRootFn) -> c_int,
+    pub set_root_direction: unsafe extern "C" fn(Mem, *mut c_int) -> c_int,
+    pub get_root_info: unsafe extern "C" fn(Mem, *mut c_int) -> c_int,
+    pub set_stop_time: unsafe extern "C" fn(Mem, f64) -> c_int,
+    pub set_max_num_steps: unsafe extern "C" fn(Mem, c_long) -> c_int,
+    pub set_init_step: unsafe extern "C" fn(Mem, f64) -> c_int,
+    pub set_min_step: unsafe extern "C" fn(Mem, f64) -> c_int,
+    pub set_max_step: unsafe extern "C" fn(Mem, f64) -> c_int,
+    pub set_max_err_test_fails: unsafe extern "C" fn(Mem, c_int) -> c_int,
+    pub set_max_nonlin_iters: unsafe extern "C" fn(Mem, c_int) -> c_int,
+    pub set_max_conv_fails: unsafe extern "C" fn(Mem, c_int) -> c_int,
+    pub set_nonlin_conv_coef: unsafe extern "C" fn(Mem, f64) -> c_int,
+    /// Restarts at (t0, y0) keeping the options.
+    pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
+    /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
+    pub reinit_resets_counters: bool,
+    /// Reads the raw counters.
+    pub read_stats: unsafe fn(Mem) -> Stats,
+    /// Maps a negative return code to an error kind.
+    pub classify: fn(c_int) -> ErrorKind,
+}
+
+/// A SUNDIALS integrator (CVODE or ARKStep) for the system `S`, built by
+/// [`Solver::cvode`](crate::sundials::Solver::cvode),
+/// [`Solver::arkstep`](crate::sundials::Solver::arkstep) or
+/// [`Solver::arkstep_imex`](crate::sundials::Solver::arkstep_imex).
+///
+/// Owns every SUNDIALS object it uses and frees them in the required order: solver memory,
+/// linear solver and matrix, vectors, then the context.
+pub struct Solver<S> {
+    mem: NonNull<c_void>,
+    api: &'static Api,
+    // Field order is drop order: all of these must go before `ctx`.
+    linear: Option<DenseLinearSolver>,
+    y: SerialVector,
+    scratch: SerialVector,
+    _atol: Option<SerialVector>,
+    shared: Box<Shared<S>>,
+    t: f64,
+    fail_on_step_underflow: bool,
+    counters_before_reinit: Stats,
+    reinits: u64,
+    ctx: Context,
+}
+
+/// Which right-hand side(s) a new solver memory is created with; used by the constructors.
+pub(crate) struct Creation<S> {
+    pub system: S,
+    pub t0: f64,
+    pub y0: Vec<f64>,
+    pub needs_linear_solver: bool,
+    pub jacobian: ffi::CVLsJacFn,
+}
+
+impl<S> Solver<S> {
+    /// Common construction: validates input, creates the context and vectors, lets `create`
+    /// make the solver memory, then attaches user data, error handler, tolerances, options and
+    /// the dense linear solver.
+    pub(crate) fn build(
+        api: &'static Api,
+        creation: Creation<S>,
+        options: &Options,
+        create: impl FnOnce(&SerialVector, &Context) -> Mem,
+    ) -> Result<Self, SolverError> {
+        let Creation { system, t0, y0, needs_linear_solver, jacobian } = creation;
+        let dim = y0.len();
+        let invalid = |message: String| SolverError {
+            solver: api.name,
+            kind: ErrorKind::InvalidInput,
+            t: t0,
+            state: y0.clone(),
+            flag: 0,
+            message,
+        };
+        if dim == 0 {
+            return Err(invalid("the system has no components".into()));
+        }
+        if !t0.is_finite() {
+            return Err(invalid(format!("t0 = {t0} must be finite")));
+        }
+        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
+        }
+        options.validate(dim).map_err(invalid)?;
+        let resource = |what: &str| invalid(format!("could not allocate the SUNDIALS {what}"));
+
+        let ctx = Context::new().ok_or_else(|| resource("context"))?;
+        let y = SerialVector::from_slice(&y0, &ctx).ok_or_else(|| resource("state vector"))?;
+        let scratch = SerialVector::from_slice(&y0, &ctx).ok_or_else(|| resource("vector"))?;
+        let atol = match &options.atol {
+            Tolerance::PerComponent(v) => {
+                Some(SerialVector::from_slice(v, &ctx).ok_or_else(|| resource("tolerance vector"))?)
+            }
+            Tolerance::Scalar(_) => None,
+        };
+        let mem = NonNull::new(create(&y, &ctx)).ok_or_else(|| resource("solver memory"))?;
+        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag: Diagnostics::default() });
+        let mut solver = Self {
+            mem,
+            api,
+            linear: None,
+            y,
+            scratch,
+            _atol: None,
+            shared,
+            t: t0,
+            fail_on_step_underflow: options.fail_on_step_underflow,
+            counters_before_reinit: Stats::default(),
+            reinits: 0,
+            ctx,
+        };
+        let m = solver.mem.as_ptr();
+        let user_data = &mut *solver.shared as *mut Shared<S> as *mut c_void;
+        let diag = &mut solver.shared.diag as *mut Diagnostics as *mut c_void;
+        // SAFETY: `m` is live solver memory; `user_data` and `diag` point into the boxed
+        // `Shared`, which lives (at a fixed address) as long as the solver memory.
+        solver.check(unsafe { (api.set_err_handler)(m, Some(callbacks::error_handler), diag) })?;
+        solver.check(unsafe { (api.set_user_data)(m, user_data) })?;
+        match &atol {
+            // SAFETY: `m` is live; the tolerance vector is kept alive in `_atol` below.
+            Some(v) => solver.check(unsafe { (api.sv_tolerances)(m, options.rtol, v.raw()) })?,
+            None => {
+                let Tolerance::Scalar(a) = options.atol else { unreachable!("matched above") };
+                solver.check(unsafe { (api.ss_tolerances)(m, options.rtol, a) })?
+            }
+        };
+        solver._atol = atol;
+        solver.apply_options(options)?;
+        if needs_linear_solver {
+            let linear = DenseLinearSolver::new(&solver.y, dim, &solver.ctx)
+                .ok_or_else(|| resource("dense linear solver"))?;
+            // SAFETY: `m` is live; the matrix and linear solver are owned by `solver.linear`,
+            // which is dropped only after the solver memory is freed.
+            solver.check(unsafe { (api.set_linear_solver)(m, linear.solver(), linear.matrix()) })?;
+            solver.linear = Some(linear);
+            if jacobian.is_some() {
+                solver.check(unsafe { (api.set_jac_fn)(m, jacobian) })?;
+            }
+        }
+        Ok(solver)
+    }
+
+    fn apply_options(&mut self, o: &Options) -> Result<(), SolverError> {
+        let m = self.mem.as_ptr();
+        let api = self.api;
+        // SAFETY (all calls below): `m` is live solver memory and each setter only stores a
+        // scalar option.
+        if let Some(v) = o.max_steps {
+            self.check(unsafe { (api.set_max_num_steps)(m, v as c_long) })?;
+        }
+        if let Some(v) = o.initial_step {
+            self.check(unsafe { (api.set_init_step)(m, v) })?;
+        }
+        if let Some(v) = o.min_step {
+            self.check(unsafe { (api.set_min_step)(m, v) })?;
+        }
+        if let Some(v) = o.max_step {
+            self.check(unsafe { (api.set_max_step)(m, v) })?;
+        }
+        if let Some(v) = o.stop_time {
+            self.check(unsafe { (api.set_stop_time)(m, v) })?;
+        }
+        if let Some(v) = o.max_err_test_fails {
+            self.check(unsafe { (api.set_max_err_test_fails)(m, v) })?;
+        }
+        if let Some(v) = o.max_nonlin_iters {
+            self.check(unsafe { (api.set_max_nonlin_iters)(m, v) })?;
+        }
+        if let Some(v) = o.max_conv_fails {
+            self.check(unsafe { (api.set_max_conv_fails)(m, v) })?;
+        }
+        if let Some(v) = o.nonlin_conv_coef {
+            self.check(unsafe { (api.set_nonlin_conv_coef)(m, v) })?;
+        }
+        Ok(())
+    }
+
+    /// Raw solver memory, for solver-specific setters in the constructors.
+    pub(crate) fn mem(&self) -> Mem {
+        self.mem.as_ptr()
+    }
+
+    /// Turns a SUNDIALS return code into `Ok` or a typed error at the current time and state.
+    pub(crate) fn check(&mut self, flag: c_int) -> Result<c_int, SolverError> {
+        if let Some(panic) = self.shared.diag.panic.take() {
+            return Err(self.error(ErrorKind::CallbackPanic, flag, panic));
+        }
+        if flag >= 0 {
+            return Ok(flag);
+        }
+        let kind = (self.api.classify)(flag);
+        let mut message = self.shared.diag.last_error.take().unwrap_or_default();
+        if kind == ErrorKind::RhsFailure && self.shared.diag.nonfinite_rhs > 0 {
+            message.push_str(&format!(
+                " [{} right-hand-side calls returned non-finite values]",
+                self.shared.diag.nonfinite_rhs
+            ));
+        }
+        if let Some(why) = self.shared.diag.root_failure.take() {
+            message.push_str(&format!(" [{why}]"));
+        }
+        Err(self.error(kind, flag, message))
+    }
+
+    fn error(&self, kind: ErrorKind, flag: c_int, message: String) -> SolverError {
+        SolverError { solver: self.api.name, kind, t: self.t, state: self.state().to_vec(), flag, message }
+    }
+
+    /// Integrates towards `tout` (see [`Task`]) and returns where and why it stopped. The
+    /// state at the returned time is [`Solver::state`].
+    ///
+    /// Errors: every SUNDIALS failure, a panic in a callback, and — when
+    /// `fail_on_step_underflow` is set — a "t + h = t" step underflow during this call.
+    pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        if !tout.is_finite() {
+            return Err(self.error(ErrorKind::InvalidInput, 0, format!("tout = {tout} must be finite")));
+        }
+        let task_code = match task {
+            Task::Normal => 1,
+            Task::OneStep => 2,
+        };
+        self.shared.diag.last_error = None;
+        self.shared.diag.step_underflows_at_call = self.shared.diag.step_underflows;
+        let mut t = self.t;
+        // SAFETY: live solver memory; `y` is a vector of the system's length owned by us;
+        // callbacks reach `shared`, which outlives the call.
+        let flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        self.t = t;
+        let flag = self.check(flag)?;
+        let new_underflows = self.shared.diag.step_underflows - self.shared.diag.step_underflows_at_call;
+        if self.fail_on_step_underflow && new_underflows > 0 {
+            let warning = self.shared.diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
+            let message = format!("{new_underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
+            return Err(self.error(ErrorKind::StepUnderflow, flag, message));
+        }
+        let event = match flag {
+            1 => StepEvent::StopTime,
+            2 => {
+                let mut info = vec![0 as c_int; self.shared.root_count];
+                // SAFETY: `info` has one slot per root function declared to SUNDIALS.
+                let f = unsafe { (self.api.get_root_info)(self.mem.as_ptr(), info.as_mut_ptr()) };
+                self.check(f)?;
+                StepEvent::Root(info)
+            }
+            _ => StepEvent::Reached,
+        };
+        Ok(Step { t, event })
+    }
+
+    /// The state at the time of the last return ([`Solver::t`]).
+    pub fn state(&self) -> &[f64] {
+        self.y.as_slice()
+    }
+
+    /// Time of the last return.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// The k-th derivative of the interpolated solution at `t`, which must lie within the last
+    /// internal step (dense output).
+    pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        // SAFETY: live solver memory; `scratch` has the system's length.
+        let f = unsafe { (self.api.get_dky)(self.mem.as_ptr(), t, k as c_int, self.scratch.raw()) };
+        self.check(f)?;
+        Ok(self.scratch.as_slice())
+    }
+
+    /// Installs new root functions, replacing any previous ones; `None` disables root finding.
+    pub fn set_roots(&mut self, roots: Option<Roots>) -> Result<(), SolverError> {
+        let m = self.mem.as_ptr();
+        let Some(roots) = roots else {
+            // SAFETY: live memory; zero root functions disables root finding.
+            self.check(unsafe { (self.api.root_init)(m, 0, None) })?;
+            self.shared.roots = None;
+            self.shared.root_count = 0;
+            return Ok(());
+        };
+        let bad_directions = !roots.directions.is_empty()
+            && (roots.directions.len() != roots.count || roots.directions.iter().any(|d| d.abs() > 1));
+        if roots.count == 0 || bad_directions {
+            let message = format!(
+                "roots: count = {} must be ≥ 1 and directions {:?} empty or one of -1/0/+1 per root",
+                roots.count, roots.directions
+            );
+            return Err(self.error(ErrorKind::InvalidInput, 0, message));
+        }
+        self.shared.roots = Some(roots.function);
+        self.shared.root_count = roots.count;
+        // SAFETY: live memory; the trampoline reads `root_count` values from `shared`, which
+        // now matches the count declared here.
+        let trampoline: ffi::CVRootFn = Some(callbacks::roots::<S>);
+        self.check(unsafe { (self.api.root_init)(m, roots.count as c_int, trampoline) })?;
+        if !roots.directions.is_empty() {
+            let mut directions: Vec<c_int> = roots.directions.clone();
+            // SAFETY: `directions` holds one entry per root function; SUNDIALS copies it.
+            self.check(unsafe { (self.api.set_root_direction)(m, directions.as_mut_ptr()) })?;
+        }
+        Ok(())
+    }
+
+    /// Sets (or moves) the stop time past which the solver will not step.
+    pub fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
+        if !t_stop.is_finite() {
+            return Err(self.error(ErrorKind::InvalidInput, 0, format!("stop time {t_stop} must be finite")));
+        }
+        // SAFETY: live solver memory; stores a scalar.
+        self.check(unsafe { (self.api.set_stop_time)(self.mem.as_ptr(), t_stop) })?;
+        Ok(())
+    }
+
+    /// Restarts the integration at (t0, y0), keeping options, tolerances, root functions and
+    /// the running statistics.
+    pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        if y0.len() != self.shared.dim || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.shared.dim);
+            return Err(self.error(ErrorKind::InvalidInput, 0, message));
+        }
+        let before = self.raw_stats();
+        self.y.as_mut_slice().copy_from_slice(y0);
+        // SAFETY: live memory; SUNDIALS copies `y` into its own history arrays.
+        let flag = unsafe { (self.api.reinit)(self.mem.as_ptr(), t0, self.y.raw()) };
+        self.check(flag)?;
+        if self.api.reinit_resets_counters {
+            self.counters_before_reinit.accumulate(&before);
+        }
+        self.t = t0;
+        self.reinits += 1;
+        Ok(())
+    }
+
+    fn raw_stats(&self) -> Stats {
+        // SAFETY: live solver memory; the reader only calls getters.
+        unsafe { (self.api.read_stats)(self.mem.as_ptr()) }
+    }
+
+    /// Statistics over the solver's whole life, restarts included.
+    pub fn stats(&self) -> Stats {
+        let mut stats = self.counters_before_reinit;
+        stats.accumulate(&self.raw_stats());
+        stats.step_underflow_warnings = self.shared.diag.step_underflows;
+        stats.nonfinite_rhs = self.shared.diag.nonfinite_rhs;
+        stats.reinits = self.reinits;
+        stats
+    }
+
+    /// Warnings SUNDIALS issued (the first 64), e.g. "t + h = t".
+    pub fn warnings(&self) -> &[String] {
+        &self.shared.diag.warnings
+    }
+
+    /// The system being integrated.
+    pub fn system(&self) -> &S {
+        &self.shared.system
+    }
+
+    /// The solver family name ("CVODE" or "ARKStep").
+    pub fn name(&self) -> &'static str {
+        self.api.name
+    }
+}
+
+impl<S> Drop for Solver<S> {
+    fn drop(&mut self) {
+        let mut mem = self.mem.as_ptr();
+        // SAFETY: frees the solver memory exactly once, before the linear solver, vectors,
+        // user data and context (dropped afterwards in field order).
+        unsafe { (self.api.free)(&mut mem) };
+    }
+}
+
+impl<S> std::fmt::Debug for Solver<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Solver").field("solver", &self.api.name).field("t", &self.t).finish()
+    }
+}

@@ -1,0 +1,66 @@
+//! Serial `N_Vector`s with RAII.
+
+use super::context::Context;
+use super::ffi;
+use std::ptr::NonNull;
+
+/// An owned serial `N_Vector` of fixed length.
+#[derive(Debug)]
+pub(crate) struct SerialVector {
+    raw: NonNull<ffi::_generic_N_Vector>,
+    len: usize,
+}
+
+impl SerialVector {
+    /// A new vector holding a copy of `values`.
+    pub(crate) fn from_slice(values: &[f64], ctx: &Context) -> Option<Self> {
+        let len = values.len();
+        // SAFETY: N_VNew_Serial allocates a vector of `len` reals owned by the returned
+        // handle; `ctx` is a live context.
+        let raw = unsafe { ffi::N_VNew_Serial(len as ffi::sunindextype, ctx.raw()) };
+        let mut vector = Self { raw: NonNull::new(raw)?, len };
+        vector.as_mut_slice().copy_from_slice(values);
+        Some(vector)
+    }
+
+    pub(crate) fn raw(&self) -> ffi::N_Vector {
+        self.raw.as_ptr()
+    }
+
+    pub(crate) fn as_slice(&self) -> &[f64] {
+        // SAFETY: a serial vector owns a contiguous array of `len` reals that lives as long as
+        // the vector; the shared borrow of `self` prevents concurrent mutation through us.
+        unsafe { std::slice::from_raw_parts(ffi::N_VGetArrayPointer(self.raw()), self.len) }
+    }
+
+    pub(crate) fn as_mut_slice(&mut self) -> &mut [f64] {
+        // SAFETY: as in `as_slice`, with exclusive access through `&mut self`.
+        unsafe { std::slice::from_raw_parts_mut(ffi::N_VGetArrayPointer(self.raw()), self.len) }
+    }
+}
+
+impl Drop for SerialVector {
+    fn drop(&mut self) {
+        // SAFETY: the vector was created by N_VNew_Serial and is destroyed exactly once.
+        unsafe { ffi::N_VDestroy(self.raw()) };
+    }
+}
+
+/// Views a SUNDIALS-owned serial vector as a slice for the duration of a callback.
+///
+/// # Safety
+/// `v` must be a valid serial `N_Vector` of length `len` that outlives `'a` and is not
+/// accessed through another path while the slice is alive.
+pub(crate) unsafe fn slice<'a>(v: ffi::N_Vector, len: usize) -> &'a [f64] {
+    // SAFETY: guaranteed by the caller (see above).
+    unsafe { std::slice::from_raw_parts(ffi::N_VGetArrayPointer(v), len) }
+}
+
+/// Mutable counterpart of [`slice`].
+///
+/// # Safety
+/// As for [`slice`], with exclusive access.
+pub(crate) unsafe fn slice_mut<'a>(v: ffi::N_Vector, len: usize) -> &'a mut [f64] {
+    // SAFETY: guaranteed by the caller (see above).
+    unsafe { std::slice::from_raw_parts_mut(ffi::N_VGetArrayPointer(v), len) }
+}
