@@ -211,6 +211,7 @@ static ARKSTEP: Api = Api {
     set_max_nonlin_iters: ffi::ARKStepSetMaxNonlinIters,
     set_max_conv_fails: ffi::ARKStepSetMaxConvFails,
     set_nonlin_conv_coef: ffi::ARKStepSetNonlinConvCoef,
+    set_max_hnil_warns: ffi::ARKStepSetMaxHnilWarns,
     // ARKStepReset keeps options and counters; only time, state and step history restart.
     reinit: ffi::ARKStepReset,
     reinit_resets_counters: false,

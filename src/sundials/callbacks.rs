@@ -20,8 +20,8 @@ pub(crate) struct Diagnostics {
     pub warnings: Vec<String>,
     /// "t + h = t" warnings since the solver was created.
     pub step_underflows: u64,
-    /// Value of `step_underflows` when the current `advance` call started.
-    pub step_underflows_at_call: u64,
+    /// Values of (`nonfinite_rhs`, `step_underflows`) when the current `advance` call started.
+    at_call: (u64, u64),
     /// Message of a panic caught in a callback, not yet reported.
     pub panic: Option<String>,
     /// RHS calls that produced non-finite values.
@@ -33,6 +33,17 @@ pub(crate) struct Diagnostics {
 const MAX_KEPT_WARNINGS: usize = 64;
 
 impl Diagnostics {
+    /// Marks the start of a call into SUNDIALS.
+    pub fn begin_call(&mut self) {
+        self.last_error = None;
+        self.at_call = (self.nonfinite_rhs, self.step_underflows);
+    }
+
+    /// (non-finite RHS results, step underflows) since [`Diagnostics::begin_call`].
+    pub fn since_call(&self) -> (u64, u64) {
+        (self.nonfinite_rhs - self.at_call.0, self.step_underflows - self.at_call.1)
+    }
+
     /// Runs a user callback, catching a panic. Returns false if it panicked (or an earlier
     /// panic is pending, in which case `f` is not run).
     fn guarded(&mut self, f: impl FnOnce()) -> bool {

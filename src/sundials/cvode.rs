@@ -105,6 +105,7 @@ static CVODE: Api = Api {
     set_max_nonlin_iters: ffi::CVodeSetMaxNonlinIters,
     set_max_conv_fails: ffi::CVodeSetMaxConvFails,
     set_nonlin_conv_coef: ffi::CVodeSetNonlinConvCoef,
+    set_max_hnil_warns: ffi::CVodeSetMaxHnilWarns,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
     read_stats,

@@ -36,6 +36,7 @@ pub(crate) struct Api {
     pub set_max_nonlin_iters: unsafe extern "C" fn(Mem, c_int) -> c_int,
     pub set_max_conv_fails: unsafe extern "C" fn(Mem, c_int) -> c_int,
     pub set_nonlin_conv_coef: unsafe extern "C" fn(Mem, f64) -> c_int,
+    pub set_max_hnil_warns: unsafe extern "C" fn(Mem, c_int) -> c_int,
     /// Restarts at (t0, y0) keeping the options.
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
@@ -142,6 +143,9 @@ impl<S> Solver<S> {
         // `Shared`, which lives (at a fixed address) as long as the solver memory.
         solver.check(unsafe { (api.set_err_handler)(m, Some(callbacks::error_handler), diag) })?;
         solver.check(unsafe { (api.set_user_data)(m, user_data) })?;
+        // Every "t + h = t" warning reaches the handler and is counted (SUNDIALS stops
+        // issuing them after 10 by default).
+        solver.check(unsafe { (api.set_max_hnil_warns)(m, c_int::MAX) })?;
         match &atol {
             // SAFETY: `m` is live; the tolerance vector is kept alive in `_atol` below.
             Some(v) => solver.check(unsafe { (api.sv_tolerances)(m, options.rtol, v.raw()) })?,
@@ -216,12 +220,6 @@ impl<S> Solver<S> {
         }
         let kind = (self.api.classify)(flag);
         let mut message = self.shared.diag.last_error.take().unwrap_or_default();
-        if kind == ErrorKind::RhsFailure && self.shared.diag.nonfinite_rhs > 0 {
-            message.push_str(&format!(
-                " [{} right-hand-side calls returned non-finite values]",
-                self.shared.diag.nonfinite_rhs
-            ));
-        }
         if let Some(why) = self.shared.diag.root_failure.take() {
             message.push_str(&format!(" [{why}]"));
         }
@@ -245,18 +243,32 @@ impl<S> Solver<S> {
             Task::Normal => 1,
             Task::OneStep => 2,
         };
-        self.shared.diag.last_error = None;
-        self.shared.diag.step_underflows_at_call = self.shared.diag.step_underflows;
+        self.shared.diag.begin_call();
         let mut t = self.t;
         // SAFETY: live solver memory; `y` is a vector of the system's length owned by us;
         // callbacks reach `shared`, which outlives the call.
         let flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         self.t = t;
-        let flag = self.check(flag)?;
-        let new_underflows = self.shared.diag.step_underflows - self.shared.diag.step_underflows_at_call;
-        if self.fail_on_step_underflow && new_underflows > 0 {
+        let (nonfinite, underflows) = self.shared.diag.since_call();
+        let flag = self.check(flag).map_err(|mut e| {
+            // Name the root cause: SUNDIALS reports its consequence (e.g. "too much work"
+            // when t + h = t stalls time, or repeated failures after NaN values).
+            if e.kind != ErrorKind::CallbackPanic && nonfinite > 0 {
+                e.kind = ErrorKind::RhsFailure;
+            } else if e.kind != ErrorKind::CallbackPanic && underflows > 0 {
+                e.kind = ErrorKind::StepUnderflow;
+            }
+            if nonfinite > 0 {
+                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            }
+            if underflows > 0 {
+                e.message.push_str(&format!(" [{underflows} steps below the spacing of t (t + h = t)]"));
+            }
+            e
+        })?;
+        if self.fail_on_step_underflow && underflows > 0 {
             let warning = self.shared.diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
-            let message = format!("{new_underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
+            let message = format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
             return Err(self.error(ErrorKind::StepUnderflow, flag, message));
         }
         let event = match flag {

@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs what stickslip needs on Debian, idempotently: Debian's SUNDIALS (headers and shared
+# libraries), libclang (bindgen reads the ARKODE headers), a C compiler and pkg-config. Needs
+# root (or sudo) only when something is missing. Also checks for a Rust toolchain.
+set -euo pipefail
+
+packages=(libsundials-dev libclang-dev clang gcc pkg-config)
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${STICKSLIP_WITH_VALGRIND:-0}" = 1 ] && ! command -v valgrind >/dev/null; then
+    missing+=(valgrind)
+fi
+
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "stickslip: installing Debian packages: ${missing[*]}" >&2
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if ! command -v cargo >/dev/null; then
+    echo "stickslip: no Rust toolchain (cargo) on PATH; install one with rustup (https://rustup.rs)" >&2
+    exit 1
+fi
