@@ -10,7 +10,8 @@
 //! Before any timing, both sides must produce the same output rows and the same counters
 //! (steps, RHS/Jacobian/root evaluations, ...); the C program also checks its final state
 //! against the example's reference solution. After the criterion group, an independent
-//! measurement (minimum of 200 single runs per side after warm-up) prints `ratio rust/c = X`.
+//! measurement (minimum of 200 single runs per side after warm-up, taken in 10 alternating
+//! rounds of 20 so both sides see the same machine load) prints `ratio rust/c = X`.
 //!
 //! Run: `cargo bench --bench robertson` (results in docs/benchmarks.md).
 
@@ -23,8 +24,11 @@ use stickslip::model::robertson::{cvode_example, ExampleRun};
 
 const GROUP: &str = "robertson_cvode";
 const C_OPT: &str = "-O3";
+/// Untimed Rust runs before the independent measurement (the C program does the same number).
 const INDEPENDENT_WARMUP: usize = 50;
-const INDEPENDENT_RUNS: usize = 200;
+/// The independent measurement: ROUNDS × ROUND_RUNS = 200 single runs per side.
+const ROUNDS: usize = 10;
+const ROUND_RUNS: usize = 20;
 
 /// Where the C binary goes: cargo's per-target scratch directory when it provides one.
 fn scratch_dir() -> PathBuf {
@@ -154,27 +158,40 @@ fn criterion_median(function: &str, since: SystemTime) -> Option<f64> {
     value[..end].trim().parse().ok()
 }
 
-/// Minimum and median of `INDEPENDENT_RUNS` single Rust runs after warm-up.
-fn rust_min_median() -> (Duration, Duration) {
-    for _ in 0..INDEPENDENT_WARMUP {
+/// `ROUND_RUNS` single Rust runs, each timed with `Instant`, after `warmup` untimed runs.
+fn rust_singles(warmup: usize) -> Vec<Duration> {
+    for _ in 0..warmup {
         black_box(cvode_example().expect("Robertson example"));
     }
-    let mut times: Vec<Duration> = (0..INDEPENDENT_RUNS)
+    (0..ROUND_RUNS)
         .map(|_| {
             let start = Instant::now();
             black_box(cvode_example().expect("Robertson example"));
             start.elapsed()
         })
-        .collect();
-    times.sort();
-    (times[0], times[times.len() / 2])
+        .collect()
 }
 
-/// Minimum and median of `INDEPENDENT_RUNS` single C runs after warm-up (timed in C).
-fn c_min_median(binary: &Path) -> (Duration, Duration) {
-    let out = run_c(binary, &[&INDEPENDENT_RUNS.to_string(), "min"]);
-    let v: Vec<u64> = out.split_whitespace().map(|s| s.parse().expect("C min output")).collect();
-    (Duration::from_nanos(v[0]), Duration::from_nanos(v[1]))
+/// `ROUND_RUNS` single C runs, timed in C after its own warm-up (`robertson_cvode N each`).
+fn c_singles(binary: &Path) -> Vec<Duration> {
+    let out = run_c(binary, &[&ROUND_RUNS.to_string(), "each"]);
+    out.lines().map(|l| Duration::from_nanos(l.trim().parse().expect("C single-run time"))).collect()
+}
+
+/// Independent measurement: `ROUNDS` alternating rounds of `ROUND_RUNS` single runs per side
+/// (so both sides see the same machine load), after warm-up. Returns (min, median) per side:
+/// ((rust_min, rust_median), (c_min, c_median)).
+fn independent(binary: &Path) -> ((Duration, Duration), (Duration, Duration)) {
+    let (mut rust, mut c) = (Vec::new(), Vec::new());
+    for round in 0..ROUNDS {
+        c.extend(c_singles(binary));
+        rust.extend(rust_singles(if round == 0 { INDEPENDENT_WARMUP } else { 5 }));
+    }
+    let summary = |mut v: Vec<Duration>| {
+        v.sort();
+        (v[0], v[v.len() / 2])
+    };
+    (summary(rust), summary(c))
 }
 
 fn us(d: Duration) -> f64 {
@@ -217,11 +234,11 @@ fn main() {
         ),
         _ => eprintln!("criterion medians: not available (a filter skipped a function, or no estimates.json)"),
     }
-    let (c_min, c_median) = c_min_median(&binary);
-    let (rust_min, rust_median) = rust_min_median();
+    let ((rust_min, rust_median), (c_min, c_median)) = independent(&binary);
     eprintln!(
-        "independent, {INDEPENDENT_RUNS} single runs after {INDEPENDENT_WARMUP} warm-up: \
+        "independent, {} single runs per side ({ROUNDS} alternating rounds) after warm-up: \
          rust min {:.1} µs (median {:.1}), c min {:.1} µs (median {:.1})",
+        ROUNDS * ROUND_RUNS,
         us(rust_min),
         us(rust_median),
         us(c_min),

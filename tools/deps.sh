@@ -4,7 +4,7 @@
 # root (or sudo) only when something is missing. Also checks for a Rust toolchain.
 set -euo pipefail
 
-packages=(libsundials-dev libclang-dev clang gcc pkg-config)
+packages=(libsundials-dev libclang-dev gcc pkg-config)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
