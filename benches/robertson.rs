@@ -32,14 +32,17 @@ const ROUND_RUNS: usize = 20;
 
 /// Where the C binary goes: cargo's per-target scratch directory when it provides one.
 fn scratch_dir() -> PathBuf {
-    option_env!("CARGO_TARGET_TMPDIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir)
+    option_env!("CARGO_TARGET_TMPDIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir)
 }
 
 /// Compiles benches/c/robertson_cvode.c once and returns the binary's path.
 fn compile_c() -> PathBuf {
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/c/robertson_cvode.c");
     let dir = scratch_dir();
-    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
+    std::fs::create_dir_all(&dir)
+        .unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
     let binary = dir.join("robertson_cvode");
     let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     let mut cmd = Command::new(&compiler);
@@ -49,7 +52,9 @@ fn compile_c() -> PathBuf {
     }
     if let Some(lib) = std::env::var_os("SUNDIALS_LIBRARY_DIR") {
         let lib = PathBuf::from(lib);
-        cmd.arg("-L").arg(&lib).arg(format!("-Wl,-rpath,{}", lib.display()));
+        cmd.arg("-L")
+            .arg(&lib)
+            .arg(format!("-Wl,-rpath,{}", lib.display()));
     }
     cmd.args([
         "-lsundials_cvode",
@@ -58,15 +63,24 @@ fn compile_c() -> PathBuf {
         "-lsundials_sunlinsoldense",
         "-lm",
     ]);
-    let status = cmd.status().unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
-    assert!(status.success(), "compiling {} failed: {cmd:?}", source.display());
+    let status = cmd
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
+    assert!(
+        status.success(),
+        "compiling {} failed: {cmd:?}",
+        source.display()
+    );
     binary
 }
 
 /// Runs the C program and returns its stdout; panics on failure (including a failed
 /// reference-solution check, exit status 2).
 fn run_c(binary: &Path, args: &[&str]) -> String {
-    let out = Command::new(binary).args(args).output().unwrap_or_else(|e| panic!("cannot run {}: {e}", binary.display()));
+    let out = Command::new(binary)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {}: {e}", binary.display()));
     assert!(
         out.status.success(),
         "{} {args:?} failed ({}): {}",
@@ -80,7 +94,11 @@ fn run_c(binary: &Path, args: &[&str]) -> String {
 /// `robertson_cvode N`: total nanoseconds of N runs.
 fn c_total(binary: &Path, iters: u64) -> Duration {
     let out = run_c(binary, &[&iters.to_string()]);
-    Duration::from_nanos(out.trim().parse().unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")))
+    Duration::from_nanos(
+        out.trim()
+            .parse()
+            .unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")),
+    )
 }
 
 /// Compares the C program's `check` output with one Rust run: every output row and every
@@ -94,8 +112,14 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
         let fields: Vec<&str> = line.split_whitespace().collect();
         match fields.as_slice() {
             ["row", rest @ ..] => {
-                let v: Vec<f64> = rest[..4].iter().map(|s| s.parse().expect("row value")).collect();
-                let r: Vec<i32> = rest[4..].iter().map(|s| s.parse().expect("root flag")).collect();
+                let v: Vec<f64> = rest[..4]
+                    .iter()
+                    .map(|s| s.parse().expect("row value"))
+                    .collect();
+                let r: Vec<i32> = rest[4..]
+                    .iter()
+                    .map(|s| s.parse().expect("root flag"))
+                    .collect();
                 rows.push((v, r));
             }
             [name, value] => {
@@ -105,7 +129,11 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
         }
     }
     let counter = |name: &str| -> u64 {
-        counters.get(name).unwrap_or_else(|| panic!("C check output lacks {name}")).parse().expect("counter")
+        counters
+            .get(name)
+            .unwrap_or_else(|| panic!("C check output lacks {name}"))
+            .parse()
+            .expect("counter")
     };
     let s = &rust.stats;
     let pairs = [
@@ -121,9 +149,20 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
         ("root_evals", s.root_evals),
     ];
     for (name, rust_value) in pairs {
-        assert_eq!(rust_value, counter(name), "{name}: Rust wrapper {rust_value} vs plain C {}", counter(name));
+        assert_eq!(
+            rust_value,
+            counter(name),
+            "{name}: Rust wrapper {rust_value} vs plain C {}",
+            counter(name)
+        );
     }
-    assert_eq!(rows.len(), rust.rows.len(), "number of output rows differs: C {} vs Rust {}", rows.len(), rust.rows.len());
+    assert_eq!(
+        rows.len(),
+        rust.rows.len(),
+        "number of output rows differs: C {} vs Rust {}",
+        rows.len(),
+        rust.rows.len()
+    );
     let mut bitwise = true;
     for (i, ((cv, cr), r)) in rows.iter().zip(&rust.rows).enumerate() {
         let rust_values = [r.t, r.y[0], r.y[1], r.y[2]];
@@ -132,7 +171,10 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
         assert_eq!(rust_roots, c_roots, "row {i}: root information differs");
         for (c, rv) in cv.iter().zip(rust_values) {
             bitwise &= c.to_bits() == rv.to_bits();
-            assert!((c - rv).abs() <= 1e-10 * c.abs().max(1e-300), "row {i}: C {cv:?} vs Rust {rust_values:?}");
+            assert!(
+                (c - rv).abs() <= 1e-10 * c.abs().max(1e-300),
+                "row {i}: C {cv:?} vs Rust {rust_values:?}"
+            );
         }
     }
     (s.steps, counter("steps"), bitwise)
@@ -143,8 +185,13 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
 fn criterion_median(function: &str, since: SystemTime) -> Option<f64> {
     let root = std::env::var_os("CRITERION_HOME")
         .map(PathBuf::from)
-        .or_else(|| std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion")))
-        .or_else(|| option_env!("CARGO_TARGET_TMPDIR").and_then(|t| Path::new(t).parent().map(|p| p.join("criterion"))))
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
+        })
+        .or_else(|| {
+            option_env!("CARGO_TARGET_TMPDIR")
+                .and_then(|t| Path::new(t).parent().map(|p| p.join("criterion")))
+        })
         .unwrap_or_else(|| PathBuf::from("target/criterion"));
     let file = root.join(GROUP).join(function).join("new/estimates.json");
     if std::fs::metadata(&file).and_then(|m| m.modified()).ok()? < since {
@@ -175,7 +222,9 @@ fn rust_singles(warmup: usize) -> Vec<Duration> {
 /// `ROUND_RUNS` single C runs, timed in C after its own warm-up (`robertson_cvode N each`).
 fn c_singles(binary: &Path) -> Vec<Duration> {
     let out = run_c(binary, &[&ROUND_RUNS.to_string(), "each"]);
-    out.lines().map(|l| Duration::from_nanos(l.trim().parse().expect("C single-run time"))).collect()
+    out.lines()
+        .map(|l| Duration::from_nanos(l.trim().parse().expect("C single-run time")))
+        .collect()
 }
 
 /// Independent measurement: `ROUNDS` alternating rounds of `ROUND_RUNS` single runs per side
@@ -185,7 +234,11 @@ fn independent(binary: &Path) -> ((Duration, Duration), (Duration, Duration)) {
     let (mut rust, mut c) = (Vec::new(), Vec::new());
     for round in 0..ROUNDS {
         c.extend(c_singles(binary));
-        rust.extend(rust_singles(if round == 0 { INDEPENDENT_WARMUP } else { 5 }));
+        rust.extend(rust_singles(if round == 0 {
+            INDEPENDENT_WARMUP
+        } else {
+            5
+        }));
     }
     let summary = |mut v: Vec<Duration>| {
         v.sort();
@@ -217,7 +270,9 @@ fn main() {
     {
         let mut group = criterion.benchmark_group(GROUP);
         group.bench_function("rust_wrapper", |b| b.iter(cvode_example));
-        group.bench_function("plain_c", |b| b.iter_custom(|iters| c_total(&binary, iters)));
+        group.bench_function("plain_c", |b| {
+            b.iter_custom(|iters| c_total(&binary, iters))
+        });
         group.finish();
     }
     criterion.final_summary();
@@ -225,14 +280,19 @@ fn main() {
     if !benchmarking {
         return;
     }
-    match (criterion_median("rust_wrapper", start), criterion_median("plain_c", start)) {
+    match (
+        criterion_median("rust_wrapper", start),
+        criterion_median("plain_c", start),
+    ) {
         (Some(rust), Some(c)) => eprintln!(
             "criterion medians: rust_wrapper {:.1} µs, plain_c {:.1} µs, ratio rust/c = {:.3}",
             rust / 1e3,
             c / 1e3,
             rust / c
         ),
-        _ => eprintln!("criterion medians: not available (a filter skipped a function, or no estimates.json)"),
+        _ => eprintln!(
+            "criterion medians: not available (a filter skipped a function, or no estimates.json)"
+        ),
     }
     let ((rust_min, rust_median), (c_min, c_median)) = independent(&binary);
     eprintln!(
@@ -245,5 +305,8 @@ fn main() {
         us(c_median)
     );
     eprintln!("steps: rust {steps}, c {c_steps}");
-    eprintln!("ratio rust/c = {:.3}", rust_min.as_secs_f64() / c_min.as_secs_f64());
+    eprintln!(
+        "ratio rust/c = {:.3}",
+        rust_min.as_secs_f64() / c_min.as_secs_f64()
+    );
 }

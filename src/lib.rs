@@ -7,6 +7,7 @@
 
 #![deny(unsafe_code)]
 
+pub mod analysis;
 pub mod integrate;
 pub mod model;
 pub mod sundials;

@@ -3,11 +3,13 @@
 //! statistics it reports and the typed errors it returns.
 
 mod error;
+mod integrator;
 mod options;
 mod problem;
 mod stats;
 
 pub use error::{ErrorKind, SolverError};
+pub use integrator::Integrator;
 pub use options::{Options, Tolerance};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
 pub use stats::Stats;

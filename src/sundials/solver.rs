@@ -6,7 +6,7 @@ use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
 use super::vector::SerialVector;
-use crate::integrate::{ErrorKind, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
+use crate::integrate::{ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr::NonNull;
 
@@ -395,6 +395,30 @@ impl<S> Solver<S> {
     /// The solver family name ("CVODE" or "ARKStep").
     pub fn name(&self) -> &'static str {
         self.api.name
+    }
+}
+
+impl<S> Integrator for Solver<S> {
+    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        Solver::advance(self, tout, task)
+    }
+    fn state(&self) -> &[f64] {
+        Solver::state(self)
+    }
+    fn t(&self) -> f64 {
+        Solver::t(self)
+    }
+    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        Solver::dense(self, t, k)
+    }
+    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        Solver::reinit(self, t0, y0)
+    }
+    fn stats(&self) -> Stats {
+        Solver::stats(self)
+    }
+    fn name(&self) -> &'static str {
+        Solver::name(self)
     }
 }
 

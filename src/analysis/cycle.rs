@@ -1,0 +1,593 @@
+//! The limit cycle by brute-force integration: events, per-cycle quantities, convergence.
+//!
+//! A cycle runs from one upward crossing of v = 1 (w = 0) to the next. Events are located on
+//! the state, never on the right-hand side (on the slow manifold dv/dt = −γ²G is solver noise
+//! times γ²): crossings of w = 0 and of the half-maximum level, and extrema of u, w, θ where
+//! the derivative of the integrator's interpolant changes sign. Time is re-based at each slip
+//! peak (the integrator restarts at local t = 0 at the v maximum): every reported duration is
+//! a difference of small local times, and the arrest that follows the peak (steps of 1e-17 at
+//! γ = 1e8) happens at local t ~ 1e-8, where such steps are representable.
+//!
+//! Convergence rule: the orbit is periodic (period 1) when, for `settle` consecutive pairs of
+//! cycles, the period and ln v_max change by less than `tolerance` (relative; absolute for
+//! ln v_max below 1). If instead cycle k matches cycle k−n (n = 2..4) for `settle`
+//! consecutive cycles, the orbit has period n and its n distinct cycles are reported. A cycle
+//! whose w range falls below 1e-9 means the oscillation died out: the fixed point is stable.
+
+use super::events::{self, Knot};
+use crate::integrate::{ErrorKind, Integrator, OdeSystem, SolverError, Task};
+use crate::model::drr::{Drr, THETA, U, W};
+use serde::Serialize;
+
+/// How the cycle analysis runs; defaults documented on each field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CycleSettings {
+    /// Relative tolerance of the convergence rule (default max(1e-8, 100·rtol)).
+    pub tolerance: f64,
+    /// Consecutive agreeing cycle pairs required (default 3).
+    pub settle: usize,
+    /// Give up after this many cycles (default 1000).
+    pub max_cycles: usize,
+    /// Give up after this much (dimensionless) time (default 1e6).
+    pub max_time: f64,
+    /// Fail with "too much work" after this many integrator steps in all (default 2e7).
+    pub max_steps: u64,
+    /// Keep every step of the last this many cycles (trajectory); 0 keeps none.
+    pub trajectory_cycles: usize,
+}
+
+impl CycleSettings {
+    /// Defaults for a given integration rtol.
+    pub fn for_rtol(rtol: f64) -> Self {
+        Self {
+            tolerance: (100.0 * rtol).max(1e-8),
+            settle: 3,
+            max_cycles: 1000,
+            max_time: 1e6,
+            max_steps: 20_000_000,
+            trajectory_cycles: 0,
+        }
+    }
+}
+
+/// Quantities of one cycle (dimensionless; times in units of D_c/v0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CycleValues {
+    /// Time between successive upward crossings of v = 1.
+    pub period: f64,
+    /// Time from the upward crossing of v = 1 to the v maximum t_c.
+    pub t0: f64,
+    /// Full width of v(t) at half its maximum; null if v never falls below half its maximum.
+    pub slip_half_width: Option<f64>,
+    /// Maximum velocity v_max.
+    pub v_max: f64,
+    /// ln v_max.
+    pub ln_v_max: f64,
+    /// Minimum velocity over the cycle.
+    pub v_min: f64,
+    /// ln v_min.
+    pub ln_v_min: f64,
+    /// u at the v maximum.
+    pub u_at_v_max: f64,
+    /// θ at the v maximum.
+    pub theta_at_v_max: f64,
+    /// Minimum of u over the cycle.
+    pub u_min: f64,
+    /// Maximum of u over the cycle.
+    pub u_max: f64,
+    /// Minimum of θ over the cycle.
+    pub theta_min: f64,
+    /// Maximum of θ over the cycle.
+    pub theta_max: f64,
+    /// Slip per event: block displacement ∫v dt while v > 1, = Δu + duration (units of D_c).
+    pub slip: f64,
+    /// Time with v > 1 (from the upward to the downward crossing of v = 1).
+    pub slip_duration: f64,
+    /// Integrator steps spent on the cycle.
+    pub steps: u64,
+}
+
+/// What the integration settled to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CycleStatus {
+    /// A limit cycle of period 1.
+    Periodic,
+    /// A limit cycle made of `cycles_per_period` > 1 distinct cycles (e.g. period doubling).
+    PeriodN,
+    /// The oscillation died out: the fixed point is stable from this start.
+    FixedPoint,
+    /// Neither within the limits (chaotic, slowly converging, or too short a run).
+    NotConverged,
+}
+
+/// The "cycle" section of a report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CycleReport {
+    /// What the integration settled to.
+    pub status: CycleStatus,
+    /// Whether a periodic orbit (of any period n) was found.
+    pub converged: bool,
+    /// n for a period-n orbit (1 for a simple cycle).
+    pub cycles_per_period: Option<usize>,
+    /// Values of the cycle: the mean over the cycles used (period 1), or for period n the
+    /// full period with the other fields null (see `orbit`); null when not converged.
+    #[serde(flatten)]
+    pub values: Option<CycleValues>,
+    /// Relative spread (max − min)/|mean| of each quantity over the cycles used.
+    pub spread: Option<CycleValues>,
+    /// The distinct cycles of the orbit: one for period 1, n for period n.
+    pub orbit: Vec<CycleValues>,
+    /// Time after which the orbit repeats (sum of its cycles' periods).
+    pub orbit_period: Option<f64>,
+    /// The last cycles computed (up to 10), when not converged.
+    pub last_cycles: Vec<CycleValues>,
+    /// Cycles averaged into `values`.
+    pub cycles_used: usize,
+    /// Complete cycles computed, transient included.
+    pub cycles_computed: usize,
+    /// Total time integrated (dimensionless).
+    pub time_integrated: f64,
+    /// The convergence rule, in words.
+    pub convergence_rule: String,
+    /// Relative tolerance of the rule.
+    pub tolerance: f64,
+    /// Mean integrator steps per cycle used.
+    pub steps_per_cycle: Option<f64>,
+    /// Every integrator step of the last cycles, if a trajectory was asked for.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub trajectory: Vec<TrajectoryCycle>,
+}
+
+/// The samples (every accepted step plus events) of one cycle; t from its upward crossing of
+/// v = 1.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct TrajectoryCycle {
+    /// Time since the cycle's upward crossing of v = 1.
+    pub t: Vec<f64>,
+    /// u.
+    pub u: Vec<f64>,
+    /// v.
+    pub v: Vec<f64>,
+    /// θ.
+    pub theta: Vec<f64>,
+}
+
+impl TrajectoryCycle {
+    fn push(&mut self, t: f64, y: &[f64]) {
+        self.t.push(t);
+        self.u.push(y[U]);
+        self.v.push(y[W].exp());
+        self.theta.push(y[THETA]);
+    }
+}
+
+/// One step end: local time, state and the interpolant's derivative.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    t: f64,
+    y: [f64; 3],
+    d: [f64; 3],
+}
+
+/// The cycle being accumulated, in the frame "time since its upward crossing of v = 1".
+#[derive(Debug, Clone)]
+struct OpenCycle {
+    /// Time since the upward crossing at local t = 0 of the current integration segment.
+    origin: f64,
+    u_start: f64,
+    peak: Option<(f64, [f64; 3])>,
+    half_rise: Option<f64>,
+    half_fall: Option<f64>,
+    down: Option<(f64, f64)>,
+    w_min: f64,
+    w_max: f64,
+    u_range: (f64, f64),
+    theta_range: (f64, f64),
+    steps_at_start: u64,
+    trajectory: Option<TrajectoryCycle>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Event {
+    Up,
+    Down,
+    MaxW,
+    MinW,
+    Extremum(usize),
+    HalfFall,
+}
+
+/// The brute-force cycle finder.
+struct Tracker<'a> {
+    integ: &'a mut dyn Integrator,
+    drr: &'a Drr,
+    settings: &'a CycleSettings,
+    prev: Sample,
+    open: Option<OpenCycle>,
+    closed: Vec<CycleValues>,
+    trajectories: Vec<TrajectoryCycle>,
+    /// Step ends of w since its last minimum (local times of the current segment).
+    rise: Vec<Knot>,
+    /// Time integrated in completed segments.
+    elapsed: f64,
+    steps: u64,
+}
+
+fn sample_after_restart(drr: &Drr, y: [f64; 3], at_peak: bool) -> Sample {
+    let mut d = [0.0; 3];
+    drr.rhs(0.0, &y, &mut d);
+    if at_peak {
+        // dw/dt = 0 at the peak; its computed value is rounding noise times γ².
+        d[W] = 0.0;
+    }
+    Sample { t: 0.0, y, d }
+}
+
+impl<'a> Tracker<'a> {
+    fn failure(&self, kind: ErrorKind, message: String) -> SolverError {
+        SolverError {
+            solver: self.integ.name(),
+            kind,
+            t: self.elapsed + self.integ.t(),
+            state: self.integ.state().to_vec(),
+            flag: 0,
+            message,
+        }
+    }
+
+    fn state_at(&mut self, t: f64) -> Result<[f64; 3], SolverError> {
+        let y = self.integ.dense(t, 0)?;
+        Ok([y[0], y[1], y[2]])
+    }
+
+    /// Events inside the step prev → next, with their refined local times.
+    fn events(&mut self, next: &Sample) -> Result<Vec<(f64, Event)>, SolverError> {
+        let (p, span) = (self.prev, (self.prev.t, next.t));
+        let mut found = Vec::new();
+        if p.y[W] < 0.0 && next.y[W] >= 0.0 {
+            found.push((events::refine(self.integ, span, 0, W, 0.0)?, Event::Up));
+        }
+        if p.y[W] >= 0.0 && next.y[W] < 0.0 {
+            found.push((events::refine(self.integ, span, 0, W, 0.0)?, Event::Down));
+        }
+        if p.d[W] > 0.0 && next.d[W] <= 0.0 {
+            found.push((events::refine(self.integ, span, 1, W, 0.0)?, Event::MaxW));
+        }
+        if p.d[W] < 0.0 && next.d[W] >= 0.0 {
+            found.push((events::refine(self.integ, span, 1, W, 0.0)?, Event::MinW));
+        }
+        for i in [U, THETA] {
+            if (p.d[i] > 0.0) != (next.d[i] > 0.0) {
+                found.push((events::refine(self.integ, span, 1, i, 0.0)?, Event::Extremum(i)));
+            }
+        }
+        if let Some(c) = &self.open {
+            if let (Some(_), None) = (c.peak, c.half_fall) {
+                let level = c.w_max - std::f64::consts::LN_2;
+                if p.y[W] >= level && next.y[W] < level {
+                    found.push((events::refine(self.integ, span, 0, W, level)?, Event::HalfFall));
+                }
+            }
+        }
+        found.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Ok(found)
+    }
+
+    fn update_ranges(&mut self, y: &[f64; 3]) {
+        if let Some(c) = &mut self.open {
+            c.w_min = c.w_min.min(y[W]);
+            c.w_max = c.w_max.max(y[W]);
+            c.u_range = (c.u_range.0.min(y[U]), c.u_range.1.max(y[U]));
+            c.theta_range = (c.theta_range.0.min(y[THETA]), c.theta_range.1.max(y[THETA]));
+        }
+    }
+
+    fn record(&mut self, t_local: f64, y: &[f64; 3]) {
+        if let Some(c) = &mut self.open {
+            if let Some(tr) = &mut c.trajectory {
+                tr.push(c.origin + t_local, y);
+            }
+        }
+    }
+
+    /// Handles one event; returns the peak state when the integrator must restart there.
+    fn handle(&mut self, t: f64, event: Event) -> Result<Option<[f64; 3]>, SolverError> {
+        let y = self.state_at(t)?;
+        self.update_ranges(&y);
+        self.record(t, &y);
+        match event {
+            Event::Up => {
+                if let Some(c) = self.open.take() {
+                    let period = c.origin + t;
+                    self.close(c, period);
+                }
+                let mut c = OpenCycle {
+                    origin: -t,
+                    u_start: y[U],
+                    peak: None,
+                    half_rise: None,
+                    half_fall: None,
+                    down: None,
+                    w_min: y[W],
+                    w_max: y[W],
+                    u_range: (y[U], y[U]),
+                    theta_range: (y[THETA], y[THETA]),
+                    steps_at_start: self.steps,
+                    trajectory: (self.settings.trajectory_cycles > 0).then(TrajectoryCycle::default),
+                };
+                if let Some(tr) = &mut c.trajectory {
+                    tr.push(0.0, &y);
+                }
+                self.open = Some(c);
+            }
+            Event::Down => {
+                if let Some(c) = &mut self.open {
+                    if c.down.is_none() {
+                        c.down = Some((c.origin + t, y[U]));
+                    }
+                }
+            }
+            Event::MinW => {
+                self.rise.clear();
+                self.rise.push(Knot { t, x: y[W], dx: 0.0 });
+            }
+            Event::MaxW => {
+                let Some(c) = &mut self.open else { return Ok(None) };
+                if c.peak.is_some() || y[W] <= 0.0 {
+                    return Ok(None);
+                }
+                c.peak = Some((c.origin + t, y));
+                let level = y[W] - std::f64::consts::LN_2;
+                let mut knots: Vec<Knot> = self.rise.iter().copied().filter(|k| k.t < t).collect();
+                knots.push(Knot { t, x: y[W], dx: 0.0 });
+                c.half_rise = events::upward_crossing(&knots, level).map(|tr| c.origin + tr);
+                return Ok(Some(y));
+            }
+            Event::HalfFall => {
+                if let Some(c) = &mut self.open {
+                    c.half_fall = Some(c.origin + t);
+                }
+            }
+            Event::Extremum(_) => {}
+        }
+        Ok(None)
+    }
+
+    fn close(&mut self, c: OpenCycle, period: f64) {
+        let Some((t_peak, y_peak)) = c.peak else {
+            // No peak with v > 1: a sub-threshold wiggle, not a cycle of the oscillation.
+            return;
+        };
+        let (t_down, u_down) = c.down.unwrap_or((period, c.u_range.1));
+        let values = CycleValues {
+            period,
+            t0: t_peak,
+            slip_half_width: c.half_rise.zip(c.half_fall).map(|(r, f)| f - r),
+            v_max: c.w_max.exp(),
+            ln_v_max: c.w_max,
+            v_min: c.w_min.exp(),
+            ln_v_min: c.w_min,
+            u_at_v_max: y_peak[U],
+            theta_at_v_max: y_peak[THETA],
+            u_min: c.u_range.0,
+            u_max: c.u_range.1,
+            theta_min: c.theta_range.0,
+            theta_max: c.theta_range.1,
+            slip: (u_down - c.u_start) + t_down,
+            slip_duration: t_down,
+            steps: self.steps - c.steps_at_start,
+        };
+        if let Some(tr) = c.trajectory {
+            self.trajectories.push(tr);
+            let keep = self.settings.trajectory_cycles;
+            if self.trajectories.len() > keep {
+                self.trajectories.remove(0);
+            }
+        }
+        self.closed.push(values);
+    }
+
+    fn restart_at_peak(&mut self, t_peak: f64, y: [f64; 3]) -> Result<(), SolverError> {
+        self.integ.reinit(0.0, &y)?;
+        self.elapsed += t_peak;
+        if let Some(c) = &mut self.open {
+            c.origin += t_peak;
+        }
+        self.rise.clear();
+        self.prev = sample_after_restart(self.drr, y, true);
+        Ok(())
+    }
+
+    fn step(&mut self) -> Result<(), SolverError> {
+        let horizon = self.prev.t + self.settings.max_time;
+        let step = self.integ.advance(horizon, Task::OneStep)?;
+        self.steps += 1;
+        let y = self.integ.state();
+        let y = [y[0], y[1], y[2]];
+        let d = self.integ.dense(step.t, 1)?;
+        let next = Sample { t: step.t, y, d: [d[0], d[1], d[2]] };
+        if y.iter().chain(&next.d).any(|v| !v.is_finite()) {
+            return Err(self.failure(ErrorKind::RhsFailure, "the state or its derivative became non-finite".into()));
+        }
+        for (t, event) in self.events(&next)? {
+            if let Some(y_peak) = self.handle(t, event)? {
+                return self.restart_at_peak(t, y_peak);
+            }
+        }
+        self.update_ranges(&y);
+        self.record(next.t, &y);
+        if let Some(last) = self.rise.last() {
+            if next.t > last.t {
+                self.rise.push(Knot { t: next.t, x: y[W], dx: next.d[W] });
+            }
+        }
+        self.prev = next;
+        Ok(())
+    }
+}
+
+/// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or
+/// absolute below 1).
+fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
+    (a.period - b.period).abs() <= tolerance * a.period.abs()
+        && (a.ln_v_max - b.ln_v_max).abs() <= tolerance * a.ln_v_max.abs().max(1.0)
+}
+
+/// n if the last cycles form a period-n orbit (n = 1..4) under the convergence rule.
+fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
+    let k = closed.len();
+    (1..=4).find(|&n| {
+        k >= settings.settle + n
+            && (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], settings.tolerance))
+    })
+}
+
+/// Whether the oscillation is dying out: w ranges below 1e-9, or strictly shrinking over the
+/// last 2·settle+1 cycles while the fixed point is linearly stable.
+fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: bool) -> bool {
+    let amplitude = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
+    if closed.last().is_some_and(|c| amplitude(c) < 1e-9) {
+        return true;
+    }
+    let n = 2 * settings.settle + 1;
+    linearly_stable
+        && closed.len() >= n
+        && closed[closed.len() - n..].windows(2).all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
+}
+
+/// Applies `f` to every real-valued field of a set of cycles, building one CycleValues.
+fn combine(cycles: &[CycleValues], f: impl Fn(&[f64]) -> f64) -> CycleValues {
+    let field = |get: &dyn Fn(&CycleValues) -> f64| f(&cycles.iter().map(get).collect::<Vec<_>>());
+    let half: Option<Vec<f64>> = cycles.iter().map(|c| c.slip_half_width).collect();
+    let steps: Vec<f64> = cycles.iter().map(|c| c.steps as f64).collect();
+    CycleValues {
+        period: field(&|c| c.period),
+        t0: field(&|c| c.t0),
+        slip_half_width: half.map(|h| f(&h)),
+        v_max: field(&|c| c.v_max),
+        ln_v_max: field(&|c| c.ln_v_max),
+        v_min: field(&|c| c.v_min),
+        ln_v_min: field(&|c| c.ln_v_min),
+        u_at_v_max: field(&|c| c.u_at_v_max),
+        theta_at_v_max: field(&|c| c.theta_at_v_max),
+        u_min: field(&|c| c.u_min),
+        u_max: field(&|c| c.u_max),
+        theta_min: field(&|c| c.theta_min),
+        theta_max: field(&|c| c.theta_max),
+        slip: field(&|c| c.slip),
+        slip_duration: field(&|c| c.slip_duration),
+        steps: f(&steps).round() as u64,
+    }
+}
+
+fn mean(x: &[f64]) -> f64 {
+    x.iter().sum::<f64>() / x.len() as f64
+}
+
+fn relative_spread(x: &[f64]) -> f64 {
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let m = mean(x).abs();
+    if m > 0.0 { (hi - lo) / m } else { hi - lo }
+}
+
+/// Integrates from the integrator's current state until the limit cycle is reached (or the
+/// limits are), and reports the cycle. `linearly_stable` is the Hopf verdict on the fixed
+/// point, used to recognise a dying oscillation early.
+pub fn analyse(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    settings: &CycleSettings,
+    linearly_stable: bool,
+) -> Result<CycleReport, SolverError> {
+    let y = integ.state();
+    let start = sample_after_restart(drr, [y[0], y[1], y[2]], false);
+    let start = Sample { t: integ.t(), ..start };
+    let mut tracker = Tracker {
+        integ,
+        drr,
+        settings,
+        prev: start,
+        open: None,
+        closed: Vec::new(),
+        trajectories: Vec::new(),
+        rise: Vec::new(),
+        elapsed: 0.0,
+        steps: 0,
+    };
+    let fixed = drr.fixed_point();
+    let mut seen = 0;
+    let outcome = loop {
+        tracker.step()?;
+        if tracker.steps > settings.max_steps {
+            let message = format!("{} steps without settling on a cycle (cycle.max_steps)", settings.max_steps);
+            return Err(tracker.failure(ErrorKind::TooMuchWork, message));
+        }
+        let time = tracker.elapsed + tracker.integ.t();
+        if tracker.closed.len() > seen {
+            seen = tracker.closed.len();
+            if let Some(n) = periodicity(&tracker.closed, settings) {
+                break if n == 1 { CycleStatus::Periodic } else { CycleStatus::PeriodN };
+            }
+            if decaying(&tracker.closed, settings, linearly_stable) {
+                break CycleStatus::FixedPoint;
+            }
+            if seen >= settings.max_cycles {
+                break CycleStatus::NotConverged;
+            }
+        }
+        if tracker.steps % 256 == 0 {
+            let y = tracker.integ.state();
+            let near = (0..3).all(|i| (y[i] - fixed[i]).abs() < 1e-10 * (1.0 + fixed[i].abs()));
+            if near {
+                break CycleStatus::FixedPoint;
+            }
+        }
+        if time >= settings.max_time {
+            break CycleStatus::NotConverged;
+        }
+    };
+    let time_integrated = tracker.elapsed + tracker.integ.t();
+    let closed = tracker.closed;
+    let n = periodicity(&closed, settings).filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
+    let (values, spread, orbit, used) = match (outcome, n) {
+        (CycleStatus::Periodic, _) => {
+            let used = &closed[closed.len() - (settings.settle + 1)..];
+            let values = combine(used, mean);
+            (Some(values), Some(combine(used, relative_spread)), vec![values], used.len())
+        }
+        (CycleStatus::PeriodN, Some(n)) => {
+            let orbit = closed[closed.len() - n..].to_vec();
+            (None, None, orbit, n)
+        }
+        _ => (None, None, Vec::new(), 0),
+    };
+    let orbit_period = (!orbit.is_empty()).then(|| orbit.iter().map(|c| c.period).sum::<f64>());
+    let last_cycles =
+        if values.is_none() && orbit.is_empty() { closed[closed.len().saturating_sub(10)..].to_vec() } else { Vec::new() };
+    Ok(CycleReport {
+        status: outcome,
+        converged: matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN),
+        cycles_per_period: n,
+        steps_per_cycle: values.map(|v| v.steps as f64),
+        values,
+        spread,
+        orbit,
+        orbit_period,
+        last_cycles,
+        cycles_used: used,
+        cycles_computed: closed.len(),
+        time_integrated,
+        convergence_rule: format!(
+            "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle pairs \
+             (lag n = 1..4 for period-n orbits); fixed point when the w range of a cycle is below 1e-9, \
+             shrinks over {} consecutive cycles at a linearly stable fixed point, or the state is within \
+             1e-10 of the fixed point",
+            settings.tolerance,
+            settings.settle,
+            2 * settings.settle + 1
+        ),
+        tolerance: settings.tolerance,
+        trajectory: tracker.trajectories,
+    })
+}

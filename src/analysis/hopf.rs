@@ -1,0 +1,152 @@
+//! Linear stability of the fixed point and the Hopf threshold.
+//!
+//! At the fixed point (v = 1, θ* = −(1+ε) f(1), u* = ε f(1)/ξ) the Jacobian in (u, v, θ) has
+//! the characteristic polynomial λ³ + a₂λ² + a₁λ + a₀ with g = γ², f₁ = f'(1):
+//! a₂ = 1 + g f₁/ξ, a₁ = g (1 − ε f₁/ξ), a₀ = g. Routh–Hurwitz gives the threshold
+//! ε_c = ξ g/(ξ + g f₁) (= ξγ²/(γ²+ξ) for f = ln v) and ω_c² = a₀/a₂ at threshold.
+//!
+//! The eigenvalues are computed from the polynomial, not from the 3×3 matrix: at γ = 1e8 its
+//! entries reach 1e16 and a matrix eigen-solver would lose the O(1) real part of the slow pair.
+//! The large real root is found by Newton's method from the left of all roots, then deflated
+//! without cancellation (q = −a₀/λ_r, p = (q − a₁)/λ_r).
+
+use crate::model::Drr;
+use serde::Serialize;
+
+/// The "hopf" analysis of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HopfReport {
+    /// Fixed point (u, v, θ) (dimensionless).
+    pub fixed_point: [f64; 3],
+    /// Eigenvalues of the Jacobian at the fixed point, as [re, im] (1/time unit), fast real
+    /// one first.
+    pub eigenvalues: Vec<[f64; 2]>,
+    /// Threshold ε_c = ξγ²/(ξ + γ² f'(1)) (dimensionless).
+    pub epsilon_c: f64,
+    /// Angular frequency at threshold ω_c = √(a₀/a₂) (1/time unit).
+    pub omega_c: f64,
+    /// Period at threshold 2π/ω_c (time units); → 2π/√ξ as γ → ∞ for f = ln v.
+    pub period_c: f64,
+    /// The paper's large-γ threshold period 2π/√ξ (time units).
+    pub period_c_large_gamma: f64,
+    /// Whether ε > ε_c (fixed point unstable, oscillation expected).
+    pub above_threshold: bool,
+    /// Largest real part of the eigenvalues (> 0: unstable).
+    pub max_real_part: f64,
+}
+
+/// Coefficients (a₂, a₁, a₀) of the characteristic polynomial at the fixed point.
+pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
+    let p = drr.params();
+    let g = p.gamma * p.gamma;
+    let (_, f1) = p.friction.eval(0.0);
+    (1.0 + g * f1 / p.xi, g * (1.0 - p.epsilon * f1 / p.xi), g)
+}
+
+/// Roots of λ³ + a₂λ² + a₁λ + a₀ as [re, im], the real root found by Newton first.
+pub fn cubic_roots(a2: f64, a1: f64, a0: f64) -> Vec<[f64; 2]> {
+    let p = |x: f64| ((x + a2) * x + a1) * x + a0;
+    let dp = |x: f64| (3.0 * x + 2.0 * a2) * x + a1;
+    // Start left of every root (Cauchy bound): Newton then converges to a real root.
+    let mut x = -(1.0 + a2.abs().max(a1.abs()).max(a0.abs()));
+    for _ in 0..500 {
+        let step = p(x) / dp(x);
+        if !step.is_finite() {
+            break;
+        }
+        x -= step;
+        if step.abs() <= 1e-16 * x.abs().max(1e-300) {
+            break;
+        }
+    }
+    let real = x;
+    // Deflate: (λ − r)(λ² + bλ + c) with c = −a₀/r, b = (c − a₁)/r.
+    let c = -a0 / real;
+    let b = (c - a1) / real;
+    let disc = b * b - 4.0 * c;
+    let mut roots = vec![[real, 0.0]];
+    if disc >= 0.0 {
+        // Stable quadratic formula.
+        let s = -0.5 * (b + b.signum() * disc.sqrt());
+        let (r1, r2) = if s != 0.0 { (s, c / s) } else { (0.0, 0.0) };
+        roots.push([r1, 0.0]);
+        roots.push([r2, 0.0]);
+    } else {
+        let im = 0.5 * (-disc).sqrt();
+        roots.push([-0.5 * b, im]);
+        roots.push([-0.5 * b, -im]);
+    }
+    roots
+}
+
+/// The Hopf analysis.
+pub fn analyse(drr: &Drr) -> HopfReport {
+    let params = drr.params();
+    let (a2, a1, a0) = characteristic_polynomial(drr);
+    let eigenvalues = cubic_roots(a2, a1, a0);
+    let g = params.gamma * params.gamma;
+    let (_, f1) = params.friction.eval(0.0);
+    let epsilon_c = params.xi * g / (params.xi + g * f1);
+    let omega_c = (a0 / a2).sqrt();
+    let fp = drr.fixed_point();
+    HopfReport {
+        fixed_point: [fp[0], fp[1].exp(), fp[2]],
+        max_real_part: eigenvalues.iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max),
+        eigenvalues,
+        epsilon_c,
+        omega_c,
+        period_c: 2.0 * std::f64::consts::PI / omega_c,
+        period_c_large_gamma: 2.0 * std::f64::consts::PI / params.xi.sqrt(),
+        above_threshold: params.epsilon > epsilon_c,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{DrrParams, Friction};
+    use nalgebra::Matrix3;
+
+    fn drr(gamma: f64, xi: f64, epsilon: f64, friction: Friction) -> Drr {
+        Drr::new(DrrParams { gamma, xi, epsilon, friction })
+    }
+
+    #[test]
+    fn eigenvalues_agree_with_a_matrix_eigensolver_at_moderate_gamma() {
+        for friction in [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }] {
+            for gamma in [1.0, 3.0, 10.0, 100.0] {
+                let d = drr(gamma, 0.7, 0.72, friction);
+                let (_, f1) = friction.eval(0.0);
+                let (g, xi, e) = (gamma * gamma, 0.7, 0.72);
+                let j = Matrix3::new(0.0, 1.0, 0.0, -g, -g * f1 / xi, -g / xi, 0.0, -(1.0 + e) * f1, -1.0);
+                let mut reference: Vec<[f64; 2]> = j.complex_eigenvalues().iter().map(|z| [z.re, z.im]).collect();
+                let mut ours = analyse(&d).eigenvalues;
+                let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
+                reference.sort_by(key);
+                ours.sort_by(key);
+                for (a, b) in ours.iter().zip(&reference) {
+                    let scale = 1.0 + b[0].hypot(b[1]);
+                    assert!((a[0] - b[0]).abs() < 1e-9 * scale && (a[1] - b[1]).abs() < 1e-9 * scale, "{friction:?} γ={gamma}: {ours:?} vs {reference:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn threshold_is_where_the_slow_pair_crosses_the_axis() {
+        for gamma in [10.0, 1e3, 1e8] {
+            let base = analyse(&drr(gamma, 0.7, 0.72, Friction::Log));
+            let ec = base.epsilon_c;
+            assert!((ec - 0.7 * gamma * gamma / (gamma * gamma + 0.7)).abs() < 1e-14);
+            let below = analyse(&drr(gamma, 0.7, ec * (1.0 - 1e-6), Friction::Log));
+            let above = analyse(&drr(gamma, 0.7, ec * (1.0 + 1e-6), Friction::Log));
+            assert!(below.max_real_part < 0.0 && !below.above_threshold, "γ={gamma}: {below:?}");
+            assert!(above.max_real_part > 0.0 && above.above_threshold, "γ={gamma}: {above:?}");
+            let at = analyse(&drr(gamma, 0.7, ec, Friction::Log));
+            let slow = at.eigenvalues.iter().find(|e| e[1] > 0.0).unwrap();
+            assert!((slow[1] - at.omega_c).abs() < 1e-8 * at.omega_c, "γ={gamma}: {slow:?} vs ω_c {}", at.omega_c);
+        }
+        let large = analyse(&drr(1e8, 0.8, 1.0, Friction::Log));
+        assert!((large.period_c - large.period_c_large_gamma).abs() < 1e-12 * large.period_c);
+    }
+}

@@ -1,0 +1,5 @@
+//! Analyses of a scene: what `analyses` asks for, and nothing else.
+
+pub mod cycle;
+pub mod events;
+pub mod hopf;
