@@ -1,13 +1,17 @@
 //! stickslip: very stiff stick-slip (Dieterich–Ruina rate-and-state friction) dynamics
 //! integrated with Debian's SUNDIALS.
 //!
-//! Data flow: scene → model → integrator → analysis → report. This crate currently provides
-//! the integration contract ([`integrate`]) and its SUNDIALS implementation ([`sundials`]).
-//! All `unsafe` code lives in [`sundials`].
+//! Data flow: [`scene`] (JSON, validated) → [`model`] (the DRR system) → integrator (the
+//! [`integrate`] contract, implemented over SUNDIALS in [`sundials`]) → [`analysis`] (hopf,
+//! cycle, paper) → [`report`] (JSON). [`engine`] wires them. All `unsafe` code lives in
+//! [`sundials`].
 
 #![deny(unsafe_code)]
 
 pub mod analysis;
+pub mod engine;
 pub mod integrate;
 pub mod model;
+pub mod report;
+pub mod scene;
 pub mod sundials;

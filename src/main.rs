@@ -2,7 +2,9 @@
 //! Exit codes: 0 success, 1 failed computation, 2 bad input.
 
 use clap::{Parser, Subcommand};
+use std::path::PathBuf;
 use std::process::ExitCode;
+use stickslip::{engine, report, scene};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
 
@@ -15,6 +17,17 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a scene (default: the built-in earthquake scene, γ = 1e8) and print a summary.
+    Run {
+        /// Scene file (JSON, see docs/scenes.md).
+        scene: Option<PathBuf>,
+        /// Print the JSON report to stdout instead of the summary.
+        #[arg(long)]
+        json: bool,
+        /// Write the JSON report to FILE (atomically).
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
@@ -62,10 +75,42 @@ fn robertson_command() -> Result<(), String> {
     Ok(())
 }
 
+/// A failure and its exit code: 2 for bad input, 1 for a failed computation.
+struct Failure(u8, String);
+
+const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
+
+fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Result<(), Failure> {
+    let (text, source) = match &path {
+        Some(p) => (
+            std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", p.display())))?,
+            p.display().to_string(),
+        ),
+        None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
+    };
+    let scene = scene::parse(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
+    let echo: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
+    let report = engine::run(&scene, echo).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+    if let Some(file) = &out {
+        report::write_atomic(file, &report.to_json())
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
+    }
+    if json {
+        println!("{}", report.to_json());
+    } else {
+        print!("{}", report.summary());
+        if let Some(file) = &out {
+            println!("report written to {}", file.display());
+        }
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Robertson => robertson_command(),
+        Command::Run { scene, json, out } => run_command(scene, json, out),
+        Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())
@@ -73,9 +118,9 @@ fn main() -> ExitCode {
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
+        Err(Failure(code, message)) => {
             eprintln!("stickslip: {message}");
-            ExitCode::from(1)
+            ExitCode::from(code)
         }
     }
 }

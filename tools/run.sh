@@ -3,4 +3,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/deps.sh
-cargo run --release --quiet -- robertson "$@"
+cargo run --release --quiet -- run "$@"

@@ -3,3 +3,4 @@
 pub mod cycle;
 pub mod events;
 pub mod hopf;
+pub mod paper;

@@ -2,7 +2,7 @@
 
 /// Work counters and step information of one integrator, accumulated over its whole life
 /// (re-initialisations included).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Stats {
     /// Accepted internal steps.
     pub steps: u64,

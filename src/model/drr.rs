@@ -12,7 +12,7 @@ use super::friction::Friction;
 use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem};
 
 /// Parameters of the dimensionless DRR model.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DrrParams {
     /// γ = (D_c/v0)·√(k/M) > 0, the stiffness parameter.
     pub gamma: f64,

@@ -112,7 +112,7 @@ pub fn arkode_example() -> Result<ExampleRun, SolverError> {
     options.max_nonlin_iters = Some(8);
     options.nonlin_conv_coef = Some(1.0e-7);
     options.max_steps = Some(100_000);
-    let settings = ArkSettings { predictor_method: Some(1) };
+    let settings = ArkSettings { predictor_method: Some(1), ..ArkSettings::default() };
     let y0 = [1.0, 0.0, 0.0];
     let mut solver = Solver::arkstep(Robertson, ArkMethod::default(), settings, 0.0, &y0, &options)?;
     solver.set_roots(Some(roots()))?;

@@ -125,6 +125,11 @@ pub struct ArkSettings {
     /// Implicit-stage predictor (ARKStepSetPredictorMethod: 0 trivial … 5); `None` keeps
     /// ARKODE's default.
     pub predictor_method: Option<i32>,
+    /// Deduce each implicit stage derivative from the stage equation, (z_i − a_i)/(h γ),
+    /// instead of evaluating f_I(z_i) (ARKStepSetDeduceImplicitRhs). On very stiff problems
+    /// the evaluated f_I carries the Newton residual times the stiffness into the error
+    /// estimate; deducing it avoids that.
+    pub deduce_implicit_rhs: bool,
 }
 
 fn classify(flag: c_int) -> ErrorKind {
@@ -245,6 +250,10 @@ impl<S> Solver<S> {
         if let Some(p) = settings.predictor_method {
             // SAFETY: live ARKStep memory; stores a scalar.
             self.check(unsafe { ffi::ARKStepSetPredictorMethod(m, p) })?;
+        }
+        if settings.deduce_implicit_rhs {
+            // SAFETY: live ARKStep memory; stores a flag.
+            self.check(unsafe { ffi::ARKStepSetDeduceImplicitRhs(m, 1) })?;
         }
         Ok(())
     }

@@ -1,0 +1,76 @@
+//! The paper's quoted values set beside ours, claim by claim. The paper's numbers are claims
+//! to test: nothing is tuned to them, and the verdict says plainly where they do not hold.
+//!
+//! Reference: Pomeau & Le Berre, "Critical speed-up vs critical slow-down" (eq. tauc, eq. to,
+//! the slip duration "about 2.5/γ", and the earthquake case τ = 28, i.e. 75 years).
+
+use super::cycle::CycleValues;
+use super::hopf::HopfReport;
+use crate::model::{DrrParams, Friction};
+use serde::Serialize;
+
+/// One claim of the paper and our value for it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Claim {
+    /// The claim, in words.
+    pub claim: String,
+    /// The paper's value.
+    pub paper: f64,
+    /// Ours, for this scene.
+    pub ours: f64,
+    /// (ours − paper)/paper.
+    pub relative_difference: f64,
+    /// "agrees" (within 5 %), "roughly" (within 20 %) or "disagrees".
+    pub verdict: &'static str,
+    /// What our number is and how it was obtained.
+    pub note: String,
+}
+
+fn claim(claim: &str, paper: f64, ours: f64, note: String) -> Claim {
+    let relative_difference = (ours - paper) / paper;
+    let verdict = match relative_difference.abs() {
+        d if d <= 0.05 => "agrees",
+        d if d <= 0.20 => "roughly",
+        _ => "disagrees",
+    };
+    Claim { claim: claim.into(), paper, ours, relative_difference, verdict, note }
+}
+
+/// The claims that one scene can test.
+pub fn compare(params: &DrrParams, hopf: &HopfReport, cycle: Option<&CycleValues>) -> Vec<Claim> {
+    let mut claims = vec![claim(
+        "period at the Hopf threshold τ_c = 2π/√ξ",
+        hopf.period_c_large_gamma,
+        hopf.period_c,
+        format!("2π/ω_c of the linearisation at this γ (ε_c = {:.9})", hopf.epsilon_c),
+    )];
+    if let Some(c) = cycle {
+        claims.push(claim(
+            "t0 ≅ 1: time from v = 1 to the v maximum",
+            1.0,
+            c.t0,
+            "limit cycle, upward crossing of v = 1 to the v maximum".into(),
+        ));
+        if let Some(w) = c.slip_half_width {
+            claims.push(claim(
+                "slip lasts about 2.5/γ",
+                2.5,
+                w * params.gamma,
+                "full width of v(t) at half its maximum, times γ".into(),
+            ));
+        }
+        let earthquake = params.friction == Friction::Log
+            && params.xi == 0.8
+            && params.epsilon == 1.0
+            && params.gamma == 1e8;
+        if earthquake {
+            claims.push(claim(
+                "earthquake case (γ = 1e8, ξ = 0.8, ε = 1): period τ = 28 (75 years)",
+                28.0,
+                c.period,
+                format!("limit-cycle period; {:.1} years with D_c/v0 = 2.7 years", c.period * 2.7),
+            ));
+        }
+    }
+    claims
+}

@@ -1,0 +1,124 @@
+//! The engine: a validated scene in, a report out, computing only what the scene asks for.
+
+use crate::analysis::{cycle, hopf, paper};
+use crate::integrate::{ErrorKind, Integrator, Options, SolverError, Tolerance};
+use crate::model::Drr;
+use crate::report::{ModelSection, Physical, Report, SolverSection};
+use crate::scene::{Method, Scene, SolverSpec};
+use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
+
+/// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
+/// Butcher tables used (ARKStep).
+pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+    let options = Options::new(spec.rtol, Tolerance::PerComponent(spec.atol.to_vec()));
+    // Deduce implicit stage derivatives: evaluating f_I at converged stages re-amplifies the
+    // Newton residual by γ² in ARKStep's error estimate, which makes it fail at γ ≥ 1e3.
+    let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
+    let dirk = || spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or_default();
+    let erk = || spec.table.as_deref().and_then(ErkTable::from_name).unwrap_or_default();
+    let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
+    Ok(match spec.method {
+        Method::CvodeBdf => (Box::new(Solver::cvode(drr, cvode(CvodeMethod::Bdf), 0.0, y0, &options)?), vec![]),
+        Method::CvodeAdams => (Box::new(Solver::cvode(drr, cvode(CvodeMethod::Adams), 0.0, y0, &options)?), vec![]),
+        Method::ArkodeDirk => {
+            let t = dirk();
+            (Box::new(Solver::arkstep(drr, ArkMethod::Dirk(t), ark, 0.0, y0, &options)?), vec![t.name().into()])
+        }
+        Method::ArkodeErk => {
+            let t = erk();
+            (Box::new(Solver::arkstep(drr, ArkMethod::Erk(t), ark, 0.0, y0, &options)?), vec![t.name().into()])
+        }
+        Method::ArkodeImex => {
+            let (default_i, default_e) = sundials::default_imex_tables();
+            let implicit = spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or(default_i);
+            let paired = spec.table.as_deref().and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
+            let explicit = spec.explicit_table.as_deref().and_then(ErkTable::from_name).or(paired).unwrap_or(default_e);
+            let solver = Solver::arkstep_imex(drr, implicit, explicit, ark, 0.0, y0, &options)?;
+            (Box::new(solver), vec![implicit.name().into(), explicit.name().into()])
+        }
+    })
+}
+
+fn non_finite(what: &str) -> SolverError {
+    SolverError {
+        solver: "stickslip",
+        kind: ErrorKind::Other,
+        t: 0.0,
+        state: Vec::new(),
+        flag: 0,
+        message: format!("the {what} section contains a non-finite number; refusing to report it"),
+    }
+}
+
+/// Runs a scene. `scene_json` is the scene as given, echoed in the report.
+pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
+    let started = std::time::Instant::now();
+    let drr = Drr::new(scene.params);
+    let (mut integ, tables) = integrator(drr, &scene.solver, &scene.initial)?;
+    let a = &scene.analyses;
+    let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
+    let cycle_report = match &a.cycle {
+        Some(o) => {
+            let defaults = cycle::CycleSettings::for_rtol(scene.solver.rtol);
+            let settings = cycle::CycleSettings {
+                tolerance: o.tolerance.unwrap_or(defaults.tolerance),
+                settle: o.settle.unwrap_or(defaults.settle),
+                max_cycles: o.max_cycles.unwrap_or(defaults.max_cycles),
+                max_time: o.max_time.unwrap_or(defaults.max_time),
+                max_steps: o.max_steps.unwrap_or(defaults.max_steps),
+                trajectory_cycles: a.trajectory_cycles.unwrap_or(0),
+            };
+            let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
+            Some(cycle::analyse(integ.as_mut(), &drr, &settings, stable)?)
+        }
+        None => None,
+    };
+    if linear.as_ref().is_some_and(|h| !h.is_finite()) {
+        return Err(non_finite("hopf"));
+    }
+    if cycle_report.as_ref().is_some_and(|c| !c.is_finite()) {
+        return Err(non_finite("cycle"));
+    }
+    let values = cycle_report.as_ref().and_then(|c| c.values);
+    let physical = scene.units.as_ref().zip(values).map(|(u, v)| Physical {
+        time_unit: u.time_unit.clone(),
+        time_scale: u.time_scale,
+        period: v.period * u.time_scale,
+        t0: v.t0 * u.time_scale,
+        slip_half_width: v.slip_half_width.map(|w| w * u.time_scale),
+        slip_duration: v.slip_duration * u.time_scale,
+    });
+    let paper = match (&linear, a.paper) {
+        (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
+        _ => None,
+    };
+    let y = scene.initial;
+    Ok(Report {
+        stickslip_version: env!("CARGO_PKG_VERSION"),
+        sundials_version: sundials::version(),
+        name: scene.name.clone(),
+        scene: scene_json,
+        model: ModelSection {
+            gamma: scene.params.gamma,
+            xi: scene.params.xi,
+            epsilon: scene.params.epsilon,
+            friction: scene.params.friction.label(),
+            dimensional: scene.dimensional,
+            initial: [y[0], y[1].exp(), y[2]],
+        },
+        solver: SolverSection {
+            method: scene.solver.method,
+            integrator: integ.name().into(),
+            rtol: scene.solver.rtol,
+            atol: scene.solver.atol,
+            tables,
+            stats: integ.stats(),
+        },
+        units: scene.units.clone(),
+        hopf: linear.filter(|_| a.hopf),
+        cycle: cycle_report,
+        physical,
+        paper,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,193 @@
+//! Reports: the JSON a scene produces (schema in docs/reports.md), its atomic writing and the
+//! CLI summary.
+
+use crate::analysis::cycle::{CycleReport, CycleStatus};
+use crate::analysis::hopf::HopfReport;
+use crate::analysis::paper::Claim;
+use crate::integrate::Stats;
+use crate::scene::{Dimensional, Method, Units};
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+
+/// Model parameters as used (dimensionless).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelSection {
+    /// γ.
+    pub gamma: f64,
+    /// ξ.
+    pub xi: f64,
+    /// ε.
+    pub epsilon: f64,
+    /// The friction law, e.g. "log" or "power(alpha=0.31)".
+    pub friction: String,
+    /// The dimensional input, when the scene gave one.
+    pub dimensional: Option<Dimensional>,
+    /// Initial state (u, v, θ).
+    pub initial: [f64; 3],
+}
+
+/// Solver settings and statistics.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolverSection {
+    /// The method, e.g. "cvode-bdf".
+    pub method: Method,
+    /// Integrator family actually run ("CVODE" or "ARKStep").
+    pub integrator: String,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerances of (u, ln v, θ).
+    pub atol: [f64; 3],
+    /// Butcher table(s) for ARKStep.
+    pub tables: Vec<String>,
+    /// Statistics of the whole run.
+    pub stats: Stats,
+}
+
+/// Durations of the cycle in physical units.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Physical {
+    /// The unit, e.g. "years".
+    pub time_unit: String,
+    /// One dimensionless time unit (D_c/v0) in that unit.
+    pub time_scale: f64,
+    /// Period.
+    pub period: f64,
+    /// t0 (v = 1 to the v maximum).
+    pub t0: f64,
+    /// Slip half-width.
+    pub slip_half_width: Option<f64>,
+    /// Time with v > 1.
+    pub slip_duration: f64,
+}
+
+/// The report of one scene. Sections appear only when the scene asked for them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// stickslip version.
+    pub stickslip_version: &'static str,
+    /// SUNDIALS version linked at run time.
+    pub sundials_version: String,
+    /// Scene name.
+    pub name: String,
+    /// The scene as given.
+    pub scene: serde_json::Value,
+    /// Model parameters as used.
+    pub model: ModelSection,
+    /// Solver settings and statistics.
+    pub solver: SolverSection,
+    /// Physical time units, when given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub units: Option<Units>,
+    /// The "hopf" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hopf: Option<HopfReport>,
+    /// The "cycle" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cycle: Option<CycleReport>,
+    /// Cycle durations in physical units (with `units` and a periodic cycle).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub physical: Option<Physical>,
+    /// The "paper" comparison.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper: Option<Vec<Claim>>,
+    /// Wall-clock time of the computation (seconds).
+    pub wall_time_s: f64,
+}
+
+impl Report {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+
+    /// A readable summary for the terminal.
+    pub fn summary(&self) -> String {
+        let mut s = String::new();
+        let m = &self.model;
+        s += &format!(
+            "scene {}: γ = {:e}, ξ = {}, ε = {}, friction {}\n",
+            self.name, m.gamma, m.xi, m.epsilon, m.friction
+        );
+        s += &format!(
+            "solver {} ({}), rtol {:e}, SUNDIALS {}; {} steps, {} RHS, {} Jacobians, {:.3} s\n",
+            self.solver.method.name(),
+            self.solver.integrator,
+            self.solver.rtol,
+            self.sundials_version,
+            self.solver.stats.steps,
+            self.solver.stats.rhs_evals + self.solver.stats.rhs_evals_explicit,
+            self.solver.stats.jac_evals,
+            self.wall_time_s
+        );
+        if let Some(h) = &self.hopf {
+            s += &format!(
+                "hopf: ε_c = {:.12}, ω_c = {:.9}, period_c = {:.9} (2π/√ξ = {:.9}); {}\n",
+                h.epsilon_c,
+                h.omega_c,
+                h.period_c,
+                h.period_c_large_gamma,
+                if h.above_threshold { "above threshold: fixed point unstable" } else { "below threshold: fixed point stable" }
+            );
+        }
+        if let Some(c) = &self.cycle {
+            match (c.status, &c.values) {
+                (CycleStatus::Periodic, Some(v)) => {
+                    s += &format!(
+                        "cycle: periodic after {} cycles ({} used, spread of period {:.1e})\n",
+                        c.cycles_computed,
+                        c.cycles_used,
+                        c.spread.map_or(0.0, |s| s.period)
+                    );
+                    s += &format!("  period          {:.10}\n  t0              {:.10}\n", v.period, v.t0);
+                    if let Some(w) = v.slip_half_width {
+                        s += &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma);
+                    }
+                    s += &format!(
+                        "  v_max           {:.6e} (ln {:.9})\n  v_min           {:.6e}\n  u, θ at v_max   {:.9}, {:.9}\n  slip            {:.9}\n",
+                        v.v_max, v.ln_v_max, v.v_min, v.u_at_v_max, v.theta_at_v_max, v.slip
+                    );
+                }
+                (CycleStatus::PeriodN, _) => {
+                    s += &format!("cycle: period-{} orbit, total period {:.10}\n", c.orbit.len(), c.orbit_period.unwrap_or(0.0));
+                    for (i, o) in c.orbit.iter().enumerate() {
+                        s += &format!("  cycle {}: period {:.10}, ln v_max {:.9}\n", i + 1, o.period, o.ln_v_max);
+                    }
+                }
+                (CycleStatus::FixedPoint, _) => s += "cycle: none; the oscillation dies out and the fixed point is stable\n",
+                _ => s += &format!(
+                    "cycle: NOT converged after {} cycles / t = {:.6e} (see cycle.last_cycles)\n",
+                    c.cycles_computed, c.time_integrated
+                ),
+            }
+        }
+        if let Some(p) = &self.physical {
+            s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
+        }
+        if let Some(claims) = &self.paper {
+            s += "paper's claims:\n";
+            for c in claims {
+                s += &format!("  {:<9} {} — paper {}, ours {:.6} ({:+.1} %)\n", c.verdict, c.claim, c.paper, c.ours, 100.0 * c.relative_difference);
+            }
+        }
+        s
+    }
+}
+
+/// Writes `text` to `path` atomically: a temporary file in the same directory, flushed to
+/// disk, then renamed over `path`. A crash leaves either the old file or the new one.
+pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().ok_or_else(|| std::io::Error::other("the output path has no file name"))?;
+    let tmp = dir.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
+    let result = (|| {
+        let mut file = std::fs::File::create(&tmp)?;
+        file.write_all(text.as_bytes())?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

@@ -1,0 +1,458 @@
+//! Scenes: what to compute, as JSON. Parsing rejects unknown keys and wrong types (naming the
+//! path); validation rejects values outside the model's domain (naming the field and what
+//! would be valid). The schema is documented in docs/scenes.md.
+
+use crate::model::{Drr, DrrParams, Friction};
+use serde::{Deserialize, Serialize};
+
+/// A bad scene: the field at fault and how to fix it. CLI exit code 2.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("scene {source_name}: {field}: {message}")]
+pub struct SceneError {
+    /// The scene file (or "<built-in>").
+    pub source_name: String,
+    /// Path of the offending field, e.g. "model.gamma".
+    pub field: String,
+    /// What is wrong and what would be valid.
+    pub message: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    name: String,
+    #[serde(default)]
+    description: Option<String>,
+    model: RawModel,
+    #[serde(default)]
+    units: Option<Units>,
+    #[serde(default)]
+    initial: Option<RawInitial>,
+    #[serde(default)]
+    solver: Option<RawSolver>,
+    analyses: Vec<RawAnalysis>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawModel {
+    gamma: Option<f64>,
+    xi: Option<f64>,
+    epsilon: Option<f64>,
+    dimensional: Option<Dimensional>,
+    #[serde(default)]
+    friction: Option<RawFriction>,
+}
+
+/// Dimensional parameters (any consistent units): γ = (D_c/v0)·√(k/M), ξ = k·D_c/A,
+/// ε = (B−A)/A.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dimensional {
+    /// Spring stiffness k.
+    pub k: f64,
+    /// Block mass M.
+    pub mass: f64,
+    /// Direct-effect coefficient A.
+    pub a: f64,
+    /// State-effect coefficient B.
+    pub b: f64,
+    /// Critical slip distance D_c.
+    pub d_c: f64,
+    /// Driving velocity v0.
+    pub v0: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+enum RawFriction {
+    Log,
+    Asinh,
+    Power { alpha: f64 },
+}
+
+/// Physical time units for reports: one dimensionless time unit (D_c/v0) is `time_scale`
+/// `time_unit`s, e.g. 2.7 years.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    /// Name of the physical time unit, e.g. "years".
+    pub time_unit: String,
+    /// D_c/v0 in that unit.
+    pub time_scale: f64,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawInitial {
+    u: Option<f64>,
+    v: Option<f64>,
+    theta: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+enum RawAtol {
+    Scalar(f64),
+    PerComponent(Vec<f64>),
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    #[serde(default)]
+    method: Option<String>,
+    #[serde(default)]
+    rtol: Option<f64>,
+    #[serde(default)]
+    atol: Option<RawAtol>,
+    #[serde(default)]
+    table: Option<String>,
+    #[serde(default)]
+    explicit_table: Option<String>,
+    #[serde(default)]
+    max_steps: Option<u64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+enum RawAnalysis {
+    Name(String),
+    WithOptions(std::collections::BTreeMap<String, serde_json::Value>),
+}
+
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawCycleOptions {
+    tolerance: Option<f64>,
+    settle: Option<usize>,
+    max_cycles: Option<usize>,
+    max_time: Option<f64>,
+    max_steps: Option<u64>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawTrajectory {
+    cycles: usize,
+}
+
+/// Integration methods a scene can ask for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// CVODE, variable-order BDF (stiff).
+    CvodeBdf,
+    /// CVODE, Adams–Moulton (non-stiff).
+    CvodeAdams,
+    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
+    ArkodeDirk,
+    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
+    ArkodeImex,
+    /// ARKStep, explicit Runge–Kutta (non-stiff).
+    ArkodeErk,
+}
+
+impl Method {
+    /// Every method with its scene name.
+    pub const ALL: [(&'static str, Method); 5] = [
+        ("cvode-bdf", Method::CvodeBdf),
+        ("cvode-adams", Method::CvodeAdams),
+        ("arkode-dirk", Method::ArkodeDirk),
+        ("arkode-imex", Method::ArkodeImex),
+        ("arkode-erk", Method::ArkodeErk),
+    ];
+
+    /// The scene name, e.g. "cvode-bdf".
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
+    }
+
+    /// Whether the method is meant for stiff problems.
+    pub fn is_stiff(self) -> bool {
+        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex)
+    }
+}
+
+/// Validated solver settings of a scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolverSpec {
+    /// The method.
+    pub method: Method,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerances of (u, ln v, θ).
+    pub atol: [f64; 3],
+    /// Butcher table (implicit one for DIRK/IMEX, explicit one for ERK), None = default.
+    pub table: Option<String>,
+    /// Explicit table of an IMEX pair, None = default.
+    pub explicit_table: Option<String>,
+}
+
+/// Options of the "cycle" analysis (None = default, see [`crate::analysis::cycle`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct CycleOptions {
+    /// Relative tolerance of the convergence rule.
+    pub tolerance: Option<f64>,
+    /// Consecutive agreeing cycle pairs required.
+    pub settle: Option<usize>,
+    /// Maximum number of cycles.
+    pub max_cycles: Option<usize>,
+    /// Maximum dimensionless time.
+    pub max_time: Option<f64>,
+    /// Maximum total integrator steps.
+    pub max_steps: Option<u64>,
+}
+
+/// Which analyses to run; everything else is neither computed nor stored.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Analyses {
+    /// Fixed point, eigenvalues and Hopf threshold.
+    pub hopf: bool,
+    /// The limit cycle (None: not asked).
+    pub cycle: Option<CycleOptions>,
+    /// Keep every step of the last this many cycles (needs "cycle").
+    pub trajectory_cycles: Option<usize>,
+    /// Compare with the paper's quoted values.
+    pub paper: bool,
+}
+
+/// A validated scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scene {
+    /// Scene name.
+    pub name: String,
+    /// Free text.
+    pub description: Option<String>,
+    /// Dimensionless model parameters.
+    pub params: DrrParams,
+    /// The dimensional input, when given.
+    pub dimensional: Option<Dimensional>,
+    /// Physical time units for reports.
+    pub units: Option<Units>,
+    /// Initial state (u, ln v, θ).
+    pub initial: [f64; 3],
+    /// Solver settings.
+    pub solver: SolverSpec,
+    /// Requested analyses.
+    pub analyses: Analyses,
+}
+
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}";
+
+/// Parses and validates a scene from JSON text. `source_name` names it in errors.
+pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
+    let err = |field: &str, message: String| SceneError { source_name: source_name.into(), field: field.into(), message };
+    let deserializer = &mut serde_json::Deserializer::from_str(text);
+    let raw: RawScene = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." { "(document)".to_string() } else { path };
+        err(&field, e.into_inner().to_string())
+    })?;
+    validate(raw, &err)
+}
+
+fn finite(field: &str, value: f64, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
+    if value.is_finite() { Ok(value) } else { Err(err(field, format!("{value} is not a finite number"))) }
+}
+
+fn positive(field: &str, value: f64, hint: &str, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
+    let v = finite(field, value, err)?;
+    if v > 0.0 { Ok(v) } else { Err(err(field, format!("{v} must be > 0 ({hint})"))) }
+}
+
+fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<Scene, SceneError> {
+    if raw.name.trim().is_empty() {
+        return Err(err("name", "must not be empty".into()));
+    }
+    let m = &raw.model;
+    let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
+        (Some(d), None, None, None) => {
+            for (name, v) in [("k", d.k), ("mass", d.mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
+                positive(&format!("model.dimensional.{name}"), v, "a physical parameter", err)?;
+            }
+            ((d.d_c / d.v0) * (d.k / d.mass).sqrt(), d.k * d.d_c / d.a, (d.b - d.a) / d.a)
+        }
+        (Some(_), ..) => {
+            return Err(err("model", "give either gamma/xi/epsilon or dimensional, not both".into()));
+        }
+        (None, Some(g), Some(x), Some(e)) => (g, x, e),
+        (None, g, x, e) => {
+            let missing: Vec<&str> =
+                [("gamma", g), ("xi", x), ("epsilon", e)].iter().filter(|(_, v)| v.is_none()).map(|(n, _)| *n).collect();
+            return Err(err("model", format!("missing {} (or give \"dimensional\": {{k, mass, a, b, d_c, v0}})", missing.join(", "))));
+        }
+    };
+    let gamma = positive("model.gamma", gamma, "γ = (D_c/v0)·√(k/M), e.g. 1e3", err)?;
+    let xi = positive("model.xi", xi, "ξ = k·D_c/A, of order one, e.g. 0.7", err)?;
+    let epsilon = finite("model.epsilon", epsilon, err)?;
+    let friction = match m.friction.clone().unwrap_or(RawFriction::Log) {
+        RawFriction::Log => Friction::Log,
+        RawFriction::Asinh => Friction::Asinh,
+        RawFriction::Power { alpha } => {
+            Friction::Power { alpha: positive("model.friction.power.alpha", alpha, "g_α(v) = (v^α − 1)/α, e.g. 0.31", err)? }
+        }
+    };
+    let params = DrrParams { gamma, xi, epsilon, friction };
+    let drr = Drr::new(params);
+
+    let units = match raw.units.clone() {
+        Some(u) => {
+            positive("units.time_scale", u.time_scale, "D_c/v0 in units.time_unit, e.g. 2.7 (years)", err)?;
+            if u.time_unit.trim().is_empty() {
+                return Err(err("units.time_unit", "must name the unit, e.g. \"years\"".into()));
+            }
+            Some(u)
+        }
+        None => m.dimensional.map(|d| Units { time_unit: "s (if the dimensional input is SI)".into(), time_scale: d.d_c / d.v0 }),
+    };
+
+    let initial = initial_state(&drr, raw.initial.as_ref(), err)?;
+    let solver = solver_spec(raw.solver.as_ref(), err)?;
+    let analyses = analyses(&raw.analyses, err)?;
+    Ok(Scene { name: raw.name, description: raw.description, params, dimensional: m.dimensional, units, initial, solver, analyses })
+}
+
+/// The start: given values, with v (or u) completed on the slow manifold when missing.
+/// Default: v = 0.5, θ at its fixed-point value, u on the slow manifold.
+fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String) -> SceneError) -> Result<[f64; 3], SceneError> {
+    let theta_star = drr.fixed_point()[2];
+    let (u, v, theta) = raw.map_or((None, None, None), |r| (r.u, r.v, r.theta));
+    let theta = finite("initial.theta", theta.unwrap_or(theta_star), err)?;
+    let w = match v {
+        Some(v) => positive("initial.v", v, "velocity, e.g. 0.5; give ln v range 1e-300..1e300", err)?.ln(),
+        None => match u {
+            Some(u) => drr.manifold_w(finite("initial.u", u, err)?, theta).ok_or_else(|| {
+                err("initial.v", format!("no point of the slow manifold has u = {u}, θ = {theta} for this friction law; give v"))
+            })?,
+            None => 0.5f64.ln(),
+        },
+    };
+    let u = match u {
+        Some(u) => finite("initial.u", u, err)?,
+        None => drr.manifold_u(w, theta),
+    };
+    Ok([u, w, theta])
+}
+
+fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneError) -> Result<SolverSpec, SceneError> {
+    let names: Vec<&str> = Method::ALL.iter().map(|(n, _)| *n).collect();
+    let method = match raw.and_then(|r| r.method.as_deref()) {
+        None => Method::CvodeBdf,
+        Some(name) => Method::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| {
+            err("solver.method", format!("\"{name}\" is not a method; use one of {}", names.join(", ")))
+        })?,
+    };
+    let rtol = positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-8), "e.g. 1e-8", err)?;
+    let atol = match raw.and_then(|r| r.atol.clone()) {
+        None => [rtol * 1e-2; 3],
+        Some(RawAtol::Scalar(a)) => [a; 3],
+        Some(RawAtol::PerComponent(v)) => {
+            let arr: [f64; 3] = v.clone().try_into().map_err(|_| {
+                err("solver.atol", format!("{v:?} has {} values; give one number or three (for u, ln v, θ)", v.len()))
+            })?;
+            arr
+        }
+    };
+    for (i, a) in atol.iter().enumerate() {
+        let a = finite(&format!("solver.atol[{i}]"), *a, err)?;
+        if a < 0.0 {
+            return Err(err(&format!("solver.atol[{i}]"), format!("{a} must be ≥ 0")));
+        }
+    }
+    let table = raw.and_then(|r| r.table.clone());
+    let explicit_table = raw.and_then(|r| r.explicit_table.clone());
+    let check_table = |field: &str, name: &Option<String>, known: &mut dyn Iterator<Item = &'static str>| {
+        let list: Vec<&str> = known.collect();
+        match name {
+            Some(n) if !list.contains(&n.as_str()) => {
+                Err(err(field, format!("unknown table \"{n}\"; available: {}", list.join(", "))))
+            }
+            _ => Ok(()),
+        }
+    };
+    use crate::sundials::{DirkTable, ErkTable};
+    match method {
+        Method::ArkodeDirk | Method::ArkodeImex => check_table("solver.table", &table, &mut DirkTable::names())?,
+        Method::ArkodeErk => check_table("solver.table", &table, &mut ErkTable::names())?,
+        _ if table.is_some() => return Err(err("solver.table", format!("{} takes no Butcher table", method.name()))),
+        _ => {}
+    }
+    if explicit_table.is_some() && method != Method::ArkodeImex {
+        return Err(err("solver.explicit_table", "only \"arkode-imex\" takes an explicit table".into()));
+    }
+    check_table("solver.explicit_table", &explicit_table, &mut ErkTable::names())?;
+    if raw.and_then(|r| r.max_steps).is_some() {
+        return Err(err("solver.max_steps", "set the step budget with {\"cycle\": {\"max_steps\": N}}".into()));
+    }
+    Ok(SolverSpec { method, rtol, atol, table, explicit_table })
+}
+
+fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> Result<Analyses, SceneError> {
+    let mut out = Analyses::default();
+    if raw.is_empty() {
+        return Err(err("analyses", format!("is empty; ask for at least one of {ANALYSIS_NAMES}")));
+    }
+    for (i, entry) in raw.iter().enumerate() {
+        let field = format!("analyses[{i}]");
+        let (name, options) = match entry {
+            RawAnalysis::Name(n) => (n.clone(), None),
+            RawAnalysis::WithOptions(map) if map.len() == 1 => {
+                let (n, v) = map.iter().next().expect("one entry");
+                (n.clone(), Some(v.clone()))
+            }
+            RawAnalysis::WithOptions(_) => {
+                return Err(err(&field, format!("an object entry must have exactly one key; use one of {ANALYSIS_NAMES}")));
+            }
+        };
+        let options_of = |what: &str| -> Result<serde_json::Value, SceneError> {
+            Ok(options.clone().unwrap_or(serde_json::Value::Object(Default::default()))).and_then(|v| {
+                if v.is_object() { Ok(v) } else { Err(err(&format!("{field}.{what}"), "options must be an object".into())) }
+            })
+        };
+        match name.as_str() {
+            "hopf" | "paper" if options.is_some() => return Err(err(&field, format!("\"{name}\" takes no options"))),
+            "hopf" => out.hopf = true,
+            "paper" => out.paper = true,
+            "cycle" => {
+                let o: RawCycleOptions = serde_json::from_value(options_of("cycle")?)
+                    .map_err(|e| err(&format!("{field}.cycle"), e.to_string()))?;
+                if let Some(t) = o.tolerance {
+                    positive(&format!("{field}.cycle.tolerance"), t, "relative, e.g. 1e-8", err)?;
+                }
+                if let Some(t) = o.max_time {
+                    positive(&format!("{field}.cycle.max_time"), t, "dimensionless time, e.g. 1e5", err)?;
+                }
+                if o.settle == Some(0) || o.max_cycles == Some(0) || o.max_steps == Some(0) {
+                    return Err(err(&format!("{field}.cycle"), "settle, max_cycles and max_steps must be ≥ 1".into()));
+                }
+                out.cycle = Some(CycleOptions {
+                    tolerance: o.tolerance,
+                    settle: o.settle,
+                    max_cycles: o.max_cycles,
+                    max_time: o.max_time,
+                    max_steps: o.max_steps,
+                });
+            }
+            "trajectory" => {
+                let Some(v) = options.clone() else {
+                    return Err(err(&field, "\"trajectory\" needs a sampling spec: {\"trajectory\": {\"cycles\": N}}".into()));
+                };
+                let t: RawTrajectory =
+                    serde_json::from_value(v).map_err(|e| err(&format!("{field}.trajectory"), e.to_string()))?;
+                if t.cycles == 0 {
+                    return Err(err(&format!("{field}.trajectory.cycles"), "must be ≥ 1".into()));
+                }
+                out.trajectory_cycles = Some(t.cycles);
+            }
+            other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
+        }
+    }
+    if out.trajectory_cycles.is_some() && out.cycle.is_none() {
+        return Err(err("analyses", "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into()));
+    }
+    if out.paper && (out.cycle.is_none() || !out.hopf) {
+        return Err(err("analyses", "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into()));
+    }
+    Ok(out)
+}
