@@ -59,7 +59,7 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
     let cycle_report = match &a.cycle {
         Some(o) => {
-            let defaults = cycle::CycleSettings::for_rtol(scene.solver.rtol);
+            let defaults = cycle::CycleSettings::defaults(scene.solver.rtol);
             let settings = cycle::CycleSettings {
                 tolerance: o.tolerance.unwrap_or(defaults.tolerance),
                 settle: o.settle.unwrap_or(defaults.settle),
@@ -67,6 +67,7 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
                 max_time: o.max_time.unwrap_or(defaults.max_time),
                 max_steps: o.max_steps.unwrap_or(defaults.max_steps),
                 trajectory_cycles: a.trajectory_cycles.unwrap_or(0),
+                ..defaults
             };
             let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
             Some(cycle::analyse(integ.as_mut(), &drr, &settings, stable)?)

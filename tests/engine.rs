@@ -1,0 +1,129 @@
+//! The engine on the paper's cases: every stiff method succeeds at γ = 1e8 with a scene's
+//! defaults, independent integrators agree, and the report holds what the scene asked for.
+
+use stickslip::analysis::cycle::CycleStatus;
+use stickslip::report::Report;
+use stickslip::{engine, scene};
+
+fn run(text: &str) -> Report {
+    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
+    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn run_file(name: &str) -> Report {
+    let path = format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR"));
+    run(&std::fs::read_to_string(path).unwrap())
+}
+
+fn cycle_scene(gamma: f64, xi: f64, epsilon: f64, solver: &str) -> String {
+    format!(
+        r#"{{"name": "t", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}}, {solver}
+            "analyses": ["cycle"]}}"#
+    )
+}
+
+#[test]
+fn the_papers_scenes_run_to_a_periodic_cycle() {
+    for name in ["earthquake.json", "fig1.json", "power-law.json", "ice-stream.json"] {
+        let report = run_file(name);
+        let c = report.cycle.as_ref().unwrap();
+        assert_eq!(c.status, CycleStatus::Periodic, "{name}");
+        let v = c.values.unwrap();
+        assert!(v.period > 0.0 && v.t0 > 0.0 && v.v_max > 1.0 && v.v_min < 1.0, "{name}: {v:?}");
+        assert!(c.spread.unwrap().period < 1e-7, "{name}: spread {:?}", c.spread);
+        assert_eq!(report.sundials_version, stickslip::sundials::version());
+        assert!(report.solver.stats.steps > 0 && report.wall_time_s > 0.0);
+        assert_eq!(report.solver.stats.step_underflow_warnings, 0, "{name}: time re-basing avoids t + h = t");
+        let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+        for key in ["period", "t0", "slip_half_width", "v_max", "ln_v_max", "v_min", "u_at_v_max", "theta_at_v_max", "converged"] {
+            assert!(!json["cycle"][key].is_null(), "{name}: cycle.{key} missing");
+        }
+        assert_eq!(json["scene"]["name"], json["name"]);
+    }
+}
+
+#[test]
+fn earthquake_report_compares_with_the_paper_in_years() {
+    let report = run_file("earthquake.json");
+    let physical = report.physical.unwrap();
+    assert_eq!(physical.time_unit, "years");
+    let v = report.cycle.unwrap().values.unwrap();
+    assert!((physical.period - 2.7 * v.period).abs() < 1e-9 * physical.period);
+    let claims = report.paper.unwrap();
+    let earthquake = claims.iter().find(|c| c.claim.contains("τ = 28")).expect("earthquake claim");
+    assert_eq!(earthquake.ours, v.period);
+    assert_eq!(earthquake.verdict, "disagrees", "ours is about twice the paper's 28");
+}
+
+#[test]
+fn cvode_and_arkode_agree_on_the_period_for_large_gamma() {
+    let tight = r#""solver": {"method": "METHOD", "rtol": 1e-10, "atol": 1e-12},"#;
+    for gamma in [1e3, 1e5, 1e8] {
+        let period = |method: &str| {
+            let r = run(&cycle_scene(gamma, 0.8, 1.0, &tight.replace("METHOD", method)));
+            r.cycle.unwrap().values.unwrap().period
+        };
+        let (bdf, dirk, imex) = (period("cvode-bdf"), period("arkode-dirk"), period("arkode-imex"));
+        for (name, p) in [("arkode-dirk", dirk), ("arkode-imex", imex)] {
+            let rel = (p - bdf).abs() / bdf;
+            assert!(rel < 1e-7, "γ = {gamma}: cvode-bdf {bdf} vs {name} {p} ({rel:.1e})");
+        }
+    }
+}
+
+#[test]
+fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
+    for method in ["cvode-bdf", "arkode-dirk", "arkode-imex"] {
+        let solver = format!(r#""solver": {{"method": "{method}"}},"#);
+        let r = run(&cycle_scene(1e8, 0.8, 1.0, &solver));
+        let c = r.cycle.unwrap();
+        assert_eq!(c.status, CycleStatus::Periodic, "{method}");
+        let p = c.values.unwrap().period;
+        assert!((p - 56.4124662).abs() < 1e-5 * p, "{method}: period {p} at default rtol 1e-8");
+    }
+}
+
+#[test]
+fn beyond_1e8_gamma_1e12_runs() {
+    let r = run(&cycle_scene(1e12, 0.8, 1.0, r#""solver": {"rtol": 1e-10, "atol": 1e-12},"#));
+    let c = r.cycle.unwrap();
+    assert_eq!(c.status, CycleStatus::Periodic);
+    let v = c.values.unwrap();
+    assert!(v.period > 56.5 && v.slip_half_width.unwrap() * 1e12 > 2.0, "{v:?}");
+    assert_eq!(r.solver.stats.step_underflow_warnings, 0);
+}
+
+#[test]
+fn below_threshold_the_fixed_point_is_reported_stable() {
+    let text = r#"{"name": "t", "model": {"gamma": 10, "xi": 0.8, "epsilon": 0.5}, "analyses": ["hopf", "cycle"]}"#;
+    let r = run(text);
+    let h = r.hopf.unwrap();
+    assert!(!h.above_threshold && h.max_real_part < 0.0);
+    let c = r.cycle.unwrap();
+    assert_eq!(c.status, CycleStatus::FixedPoint);
+    assert!(!c.converged && c.values.is_none());
+}
+
+#[test]
+fn half_width_matches_the_recorded_trajectory() {
+    let r = run_file("fig1.json");
+    let c = r.cycle.unwrap();
+    let v = c.values.unwrap();
+    let traj = c.trajectory.last().expect("trajectory asked for one cycle");
+    assert!(traj.t.len() > 100 && traj.t.windows(2).all(|w| w[1] >= w[0]));
+    // Full width at half maximum from the recorded samples, by linear interpolation.
+    let vmax = traj.v.iter().cloned().fold(0.0, f64::max);
+    assert!((vmax - v.v_max).abs() < 1e-6 * v.v_max, "the peak is a recorded event");
+    let half = 0.5 * vmax;
+    let crossings: Vec<f64> = traj
+        .t
+        .windows(2)
+        .zip(traj.v.windows(2))
+        .filter(|(_, x)| (x[0] < half) != (x[1] < half))
+        .map(|(t, x)| t[0] + (half - x[0]) * (t[1] - t[0]) / (x[1] - x[0]))
+        .collect();
+    assert_eq!(crossings.len(), 2, "{crossings:?}");
+    let width = crossings[1] - crossings[0];
+    let ours = v.slip_half_width.unwrap();
+    assert!((width - ours).abs() < 1e-3 * ours, "sampled {width} vs located {ours}");
+}

@@ -1,0 +1,128 @@
+//! Scene validation: bad input names the field and the fix; the CLI exits 2 and writes nothing.
+
+use std::process::Command;
+use stickslip::scene;
+
+fn scene_with(model: &str, rest: &str) -> String {
+    format!(r#"{{"name": "t", "model": {model}, "analyses": ["hopf"]{rest}}}"#)
+}
+
+fn error_of(text: &str) -> scene::SceneError {
+    scene::parse(text, "test").expect_err("the scene must be rejected")
+}
+
+#[test]
+fn the_shipped_scenes_are_valid() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes");
+    let mut count = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        scene::parse(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
+        count += 1;
+    }
+    assert!(count >= 4);
+}
+
+#[test]
+fn domain_errors_name_the_field_and_what_is_valid() {
+    let cases = [
+        (scene_with(r#"{"gamma": -1, "xi": 0.7, "epsilon": 0.7}"#, ""), "model.gamma", "> 0"),
+        (scene_with(r#"{"gamma": 0, "xi": 0.7, "epsilon": 0.7}"#, ""), "model.gamma", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0, "epsilon": 0.7}"#, ""), "model.xi", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 0.7, "friction": {"power": {"alpha": -0.3}}}"#, ""), "model.friction.power.alpha", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7}"#, ""), "model", "epsilon"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "solver": {"rtol": 0}"#), "solver.rtol", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "solver": {"rtol": -1e-8}"#), "solver.rtol", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "solver": {"method": "rk4"}"#), "solver.method", "cvode-bdf"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "solver": {"atol": [1e-9, 1e-9]}"#), "solver.atol", "three"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "solver": {"method": "arkode-dirk", "table": "NOPE"}"#), "solver.table", "SDIRK_5_3_4"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, r#", "initial": {"v": -1}"#), "initial.v", "> 0"),
+        (scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "dimensional": {"k":1,"mass":1,"a":1,"b":2,"d_c":1,"v0":1}}"#, ""), "model", "not both"),
+    ];
+    for (text, field, hint) in cases {
+        let e = error_of(&text);
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.message.contains(hint), "{e} should mention {hint}");
+    }
+}
+
+#[test]
+fn unknown_keys_and_wrong_types_name_the_path() {
+    let e = error_of(&scene_with(r#"{"gama": 10, "xi": 0.7, "epsilon": 1}"#, ""));
+    assert!(e.field.starts_with("model") && e.message.contains("gama"), "{e}");
+    let e = error_of(&scene_with(r#"{"gamma": "big", "xi": 0.7, "epsilon": 1}"#, ""));
+    assert_eq!(e.field, "model.gamma", "{e}");
+    let e = error_of(r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 1}, "analyses": ["hopf"], "extra": 1}"#);
+    assert!(e.message.contains("extra"), "{e}");
+    let e = error_of(&scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, "").replace("\"hopf\"", "\"fourier\""));
+    assert!(e.message.contains("unknown analysis") && e.message.contains("cycle"), "{e}");
+    // JSON has no NaN or infinity: both are syntax or range errors, never a silent value.
+    assert!(scene::parse(&scene_with(r#"{"gamma": NaN, "xi": 0.7, "epsilon": 1}"#, ""), "t").is_err());
+    let e = error_of(&scene_with(r#"{"gamma": 1e999, "xi": 0.7, "epsilon": 1}"#, ""));
+    assert!(e.message.contains("out of range") || e.message.contains("finite"), "{e}");
+}
+
+#[test]
+fn dimensional_input_converts_to_gamma_xi_epsilon() {
+    let text = scene_with(r#"{"dimensional": {"k": 4.0, "mass": 1.0, "a": 2.0, "b": 5.0, "d_c": 3.0, "v0": 0.5}}"#, "");
+    let s = scene::parse(&text, "t").unwrap();
+    assert!((s.params.gamma - 6.0 * 2.0).abs() < 1e-12); // (D_c/v0)·√(k/M)
+    assert!((s.params.xi - 6.0).abs() < 1e-12); // k·D_c/A
+    assert!((s.params.epsilon - 1.5).abs() < 1e-12); // (B − A)/A
+    assert_eq!(s.units.unwrap().time_scale, 6.0); // D_c/v0
+}
+
+#[test]
+fn default_start_is_on_the_slow_manifold() {
+    for friction in [r#""log""#, r#""asinh""#, r#"{"power": {"alpha": 0.31}}"#] {
+        let text = scene_with(&format!(r#"{{"gamma": 1e8, "xi": 0.8, "epsilon": 1, "friction": {friction}}}"#), "");
+        let s = scene::parse(&text, "t").unwrap();
+        let drr = stickslip::model::Drr::new(s.params);
+        assert!(drr.manifold_offset(&s.initial).abs() < 1e-15, "{friction}: G = {}", drr.manifold_offset(&s.initial));
+        assert!((s.initial[1] - 0.5f64.ln()).abs() < 1e-15);
+    }
+}
+
+#[test]
+fn cli_exit_codes_and_nothing_written_on_bad_input() {
+    let exe = env!("CARGO_BIN_EXE_stickslip");
+    let dir = std::env::temp_dir().join(format!("stickslip-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, scene_with(r#"{"gamma": -5, "xi": 0.7, "epsilon": 1}"#, "")).unwrap();
+    let out = dir.join("report.json");
+    let run = Command::new(exe).args(["run", bad.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("model.gamma"), "{stderr}");
+    assert!(!out.exists(), "no report on bad input");
+    let missing = Command::new(exe).args(["run", "/no/such/scene.json"]).output().unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    let malformed = dir.join("malformed.json");
+    std::fs::write(&malformed, "{\"name\": ").unwrap();
+    assert_eq!(Command::new(exe).args(["run", malformed.to_str().unwrap()]).output().unwrap().status.code(), Some(2));
+
+    // A computation that fails: a non-stiff method on a stiff case with a small step budget.
+    let stiff = dir.join("stiff.json");
+    std::fs::write(
+        &stiff,
+        r#"{"name": "t", "model": {"gamma": 1e5, "xi": 0.8, "epsilon": 1}, "solver": {"method": "arkode-erk"},
+            "analyses": [{"cycle": {"max_steps": 20000}}]}"#,
+    )
+    .unwrap();
+    let run = Command::new(exe).args(["run", stiff.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("at t =") && stderr.contains("state"), "{stderr}");
+    assert!(!out.exists());
+
+    let good = dir.join("good.json");
+    std::fs::write(&good, scene_with(r#"{"gamma": 10, "xi": 0.8, "epsilon": 1}"#, "")).unwrap();
+    let run = Command::new(exe).args(["run", good.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert_eq!(run.status.code(), Some(0), "{}", String::from_utf8_lossy(&run.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(report["hopf"]["epsilon_c"].is_number());
+    assert!(report.get("cycle").is_none(), "only what the scene asks for");
+    std::fs::remove_dir_all(&dir).ok();
+}
