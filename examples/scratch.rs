@@ -24,7 +24,7 @@ fn main() {
         }
     };
     let h = hopf::analyse(&drr);
-    let r = cycle::analyse(integ.as_mut(), &drr, &cycle::CycleSettings::defaults(rtol), h.max_real_part < 0.0);
+    let r = cycle::analyse(integ.as_mut(), &drr, &cycle::CycleSettings::defaults(rtol, rtol * 1e-2), h.max_real_part < 0.0);
     let el = t.elapsed();
     match r {
         Ok(r) => { println!("{:?} cycles {} used {}", r.status, r.cycles_computed, r.cycles_used);

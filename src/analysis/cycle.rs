@@ -7,20 +7,21 @@
 //! peak (the integrator restarts at local t = 0 at the v maximum): every reported duration is
 //! a difference of small local times, and the arrest that follows the peak (steps of 1e-17 at
 //! γ = 1e8) happens at local t ~ 1e-8, where such steps are representable. Time is also
-//! re-based at the upward crossing of v = 1 when the clock is too coarse for the coming slip,
-//! i.e. when 1/γ is within 1e5 ulps of the local time (γ·t > 1/(1e5 ε), about γ > 1e9 for
-//! periods ~50): the rise to the peak then happens at local t < 1; without it γ = 1e12 hits
-//! "t + h = t" at t ≈ 60. Below that the restart is skipped: each one costs accuracy
-//! (measured: the DIRK period spread grows from 2e-8 to 1e-7 at γ = 1e8).
+//! re-based during the rise when the clock is too coarse for the coming slip, i.e. when 1/γ
+//! is within 1e3 ulps of the local time at the upward crossing of v = 1 (γ·t > 1/(1e3 ε) ≈
+//! 4.5e12, so γ ≳ 1e11 for periods ~50; the rise ends with steps ~1e-2/γ, which must stay
+//! well above the spacing of t). Without it γ = 1e12 hits "t + h = t" at t ≈ 60.
 //!
-//! A restart state is a step end computed by the integrator (never an interpolated point:
-//! on the slow manifold an interpolation error δ in G gives dw/dt ~ γ²δ). On the manifold (the
-//! v = 1 restart) it is also made consistent: its w is moved (by ~ the solver's error, 1e-12)
-//! so that the model's dw/dt equals the interpolant's. Without that, the restarted BDF's first
-//! predictor uses f(y₀), which near the manifold is solver noise times γ², and fails at
-//! γ ≥ 1e8. At the peak the stiffness is only γ²/(ξ v_max) and the state is used as is (the
-//! correction would import the interpolant's error: measured 5e-7 in the period with
-//! ARKStep). No restart happens inside the arrest layer.
+//! Restarts happen only at step ends computed by the integrator (never at interpolated
+//! points) and only where the model's dw/dt = −γ² e^{−w} G is meaningful: its error, the
+//! solver's error in G amplified by γ² e^{−w}, must be below 1e-3 of the rise's rate. On the
+//! slow manifold it is not (at γ = 1e8, v ~ 4, it is ~3e3 against O(1)); a restarted BDF,
+//! whose first predictor uses f(y₀), then fails. So the peak of a relaxation cycle
+//! (v ~ γ ln γ, where γ² e^{−w} is small) is re-based, the peak of a small oscillation near
+//! the fixed point is not (it needs no re-basing: it has no arrest layer), and the rise re-base
+//! waits for the first step end where f is resolved. Each restart costs some accuracy
+//! (measured: the DIRK period spread grows from 2e-8 to 1e-7 at γ = 1e8 with one extra
+//! restart per cycle), so none is made unless needed. None happens inside the arrest layer.
 //!
 //! Convergence rule: the orbit is periodic (period 1) when, for `settle` consecutive pairs of
 //! cycles, the period and ln v_max change by less than `tolerance` (relative; absolute for
@@ -48,12 +49,15 @@ pub struct CycleSettings {
     pub max_steps: u64,
     /// Keep every step of the last this many cycles (trajectory); 0 keeps none.
     pub trajectory_cycles: usize,
+    /// The integrator's (rtol, atol) on w = ln v, to judge where f is meaningful.
+    pub w_tolerance: (f64, f64),
 }
 
 impl CycleSettings {
-    /// Defaults for a given integration rtol.
-    pub fn defaults(rtol: f64) -> Self {
+    /// Defaults for a given integration rtol and absolute tolerance on w.
+    pub fn defaults(rtol: f64, atol_w: f64) -> Self {
         Self {
+            w_tolerance: (rtol, atol_w),
             tolerance: (1000.0 * rtol).max(1e-7),
             settle: 3,
             max_cycles: 1000,
@@ -225,14 +229,6 @@ struct OpenCycle {
     trajectory: Option<TrajectoryCycle>,
 }
 
-/// Whether (and how) time is re-based after a step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Rebase {
-    No,
-    AfterPeak,
-    OnManifold,
-}
-
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Event {
     Up,
@@ -256,6 +252,10 @@ struct Tracker<'a> {
     rise: Vec<Knot>,
     /// Time integrated in completed segments.
     elapsed: f64,
+    /// The clock is too coarse for the coming slip: re-base once off the manifold.
+    rebase_in_rise: bool,
+    /// Largest |dw/dt| since the last minimum of w.
+    rise_rate: f64,
     steps: u64,
 }
 
@@ -333,9 +333,9 @@ impl<'a> Tracker<'a> {
         }
     }
 
-    /// Handles one event; says whether time must be re-based after this step (after the peak,
-    /// and after the upward crossing of v = 1 when the clock is too coarse).
-    fn handle(&mut self, t: f64, event: Event) -> Result<Rebase, SolverError> {
+    /// Handles one event; returns true when time must be re-based after this step (after the
+    /// peak).
+    fn handle(&mut self, t: f64, event: Event) -> Result<bool, SolverError> {
         let y = self.state_at(t)?;
         self.update_ranges(&y);
         self.record(t, &y);
@@ -363,8 +363,7 @@ impl<'a> Tracker<'a> {
                     tr.push(0.0, &y);
                 }
                 self.open = Some(c);
-                let clock_too_coarse = self.drr.params().gamma * t > 1.0 / (1e5 * f64::EPSILON);
-                return Ok(if clock_too_coarse { Rebase::OnManifold } else { Rebase::No });
+                self.rebase_in_rise = self.drr.params().gamma * t > 1.0 / (1e3 * f64::EPSILON);
             }
             Event::Down => {
                 if let Some(c) = &mut self.open {
@@ -374,21 +373,25 @@ impl<'a> Tracker<'a> {
                 }
             }
             Event::MinW => {
+                self.rise_rate = 0.0;
                 self.rise.clear();
                 self.rise.push(Knot { t, x: y[W], dx: 0.0 });
             }
             Event::MaxW => {
-                let Some(c) = &mut self.open else { return Ok(Rebase::No) };
-                if c.peak.is_some() || y[W] <= 0.0 {
-                    return Ok(Rebase::No);
+                // The cycle's peak is its highest maximum of w with v > 1: a wiggle earlier in
+                // the rise is superseded by the real peak.
+                let Some(c) = &mut self.open else { return Ok(false) };
+                if y[W] <= 0.0 || c.peak.is_some_and(|(_, p)| y[W] <= p[W]) {
+                    return Ok(false);
                 }
                 c.peak = Some((c.origin + t, y));
                 let level = y[W] - std::f64::consts::LN_2;
                 let mut knots: Vec<Knot> = self.rise.iter().copied().filter(|k| k.t < t).collect();
                 knots.push(Knot { t, x: y[W], dx: 0.0 });
                 c.half_rise = events::upward_crossing(&knots, level).map(|tr| c.origin + tr);
-                self.rise.clear();
-                return Ok(Rebase::AfterPeak);
+                c.half_fall = None;
+                self.rebase_in_rise = false;
+                return Ok(true);
             }
             Event::HalfFall => {
                 if let Some(c) = &mut self.open {
@@ -397,7 +400,7 @@ impl<'a> Tracker<'a> {
             }
             Event::Extremum(_) => {}
         }
-        Ok(Rebase::No)
+        Ok(false)
     }
 
     fn close(&mut self, c: OpenCycle, period: f64) {
@@ -434,15 +437,21 @@ impl<'a> Tracker<'a> {
         self.closed.push(values);
     }
 
+    /// Whether a restart at y is safe: the model's dw/dt there, whose error is the solver's
+    /// error in G (its tolerance on w over ξ) amplified by γ² e^{−w}, is resolved to 1e-3 of
+    /// `rate`, the scale of dw/dt in the current rise.
+    fn restart_safe(&self, y: &[f64; 3], rate: f64) -> bool {
+        let p = self.drr.params();
+        let (rtol, atol) = self.settings.w_tolerance;
+        let error_g = (rtol * y[W].abs() + atol) / p.xi;
+        p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
+    }
+
     /// Re-bases time at the step end `at` (a point the integrator computed, never an
     /// interpolated one: on the slow manifold an interpolation error δ in G would start an
     /// artificial layer with dw/dt ~ γ²δ). Times of the open cycle and of the rise buffer move
     /// into the new frame.
-    fn restart(&mut self, mut at: Sample, rebase: Rebase) -> Result<(), SolverError> {
-        if rebase == Rebase::OnManifold {
-            let tolerance = 1e-6 * (1.0 + at.y[W].abs());
-            at.y[W] = self.drr.consistent_w(&at.y, at.d[W], tolerance);
-        }
+    fn restart(&mut self, at: Sample) -> Result<(), SolverError> {
         self.integ.reinit(0.0, &at.y)?;
         self.elapsed += at.t;
         if let Some(c) = &mut self.open {
@@ -466,12 +475,15 @@ impl<'a> Tracker<'a> {
         if y.iter().chain(&next.d).any(|v| !v.is_finite()) {
             return Err(self.failure(ErrorKind::RhsFailure, "the state or its derivative became non-finite".into()));
         }
-        let mut rebase = Rebase::No;
+        self.rise_rate = self.rise_rate.max(next.d[W].abs());
+        let mut after_peak = false;
         for (t, event) in self.events(&next)? {
-            match self.handle(t, event)? {
-                Rebase::No => {}
-                r => rebase = r,
-            }
+            after_peak |= self.handle(t, event)?;
+        }
+        let mut rebase = after_peak && self.restart_safe(&next.y, self.rise_rate);
+        if self.rebase_in_rise && self.restart_safe(&next.y, next.d[W].abs()) {
+            self.rebase_in_rise = false;
+            rebase = true;
         }
         self.update_ranges(&y);
         self.record(next.t, &y);
@@ -480,8 +492,8 @@ impl<'a> Tracker<'a> {
                 self.rise.push(Knot { t: next.t, x: y[W], dx: next.d[W] });
             }
         }
-        if rebase != Rebase::No {
-            self.restart(next, rebase)
+        if rebase {
+            self.restart(next)
         } else {
             self.prev = next;
             Ok(())
@@ -578,6 +590,8 @@ pub fn analyse(
         trajectories: Vec::new(),
         rise: Vec::new(),
         elapsed: 0.0,
+        rebase_in_rise: false,
+        rise_rate: 0.0,
         steps: 0,
     };
     let fixed = drr.fixed_point();

@@ -83,32 +83,6 @@ impl Drr {
         -(theta + f) / self.params.xi
     }
 
-    /// The w for which dw/dt(u, w, θ) equals `dw_target`, by Newton's method from y[W]: a
-    /// consistent restart state. Near the slow manifold the computed dw/dt is the solver's
-    /// error in G times γ² e^{−w} (e.g. 1e4 instead of O(1) at γ = 1e8); moving w by that error
-    /// (~1e-12) restores a meaningful derivative. Returns y[W] unchanged if Newton does not
-    /// converge to a correction within `max_shift`.
-    pub fn consistent_w(&self, y: &[f64], dw_target: f64, max_shift: f64) -> f64 {
-        let p = &self.params;
-        let mut w = y[W];
-        for _ in 0..8 {
-            let (f, vfp) = p.friction.eval(w);
-            let a = self.gamma2 * (-w).exp();
-            let g = y[U] + (y[THETA] + f) / p.xi;
-            let residual = -a * g - dw_target;
-            let slope = a * (g - vfp / p.xi);
-            let step = residual / slope;
-            if !step.is_finite() {
-                return y[W];
-            }
-            w -= step;
-            if step.abs() <= 4.0 * f64::EPSILON * w.abs().max(1.0) {
-                break;
-            }
-        }
-        if (w - y[W]).abs() <= max_shift { w } else { y[W] }
-    }
-
     fn split(&self, y: &[f64]) -> (f64, f64, f64) {
         let w = y[W];
         let (f, _) = self.params.friction.eval(w);
