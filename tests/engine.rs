@@ -127,3 +127,15 @@ fn half_width_matches_the_recorded_trajectory() {
     let ours = v.slip_half_width.unwrap();
     assert!((width - ours).abs() < 1e-3 * ours, "sampled {width} vs located {ours}");
 }
+
+#[test]
+fn an_unsettled_run_lists_its_cycles_and_averages_nothing() {
+    let text = r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 0.72},
+                   "analyses": [{"cycle": {"max_cycles": 3}}]}"#;
+    let c = run(text).cycle.unwrap();
+    assert_eq!(c.status, CycleStatus::NotConverged);
+    assert!(!c.converged && c.values.is_none() && c.spread.is_none() && c.orbit.is_empty());
+    assert_eq!(c.last_cycles.len(), 3);
+    let json: serde_json::Value = serde_json::to_value(&c).unwrap();
+    assert!(json["period"].is_null(), "no single number for an unsettled orbit");
+}

@@ -670,3 +670,76 @@ pub fn analyse(
         trajectory: tracker.trajectories,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cycle(period: f64, ln_v_max: f64, ln_v_min: f64) -> CycleValues {
+        CycleValues {
+            period,
+            t0: 1.0,
+            slip_half_width: Some(0.1),
+            v_max: ln_v_max.exp(),
+            ln_v_max,
+            v_min: ln_v_min.exp(),
+            ln_v_min,
+            u_at_v_max: 0.0,
+            theta_at_v_max: 0.0,
+            u_min: -1.0,
+            u_max: 1.0,
+            theta_min: -1.0,
+            theta_max: 1.0,
+            slip: 2.0,
+            slip_duration: 1.0,
+            steps: 100,
+        }
+    }
+
+    fn settings() -> CycleSettings {
+        CycleSettings { tolerance: 1e-7, ..CycleSettings::defaults(1e-10, 1e-12) }
+    }
+
+    #[test]
+    fn a_settled_cycle_is_period_one() {
+        let mut cycles = vec![cycle(20.0, 5.0, -2.0), cycle(19.0, 4.9, -2.0)];
+        cycles.extend((0..4).map(|k| cycle(18.0 + 1e-9 * k as f64, 4.8, -2.0)));
+        assert_eq!(periodicity(&cycles, &settings()), Some(1));
+        assert_eq!(periodicity(&cycles[..4], &settings()), None, "needs settle + 1 agreeing cycles");
+    }
+
+    #[test]
+    fn alternating_cycles_are_period_two_and_never_averaged() {
+        let cycles: Vec<CycleValues> =
+            (0..8).map(|k| if k % 2 == 0 { cycle(10.0, 3.0, -1.0) } else { cycle(12.0, 3.5, -1.2) }).collect();
+        assert_eq!(periodicity(&cycles, &settings()), Some(2));
+        let three: Vec<CycleValues> = (0..9).map(|k| cycle(10.0 + (k % 3) as f64, 3.0, -1.0)).collect();
+        assert_eq!(periodicity(&three, &settings()), Some(3));
+    }
+
+    #[test]
+    fn noise_around_a_period_one_orbit_is_not_period_two() {
+        // Lag-2 agreement by chance, lag-1 differences of only a few tolerances.
+        let noisy: Vec<CycleValues> =
+            (0..8).map(|k| cycle(18.0 * (1.0 + if k % 2 == 0 { 0.0 } else { 3e-7 }), 4.8, -2.0)).collect();
+        assert_eq!(periodicity(&noisy, &settings()), None);
+    }
+
+    #[test]
+    fn a_shrinking_oscillation_is_recognised_only_at_a_stable_fixed_point() {
+        let shrinking: Vec<CycleValues> = (0..8).map(|k| cycle(7.0, 0.5 * 0.8f64.powi(k), -0.5 * 0.8f64.powi(k))).collect();
+        assert!(decaying(&shrinking, &settings(), true));
+        assert!(!decaying(&shrinking, &settings(), false));
+        assert!(decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), false), "a vanished amplitude needs no Hopf verdict");
+    }
+
+    #[test]
+    fn spread_and_mean_of_cycles() {
+        let cycles = [cycle(10.0, 3.0, -1.0), cycle(10.2, 3.0, -1.0)];
+        let mean_values = combine(&cycles, mean);
+        assert!((mean_values.period - 10.1).abs() < 1e-12);
+        let spread = combine(&cycles, relative_spread);
+        assert!((spread.period - 0.2 / 10.1).abs() < 1e-12);
+        assert_eq!(spread.ln_v_max, 0.0);
+    }
+}
