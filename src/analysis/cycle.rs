@@ -615,7 +615,7 @@ pub fn analyse(
                 break CycleStatus::NotConverged;
             }
         }
-        if tracker.steps % 256 == 0 {
+        if tracker.steps.is_multiple_of(256) {
             let y = tracker.integ.state();
             let near = (0..3).all(|i| (y[i] - fixed[i]).abs() < 1e-10 * (1.0 + fixed[i].abs()));
             if near {
