@@ -1,0 +1,755 @@
+/* Plain-C reference for the earthquake benchmark (benches/earthquake.rs).
+ *
+ * Integrates the earthquake scene (data/scenes/earthquake.json: γ = 1e8, ξ = 0.8, ε = 1,
+ * f = ln v) in y = (u, w = ln v, θ) with CVODE exactly as stickslip's safe wrapper does
+ * (src/sundials/solver.rs, cvode.rs): CVodeCreate(CV_BDF), CVodeInit, an error handler that
+ * records messages instead of printing them, CVodeSetMaxHnilWarns(INT_MAX),
+ * CVodeSVtolerances(rtol 1e-10, atol 1e-12 per component), dense matrix + dense linear
+ * solver, analytic Jacobian, CVODE defaults otherwise. The RHS and Jacobian are the formulas
+ * of src/model/drr.rs written in the same order of operations (du/dt = expm1(w)), and return
+ * +1 (recoverable) on non-finite values as the wrapper's trampolines do.
+ *
+ * It replicates the cycle engine (src/analysis/cycle.rs, events.rs) step for step: CV_ONE_STEP
+ * calls with tout = (previous step end) + max_time; after each step CVodeGetDky(t, 1) at the
+ * step end; events between step ends (sign changes of w, of the interpolant's dw/dt, du/dt,
+ * dθ/dt, and the fall through half the maximum), each refined by the same Illinois iteration
+ * on CVodeGetDky and evaluated with CVodeGetDky(t, 0); the same rise buffer and cubic-Hermite
+ * half-maximum crossing; the same restart policy: CVodeReInit at local t = 0 at the end of
+ * the step holding a new highest v maximum of the cycle (its peak), if the model's dw/dt is
+ * resolved there (Tracker::restart_safe), and at the first resolved step end of the rise when
+ * the clock is too coarse (γ·t > 1/(1e3 ε) at the upward crossing of v = 1; never in this
+ * scene). The engine's convergence rule (a few comparisons per closed cycle) is replaced by
+ * "stop after N closed cycles"; the engine stops
+ * after 5 cycles on this scene, so both integrate exactly the same steps.
+ *
+ * Usage:
+ *   earthquake_cvode R [N]        R runs of N cycles (default 5) after WARMUP untimed runs;
+ *                                 prints "elapsed_ns X", "steps S" (total over the R runs)
+ *                                 and "period P" (last cycle of the last run, %.17e)
+ *   earthquake_cvode R each [N]   times R runs individually (after EACH_WARMUP untimed runs)
+ *                                 and prints each run's nanoseconds on its own line
+ *   earthquake_cvode check [N]    one run; prints every cycle (steps, period, ...) and the
+ *                                 CVODE counters summed over restarts
+ * Exit status 1 if a SUNDIALS call fails or a "t + h = t" warning occurs (the wrapper fails
+ * then too), 64 on bad usage.
+ */
+#define _POSIX_C_SOURCE 199309L
+
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#define NEQ 3
+#define U 0
+#define W 1
+#define TH 2
+#define GAMMA 1.0e8
+#define XI 0.8
+#define EPS 1.0
+#define RTOL 1.0e-10
+#define ATOL 1.0e-12
+#define U0 1.0
+#define V0 0.45
+#define THETA0 0.0
+/* CycleSettings::defaults(1e-10) */
+#define MAX_TIME 1.0e6
+#define MAX_STEPS 20000000L
+#define MAX_CYCLES 64
+#define LN_2 0.693147180559945309417232121458176568
+#define WARMUP 1
+#define EACH_WARMUP 3
+
+static const double GAMMA2 = GAMMA * GAMMA;
+
+/* ------------------------------------------------------------------ model (drr.rs) */
+
+static int all_finite(const double *v, int n) {
+  int i;
+  for (i = 0; i < n; i++)
+    if (!isfinite(v[i])) return 0;
+  return 1;
+}
+
+static long nonfinite_rhs;
+
+static int rhs(realtype t, N_Vector yv, N_Vector ydot, void *user_data) {
+  const double *y = N_VGetArrayPointer(yv);
+  double *d = N_VGetArrayPointer(ydot);
+  double w = y[W];
+  double f = w; /* Friction::Log: (f, v f') = (w, 1) */
+  double g = y[U] + (y[TH] + f) / XI;
+  double dw = -GAMMA2 * exp(-w) * g;
+  double dtheta = -exp(w) * (y[TH] + (1.0 + EPS) * f);
+  (void)t; (void)user_data;
+  d[U] = expm1(w);
+  d[W] = dw;
+  d[TH] = dtheta;
+  if (all_finite(d, NEQ)) return 0;
+  nonfinite_rhs++;
+  return 1;
+}
+
+static int jac(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void *user_data,
+               N_Vector tmp1, N_Vector tmp2, N_Vector tmp3) {
+  const double *y = N_VGetArrayPointer(yv);
+  double *data = SUNDenseMatrix_Data(J);
+  double w = y[W];
+  double v = exp(w);
+  double f = w, vfp = 1.0;
+  double g = y[U] + (y[TH] + f) / XI;
+  double a = GAMMA2 * exp(-w);
+  (void)t; (void)fy; (void)user_data; (void)tmp1; (void)tmp2; (void)tmp3;
+  memset(data, 0, NEQ * NEQ * sizeof *data);
+  SM_ELEMENT_D(J, U, W) = v;
+  SM_ELEMENT_D(J, W, U) = -a;
+  SM_ELEMENT_D(J, W, W) = a * (g - vfp / XI);
+  SM_ELEMENT_D(J, W, TH) = -a / XI;
+  SM_ELEMENT_D(J, TH, W) = -v * (y[TH] + (1.0 + EPS) * f) - v * (1.0 + EPS) * vfp;
+  SM_ELEMENT_D(J, TH, TH) = -v;
+  return all_finite(data, NEQ * NEQ) ? 0 : 1;
+}
+
+/* The wrapper records messages and counts "t + h = t" warnings (and then fails the call). */
+static long step_underflows;
+
+static void err_handler(int error_code, const char *module, const char *function, char *msg,
+                        void *data) {
+  (void)error_code; (void)module; (void)function; (void)data;
+  if (msg && strstr(msg, "t + h = t")) step_underflows++;
+}
+
+/* ------------------------------------------------------------------ engine (cycle.rs) */
+
+typedef struct {
+  double t, y[NEQ], d[NEQ];
+} Sample;
+
+typedef struct {
+  double t, x, dx;
+} Knot;
+
+typedef struct {
+  double period, t0, slip_half_width, v_max, ln_v_max, v_min, ln_v_min, u_at_v_max,
+      theta_at_v_max, u_min, u_max, theta_min, theta_max, slip, slip_duration;
+  int has_half_width;
+  long steps;
+} CycleValues;
+
+typedef struct {
+  double origin, u_start;
+  int has_peak;
+  double t_peak, y_peak[NEQ];
+  int has_half_rise, has_half_fall, has_down;
+  double half_rise, half_fall, t_down, u_down;
+  double w_min, w_max, u_lo, u_hi, th_lo, th_hi;
+  long steps_at_start;
+} OpenCycle;
+
+enum { EV_UP, EV_DOWN, EV_MAXW, EV_MINW, EV_EXT_U, EV_EXT_TH, EV_HALFFALL };
+
+typedef struct {
+  double t;
+  int kind;
+} Event;
+
+typedef struct {
+  long nst, nfe, nsetups, netf, nsolvefails, nni, ncfn, nje, nfeLS;
+} Counters;
+
+typedef struct {
+  void *mem;
+  N_Vector y, scratch;
+  double tcur; /* time of the last CVode return (Solver::t) */
+  Sample prev;
+  int has_open;
+  OpenCycle open;
+  CycleValues closed[MAX_CYCLES];
+  int nclosed;
+  Knot *rise; /* step ends of w since its last minimum */
+  size_t nrise, cap_rise;
+  Knot *knots; /* scratch for the half-rise crossing */
+  size_t cap_knots;
+  double elapsed;
+  int rebase_in_rise; /* the clock is too coarse for the coming slip: re-base off the manifold */
+  double rise_rate;   /* largest |dw/dt| since the last minimum of w */
+  long steps;
+  long reinits;
+  Counters before; /* counters of the segments before the last CVodeReInit */
+  const char *failure;
+} Tracker;
+
+static void fail(Tracker *tr, const char *what) {
+  if (!tr->failure) tr->failure = what;
+}
+
+/* Component `index` of the k-th derivative of the interpolant at t. */
+static int dense(Tracker *tr, double t, int k, const double **out) {
+  if (CVodeGetDky(tr->mem, t, k, tr->scratch) < 0) {
+    fail(tr, "CVodeGetDky");
+    return -1;
+  }
+  *out = N_VGetArrayPointer(tr->scratch);
+  return 0;
+}
+
+static double signum(double x) { return isnan(x) ? NAN : copysign(1.0, x); }
+
+/* events::refine: Illinois (modified regula falsi) on the dense output. */
+static int refine(Tracker *tr, double a, double b, int k, int index, double level, double *root) {
+  const double *d;
+  double ta = a, tb = b, fa, fb;
+  int side = 0, it;
+  if (dense(tr, ta, k, &d)) return -1;
+  fa = d[index] - level;
+  if (dense(tr, tb, k, &d)) return -1;
+  fb = d[index] - level;
+  if (fa == 0.0) {
+    *root = ta;
+    return 0;
+  }
+  if (fb == 0.0 || signum(fa) == signum(fb)) {
+    *root = tb;
+    return 0;
+  }
+  for (it = 0; it < 200; it++) {
+    double width = tb - ta, t, f;
+    if (fabs(width) <= 4.0 * DBL_EPSILON * fmax(fabs(ta), fabs(tb)) + DBL_MIN) break;
+    t = tb - fb * width / (fb - fa);
+    if (!(t > fmin(ta, tb) && t < fmax(ta, tb))) t = 0.5 * (ta + tb);
+    if (dense(tr, t, k, &d)) return -1;
+    f = d[index] - level;
+    if (f == 0.0) {
+      *root = t;
+      return 0;
+    }
+    if (signum(f) == signum(fb)) {
+      tb = t;
+      fb = f;
+      if (side == 1) fa *= 0.5;
+      side = 1;
+    } else {
+      ta = t;
+      fa = f;
+      if (side == -1) fb *= 0.5;
+      side = -1;
+    }
+  }
+  *root = fabs(fa) < fabs(fb) ? ta : tb;
+  return 0;
+}
+
+static double hermite(Knot a, Knot b, double t) {
+  double h = b.t - a.t;
+  double s = (t - a.t) / h;
+  double s2 = s * s, s3 = s * s * s;
+  return (2.0 * s3 - 3.0 * s2 + 1.0) * a.x + (s3 - 2.0 * s2 + s) * h * a.dx +
+         (-2.0 * s3 + 3.0 * s2) * b.x + (s3 - s2) * h * b.dx;
+}
+
+/* events::upward_crossing */
+static int upward_crossing(const Knot *knots, size_t n, double level, double *out) {
+  size_t i;
+  Knot a, b;
+  double lo, hi;
+  int it;
+  for (i = 0; i + 1 < n; i++)
+    if (knots[i].x < level && knots[i + 1].x >= level) break;
+  if (i + 1 >= n) return 0;
+  a = knots[i];
+  b = knots[i + 1];
+  lo = a.t;
+  hi = b.t;
+  for (it = 0; it < 200; it++) {
+    double mid = 0.5 * (lo + hi);
+    if (mid <= lo || mid >= hi) break;
+    if (hermite(a, b, mid) < level)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  *out = 0.5 * (lo + hi);
+  return 1;
+}
+
+/* Makes room for `need` knots in *buf. */
+static void grow(Knot **buf, size_t *cap, size_t need) {
+  size_t c = *cap ? *cap : 1024;
+  Knot *p;
+  if (need <= *cap) return;
+  while (c < need) c *= 2;
+  p = realloc(*buf, c * sizeof *p);
+  if (!p) {
+    fprintf(stderr, "earthquake_cvode: out of memory\n");
+    exit(1);
+  }
+  *buf = p;
+  *cap = c;
+}
+
+static void rise_push(Tracker *tr, Knot k) {
+  grow(&tr->rise, &tr->cap_rise, tr->nrise + 1);
+  tr->rise[tr->nrise++] = k;
+}
+
+/* f64::total_cmp for the (finite) event times, then a stable insertion sort. */
+static int64_t total_key(double x) {
+  int64_t bits;
+  memcpy(&bits, &x, sizeof bits);
+  return bits ^ (int64_t)(((uint64_t)(bits >> 63)) >> 1);
+}
+
+static int events(Tracker *tr, const Sample *next, Event *found) {
+  const Sample *p = &tr->prev;
+  double a = p->t, b = next->t, t;
+  int n = 0, i, j, idx[2] = {U, TH};
+  if (p->y[W] < 0.0 && next->y[W] >= 0.0) {
+    if (refine(tr, a, b, 0, W, 0.0, &t)) return -1;
+    found[n].t = t; found[n++].kind = EV_UP;
+  }
+  if (p->y[W] >= 0.0 && next->y[W] < 0.0) {
+    if (refine(tr, a, b, 0, W, 0.0, &t)) return -1;
+    found[n].t = t; found[n++].kind = EV_DOWN;
+  }
+  if (p->d[W] > 0.0 && next->d[W] <= 0.0) {
+    if (refine(tr, a, b, 1, W, 0.0, &t)) return -1;
+    found[n].t = t; found[n++].kind = EV_MAXW;
+  }
+  if (p->d[W] < 0.0 && next->d[W] >= 0.0) {
+    if (refine(tr, a, b, 1, W, 0.0, &t)) return -1;
+    found[n].t = t; found[n++].kind = EV_MINW;
+  }
+  for (i = 0; i < 2; i++) {
+    int c = idx[i];
+    if ((p->d[c] > 0.0) != (next->d[c] > 0.0)) {
+      if (refine(tr, a, b, 1, c, 0.0, &t)) return -1;
+      found[n].t = t; found[n++].kind = c == U ? EV_EXT_U : EV_EXT_TH;
+    }
+  }
+  if (tr->has_open && tr->open.has_peak && !tr->open.has_half_fall) {
+    double level = tr->open.w_max - LN_2;
+    if (p->y[W] >= level && next->y[W] < level) {
+      if (refine(tr, a, b, 0, W, level, &t)) return -1;
+      found[n].t = t; found[n++].kind = EV_HALFFALL;
+    }
+  }
+  for (i = 1; i < n; i++) {
+    Event e = found[i];
+    for (j = i; j > 0 && total_key(found[j - 1].t) > total_key(e.t); j--) found[j] = found[j - 1];
+    found[j] = e;
+  }
+  return n;
+}
+
+static void update_ranges(Tracker *tr, const double *y) {
+  OpenCycle *c = &tr->open;
+  if (!tr->has_open) return;
+  c->w_min = fmin(c->w_min, y[W]);
+  c->w_max = fmax(c->w_max, y[W]);
+  c->u_lo = fmin(c->u_lo, y[U]);
+  c->u_hi = fmax(c->u_hi, y[U]);
+  c->th_lo = fmin(c->th_lo, y[TH]);
+  c->th_hi = fmax(c->th_hi, y[TH]);
+}
+
+static void close_cycle(Tracker *tr, const OpenCycle *c, double period) {
+  CycleValues *v;
+  double t_down, u_down;
+  if (!c->has_peak) return; /* a sub-threshold wiggle */
+  if (tr->nclosed >= MAX_CYCLES) {
+    fail(tr, "too many cycles");
+    return;
+  }
+  t_down = c->has_down ? c->t_down : period;
+  u_down = c->has_down ? c->u_down : c->u_hi;
+  v = &tr->closed[tr->nclosed++];
+  v->period = period;
+  v->t0 = c->t_peak;
+  v->has_half_width = c->has_half_rise && c->has_half_fall;
+  v->slip_half_width = v->has_half_width ? c->half_fall - c->half_rise : NAN;
+  v->v_max = exp(c->w_max);
+  v->ln_v_max = c->w_max;
+  v->v_min = exp(c->w_min);
+  v->ln_v_min = c->w_min;
+  v->u_at_v_max = c->y_peak[U];
+  v->theta_at_v_max = c->y_peak[TH];
+  v->u_min = c->u_lo;
+  v->u_max = c->u_hi;
+  v->theta_min = c->th_lo;
+  v->theta_max = c->th_hi;
+  v->slip = (u_down - c->u_start) + t_down;
+  v->slip_duration = t_down;
+  v->steps = tr->steps - c->steps_at_start;
+}
+
+/* Tracker::handle: returns 1 when time must be re-based after this step (after the peak),
+ * 0 otherwise, -1 on failure. */
+static int handle(Tracker *tr, double t, int kind) {
+  const double *d;
+  double y[NEQ];
+  if (dense(tr, t, 0, &d)) return -1;
+  memcpy(y, d, sizeof y);
+  update_ranges(tr, y);
+  switch (kind) {
+  case EV_UP: {
+    OpenCycle *c = &tr->open;
+    if (tr->has_open) {
+      OpenCycle old = *c;
+      close_cycle(tr, &old, old.origin + t);
+    }
+    memset(c, 0, sizeof *c);
+    c->origin = -t;
+    c->u_start = y[U];
+    c->w_min = c->w_max = y[W];
+    c->u_lo = c->u_hi = y[U];
+    c->th_lo = c->th_hi = y[TH];
+    c->steps_at_start = tr->steps;
+    tr->has_open = 1;
+    tr->rebase_in_rise = GAMMA * t > 1.0 / (1e3 * DBL_EPSILON);
+    break;
+  }
+  case EV_DOWN:
+    if (tr->has_open && !tr->open.has_down) {
+      tr->open.has_down = 1;
+      tr->open.t_down = tr->open.origin + t;
+      tr->open.u_down = y[U];
+    }
+    break;
+  case EV_MINW: {
+    Knot k = {t, y[W], 0.0};
+    tr->rise_rate = 0.0;
+    tr->nrise = 0;
+    rise_push(tr, k);
+    break;
+  }
+  case EV_MAXW: {
+    /* The cycle's peak is its highest maximum of w with v > 1. */
+    OpenCycle *c = &tr->open;
+    double level, tr_half;
+    size_t i, n = 0;
+    if (!tr->has_open) return 0;
+    if (y[W] <= 0.0 || (c->has_peak && y[W] <= c->y_peak[W])) return 0;
+    c->has_peak = 1;
+    c->t_peak = c->origin + t;
+    memcpy(c->y_peak, y, sizeof y);
+    level = y[W] - LN_2;
+    /* knots = the rise buffer's knots before the event, then the peak knot */
+    grow(&tr->knots, &tr->cap_knots, tr->nrise + 1);
+    for (i = 0; i < tr->nrise; i++)
+      if (tr->rise[i].t < t) tr->knots[n++] = tr->rise[i];
+    tr->knots[n].t = t;
+    tr->knots[n].x = y[W];
+    tr->knots[n++].dx = 0.0;
+    c->has_half_rise = upward_crossing(tr->knots, n, level, &tr_half);
+    if (c->has_half_rise) c->half_rise = c->origin + tr_half;
+    c->has_half_fall = 0;
+    tr->rebase_in_rise = 0;
+    return 1;
+  }
+  case EV_HALFFALL:
+    if (tr->has_open) {
+      tr->open.has_half_fall = 1;
+      tr->open.half_fall = tr->open.origin + t;
+    }
+    break;
+  default:
+    break;
+  }
+  return 0;
+}
+
+/* Tracker::restart_safe: the model's dw/dt at y (error: the solver's error in G amplified by
+ * γ² e^{−w}) is resolved to 1e-3 of `rate`. The engine's w tolerance is (rtol, atol[w]). */
+static int restart_safe(const double *y, double rate) {
+  double error_g = (RTOL * fabs(y[W]) + ATOL) / XI;
+  return GAMMA * GAMMA * exp(-y[W]) * error_g <= 1e-3 * rate;
+}
+
+static void read_counters(void *mem, Counters *c) {
+  CVodeGetNumSteps(mem, &c->nst);
+  CVodeGetNumRhsEvals(mem, &c->nfe);
+  CVodeGetNumLinSolvSetups(mem, &c->nsetups);
+  CVodeGetNumErrTestFails(mem, &c->netf);
+  CVodeGetNumStepSolveFails(mem, &c->nsolvefails);
+  CVodeGetNumNonlinSolvIters(mem, &c->nni);
+  CVodeGetNumNonlinSolvConvFails(mem, &c->ncfn);
+  CVodeGetNumJacEvals(mem, &c->nje);
+  CVodeGetNumLinRhsEvals(mem, &c->nfeLS);
+}
+
+static void add_counters(Counters *sum, const Counters *c) {
+  sum->nst += c->nst; sum->nfe += c->nfe; sum->nsetups += c->nsetups; sum->netf += c->netf;
+  sum->nsolvefails += c->nsolvefails; sum->nni += c->nni; sum->ncfn += c->ncfn;
+  sum->nje += c->nje; sum->nfeLS += c->nfeLS;
+}
+
+/* Tracker::restart: CVodeReInit at local t = 0 with the step end's state, as is. */
+static int restart(Tracker *tr, const Sample *at) {
+  Counters c;
+  size_t i;
+  read_counters(tr->mem, &c);
+  memcpy(N_VGetArrayPointer(tr->y), at->y, sizeof at->y);
+  if (CVodeReInit(tr->mem, 0.0, tr->y) < 0) {
+    fail(tr, "CVodeReInit");
+    return -1;
+  }
+  add_counters(&tr->before, &c);
+  tr->tcur = 0.0;
+  tr->reinits++;
+  tr->elapsed += at->t;
+  if (tr->has_open) tr->open.origin += at->t;
+  for (i = 0; i < tr->nrise; i++) tr->rise[i].t -= at->t;
+  tr->prev = *at;
+  tr->prev.t = 0.0;
+  return 0;
+}
+
+/* Tracker::step */
+static int step(Tracker *tr) {
+  double horizon = tr->prev.t + MAX_TIME, t;
+  const double *d, *y;
+  Sample next;
+  Event found[8];
+  int n, i, after_peak = 0, rebase;
+  long underflows = step_underflows;
+  int flag = CVode(tr->mem, horizon, tr->y, &t, CV_ONE_STEP);
+  tr->tcur = t;
+  if (flag < 0) {
+    fail(tr, "CVode");
+    return -1;
+  }
+  if (step_underflows > underflows) {
+    fail(tr, "t + h = t");
+    return -1;
+  }
+  tr->steps++;
+  y = N_VGetArrayPointer(tr->y);
+  next.t = t;
+  memcpy(next.y, y, sizeof next.y);
+  if (dense(tr, t, 1, &d)) return -1;
+  memcpy(next.d, d, sizeof next.d);
+  if (!all_finite(next.y, NEQ) || !all_finite(next.d, NEQ)) {
+    fail(tr, "the state or its derivative became non-finite");
+    return -1;
+  }
+  tr->rise_rate = fmax(tr->rise_rate, fabs(next.d[W]));
+  n = events(tr, &next, found);
+  if (n < 0) return -1;
+  for (i = 0; i < n; i++) {
+    int r = handle(tr, found[i].t, found[i].kind);
+    if (r < 0) return -1;
+    after_peak |= r;
+  }
+  rebase = after_peak && restart_safe(next.y, tr->rise_rate);
+  if (tr->rebase_in_rise && restart_safe(next.y, fabs(next.d[W]))) {
+    tr->rebase_in_rise = 0;
+    rebase = 1;
+  }
+  update_ranges(tr, next.y);
+  if (tr->nrise > 0 && next.t > tr->rise[tr->nrise - 1].t) {
+    Knot k = {next.t, next.y[W], next.d[W]};
+    rise_push(tr, k);
+  }
+  if (rebase) return restart(tr, &next);
+  tr->prev = next;
+  return 0;
+}
+
+typedef struct {
+  CycleValues cycles[MAX_CYCLES];
+  int ncycles;
+  long steps, reinits;
+  double time_integrated;
+  Counters counters;
+} Result;
+
+static volatile double v0_in = V0; /* keeps log(0.45) a runtime glibc call, as in Rust */
+
+/* One run: create, integrate through n_cycles closed cycles, read counters, free. */
+static int run_once(int n_cycles, Result *out) {
+  SUNContext ctx = NULL;
+  N_Vector atol = NULL;
+  SUNMatrix A = NULL;
+  SUNLinearSolver LS = NULL;
+  Tracker tr;
+  Counters last;
+  int status = 1, i;
+  static const double fixed[NEQ] = {EPS * 0.0 / XI, 0.0, -(1.0 + EPS) * 0.0};
+
+  memset(&tr, 0, sizeof tr);
+  if (SUNContext_Create(NULL, &ctx) != 0) return 1;
+  tr.y = N_VNew_Serial(NEQ, ctx);
+  tr.scratch = N_VNew_Serial(NEQ, ctx);
+  atol = N_VNew_Serial(NEQ, ctx);
+  if (!tr.y || !tr.scratch || !atol) goto done;
+  NV_Ith_S(tr.y, U) = U0;
+  NV_Ith_S(tr.y, W) = log(v0_in);
+  NV_Ith_S(tr.y, TH) = THETA0;
+  N_VScale(1.0, tr.y, tr.scratch);
+  for (i = 0; i < NEQ; i++) NV_Ith_S(atol, i) = ATOL;
+
+  tr.mem = CVodeCreate(CV_BDF, ctx);
+  if (!tr.mem) goto done;
+  if (CVodeInit(tr.mem, rhs, 0.0, tr.y) != CV_SUCCESS) goto done;
+  if (CVodeSetErrHandlerFn(tr.mem, err_handler, NULL) != CV_SUCCESS) goto done;
+  if (CVodeSetMaxHnilWarns(tr.mem, INT_MAX) != CV_SUCCESS) goto done;
+  if (CVodeSVtolerances(tr.mem, RTOL, atol) != CV_SUCCESS) goto done;
+  A = SUNDenseMatrix(NEQ, NEQ, ctx);
+  if (!A) goto done;
+  LS = SUNLinSol_Dense(tr.y, A, ctx);
+  if (!LS) goto done;
+  if (CVodeSetLinearSolver(tr.mem, LS, A) != CVLS_SUCCESS) goto done;
+  if (CVodeSetJacFn(tr.mem, jac) != CVLS_SUCCESS) goto done;
+
+  /* first_sample: the RHS gives the derivative at the start */
+  tr.prev.t = 0.0;
+  memcpy(tr.prev.y, N_VGetArrayPointer(tr.y), sizeof tr.prev.y);
+  rhs(0.0, tr.y, tr.scratch, NULL);
+  memcpy(tr.prev.d, N_VGetArrayPointer(tr.scratch), sizeof tr.prev.d);
+
+  /* cycle::analyse's loop, stopping after n_cycles closed cycles */
+  while (1) {
+    double time;
+    if (step(&tr)) goto done;
+    if (tr.steps > MAX_STEPS) {
+      fail(&tr, "cycle.max_steps");
+      goto done;
+    }
+    time = tr.elapsed + tr.tcur;
+    if (tr.nclosed >= n_cycles) break;
+    if (tr.steps % 256 == 0) {
+      const double *y = N_VGetArrayPointer(tr.y);
+      int near = 1;
+      for (i = 0; i < NEQ; i++) near &= fabs(y[i] - fixed[i]) < 1e-10 * (1.0 + fabs(fixed[i]));
+      if (near) {
+        fail(&tr, "reached the fixed point");
+        goto done;
+      }
+    }
+    if (time >= MAX_TIME) {
+      fail(&tr, "cycle.max_time");
+      goto done;
+    }
+  }
+  memcpy(out->cycles, tr.closed, (size_t)tr.nclosed * sizeof *tr.closed);
+  out->ncycles = tr.nclosed;
+  out->steps = tr.steps;
+  out->reinits = tr.reinits;
+  out->time_integrated = tr.elapsed + tr.tcur;
+  read_counters(tr.mem, &last);
+  out->counters = tr.before;
+  add_counters(&out->counters, &last);
+  status = 0;
+
+done:
+  if (status && tr.failure) fprintf(stderr, "earthquake_cvode: %s\n", tr.failure);
+  if (tr.mem) CVodeFree(&tr.mem);
+  if (LS) SUNLinSolFree(LS);
+  if (A) SUNMatDestroy(A);
+  if (atol) N_VDestroy(atol);
+  if (tr.scratch) N_VDestroy(tr.scratch);
+  if (tr.y) N_VDestroy(tr.y);
+  free(tr.rise);
+  free(tr.knots);
+  SUNContext_Free(&ctx);
+  return status;
+}
+
+static long long now_ns(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static Result result; /* latest run */
+
+static void must_run(int n_cycles) {
+  if (run_once(n_cycles, &result) != 0) {
+    fprintf(stderr, "earthquake_cvode: run failed\n");
+    exit(1);
+  }
+}
+
+static int parse_cycles(const char *s) {
+  long n = strtol(s, NULL, 10);
+  if (n < 1 || n > MAX_CYCLES) {
+    fprintf(stderr, "earthquake_cvode: N must be 1..%d\n", MAX_CYCLES);
+    exit(64);
+  }
+  return (int)n;
+}
+
+int main(int argc, char **argv) {
+  long r, i;
+  int n_cycles = 5;
+  if (argc >= 2 && strcmp(argv[1], "check") == 0) {
+    int k;
+    const Counters *c = &result.counters;
+    if (argc == 3) n_cycles = parse_cycles(argv[2]);
+    must_run(n_cycles);
+    for (k = 0; k < result.ncycles; k++) {
+      const CycleValues *v = &result.cycles[k];
+      printf("cycle %d steps %ld period %.17e t0 %.17e ln_v_max %.17e ln_v_min %.17e "
+             "slip %.17e slip_half_width %.17e\n",
+             k, v->steps, v->period, v->t0, v->ln_v_max, v->ln_v_min, v->slip,
+             v->slip_half_width);
+    }
+    printf("time_integrated %.17e\nreinits %ld\n", result.time_integrated, result.reinits);
+    printf("steps %ld\nrhs_evals %ld\nlin_setups %ld\nerr_test_fails %ld\n"
+           "step_solve_fails %ld\nnonlin_iters %ld\nnonlin_conv_fails %ld\njac_evals %ld\n"
+           "rhs_evals_jacobian %ld\n",
+           c->nst, c->nfe, c->nsetups, c->netf, c->nsolvefails, c->nni, c->ncfn, c->nje,
+           c->nfeLS);
+    if (c->nst != result.steps) {
+      fprintf(stderr, "earthquake_cvode: CVODE counted %ld steps, the loop %ld\n", c->nst,
+              result.steps);
+      return 1;
+    }
+    return 0;
+  }
+  if (argc < 2 || (r = strtol(argv[1], NULL, 10)) < 1) {
+    fprintf(stderr, "usage: %s R [N] | %s R each [N] | %s check [N]\n", argv[0], argv[0],
+            argv[0]);
+    return 64;
+  }
+  if (argc >= 3 && strcmp(argv[2], "each") == 0) {
+    long long *times;
+    if (argc == 4) n_cycles = parse_cycles(argv[3]);
+    else if (argc > 4) return 64;
+    times = malloc((size_t)r * sizeof *times);
+    if (!times) return 1;
+    for (i = 0; i < EACH_WARMUP; i++) must_run(n_cycles);
+    for (i = 0; i < r; i++) {
+      long long start = now_ns();
+      must_run(n_cycles);
+      times[i] = now_ns() - start;
+    }
+    for (i = 0; i < r; i++) printf("%lld\n", times[i]);
+    free(times);
+    return 0;
+  } else {
+    long long start, stop;
+    long total_steps = 0;
+    if (argc == 3) n_cycles = parse_cycles(argv[2]);
+    else if (argc > 3) return 64;
+    for (i = 0; i < WARMUP; i++) must_run(n_cycles);
+    start = now_ns();
+    for (i = 0; i < r; i++) {
+      must_run(n_cycles);
+      total_steps += result.steps;
+    }
+    stop = now_ns();
+    printf("elapsed_ns %lld\nsteps %ld\nperiod %.17e\n", stop - start, total_steps,
+           result.cycles[result.ncycles - 1].period);
+  }
+  return 0;
+}

@@ -1,0 +1,478 @@
+//! The earthquake scene (data/scenes/earthquake.json: γ = 1e8, ξ = 0.8, ε = 1, CVODE BDF at
+//! rtol 1e-10): the whole scene's wall time, and the cost per limit cycle of our engine
+//! against a plain-C CVODE program with identical settings.
+//!
+//! Group `earthquake_scene`, function `engine_run`: `stickslip::engine::run` on the parsed
+//! scene (Hopf analysis, cycle analysis to convergence, paper comparison, report assembly) —
+//! the "cycle report in under 50 ms" number.
+//!
+//! Group `earthquake_cycles`: one full integration from the scene's initial state through the
+//! N cycles the engine computes (N = 5 today), solver creation and teardown included, on both
+//! sides. `rust_engine` runs `engine::integrator` + `analysis::cycle::analyse` with the
+//! engine's settings; `plain_c` times `benches/c/earthquake_cvode.c`, which replicates the
+//! engine's stepping, event location and restarts in C (compiled here with `cc -O3` against
+//! the same system SUNDIALS; it times itself with CLOCK_MONOTONIC and criterion gets its
+//! total through `iter_custom`, so process start-up is never timed).
+//!
+//! Before any timing, the step count of every cycle, the total CVODE counters (steps, RHS and
+//! Jacobian evaluations, error-test failures, ...) and every cycle's period must be identical
+//! on both sides (periods compared bit for bit). After the groups, an independent measurement
+//! (minimum of ROUNDS × ROUND_RUNS single runs per side after warm-up, in alternating rounds
+//! so both sides see the same machine load) prints `per-cycle ratio rust/c = X`.
+//!
+//! Run: `cargo bench --bench earthquake` (results in docs/bench-cycle.md).
+
+use criterion::{Criterion, SamplingMode};
+use std::hint::black_box;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant, SystemTime};
+use stickslip::analysis::{cycle, hopf};
+use stickslip::engine;
+use stickslip::integrate::Stats;
+use stickslip::model::{Drr, Friction};
+use stickslip::scene::{self, Method, Scene};
+
+const SCENE: &str = "data/scenes/earthquake.json";
+const C_OPT: &str = "-O3";
+/// Untimed Rust runs before the independent measurement (the C program does EACH_WARMUP = 3).
+const INDEPENDENT_WARMUP: usize = 3;
+/// The independent measurement: ROUNDS × ROUND_RUNS single runs per side.
+const ROUNDS: usize = 10;
+const ROUND_RUNS: usize = 10;
+
+/// Where the C binary goes: cargo's per-target scratch directory when it provides one.
+fn scratch_dir() -> PathBuf {
+    option_env!("CARGO_TARGET_TMPDIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir)
+}
+
+/// Compiles benches/c/earthquake_cvode.c once and returns the binary's path.
+fn compile_c() -> PathBuf {
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/c/earthquake_cvode.c");
+    let dir = scratch_dir();
+    std::fs::create_dir_all(&dir)
+        .unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
+    let binary = dir.join("earthquake_cvode");
+    let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let mut cmd = Command::new(&compiler);
+    // No FMA contraction: the C arithmetic must be the Rust arithmetic, operation for operation.
+    cmd.arg(C_OPT)
+        .arg("-ffp-contract=off")
+        .arg("-o")
+        .arg(&binary)
+        .arg(&source);
+    if let Some(inc) = std::env::var_os("SUNDIALS_INCLUDE_DIR") {
+        cmd.arg("-I").arg(inc);
+    }
+    if let Some(lib) = std::env::var_os("SUNDIALS_LIBRARY_DIR") {
+        let lib = PathBuf::from(lib);
+        cmd.arg("-L")
+            .arg(&lib)
+            .arg(format!("-Wl,-rpath,{}", lib.display()));
+    }
+    cmd.args([
+        "-lsundials_cvode",
+        "-lsundials_nvecserial",
+        "-lsundials_sunmatrixdense",
+        "-lsundials_sunlinsoldense",
+        "-lm",
+    ]);
+    let status = cmd
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
+    assert!(
+        status.success(),
+        "compiling {} failed: {cmd:?}",
+        source.display()
+    );
+    binary
+}
+
+/// Runs the C program and returns its stdout; panics on failure.
+fn run_c(binary: &Path, args: &[&str]) -> String {
+    let out = Command::new(binary)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {}: {e}", binary.display()));
+    assert!(
+        out.status.success(),
+        "{} {args:?} failed ({}): {}",
+        binary.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("the C program prints ASCII")
+}
+
+/// `key value` lines of the C program's output.
+fn fields(out: &str) -> std::collections::HashMap<String, String> {
+    out.lines()
+        .filter_map(|l| l.split_once(' '))
+        .filter(|(k, _)| *k != "cycle")
+        .map(|(k, v)| (k.to_string(), v.trim().to_string()))
+        .collect()
+}
+
+/// The scene, its JSON, and the number of cycles the engine computes on it.
+struct Setup {
+    scene: Scene,
+    json: serde_json::Value,
+    drr: Drr,
+    stable: bool,
+    settings: cycle::CycleSettings,
+    cycles: usize,
+}
+
+fn setup() -> Setup {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE);
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let scene = scene::parse(&text, SCENE).unwrap_or_else(|e| panic!("{SCENE}: {e:?}"));
+    let json: serde_json::Value = serde_json::from_str(&text).expect("scene JSON");
+    // The C program hard-codes these values; they must be the parsed ones, bit for bit.
+    let p = &scene.params;
+    let s = &scene.solver;
+    let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+    assert!(
+        same(p.gamma, 1e8)
+            && same(p.xi, 0.8)
+            && same(p.epsilon, 1.0)
+            && p.friction == Friction::Log,
+        "the earthquake scene's model changed ({p:?}); update benches/c/earthquake_cvode.c"
+    );
+    assert!(
+        s.method == Method::CvodeBdf
+            && same(s.rtol, 1e-10)
+            && s.atol.iter().all(|&a| same(a, 1e-12)),
+        "the earthquake scene's solver changed ({s:?}); update benches/c/earthquake_cvode.c"
+    );
+    let initial = [1.0, 0.45f64.ln(), 0.0];
+    assert!(
+        scene.initial.iter().zip(initial).all(|(&a, b)| same(a, b)),
+        "the earthquake scene's initial state changed ({:?}); update benches/c/earthquake_cvode.c",
+        scene.initial
+    );
+    let a = &scene.analyses;
+    let options = a
+        .cycle
+        .as_ref()
+        .expect("the earthquake scene asks for the cycle analysis");
+    let no_overrides = options.tolerance.is_none()
+        && options.settle.is_none()
+        && options.max_cycles.is_none()
+        && options.max_time.is_none()
+        && options.max_steps.is_none();
+    assert!(
+        no_overrides,
+        "the scene overrides cycle settings; replicate them here and in the C program"
+    );
+    let settings = cycle::CycleSettings {
+        trajectory_cycles: 0,
+        ..cycle::CycleSettings::defaults(s.rtol, s.atol[1])
+    };
+    let drr = Drr::new(scene.params);
+    let stable = hopf::analyse(&drr).max_real_part < 0.0;
+    let report = engine::run(&scene, json.clone()).expect("the earthquake scene runs");
+    let c = report.cycle.as_ref().expect("cycle section");
+    assert!(c.converged, "the earthquake scene no longer converges");
+    let cycles = c.cycles_computed;
+    Setup {
+        scene,
+        json,
+        drr,
+        stable,
+        settings,
+        cycles,
+    }
+}
+
+/// What the engine does for the cycle section: build the integrator, integrate through the
+/// cycles to convergence, drop the integrator. Returns the report and the solver statistics.
+fn rust_cycles(s: &Setup, settings: &cycle::CycleSettings) -> (cycle::CycleReport, Stats) {
+    let (mut integ, _) =
+        engine::integrator(s.drr, &s.scene.solver, &s.scene.initial).expect("integrator");
+    let report =
+        cycle::analyse(integ.as_mut(), &s.drr, settings, s.stable).expect("cycle analysis");
+    let stats = integ.stats();
+    (report, stats)
+}
+
+/// Checks that the C program integrates exactly as the engine does: per-cycle steps, counters
+/// and periods. Returns (total steps, per-cycle steps).
+fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
+    // Same integration, but the convergence rule made unsatisfiable so that the report lists
+    // every cycle (`last_cycles`); the run stops at max_cycles = N, exactly where the default
+    // rule stops (the rule only reads closed cycles, it never changes the stepping).
+    let listing = cycle::CycleSettings {
+        settle: 1000,
+        max_cycles: s.cycles,
+        ..s.settings.clone()
+    };
+    let (listed, stats) = rust_cycles(s, &listing);
+    assert_eq!(
+        listed.last_cycles.len(),
+        s.cycles,
+        "the listing run must list all {} cycles",
+        s.cycles
+    );
+    let (default_report, default_stats) = rust_cycles(s, &s.settings);
+    assert_eq!(default_report.cycles_computed, s.cycles);
+    assert_eq!(
+        stats, default_stats,
+        "the listing run must integrate exactly like the default one"
+    );
+
+    let out = run_c(binary, &["check", &s.cycles.to_string()]);
+    // "cycle k steps S period P t0 T ln_v_max A ln_v_min B slip C slip_half_width H"
+    let c_cycles: Vec<std::collections::HashMap<String, String>> = out
+        .lines()
+        .filter(|l| l.starts_with("cycle "))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            w[2..]
+                .chunks(2)
+                .map(|kv| (kv[0].to_string(), kv[1].to_string()))
+                .collect()
+        })
+        .collect();
+    assert_eq!(
+        c_cycles.len(),
+        s.cycles,
+        "C computed {} cycles, the engine {}",
+        c_cycles.len(),
+        s.cycles
+    );
+    let mut c_steps = Vec::new();
+    for (k, (rust, c)) in listed.last_cycles.iter().zip(&c_cycles).enumerate() {
+        let steps: u64 = c["steps"].parse().expect("steps");
+        assert_eq!(
+            rust.steps, steps,
+            "cycle {k}: Rust {} steps, C {steps}",
+            rust.steps
+        );
+        c_steps.push(steps);
+        let half_width = rust.slip_half_width.unwrap_or(f64::NAN);
+        let values = [
+            ("period", rust.period),
+            ("t0", rust.t0),
+            ("ln_v_max", rust.ln_v_max),
+            ("ln_v_min", rust.ln_v_min),
+            ("slip", rust.slip),
+            ("slip_half_width", half_width),
+        ];
+        for (name, rust_value) in values {
+            let c_value: f64 = c[name].parse().expect(name);
+            let same = rust_value.to_bits() == c_value.to_bits()
+                || (rust_value.is_nan() && c_value.is_nan());
+            assert!(
+                same,
+                "cycle {k}: {name} Rust {rust_value:.17e}, C {c_value:.17e}"
+            );
+        }
+    }
+    let f = fields(&out);
+    let counter = |name: &str| -> u64 {
+        f.get(name)
+            .unwrap_or_else(|| panic!("C check output lacks {name}"))
+            .parse()
+            .expect("counter")
+    };
+    let pairs = [
+        ("steps", stats.steps),
+        ("rhs_evals", stats.rhs_evals),
+        ("lin_setups", stats.lin_setups),
+        ("err_test_fails", stats.err_test_fails),
+        ("step_solve_fails", stats.step_solve_fails),
+        ("nonlin_iters", stats.nonlin_iters),
+        ("nonlin_conv_fails", stats.nonlin_conv_fails),
+        ("jac_evals", stats.jac_evals),
+        ("rhs_evals_jacobian", stats.rhs_evals_jacobian),
+        ("reinits", stats.reinits),
+    ];
+    for (name, rust_value) in pairs {
+        assert_eq!(
+            rust_value,
+            counter(name),
+            "{name}: Rust engine {rust_value} vs plain C {}",
+            counter(name)
+        );
+    }
+    let c_time: f64 = f["time_integrated"].parse().expect("time_integrated");
+    assert_eq!(
+        listed.time_integrated.to_bits(),
+        c_time.to_bits(),
+        "time integrated differs"
+    );
+    (stats.steps, c_steps)
+}
+
+/// `earthquake_cvode R N`: total nanoseconds of R runs of N cycles, checking the step count.
+fn c_total(binary: &Path, iters: u64, cycles: usize, steps_per_run: u64) -> Duration {
+    let out = run_c(binary, &[&iters.to_string(), &cycles.to_string()]);
+    let f = fields(&out);
+    let steps: u64 = f["steps"].parse().expect("steps");
+    assert_eq!(steps, iters * steps_per_run, "C steps changed between runs");
+    Duration::from_nanos(
+        f["elapsed_ns"]
+            .parse()
+            .unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")),
+    )
+}
+
+/// Criterion's median point estimate (ns) for one function of a group, if it was written
+/// during this run.
+fn criterion_median(group: &str, function: &str, since: SystemTime) -> Option<f64> {
+    let root = std::env::var_os("CRITERION_HOME")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
+        })
+        .or_else(|| {
+            option_env!("CARGO_TARGET_TMPDIR")
+                .and_then(|t| Path::new(t).parent().map(|p| p.join("criterion")))
+        })
+        .unwrap_or_else(|| PathBuf::from("target/criterion"));
+    let file = root.join(group).join(function).join("new/estimates.json");
+    if std::fs::metadata(&file).and_then(|m| m.modified()).ok()? < since {
+        return None;
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(file).ok()?).ok()?;
+    json["median"]["point_estimate"].as_f64()
+}
+
+fn time_one(f: impl FnOnce()) -> Duration {
+    let start = Instant::now();
+    f();
+    start.elapsed()
+}
+
+/// Independent measurement: ROUNDS alternating rounds of ROUND_RUNS single runs per side, after
+/// warm-up. Returns sorted single-run times (rust, c, engine_run).
+fn independent(binary: &Path, s: &Setup) -> (Vec<Duration>, Vec<Duration>, Vec<Duration>) {
+    let (mut rust, mut c, mut scene) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..INDEPENDENT_WARMUP {
+        black_box(rust_cycles(s, &s.settings));
+        black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
+    }
+    for _ in 0..ROUNDS {
+        let out = run_c(
+            binary,
+            &[&ROUND_RUNS.to_string(), "each", &s.cycles.to_string()],
+        );
+        c.extend(
+            out.lines()
+                .map(|l| Duration::from_nanos(l.trim().parse().expect("C single-run time"))),
+        );
+        for _ in 0..ROUND_RUNS {
+            rust.push(time_one(|| {
+                black_box(rust_cycles(s, &s.settings));
+            }));
+            scene.push(time_one(|| {
+                black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
+            }));
+        }
+    }
+    rust.sort();
+    c.sort();
+    scene.sort();
+    (rust, c, scene)
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let has = |flag: &str| args.iter().any(|a| a == flag);
+    let benchmarking = has("--bench") && !has("--test") && !has("--list") && !has("--profile-time");
+
+    let s = setup();
+    let binary = compile_c();
+    let (steps, per_cycle) = compare(&binary, &s);
+    let n = s.cycles;
+    eprintln!(
+        "earthquake: C ({} {C_OPT}) and the Rust engine agree: {n} cycles, {steps} steps in all \
+         (per cycle {per_cycle:?}), same CVODE counters, per-cycle values (period, t0, ln v_max, ln v_min, slip, half width) bit-for-bit identical",
+        binary.display()
+    );
+
+    let start = SystemTime::now();
+    let mut criterion = Criterion::default().configure_from_args();
+    {
+        let mut group = criterion.benchmark_group("earthquake_scene");
+        group
+            .sampling_mode(SamplingMode::Flat)
+            .sample_size(20)
+            .measurement_time(Duration::from_secs(8));
+        group.bench_function("engine_run", |b| {
+            b.iter(|| engine::run(&s.scene, s.json.clone()).expect("scene"))
+        });
+        group.finish();
+    }
+    {
+        let mut group = criterion.benchmark_group("earthquake_cycles");
+        group
+            .sampling_mode(SamplingMode::Flat)
+            .sample_size(20)
+            .measurement_time(Duration::from_secs(8));
+        group.bench_function("rust_engine", |b| b.iter(|| rust_cycles(&s, &s.settings)));
+        group.bench_function("plain_c", |b| {
+            b.iter_custom(|iters| c_total(&binary, iters, n, steps))
+        });
+        group.finish();
+    }
+    criterion.final_summary();
+
+    if !benchmarking {
+        return;
+    }
+    let nf = n as f64;
+    let scene_median = criterion_median("earthquake_scene", "engine_run", start);
+    let rust_median = criterion_median("earthquake_cycles", "rust_engine", start);
+    let c_median = criterion_median("earthquake_cycles", "plain_c", start);
+    if let Some(t) = scene_median {
+        eprintln!(
+            "criterion median: earthquake scene (engine::run) {:.2} ms",
+            t / 1e6
+        );
+    }
+    if let (Some(r), Some(c)) = (rust_median, c_median) {
+        eprintln!(
+            "criterion medians per cycle ({n} cycles per run): rust {:.3} ms, c {:.3} ms, ratio rust/c = {:.3}",
+            r / 1e6 / nf,
+            c / 1e6 / nf,
+            r / c
+        );
+    }
+    let (rust, c, scene) = independent(&binary, &s);
+    let med = |v: &[Duration]| v[v.len() / 2];
+    eprintln!(
+        "independent, {} single runs per side ({ROUNDS} alternating rounds) after warm-up:",
+        ROUNDS * ROUND_RUNS
+    );
+    eprintln!(
+        "  earthquake scene (engine::run): min {:.2} ms, median {:.2} ms",
+        ms(scene[0]),
+        ms(med(&scene))
+    );
+    eprintln!(
+        "  {n} cycles: rust min {:.2} ms (median {:.2}), c min {:.2} ms (median {:.2})",
+        ms(rust[0]),
+        ms(med(&rust)),
+        ms(c[0]),
+        ms(med(&c))
+    );
+    eprintln!(
+        "  per cycle: rust {:.3} ms, c {:.3} ms; steps per cycle {per_cycle:?} on both sides",
+        ms(rust[0]) / nf,
+        ms(c[0]) / nf
+    );
+    eprintln!(
+        "per-cycle ratio rust/c = {:.3}",
+        rust[0].as_secs_f64() / c[0].as_secs_f64()
+    );
+}
