@@ -43,6 +43,24 @@ pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn
     })
 }
 
+/// Adds the likely physical cause to a failure: v falling to 0 in finite time. With
+/// dv/dt = −γ² G and G > 0 at v → 0, e^w decreases linearly to 0 and w = ln v → −∞: the block
+/// stops. The log law makes this a true singularity of the model; with the regularised asinh
+/// law the block would go on and reverse, which the ln v formulation cannot follow.
+fn diagnose(drr: &Drr, mut error: SolverError) -> SolverError {
+    if let [u, w, theta] = error.state[..] {
+        let g = drr.manifold_offset(&[u, w, theta]);
+        if w < -10.0 && g > 0.0 {
+            error.message.push_str(&format!(
+                " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0): the block stops, \
+                 which the integration in ln v cannot pass]",
+                w.exp()
+            ));
+        }
+    }
+    error
+}
+
 fn non_finite(what: &str) -> SolverError {
     SolverError {
         solver: "stickslip",
@@ -74,7 +92,7 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
                 ..defaults
             };
             let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
-            Some(cycle::analyse(integ.as_mut(), &drr, &settings, stable)?)
+            Some(cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| diagnose(&drr, e))?)
         }
         None => None,
     };

@@ -139,3 +139,25 @@ fn an_unsettled_run_lists_its_cycles_and_averages_nothing() {
     let json: serde_json::Value = serde_json::to_value(&c).unwrap();
     assert!(json["period"].is_null(), "no single number for an unsettled orbit");
 }
+
+#[test]
+fn the_block_stopping_in_finite_time_is_diagnosed_not_hidden() {
+    // asinh friction far above its threshold (ε_c ≈ ξ√2): after the slip v falls to 0 in
+    // finite time, which the ln v formulation cannot pass. A typed error says so.
+    let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.5, "friction": "asinh"},
+                   "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#;
+    let s = scene::parse(text, "test").unwrap();
+    let error = engine::run(&s, serde_json::Value::Null).unwrap_err();
+    assert!(error.message.contains("falling to 0 in finite time"), "{error}");
+    assert!(error.state[1] < -10.0);
+}
+
+#[test]
+fn asinh_friction_has_a_cycle_above_its_own_threshold() {
+    let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.2, "friction": "asinh"},
+                   "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["hopf", "cycle"]}"#;
+    let r = run(text);
+    let h = r.hopf.unwrap();
+    assert!((h.epsilon_c - 0.7 * 2f64.sqrt()).abs() < 1e-5 && h.above_threshold);
+    assert_eq!(r.cycle.unwrap().status, CycleStatus::Periodic);
+}
