@@ -22,11 +22,12 @@
 //!
 //! Run: `cargo bench --bench earthquake` (results in docs/bench-cycle.md).
 
+mod common;
+
 use criterion::{Criterion, SamplingMode};
 use std::hint::black_box;
-use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant, SystemTime};
+use std::path::Path;
+use std::time::{Duration, SystemTime};
 use stickslip::analysis::{cycle, hopf};
 use stickslip::engine;
 use stickslip::integrate::Stats;
@@ -35,76 +36,13 @@ use stickslip::scene::{self, Method, Scene};
 
 const SCENE: &str = "data/scenes/earthquake.json";
 const C_OPT: &str = "-O3";
+/// No FMA contraction: the C arithmetic must be the Rust arithmetic, operation for operation.
+const C_FLAGS: &[&str] = &[C_OPT, "-ffp-contract=off"];
 /// Untimed Rust runs before the independent measurement (the C program does EACH_WARMUP = 3).
 const INDEPENDENT_WARMUP: usize = 3;
 /// The independent measurement: ROUNDS × ROUND_RUNS single runs per side.
 const ROUNDS: usize = 10;
 const ROUND_RUNS: usize = 10;
-
-/// Where the C binary goes: cargo's per-target scratch directory when it provides one.
-fn scratch_dir() -> PathBuf {
-    option_env!("CARGO_TARGET_TMPDIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(std::env::temp_dir)
-}
-
-/// Compiles benches/c/earthquake_cvode.c once and returns the binary's path.
-fn compile_c() -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/c/earthquake_cvode.c");
-    let dir = scratch_dir();
-    std::fs::create_dir_all(&dir)
-        .unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
-    let binary = dir.join("earthquake_cvode");
-    let compiler = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let mut cmd = Command::new(&compiler);
-    // No FMA contraction: the C arithmetic must be the Rust arithmetic, operation for operation.
-    cmd.arg(C_OPT)
-        .arg("-ffp-contract=off")
-        .arg("-o")
-        .arg(&binary)
-        .arg(&source);
-    if let Some(inc) = std::env::var_os("SUNDIALS_INCLUDE_DIR") {
-        cmd.arg("-I").arg(inc);
-    }
-    if let Some(lib) = std::env::var_os("SUNDIALS_LIBRARY_DIR") {
-        let lib = PathBuf::from(lib);
-        cmd.arg("-L")
-            .arg(&lib)
-            .arg(format!("-Wl,-rpath,{}", lib.display()));
-    }
-    cmd.args([
-        "-lsundials_cvode",
-        "-lsundials_nvecserial",
-        "-lsundials_sunmatrixdense",
-        "-lsundials_sunlinsoldense",
-        "-lm",
-    ]);
-    let status = cmd
-        .status()
-        .unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
-    assert!(
-        status.success(),
-        "compiling {} failed: {cmd:?}",
-        source.display()
-    );
-    binary
-}
-
-/// Runs the C program and returns its stdout; panics on failure.
-fn run_c(binary: &Path, args: &[&str]) -> String {
-    let out = Command::new(binary)
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run {}: {e}", binary.display()));
-    assert!(
-        out.status.success(),
-        "{} {args:?} failed ({}): {}",
-        binary.display(),
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("the C program prints ASCII")
-}
 
 /// `key value` lines of the C program's output.
 fn fields(out: &str) -> std::collections::HashMap<String, String> {
@@ -224,7 +162,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         "the listing run must integrate exactly like the default one"
     );
 
-    let out = run_c(binary, &["check", &s.cycles.to_string()]);
+    let out = common::run_c(binary, &["check", &s.cycles.to_string()]);
     // "cycle k steps S period P t0 T ln_v_max A ln_v_min B slip C slip_half_width H"
     let c_cycles: Vec<std::collections::HashMap<String, String>> = out
         .lines()
@@ -273,32 +211,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         }
     }
     let f = fields(&out);
-    let counter = |name: &str| -> u64 {
-        f.get(name)
-            .unwrap_or_else(|| panic!("C check output lacks {name}"))
-            .parse()
-            .expect("counter")
-    };
-    let pairs = [
-        ("steps", stats.steps),
-        ("rhs_evals", stats.rhs_evals),
-        ("lin_setups", stats.lin_setups),
-        ("err_test_fails", stats.err_test_fails),
-        ("step_solve_fails", stats.step_solve_fails),
-        ("nonlin_iters", stats.nonlin_iters),
-        ("nonlin_conv_fails", stats.nonlin_conv_fails),
-        ("jac_evals", stats.jac_evals),
-        ("rhs_evals_jacobian", stats.rhs_evals_jacobian),
-        ("reinits", stats.reinits),
-    ];
-    for (name, rust_value) in pairs {
-        assert_eq!(
-            rust_value,
-            counter(name),
-            "{name}: Rust engine {rust_value} vs plain C {}",
-            counter(name)
-        );
-    }
+    common::assert_counters(&f, "Rust engine", &stats, ("reinits", stats.reinits));
     let c_time: f64 = f["time_integrated"].parse().expect("time_integrated");
     assert_eq!(
         listed.time_integrated.to_bits(),
@@ -310,74 +223,41 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
 
 /// `earthquake_cvode R N`: total nanoseconds of R runs of N cycles, checking the step count.
 fn c_total(binary: &Path, iters: u64, cycles: usize, steps_per_run: u64) -> Duration {
-    let out = run_c(binary, &[&iters.to_string(), &cycles.to_string()]);
+    let out = common::run_c(binary, &[&iters.to_string(), &cycles.to_string()]);
     let f = fields(&out);
     let steps: u64 = f["steps"].parse().expect("steps");
     assert_eq!(steps, iters * steps_per_run, "C steps changed between runs");
-    Duration::from_nanos(
-        f["elapsed_ns"]
-            .parse()
-            .unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")),
-    )
-}
-
-/// Criterion's median point estimate (ns) for one function of a group, if it was written
-/// during this run.
-fn criterion_median(group: &str, function: &str, since: SystemTime) -> Option<f64> {
-    let root = std::env::var_os("CRITERION_HOME")
-        .map(PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
-        })
-        .or_else(|| {
-            option_env!("CARGO_TARGET_TMPDIR")
-                .and_then(|t| Path::new(t).parent().map(|p| p.join("criterion")))
-        })
-        .unwrap_or_else(|| PathBuf::from("target/criterion"));
-    let file = root.join(group).join(function).join("new/estimates.json");
-    if std::fs::metadata(&file).and_then(|m| m.modified()).ok()? < since {
-        return None;
-    }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(file).ok()?).ok()?;
-    json["median"]["point_estimate"].as_f64()
-}
-
-fn time_one(f: impl FnOnce()) -> Duration {
-    let start = Instant::now();
-    f();
-    start.elapsed()
+    common::c_nanos(&f["elapsed_ns"], &out)
 }
 
 /// Independent measurement: ROUNDS alternating rounds of ROUND_RUNS single runs per side, after
 /// warm-up. Returns sorted single-run times (rust, c, engine_run).
 fn independent(binary: &Path, s: &Setup) -> (Vec<Duration>, Vec<Duration>, Vec<Duration>) {
-    let (mut rust, mut c, mut scene) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..INDEPENDENT_WARMUP {
         black_box(rust_cycles(s, &s.settings));
         black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
     }
-    for _ in 0..ROUNDS {
-        let out = run_c(
-            binary,
-            &[&ROUND_RUNS.to_string(), "each", &s.cycles.to_string()],
-        );
-        c.extend(
-            out.lines()
-                .map(|l| Duration::from_nanos(l.trim().parse().expect("C single-run time"))),
-        );
-        for _ in 0..ROUND_RUNS {
-            rust.push(time_one(|| {
-                black_box(rust_cycles(s, &s.settings));
-            }));
-            scene.push(time_one(|| {
-                black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
-            }));
-        }
-    }
-    rust.sort();
-    c.sort();
-    scene.sort();
+    let (c, [rust, scene]) = common::alternate(
+        ROUNDS,
+        ROUND_RUNS,
+        || {
+            common::c_singles(
+                binary,
+                &[&ROUND_RUNS.to_string(), "each", &s.cycles.to_string()],
+            )
+        },
+        |_| {},
+        || {
+            [
+                common::time_one(|| {
+                    black_box(rust_cycles(s, &s.settings));
+                }),
+                common::time_one(|| {
+                    black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
+                }),
+            ]
+        },
+    );
     (rust, c, scene)
 }
 
@@ -386,12 +266,10 @@ fn ms(d: Duration) -> f64 {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let has = |flag: &str| args.iter().any(|a| a == flag);
-    let benchmarking = has("--bench") && !has("--test") && !has("--list") && !has("--profile-time");
+    let benchmarking = common::benchmarking();
 
     let s = setup();
-    let binary = compile_c();
+    let binary = common::compile_c("earthquake_cvode", C_FLAGS, common::CVODE_DENSE_LIBS);
     let (steps, per_cycle) = compare(&binary, &s);
     let n = s.cycles;
     eprintln!(
@@ -431,9 +309,9 @@ fn main() {
         return;
     }
     let nf = n as f64;
-    let scene_median = criterion_median("earthquake_scene", "engine_run", start);
-    let rust_median = criterion_median("earthquake_cycles", "rust_engine", start);
-    let c_median = criterion_median("earthquake_cycles", "plain_c", start);
+    let scene_median = common::criterion_median("earthquake_scene", "engine_run", start);
+    let rust_median = common::criterion_median("earthquake_cycles", "rust_engine", start);
+    let c_median = common::criterion_median("earthquake_cycles", "plain_c", start);
     if let Some(t) = scene_median {
         eprintln!(
             "criterion median: earthquake scene (engine::run) {:.2} ms",
@@ -449,7 +327,6 @@ fn main() {
         );
     }
     let (rust, c, scene) = independent(&binary, &s);
-    let med = |v: &[Duration]| v[v.len() / 2];
     eprintln!(
         "independent, {} single runs per side ({ROUNDS} alternating rounds) after warm-up:",
         ROUNDS * ROUND_RUNS
@@ -457,14 +334,14 @@ fn main() {
     eprintln!(
         "  earthquake scene (engine::run): min {:.2} ms, median {:.2} ms",
         ms(scene[0]),
-        ms(med(&scene))
+        ms(common::median(&scene))
     );
     eprintln!(
         "  {n} cycles: rust min {:.2} ms (median {:.2}), c min {:.2} ms (median {:.2})",
         ms(rust[0]),
-        ms(med(&rust)),
+        ms(common::median(&rust)),
         ms(c[0]),
-        ms(med(&c))
+        ms(common::median(&c))
     );
     eprintln!(
         "  per cycle: rust {:.3} ms, c {:.3} ms; steps per cycle {per_cycle:?} on both sides",
@@ -473,6 +350,6 @@ fn main() {
     );
     eprintln!(
         "per-cycle ratio rust/c = {:.3}",
-        rust[0].as_secs_f64() / c[0].as_secs_f64()
+        common::ratio(rust[0], c[0])
     );
 }
