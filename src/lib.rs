@@ -14,4 +14,5 @@ pub mod integrate;
 pub mod model;
 pub mod report;
 pub mod scene;
+pub mod stress;
 pub mod sundials;

@@ -4,7 +4,8 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use stickslip::{engine, report, scene};
+use std::io::IsTerminal;
+use stickslip::{engine, report, scene, stress};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
 
@@ -31,6 +32,19 @@ enum Command {
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
+    /// Run the numerical stress grid (γ, ξ, ε, tolerances, far-off starts, every method).
+    /// Exit 1 if any cell panics, reports a non-finite number or methods disagree.
+    Stress {
+        /// The small grid (runs in CI).
+        #[arg(long)]
+        quick: bool,
+        /// Print the counts and defects as JSON.
+        #[arg(long)]
+        json: bool,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Print the SUNDIALS version linked at run time.
     Version,
 }
@@ -106,11 +120,52 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
     Ok(())
 }
 
+fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
+    let cells = stress::grid(quick);
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let started = std::time::Instant::now();
+    let terminal = std::io::stderr().is_terminal();
+    let progress = |done: usize, total: usize| {
+        if terminal {
+            let elapsed = started.elapsed().as_secs_f64();
+            let eta = elapsed / done as f64 * (total - done) as f64;
+            eprint!("\rstress: {done}/{total} cells, {elapsed:.0} s, ETA {eta:.0} s   ");
+        }
+    };
+    let (_, summary) = stress::run(&cells, threads, &progress);
+    if terminal {
+        eprintln!();
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
+    } else {
+        println!(
+            "stress: {} cells in {:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent",
+            summary.cells,
+            started.elapsed().as_secs_f64(),
+            summary.ok,
+            summary.typed_errors,
+            summary.panics,
+            summary.nan,
+            summary.inconsistent
+        );
+        for d in &summary.defects {
+            println!("  DEFECT {d}");
+        }
+    }
+    if summary.defects.is_empty() {
+        Ok(())
+    } else {
+        Err(Failure(1, format!("{} defects in the stress grid", summary.defects.len())))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Run { scene, json, out } => run_command(scene, json, out),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
+        Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())

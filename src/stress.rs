@@ -1,0 +1,203 @@
+//! The numerical stress suite: a grid of γ, ξ, ε (below and above threshold), tolerances,
+//! starts far off the cycle and every method. Each cell must end in a finite result or a typed
+//! error; a panic or a non-finite number is a defect. Where several methods find a periodic
+//! orbit, their periods must agree within the tolerance.
+
+use crate::analysis::cycle::CycleStatus;
+use crate::engine;
+use crate::integrate::ErrorKind;
+use crate::scene::{self, Method};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One cell of the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Cell {
+    /// γ.
+    pub gamma: f64,
+    /// ξ.
+    pub xi: f64,
+    /// ε.
+    pub epsilon: f64,
+    /// rtol (atol = rtol/100).
+    pub rtol: f64,
+    /// Start: (u, v, θ); None for the default start on the slow manifold.
+    pub start: Option<[f64; 3]>,
+    /// The method.
+    pub method: Method,
+}
+
+/// How a cell ended.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// A finite report: the cycle status and period (if periodic).
+    Ok {
+        /// The cycle analysis' status.
+        status: CycleStatus,
+        /// Period, when periodic.
+        period: Option<f64>,
+    },
+    /// A typed error.
+    Error {
+        /// Its kind.
+        kind: String,
+        /// Its message.
+        message: String,
+    },
+    /// A panic (a defect).
+    Panic {
+        /// The panic message.
+        message: String,
+    },
+}
+
+/// The grid: the quick one runs in CI in well under a minute on 2 cores.
+pub fn grid(quick: bool) -> Vec<Cell> {
+    let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = if quick {
+        (vec![1.0, 1e4, 1e8], vec![0.2, 2.0], vec![0.1, 3.0], vec![1e-4, 1e-10])
+    } else {
+        (
+            vec![1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6, 1e8, 1e10, 1e12],
+            vec![0.2, 0.7, 2.0],
+            vec![0.1, 0.72, 1.0, 3.0],
+            vec![1e-3, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13],
+        )
+    };
+    let starts: Vec<Option<[f64; 3]>> = vec![None, Some([0.0, 1e-30, 0.0]), Some([0.0, 1e30, 0.0]), Some([1e3, 1.0, -1e3])];
+    let mut cells = Vec::new();
+    for &gamma in &gammas {
+        for &xi in &xis {
+            for &epsilon in &epsilons {
+                for &rtol in &rtols {
+                    for start in &starts {
+                        for (_, method) in Method::ALL {
+                            cells.push(Cell { gamma, xi, epsilon, rtol, start: *start, method });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    cells
+}
+
+fn scene_text(cell: &Cell) -> String {
+    let initial = cell.start.map_or(String::new(), |[u, v, theta]| {
+        format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
+    });
+    format!(
+        r#"{{"name": "stress", "model": {{"gamma": {:e}, "xi": {}, "epsilon": {}}}, {initial}
+            "solver": {{"method": "{}", "rtol": {:e}, "atol": {:e}}},
+            "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 3000, "max_steps": 200000}}}}]}}"#,
+        cell.gamma,
+        cell.xi,
+        cell.epsilon,
+        cell.method.name(),
+        cell.rtol,
+        cell.rtol * 1e-2
+    )
+}
+
+/// Runs one cell, catching panics.
+pub fn run_cell(cell: &Cell) -> Outcome {
+    let text = scene_text(cell);
+    let outcome = std::panic::catch_unwind(|| {
+        let scene = scene::parse(&text, "stress").map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
+        engine::run(&scene, serde_json::Value::Null).map_err(|e| (format!("{:?}", e.kind), e.to_string()))
+    });
+    match outcome {
+        Ok(Ok(report)) => {
+            let c = report.cycle.expect("the stress scene asks for the cycle");
+            Outcome::Ok { status: c.status, period: c.values.map(|v| v.period) }
+        }
+        Ok(Err((kind, message))) => Outcome::Error { kind, message },
+        Err(payload) => Outcome::Panic {
+            message: payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_default(),
+        },
+    }
+}
+
+/// Counts over the grid.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Summary {
+    /// Cells run.
+    pub cells: usize,
+    /// Cells with a finite report.
+    pub ok: usize,
+    /// Typed errors by kind.
+    pub typed_errors: BTreeMap<String, usize>,
+    /// Panics (defects).
+    pub panics: usize,
+    /// Reports refused for a non-finite number (defects).
+    pub nan: usize,
+    /// Parameter points where periodic methods disagree on the period beyond tolerance.
+    pub inconsistent: usize,
+    /// The defective cells and inconsistent points, described.
+    pub defects: Vec<String>,
+}
+
+/// Runs the grid on `threads` threads; `progress` is called after each cell.
+pub fn run(cells: &[Cell], threads: usize, progress: &(dyn Fn(usize, usize) + Sync)) -> (Vec<Outcome>, Summary) {
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; cells.len()]);
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(cell) = cells.get(i) else { break };
+                let outcome = run_cell(cell);
+                results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(outcome);
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cells.len());
+            });
+        }
+    });
+    let outcomes: Vec<Outcome> =
+        results.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|o| o.expect("every cell ran")).collect();
+    let summary = summarise(cells, &outcomes);
+    (outcomes, summary)
+}
+
+fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
+    let mut s = Summary { cells: cells.len(), ..Summary::default() };
+    let mut periods: BTreeMap<String, Vec<(Method, f64)>> = BTreeMap::new();
+    for (cell, outcome) in cells.iter().zip(outcomes) {
+        match outcome {
+            Outcome::Ok { period, .. } => {
+                s.ok += 1;
+                if let Some(p) = period {
+                    let key = format!("γ={:e} ξ={} ε={} rtol={:e} start={:?}", cell.gamma, cell.xi, cell.epsilon, cell.rtol, cell.start);
+                    periods.entry(key).or_default().push((cell.method, *p));
+                }
+            }
+            Outcome::Error { kind, message } => {
+                if kind == &format!("{:?}", ErrorKind::Other) && message.contains("non-finite") {
+                    s.nan += 1;
+                    s.defects.push(format!("{cell:?}: {message}"));
+                }
+                *s.typed_errors.entry(kind.clone()).or_default() += 1;
+            }
+            Outcome::Panic { message } => {
+                s.panics += 1;
+                s.defects.push(format!("{cell:?}: panic: {message}"));
+            }
+        }
+    }
+    for (point, found) in periods {
+        let rtol: f64 = point.split("rtol=").nth(1).and_then(|r| r.split(' ').next()).and_then(|r| r.parse().ok()).unwrap_or(1e-8);
+        let allowed = (1e3 * rtol).clamp(1e-6, 0.05);
+        let (lo, hi) = found.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| (lo.min(*p), hi.max(*p)));
+        if found.len() > 1 && (hi - lo) > allowed * hi {
+            s.inconsistent += 1;
+            s.defects.push(format!("{point}: periods {found:?} differ by {:.1e} (allowed {allowed:.0e})", (hi - lo) / hi));
+        }
+    }
+    s
+}
