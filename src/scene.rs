@@ -151,16 +151,19 @@ pub enum Method {
     ArkodeImex,
     /// ARKStep, explicit Runge–Kutta (non-stiff).
     ArkodeErk,
+    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
+    Radau5,
 }
 
 impl Method {
     /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 5] = [
+    pub const ALL: [(&'static str, Method); 6] = [
         ("cvode-bdf", Method::CvodeBdf),
         ("cvode-adams", Method::CvodeAdams),
         ("arkode-dirk", Method::ArkodeDirk),
         ("arkode-imex", Method::ArkodeImex),
         ("arkode-erk", Method::ArkodeErk),
+        ("radau5", Method::Radau5),
     ];
 
     /// The scene name, e.g. "cvode-bdf".
@@ -170,7 +173,7 @@ impl Method {
 
     /// Whether the method is meant for stiff problems.
     pub fn is_stiff(self) -> bool {
-        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex)
+        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5)
     }
 }
 

@@ -5,6 +5,15 @@ use stickslip::{engine, scene};
 
 #[test]
 fn engine_matches_the_reference_table() {
+    check_against_table("cvode-bdf");
+}
+
+#[test]
+fn radau5_matches_the_reference_table() {
+    check_against_table("radau5");
+}
+
+fn check_against_table(method: &str) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/reference/drr_cycles.json");
     let table: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let rows = table["rows"].as_array().unwrap();
@@ -16,7 +25,7 @@ fn engine_matches_the_reference_table() {
         assert!(agreement < 1e-8, "γ = {gamma}: the two reference integrators disagree by {agreement}");
         let text = format!(
             r#"{{"name": "ref", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
-                "solver": {{"method": "cvode-bdf", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#
+                "solver": {{"method": "{method}", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#
         );
         let s = scene::parse(&text, "reference").unwrap();
         let report = engine::run(&s, serde_json::Value::Null).unwrap();
@@ -33,5 +42,5 @@ fn engine_matches_the_reference_table() {
             assert!(rel < bounds[k], "ξ={xi} ε={epsilon} γ={gamma:e}: {} = {} vs reference {reference} ({rel:.1e})", keys[k], ours[k]);
         }
     }
-    eprintln!("worst relative deviations (period, t0, half-width·γ, ln v_max): {worst:?}");
+    eprintln!("{method}: worst relative deviations (period, t0, half-width·γ, ln v_max): {worst:?}");
 }

@@ -6,12 +6,14 @@ mod error;
 mod integrator;
 mod options;
 mod problem;
+mod radau5;
 mod stats;
 
 pub use error::{ErrorKind, SolverError};
 pub use integrator::Integrator;
 pub use options::{Options, Tolerance};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
+pub use radau5::Radau5;
 pub use stats::Stats;
 
 /// How far one call to a solver's `advance` goes.

@@ -1,0 +1,1296 @@
+//! Radau IIA of order 5 (three stages), after Hairer & Wanner, "Solving Ordinary Differential
+//! Equations II", Section IV.8, and their Fortran code RADAU5 (version of 2002), for a full
+//! Jacobian and identity mass matrix.
+//!
+//! What follows RADAU5 line by line:
+//! - the simplified Newton iteration on the stage increments Z, transformed by T⁻¹ so that the
+//!   3n×3n system splits into one real n×n system (γ/h − J) and one complex one
+//!   ((α + iβ)/h − J), with (γ, α ± iβ) the eigenvalues of A⁻¹;
+//! - its convergence monitor (θ, the predicted "slow convergence" step reduction, at most
+//!   `max_nonlin_iters` = 7 iterations, stopping test `faccon·‖ΔZ‖ ≤ fnewt` with fnewt =
+//!   max(10u/rtol', min(0.03, √rtol')));
+//! - Jacobian reuse: a new Jacobian only after a step whose Newton contraction θ exceeded 0.001
+//!   (or after a failure with a reused one); the LU factors are kept when moreover the step size
+//!   would change by a factor in [1, 1.2] (the step size is then left unchanged);
+//! - the embedded error estimate filtered by (I − hγ₀J)⁻¹, re-filtered with a fresh f on the
+//!   first step and after a rejection when it fails;
+//! - the step-size control: h_new = h·fac/err^{1/4} with the safety factor 0.9 lowered for
+//!   many Newton iterations, ratio limits [0.2, 8], no increase right after a rejection, and
+//!   the predictive (Gustafsson) controller; the first step, when rejected, is cut by 10;
+//! - starting values for Newton from the previous step's collocation polynomial, and the same
+//!   cubic polynomial as continuous output on the last step;
+//! - the tolerances: RADAU5 replaces rtol by rtol' = 0.1·rtol^{2/3} and atol by rtol'·atol/rtol,
+//!   so that a given rtol buys about the accuracy it buys in CVODE.
+//!
+//! What differs: the initial step (when none is given) is Hairer–Wanner's explicit estimate
+//! (Solving ODEs I, II.4) instead of 1e-6; steps go past `tout` (Normal task) and the result
+//! is interpolated, as in CVODE; non-finite right-hand sides are Newton failures (h halved),
+//! ten of them in one step an error; a step underflow is "0.1·|h| ≤ u·|t|" as in RADAU5.
+//!
+//! Error flags ([`SolverError::flag`]), RADAU5's IDID where it has one: −1 invalid input,
+//! −2 too many steps, −3 step size too small, −4 matrix repeatedly singular, −5 repeated
+//! Newton failures, −6 right-hand-side failure, −7 repeated error-test failures.
+
+// RADAU5's coefficients are kept with the digits it publishes.
+#![allow(clippy::excessive_precision)]
+
+use super::{
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task,
+    Tolerance,
+};
+
+const NAME: &str = "Radau5";
+/// Unit roundoff as in RADAU5 (WORK(1) default).
+const UROUND: f64 = 1e-16;
+/// Safety factor of the step-size control.
+const SAFE: f64 = 0.9;
+/// Jacobian reuse threshold on the Newton contraction θ.
+const THET: f64 = 0.001;
+/// Keep h (and the LU factors) when the proposed ratio lies in [QUOT1, QUOT2].
+const QUOT1: f64 = 1.0;
+const QUOT2: f64 = 1.2;
+/// 1/FACL ≤ h_new/h ≤ 1/FACR.
+const FACL: f64 = 5.0;
+const FACR: f64 = 0.125;
+/// Consecutive singular iteration matrices before giving up (RADAU5: 5).
+const MAX_SINGULAR: u32 = 5;
+/// Non-finite right-hand sides within one step before giving up.
+const MAX_NONFINITE: u32 = 10;
+/// Defaults for options RADAU5 does not bound (it relies on the step underflow test).
+const DEFAULT_MAX_STEPS: i64 = 500;
+const DEFAULT_MAX_CONV_FAILS: u32 = 10;
+const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
+const DEFAULT_NIT: u32 = 7;
+/// Failed attempts of any kind in one step before giving up (a guard; RADAU5 has none).
+const MAX_ATTEMPTS: u32 = 500;
+
+// The transformation T (A⁻¹ = T Λ T⁻¹) and its inverse, from RADAU5. T32 = 1, T33 = 0.
+const T11: f64 = 9.123_239_487_089_294_279_2e-2;
+const T12: f64 = -0.141_255_295_020_954_208_43;
+const T13: f64 = -3.002_919_410_514_742_449_2e-2;
+const T21: f64 = 0.241_717_932_707_107_018_96;
+const T22: f64 = 0.204_129_352_293_799_931_99;
+const T23: f64 = 0.382_942_112_757_261_937_79;
+const T31: f64 = 0.966_048_182_615_092_936_19;
+const TI11: f64 = 4.325_579_890_063_155_351;
+const TI12: f64 = 0.339_199_251_815_809_869_54;
+const TI13: f64 = 0.541_770_539_935_874_871_19;
+const TI21: f64 = -4.178_718_591_551_904_727_3;
+const TI22: f64 = -0.327_682_820_761_062_387_08;
+const TI23: f64 = 0.476_623_554_500_550_451_96;
+const TI31: f64 = -0.502_872_634_945_786_875_95;
+const TI32: f64 = 2.571_926_949_855_605_429_2;
+const TI33: f64 = -0.596_039_204_828_224_924_97;
+
+/// The method's nodes, error-estimate weights and the eigenvalues of A⁻¹.
+#[derive(Debug, Clone, Copy)]
+struct Coeffs {
+    c1: f64,
+    c2: f64,
+    c1m1: f64,
+    c2m1: f64,
+    c1mc2: f64,
+    dd1: f64,
+    dd2: f64,
+    dd3: f64,
+    /// Real eigenvalue γ of A⁻¹.
+    u1: f64,
+    /// Complex pair α ± iβ of A⁻¹.
+    alph: f64,
+    beta: f64,
+}
+
+impl Coeffs {
+    fn new() -> Self {
+        let sq6 = 6f64.sqrt();
+        let c1 = (4.0 - sq6) / 10.0;
+        let c2 = (4.0 + sq6) / 10.0;
+        let (r81, r9) = (81f64.cbrt(), 9f64.cbrt());
+        let u1 = (6.0 + r81 - r9) / 30.0;
+        let alph = (12.0 - r81 + r9) / 60.0;
+        let beta = (r81 + r9) * 3f64.sqrt() / 60.0;
+        let cno = alph * alph + beta * beta;
+        Self {
+            c1,
+            c2,
+            c1m1: c1 - 1.0,
+            c2m1: c2 - 1.0,
+            c1mc2: c1 - c2,
+            dd1: -(13.0 + 7.0 * sq6) / 3.0,
+            dd2: (-13.0 + 7.0 * sq6) / 3.0,
+            dd3: -1.0 / 3.0,
+            u1: 1.0 / u1,
+            alph: alph / cno,
+            beta: beta / cno,
+        }
+    }
+}
+
+/// What the next step attempt must recompute first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Action {
+    /// A new Jacobian at the current point, then new LU factors.
+    Jacobian,
+    /// New LU factors with the current Jacobian (the step size changed).
+    Decompose,
+    /// Keep both (the LU factors still match h).
+    Reuse,
+}
+
+/// Outcome of the simplified Newton iteration.
+enum Newton {
+    /// Converged after this many iterations.
+    Converged(u32),
+    /// Diverged or too slow (θ ≥ 0.99, or more than `nit` iterations).
+    Diverged,
+    /// Predicted not to converge in time: retry with h multiplied by this factor.
+    Slow(f64),
+    /// The right-hand side returned a non-finite value.
+    NonFinite,
+}
+
+/// Work arrays, allocated once.
+#[derive(Debug, Clone)]
+struct Work {
+    z1: Vec<f64>,
+    z2: Vec<f64>,
+    z3: Vec<f64>,
+    f1: Vec<f64>,
+    f2: Vec<f64>,
+    f3: Vec<f64>,
+    tmp: Vec<f64>,
+    ynew: Vec<f64>,
+    fnew: Vec<f64>,
+    /// Collocation polynomial of the last step: y(x + s·hold) = y + s(a1 + (s−c2m1)(a2 +
+    /// (s−c1m1)a3)), s ∈ [−1, 0].
+    a1: Vec<f64>,
+    a2: Vec<f64>,
+    a3: Vec<f64>,
+    /// Jacobian, column-major.
+    jac: Vec<f64>,
+    /// LU factors of γ/h − J (column-major, LINPACK layout) and pivots.
+    e1: Vec<f64>,
+    ip1: Vec<usize>,
+    /// LU factors of (α + iβ)/h − J: real and imaginary parts.
+    e2r: Vec<f64>,
+    e2i: Vec<f64>,
+    ip2: Vec<usize>,
+    dense: Vec<f64>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        let v = || vec![0.0; n];
+        Self {
+            z1: v(),
+            z2: v(),
+            z3: v(),
+            f1: v(),
+            f2: v(),
+            f3: v(),
+            tmp: v(),
+            ynew: v(),
+            fnew: v(),
+            a1: v(),
+            a2: v(),
+            a3: v(),
+            jac: vec![0.0; n * n],
+            e1: vec![0.0; n * n],
+            ip1: vec![0; n],
+            e2r: vec![0.0; n * n],
+            e2i: vec![0.0; n * n],
+            ip2: vec![0; n],
+            dense: v(),
+        }
+    }
+}
+
+/// The Radau IIA method of order 5 with RADAU5's step-size and Newton control, on the system
+/// `S`: simplified Newton on the stage increments split into one real and one complex n×n
+/// system by RADAU5's transformation T, Jacobian and LU reuse (θ ≤ 0.001, h ratio in
+/// [1, 1.2]), the (I − hγ₀J)⁻¹-filtered embedded error estimate, Gustafsson's predictive
+/// step-size control, Newton starting values and continuous output from the collocation
+/// polynomial. Sources: Hairer & Wanner, Solving ODEs II, IV.8, and their code RADAU5.
+///
+/// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (the collocation
+/// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated
+/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `max_steps` (per Normal
+/// call, default 500), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
+/// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
+/// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
+/// step, default 10), `max_err_test_fails` (consecutive rejections, default 50),
+/// `fail_on_step_underflow`. `max_order` is ignored (the order is 5).
+pub struct Radau5<S: OdeSystem> {
+    system: S,
+    n: usize,
+    c: Coeffs,
+    // Tolerances (RADAU5-transformed).
+    rtol: f64,
+    atol: Vec<f64>,
+    // Options.
+    max_steps: u64,
+    hmin: f64,
+    hmax: f64,
+    initial_step: Option<f64>,
+    stop_time: Option<f64>,
+    nit: u32,
+    fnewt: f64,
+    max_conv_fails: u32,
+    max_err_test_fails: u32,
+    fail_on_step_underflow: bool,
+    fixed_h: Option<f64>,
+    // Integration state.
+    x: f64,
+    y: Vec<f64>,
+    /// f(x, y), valid when `f0_valid`.
+    f0: Vec<f64>,
+    f0_valid: bool,
+    scal: Vec<f64>,
+    /// Direction, step size and step history set up (after new/reinit: at the first advance).
+    started: bool,
+    posneg: f64,
+    /// Step size to try next (signed).
+    h: f64,
+    /// Last accepted step (signed) and its start.
+    hold: f64,
+    xold: f64,
+    /// An accepted step exists since the last (re)start: the polynomial is valid.
+    have_step: bool,
+    reject: bool,
+    faccon: f64,
+    theta: f64,
+    /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
+    naccpt: u64,
+    hacc: f64,
+    erracc: f64,
+    /// The Jacobian was computed at the current point (no step accepted since).
+    caljac: bool,
+    action: Action,
+    /// Step size the LU factors were computed for (NaN: none).
+    lu_h: f64,
+    // Returned state.
+    t_out: f64,
+    y_out: Vec<f64>,
+    work: Work,
+    stats: Stats,
+}
+
+impl<S: OdeSystem> std::fmt::Debug for Radau5<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Radau5").field("n", &self.n).field("t", &self.t_out).field("t_internal", &self.x).finish()
+    }
+}
+
+/// Scaled RMS norm ‖v/scal‖.
+fn rms(v: &[f64], scal: &[f64]) -> f64 {
+    let sum: f64 = v.iter().zip(scal).map(|(a, s)| (a / s) * (a / s)).sum();
+    (sum / v.len() as f64).sqrt()
+}
+
+/// LU factorisation with partial pivoting of the column-major n×n matrix `a` (LINPACK DGEFA
+/// layout: row interchanges applied to the columns to the right only). False if singular.
+fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    for k in 0..n {
+        let col = k * n;
+        let mut p = k;
+        let mut big = a[col + k].abs();
+        for i in k + 1..n {
+            let v = a[col + i].abs();
+            if v > big {
+                big = v;
+                p = i;
+            }
+        }
+        ip[k] = p;
+        if big == 0.0 || !big.is_finite() {
+            return false;
+        }
+        if p != k {
+            for j in k..n {
+                a.swap(j * n + k, j * n + p);
+            }
+        }
+        let inv = 1.0 / a[col + k];
+        for i in k + 1..n {
+            a[col + i] *= -inv;
+        }
+        for j in k + 1..n {
+            let t = a[j * n + k];
+            if t != 0.0 {
+                for i in k + 1..n {
+                    a[j * n + i] += a[col + i] * t;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves with the factors of [`lu_real`], in place.
+fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
+    for k in 0..n {
+        let p = ip[k];
+        if p != k {
+            b.swap(k, p);
+        }
+        let t = b[k];
+        for i in k + 1..n {
+            b[i] += a[k * n + i] * t;
+        }
+    }
+    for k in (0..n).rev() {
+        b[k] /= a[k * n + k];
+        let t = -b[k];
+        for i in 0..k {
+            b[i] += a[k * n + i] * t;
+        }
+    }
+}
+
+/// Complex division (a + ib)/(c + id) by Smith's method.
+fn cdiv(a: f64, b: f64, c: f64, d: f64) -> (f64, f64) {
+    if c.abs() >= d.abs() {
+        let r = d / c;
+        let den = c + d * r;
+        ((a + b * r) / den, (b - a * r) / den)
+    } else {
+        let r = c / d;
+        let den = c * r + d;
+        ((a * r + b) / den, (b * r - a) / den)
+    }
+}
+
+/// Complex LU factorisation with partial pivoting (real parts `ar`, imaginary `ai`).
+fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    for k in 0..n {
+        let col = k * n;
+        let mut p = k;
+        let mut big = ar[col + k].abs() + ai[col + k].abs();
+        for i in k + 1..n {
+            let v = ar[col + i].abs() + ai[col + i].abs();
+            if v > big {
+                big = v;
+                p = i;
+            }
+        }
+        ip[k] = p;
+        if big == 0.0 || !big.is_finite() {
+            return false;
+        }
+        if p != k {
+            for j in k..n {
+                ar.swap(j * n + k, j * n + p);
+                ai.swap(j * n + k, j * n + p);
+            }
+        }
+        let (inv_r, inv_i) = cdiv(-1.0, 0.0, ar[col + k], ai[col + k]);
+        for i in k + 1..n {
+            let (xr, xi) = (ar[col + i], ai[col + i]);
+            ar[col + i] = xr * inv_r - xi * inv_i;
+            ai[col + i] = xr * inv_i + xi * inv_r;
+        }
+        for j in k + 1..n {
+            let (tr, ti) = (ar[j * n + k], ai[j * n + k]);
+            if tr != 0.0 || ti != 0.0 {
+                for i in k + 1..n {
+                    let (mr, mi) = (ar[col + i], ai[col + i]);
+                    ar[j * n + i] += mr * tr - mi * ti;
+                    ai[j * n + i] += mr * ti + mi * tr;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves with the factors of [`lu_complex`], in place on (br, bi).
+fn solve_complex(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64], bi: &mut [f64]) {
+    for k in 0..n {
+        let p = ip[k];
+        if p != k {
+            br.swap(k, p);
+            bi.swap(k, p);
+        }
+        let (tr, ti) = (br[k], bi[k]);
+        for i in k + 1..n {
+            let (mr, mi) = (ar[k * n + i], ai[k * n + i]);
+            br[i] += mr * tr - mi * ti;
+            bi[i] += mr * ti + mi * tr;
+        }
+    }
+    for k in (0..n).rev() {
+        let (qr, qi) = cdiv(br[k], bi[k], ar[k * n + k], ai[k * n + k]);
+        br[k] = qr;
+        bi[k] = qi;
+        let (tr, ti) = (-qr, -qi);
+        for i in 0..k {
+            let (mr, mi) = (ar[k * n + i], ai[k * n + i]);
+            br[i] += mr * tr - mi * ti;
+            bi[i] += mr * ti + mi * tr;
+        }
+    }
+}
+
+/// Evaluates the k-th time derivative of the collocation polynomial at t into `out`.
+#[allow(clippy::too_many_arguments)]
+fn interpolate(c: &Coeffs, w: &Work, y: &[f64], x: f64, hold: f64, t: f64, k: u32, out: &mut [f64]) {
+    let s = (t - x) / hold;
+    let (b, cc) = (c.c2m1, c.c1m1);
+    for i in 0..out.len() {
+        let (a1, a2, a3) = (w.a1[i], w.a2[i], w.a3[i]);
+        out[i] = match k {
+            0 => y[i] + s * (a1 + (s - b) * (a2 + (s - cc) * a3)),
+            1 => {
+                let b1 = a1 - b * a2 + b * cc * a3;
+                let b2 = a2 - (b + cc) * a3;
+                (b1 + s * (2.0 * b2 + 3.0 * s * a3)) / hold
+            }
+            2 => (2.0 * (a2 - (b + cc) * a3) + 6.0 * s * a3) / (hold * hold),
+            _ => 6.0 * a3 / (hold * hold * hold),
+        };
+    }
+}
+
+fn all_finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl<S: OdeSystem> Radau5<S> {
+    /// A Radau5 integrator of `system` starting at (t0, y0). Errors (InvalidInput): a system
+    /// without components, y0 of the wrong length or non-finite, non-finite t0, invalid
+    /// options.
+    pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
+        let n = system.dim();
+        let invalid = |message: String| SolverError {
+            solver: NAME,
+            kind: ErrorKind::InvalidInput,
+            t: t0,
+            state: y0.to_vec(),
+            flag: -1,
+            message,
+        };
+        if n == 0 {
+            return Err(invalid("the system has no components".into()));
+        }
+        if y0.len() != n {
+            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
+        }
+        if !t0.is_finite() {
+            return Err(invalid(format!("t0 = {t0} must be finite")));
+        }
+        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
+        }
+        options.validate(n).map_err(invalid)?;
+        // RADAU5's tolerance transformation.
+        let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
+        let atol: Vec<f64> = match &options.atol {
+            Tolerance::Scalar(a) => vec![rtol * a / options.rtol; n],
+            Tolerance::PerComponent(v) => v.iter().map(|a| rtol * a / options.rtol).collect(),
+        };
+        let fnewt = options.nonlin_conv_coef.unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
+        let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
+        let mut solver = Self {
+            system,
+            n,
+            c: Coeffs::new(),
+            rtol,
+            atol,
+            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
+            hmin: options.min_step.unwrap_or(0.0),
+            hmax: options.max_step.unwrap_or(f64::INFINITY),
+            initial_step: options.initial_step,
+            stop_time: options.stop_time,
+            nit: positive(options.max_nonlin_iters, DEFAULT_NIT),
+            fnewt,
+            max_conv_fails: positive(options.max_conv_fails, DEFAULT_MAX_CONV_FAILS),
+            max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
+            fail_on_step_underflow: options.fail_on_step_underflow,
+            fixed_h: None,
+            x: t0,
+            y: y0.to_vec(),
+            f0: vec![0.0; n],
+            f0_valid: false,
+            scal: vec![1.0; n],
+            started: false,
+            posneg: 1.0,
+            h: 0.0,
+            hold: 0.0,
+            xold: t0,
+            have_step: false,
+            reject: false,
+            faccon: 1.0,
+            theta: THET,
+            naccpt: 0,
+            hacc: 0.0,
+            erracc: 0.0,
+            caljac: false,
+            action: Action::Jacobian,
+            lu_h: f64::NAN,
+            t_out: t0,
+            y_out: y0.to_vec(),
+            work: Work::new(n),
+            stats: Stats { last_order: 5, ..Stats::default() },
+        };
+        solver.update_scal();
+        Ok(solver)
+    }
+
+    /// Testing aid: integrate with the constant step `h` (clipped only at the stop time), every
+    /// step accepted whatever its error estimate; a Newton failure is then an error.
+    #[doc(hidden)]
+    pub fn fixed_step(mut self, h: f64) -> Self {
+        self.fixed_h = Some(h);
+        self
+    }
+
+    /// The system being integrated.
+    pub fn system(&self) -> &S {
+        &self.system
+    }
+
+    fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
+        SolverError { solver: NAME, kind, t: self.x, state: self.y.clone(), flag, message }
+    }
+
+    fn update_scal(&mut self) {
+        for i in 0..self.n {
+            let s = self.atol[i] + self.rtol * self.y[i].abs();
+            self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+        }
+    }
+
+    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
+    fn ensure_f0(&mut self) -> bool {
+        if !self.f0_valid {
+            self.system.rhs(self.x, &self.y, &mut self.f0);
+            self.stats.rhs_evals += 1;
+            if !all_finite(&self.f0) {
+                self.stats.nonfinite_rhs += 1;
+                return false;
+            }
+            self.f0_valid = true;
+        }
+        true
+    }
+
+    /// First advance after new/reinit: direction, f(t0, y0), initial step.
+    fn start(&mut self, tout: f64, task: Task) -> Result<(), SolverError> {
+        if self.started {
+            return Ok(());
+        }
+        self.posneg = if tout < self.x { -1.0 } else { 1.0 };
+        if !self.ensure_f0() {
+            return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side at the initial point is not finite".into()));
+        }
+        let mut bound = self.hmax;
+        if task == Task::Normal && tout != self.x {
+            bound = bound.min((tout - self.x).abs());
+        }
+        if let Some(ts) = self.stop_time {
+            if (ts - self.x) * self.posneg > 0.0 {
+                bound = bound.min((ts - self.x).abs());
+            }
+        }
+        let h = match (self.fixed_h, self.initial_step) {
+            (Some(h), _) => h,
+            (None, Some(h)) => h.min(bound),
+            (None, None) => self.estimate_initial_step(bound),
+        };
+        self.h = self.posneg * h.max(self.hmin);
+        self.started = true;
+        Ok(())
+    }
+
+    /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁴ (the embedded
+    /// estimate's order), measured with the scaled norm of the step-size control.
+    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+        let d0 = rms(&self.y, &self.scal);
+        let d1 = rms(&self.f0, &self.scal);
+        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+        h0 = h0.min(bound).max(100.0 * UROUND * self.x.abs()).max(f64::MIN_POSITIVE);
+        let mut d2 = None;
+        for _ in 0..12 {
+            let th = self.posneg * h0;
+            for i in 0..self.n {
+                self.work.tmp[i] = self.y[i] + th * self.f0[i];
+            }
+            self.system.rhs(self.x + th, &self.work.tmp, &mut self.work.fnew);
+            self.stats.rhs_evals += 1;
+            if all_finite(&self.work.fnew) {
+                for i in 0..self.n {
+                    self.work.tmp[i] = self.work.fnew[i] - self.f0[i];
+                }
+                d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
+                break;
+            }
+            self.stats.nonfinite_rhs += 1;
+            h0 *= 0.1;
+        }
+        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
+        let dm = d1.max(d2);
+        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(0.25) };
+        (100.0 * h0).min(h1).min(bound)
+    }
+
+    /// Jacobian at (x, y) into `work.jac`: analytic, or forward differences (RADAU5's
+    /// increments √(u·max(1e-5, |y_i|))). False if not finite.
+    fn compute_jacobian(&mut self) -> bool {
+        let n = self.n;
+        self.stats.jac_evals += 1;
+        let w = &mut self.work;
+        if self.system.has_jacobian() {
+            w.jac.iter_mut().for_each(|v| *v = 0.0);
+            let mut m = JacobianMatrix::new(&mut w.jac, n);
+            self.system.jacobian(self.x, &self.y, &mut m);
+        } else {
+            w.tmp.copy_from_slice(&self.y);
+            for j in 0..n {
+                let ysafe = w.tmp[j];
+                let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
+                w.tmp[j] = ysafe + delt;
+                let delt = w.tmp[j] - ysafe;
+                self.system.rhs(self.x, &w.tmp, &mut w.fnew);
+                self.stats.rhs_evals_jacobian += 1;
+                for i in 0..n {
+                    w.jac[j * n + i] = (w.fnew[i] - self.f0[i]) / delt;
+                }
+                w.tmp[j] = ysafe;
+            }
+        }
+        all_finite(&w.jac)
+    }
+
+    /// LU factors of γ/h − J and (α + iβ)/h − J. False if either is singular.
+    fn decompose(&mut self) -> bool {
+        let n = self.n;
+        let h = self.h;
+        let fac1 = self.c.u1 / h;
+        let (alphn, betan) = (self.c.alph / h, self.c.beta / h);
+        let w = &mut self.work;
+        for k in 0..n * n {
+            w.e1[k] = -w.jac[k];
+            w.e2r[k] = -w.jac[k];
+            w.e2i[k] = 0.0;
+        }
+        for j in 0..n {
+            w.e1[j * n + j] += fac1;
+            w.e2r[j * n + j] += alphn;
+            w.e2i[j * n + j] = betan;
+        }
+        self.stats.lin_setups += 1;
+        let ok = lu_real(&mut w.e1, &mut w.ip1, n) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, n);
+        self.lu_h = if ok { h } else { f64::NAN };
+        ok
+    }
+
+    /// The simplified Newton iteration for the stage increments (RADAU5's loop 40).
+    fn newton(&mut self) -> Newton {
+        let n = self.n;
+        let h = self.h;
+        let c = self.c;
+        let fac1 = c.u1 / h;
+        let (alphn, betan) = (c.alph / h, c.beta / h);
+        let w = &mut self.work;
+        // Starting values: zero on the first step, else the previous collocation polynomial.
+        if !self.have_step {
+            for v in [&mut w.z1, &mut w.z2, &mut w.z3, &mut w.f1, &mut w.f2, &mut w.f3] {
+                v.iter_mut().for_each(|x| *x = 0.0);
+            }
+        } else {
+            let c3q = h / self.hold;
+            let (c1q, c2q) = (c.c1 * c3q, c.c2 * c3q);
+            for i in 0..n {
+                let (ak1, ak2, ak3) = (w.a1[i], w.a2[i], w.a3[i]);
+                let z1 = c1q * (ak1 + (c1q - c.c2m1) * (ak2 + (c1q - c.c1m1) * ak3));
+                let z2 = c2q * (ak1 + (c2q - c.c2m1) * (ak2 + (c2q - c.c1m1) * ak3));
+                let z3 = c3q * (ak1 + (c3q - c.c2m1) * (ak2 + (c3q - c.c1m1) * ak3));
+                w.z1[i] = z1;
+                w.z2[i] = z2;
+                w.z3[i] = z3;
+                w.f1[i] = TI11 * z1 + TI12 * z2 + TI13 * z3;
+                w.f2[i] = TI21 * z1 + TI22 * z2 + TI23 * z3;
+                w.f3[i] = TI31 * z1 + TI32 * z2 + TI33 * z3;
+            }
+        }
+        self.faccon = self.faccon.max(UROUND).powf(0.8);
+        self.theta = THET;
+        let (mut dynold, mut thqold) = (0.0f64, 0.0f64);
+        let mut newt = 0u32;
+        loop {
+            if newt >= self.nit {
+                return Newton::Diverged;
+            }
+            // The right-hand side at the three stages.
+            let mut finite = true;
+            for (cs, z) in [(c.c1, &mut w.z1), (c.c2, &mut w.z2), (1.0, &mut w.z3)] {
+                for ((point, y), z) in w.tmp.iter_mut().zip(&self.y).zip(z.iter()) {
+                    *point = y + z;
+                }
+                let t = if cs == 1.0 { self.x + h } else { self.x + cs * h };
+                self.system.rhs(t, &w.tmp, z);
+                self.stats.rhs_evals += 1;
+                if !all_finite(z) {
+                    self.stats.nonfinite_rhs += 1;
+                    finite = false;
+                    break;
+                }
+            }
+            if !finite {
+                return Newton::NonFinite;
+            }
+            // Transform with T⁻¹ and solve the real and complex systems.
+            for i in 0..n {
+                let (a1, a2, a3) = (w.z1[i], w.z2[i], w.z3[i]);
+                let z1 = TI11 * a1 + TI12 * a2 + TI13 * a3;
+                let z2 = TI21 * a1 + TI22 * a2 + TI23 * a3;
+                let z3 = TI31 * a1 + TI32 * a2 + TI33 * a3;
+                let (s2, s3) = (-w.f2[i], -w.f3[i]);
+                w.z1[i] = z1 - w.f1[i] * fac1;
+                w.z2[i] = z2 + s2 * alphn - s3 * betan;
+                w.z3[i] = z3 + s3 * alphn + s2 * betan;
+            }
+            solve_real(&w.e1, &w.ip1, n, &mut w.z1);
+            solve_complex(&w.e2r, &w.e2i, &w.ip2, n, &mut w.z2, &mut w.z3);
+            newt += 1;
+            self.stats.nonlin_iters += 1;
+            let mut sum = 0.0;
+            for i in 0..n {
+                let s = self.scal[i];
+                sum += (w.z1[i] / s).powi(2) + (w.z2[i] / s).powi(2) + (w.z3[i] / s).powi(2);
+            }
+            let dyno = (sum / (3 * n) as f64).sqrt();
+            if !dyno.is_finite() {
+                return Newton::Diverged;
+            }
+            if newt > 1 && newt < self.nit {
+                let thq = dyno / dynold;
+                self.theta = if newt == 2 { thq } else { (thq * thqold).sqrt() };
+                thqold = thq;
+                if self.theta < 0.99 {
+                    self.faccon = self.theta / (1.0 - self.theta);
+                    let rest = (self.nit - 1 - newt) as i32;
+                    let dyth = self.faccon * dyno * self.theta.powi(rest) / self.fnewt;
+                    if dyth >= 1.0 && self.fixed_h.is_none() {
+                        let qnewt = dyth.clamp(1e-4, 20.0);
+                        return Newton::Slow(0.8 * qnewt.powf(-1.0 / (4.0 + rest as f64)));
+                    }
+                } else {
+                    return Newton::Diverged;
+                }
+            }
+            dynold = dyno.max(UROUND);
+            for i in 0..n {
+                let f1 = w.f1[i] + w.z1[i];
+                let f2 = w.f2[i] + w.z2[i];
+                let f3 = w.f3[i] + w.z3[i];
+                w.f1[i] = f1;
+                w.f2[i] = f2;
+                w.f3[i] = f3;
+                w.z1[i] = T11 * f1 + T12 * f2 + T13 * f3;
+                w.z2[i] = T21 * f1 + T22 * f2 + T23 * f3;
+                w.z3[i] = T31 * f1 + f2;
+            }
+            if self.faccon * dyno <= self.fnewt {
+                return Newton::Converged(newt);
+            }
+        }
+    }
+
+    /// RADAU5's ESTRAD: the filtered embedded error estimate (None: a non-finite f in the
+    /// re-filtering).
+    fn estimate_error(&mut self) -> Option<f64> {
+        let n = self.n;
+        let c = self.c;
+        let h = self.h;
+        let (hee1, hee2, hee3) = (c.dd1 / h, c.dd2 / h, c.dd3 / h);
+        let w = &mut self.work;
+        for i in 0..n {
+            w.f2[i] = hee1 * w.z1[i] + hee2 * w.z2[i] + hee3 * w.z3[i];
+            w.tmp[i] = w.f2[i] + self.f0[i];
+        }
+        solve_real(&w.e1, &w.ip1, n, &mut w.tmp);
+        let mut err = rms(&w.tmp, &self.scal).max(1e-10);
+        if err >= 1.0 && (!self.have_step || self.reject) {
+            for i in 0..n {
+                w.ynew[i] = self.y[i] + w.tmp[i];
+            }
+            self.system.rhs(self.x, &w.ynew, &mut w.f1);
+            self.stats.rhs_evals += 1;
+            if !all_finite(&w.f1) {
+                self.stats.nonfinite_rhs += 1;
+                return None;
+            }
+            for i in 0..n {
+                w.tmp[i] = w.f1[i] + w.f2[i];
+            }
+            solve_real(&w.e1, &w.ip1, n, &mut w.tmp);
+            err = rms(&w.tmp, &self.scal).max(1e-10);
+        }
+        Some(if err.is_finite() { err } else { 1e20 })
+    }
+
+    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
+    /// `min_step`.
+    fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
+        let mut hnew = hnew;
+        if hnew.abs() < self.hmin {
+            if self.h.abs() <= self.hmin {
+                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
+                return Err(self.error(kind, flag, message));
+            }
+            hnew = self.posneg * self.hmin;
+        }
+        self.h = hnew;
+        self.reject = true;
+        self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
+        Ok(())
+    }
+
+    /// One accepted step (with as many attempts as needed). Returns true if it ended at the
+    /// stop time.
+    fn step(&mut self) -> Result<bool, SolverError> {
+        let (mut conv_fails, mut nonfinite, mut singular, mut rejections) = (0u32, 0u32, 0u32, 0u32);
+        let mut attempts = 0u32;
+        if let Some(ts) = self.stop_time {
+            if (ts - self.x) * self.posneg <= 0.0 {
+                self.stop_time = None;
+            }
+        }
+        loop {
+            attempts += 1;
+            if attempts > MAX_ATTEMPTS {
+                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.h);
+                return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+            }
+            if let Some(h) = self.fixed_h {
+                if self.h.abs() != h {
+                    self.h = self.posneg * h;
+                }
+            }
+            // Do not step past the stop time.
+            let planned = self.h;
+            let mut last = false;
+            if let Some(ts) = self.stop_time {
+                if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
+                    self.h = ts - self.x;
+                    last = true;
+                }
+            }
+            // Step underflow (RADAU5: 0.1·|h| ≤ u·|x|).
+            if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
+                let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
+                if self.fail_on_step_underflow || self.x + self.h == self.x {
+                    return Err(self.error(ErrorKind::StepUnderflow, -3, message));
+                }
+                self.stats.step_underflow_warnings += 1;
+            }
+            // Jacobian and LU factors.
+            if self.action == Action::Jacobian {
+                if !self.compute_jacobian() {
+                    return Err(self.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
+                }
+                self.caljac = true;
+                self.action = Action::Decompose;
+            }
+            if self.action == Action::Decompose || self.lu_h != self.h {
+                if !self.decompose() {
+                    singular += 1;
+                    if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
+                        let message = format!("iteration matrix singular {singular} times (h = {:e})", self.h);
+                        return Err(self.error(ErrorKind::LinearSolver, -4, message));
+                    }
+                    self.reduce(0.5 * self.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
+                    continue;
+                }
+                self.action = Action::Reuse;
+            }
+            self.stats.step_attempts += 1;
+            let newt = match self.newton() {
+                Newton::Converged(k) => k,
+                Newton::Diverged => {
+                    self.stats.nonlin_conv_fails += 1;
+                    self.stats.step_solve_fails += 1;
+                    conv_fails += 1;
+                    if conv_fails >= self.max_conv_fails || self.fixed_h.is_some() {
+                        let message = format!("Newton failed {conv_fails} times in one step (h = {:e})", self.h);
+                        return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+                    }
+                    self.reduce(0.5 * self.h, ErrorKind::ConvergenceFailures, -5, "Newton failure")?;
+                    continue;
+                }
+                Newton::Slow(factor) => {
+                    self.stats.nonlin_conv_fails += 1;
+                    self.stats.step_solve_fails += 1;
+                    self.reduce(factor * self.h, ErrorKind::ConvergenceFailures, -5, "slow Newton convergence")?;
+                    continue;
+                }
+                Newton::NonFinite => {
+                    self.stats.step_solve_fails += 1;
+                    self.nonfinite_failure(&mut nonfinite)?;
+                    continue;
+                }
+            };
+            let Some(err) = self.estimate_error() else {
+                self.nonfinite_failure(&mut nonfinite)?;
+                continue;
+            };
+            // The new step size.
+            let fac = SAFE.min(SAFE * (1 + 2 * self.nit) as f64 / (newt + 2 * self.nit) as f64);
+            let mut quot = (err.powf(0.25) / fac).clamp(FACR, FACL);
+            let mut hnew = self.h / quot;
+            if err < 1.0 || self.fixed_h.is_some() {
+                // f at the new point (needed next anyway): a non-finite one fails the step.
+                let xph = if last { self.stop_time.unwrap_or(self.x + self.h) } else { self.x + self.h };
+                let w = &mut self.work;
+                for i in 0..self.n {
+                    w.ynew[i] = self.y[i] + w.z3[i];
+                }
+                self.system.rhs(xph, &w.ynew, &mut w.fnew);
+                self.stats.rhs_evals += 1;
+                if !all_finite(&w.fnew) {
+                    self.stats.nonfinite_rhs += 1;
+                    self.nonfinite_failure(&mut nonfinite)?;
+                    continue;
+                }
+                self.accept(xph, err, &mut quot, &mut hnew);
+                let h = self.h;
+                // The next step size (RADAU5 after label 30's acceptance branch).
+                hnew = self.posneg * hnew.abs().min(self.hmax).max(self.hmin);
+                if self.reject {
+                    hnew = self.posneg * hnew.abs().min(h.abs());
+                }
+                self.reject = false;
+                if last {
+                    self.stop_time = None;
+                    hnew = planned;
+                }
+                if let Some(hf) = self.fixed_h {
+                    hnew = self.posneg * hf;
+                }
+                let qt = hnew / h;
+                if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                    self.action = Action::Reuse;
+                } else {
+                    self.h = hnew;
+                    self.action = if self.theta <= THET { Action::Decompose } else { Action::Jacobian };
+                }
+                self.stats.current_step = self.h;
+                return Ok(last);
+            }
+            // Rejected by the error test.
+            self.stats.err_test_fails += 1;
+            rejections += 1;
+            if rejections >= self.max_err_test_fails {
+                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.h);
+                return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+            }
+            let hnew = if self.have_step { hnew } else { 0.1 * self.h };
+            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+        }
+    }
+
+    /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step.
+    fn nonfinite_failure(&mut self, count: &mut u32) -> Result<(), SolverError> {
+        *count += 1;
+        if *count >= MAX_NONFINITE || self.fixed_h.is_some() {
+            let message = format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
+            return Err(self.error(ErrorKind::RhsFailure, -6, message));
+        }
+        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
+    }
+
+    /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new
+    /// state (RADAU5's acceptance branch).
+    fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
+        let h = self.h;
+        self.naccpt += 1;
+        if self.naccpt > 1 {
+            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE).clamp(FACR, FACL);
+            *quot = quot.max(facgus);
+            *hnew = h / *quot;
+        }
+        self.hacc = h;
+        self.erracc = err.max(1e-2);
+        self.xold = self.x;
+        self.hold = h;
+        self.x = xph;
+        let c = self.c;
+        let w = &mut self.work;
+        for i in 0..self.n {
+            let (z1, z2, z3) = (w.z1[i], w.z2[i], w.z3[i]);
+            w.a1[i] = (z2 - z3) / c.c2m1;
+            let ak = (z1 - z2) / c.c1mc2;
+            let acont3 = (ak - z1 / c.c1) / c.c2;
+            w.a2[i] = (ak - w.a1[i]) / c.c1m1;
+            w.a3[i] = w.a2[i] - acont3;
+        }
+        std::mem::swap(&mut self.y, &mut w.ynew);
+        std::mem::swap(&mut self.f0, &mut w.fnew);
+        self.f0_valid = true;
+        self.update_scal();
+        self.have_step = true;
+        self.caljac = false;
+        if self.stats.steps == 0 {
+            self.stats.initial_step = h;
+        }
+        self.stats.steps += 1;
+        self.stats.last_step = h;
+    }
+
+    fn invalid(&self, message: String) -> SolverError {
+        SolverError { solver: NAME, kind: ErrorKind::InvalidInput, t: self.t_out, state: self.y_out.clone(), flag: -1, message }
+    }
+
+    fn advance_inner(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        if !tout.is_finite() {
+            return Err(self.invalid(format!("tout = {tout} must be finite")));
+        }
+        if let Some(h) = self.fixed_h {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(self.invalid(format!("fixed step {h} must be finite and > 0")));
+            }
+        }
+        self.start(tout, task)?;
+        if task == Task::OneStep {
+            let stopped = self.step()?;
+            self.t_out = self.x;
+            self.y_out.copy_from_slice(&self.y);
+            let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
+            return Ok(Step { t: self.x, event });
+        }
+        let mut taken = 0u64;
+        let mut stopped = false;
+        loop {
+            if (self.x - tout) * self.posneg >= 0.0 {
+                if tout == self.x {
+                    self.y_out.copy_from_slice(&self.y);
+                } else if self.have_step && (tout - self.xold) * self.posneg >= -self.fuzz() {
+                    interpolate(&self.c, &self.work, &self.y, self.x, self.hold, tout, 0, &mut self.y_out);
+                } else {
+                    let message = format!("tout = {tout:e} is behind the last step (t = {:e})", self.x);
+                    return Err(self.invalid(message));
+                }
+                self.t_out = tout;
+                return Ok(Step { t: tout, event: StepEvent::Reached });
+            }
+            if stopped {
+                self.t_out = self.x;
+                self.y_out.copy_from_slice(&self.y);
+                return Ok(Step { t: self.x, event: StepEvent::StopTime });
+            }
+            if taken >= self.max_steps {
+                let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", self.max_steps);
+                return Err(self.error(ErrorKind::TooMuchWork, -2, message));
+            }
+            stopped = self.step()?;
+            taken += 1;
+        }
+    }
+
+    fn fuzz(&self) -> f64 {
+        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
+    }
+
+    /// See [`Integrator::advance`]. On an error, [`Radau5::t`] and [`Radau5::state`] are the
+    /// last accepted step's end.
+    pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        let nonfinite_before = self.stats.nonfinite_rhs;
+        self.advance_inner(tout, task).map_err(|mut e| {
+            if e.kind != ErrorKind::InvalidInput {
+                self.t_out = self.x;
+                self.y_out.copy_from_slice(&self.y);
+            }
+            // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
+            // point where f turns non-finite end in a step underflow or too much work.
+            let nonfinite = self.stats.nonfinite_rhs - nonfinite_before;
+            if nonfinite > 0 {
+                if e.kind != ErrorKind::InvalidInput {
+                    e.kind = ErrorKind::RhsFailure;
+                }
+                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            }
+            e
+        })
+    }
+
+    /// The state at [`Radau5::t`].
+    pub fn state(&self) -> &[f64] {
+        &self.y_out
+    }
+
+    /// Time of the last return.
+    pub fn t(&self) -> f64 {
+        self.t_out
+    }
+
+    /// The k-th derivative (k ≤ 3) of the collocation polynomial at t inside the last step
+    /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
+    pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        if !t.is_finite() || k > 3 {
+            return Err(self.invalid(format!("dense output needs a finite t and k ≤ 3, got t = {t}, k = {k}")));
+        }
+        if !self.have_step {
+            if t != self.x || k > 1 {
+                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", self.x);
+                return Err(self.invalid(message));
+            }
+            if k == 0 {
+                self.work.dense.copy_from_slice(&self.y);
+            } else {
+                if !self.ensure_f0() {
+                    return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
+                }
+                self.work.dense.copy_from_slice(&self.f0);
+            }
+            return Ok(&self.work.dense);
+        }
+        let fuzz = self.fuzz();
+        let (lo, hi) = (self.xold.min(self.x) - fuzz, self.xold.max(self.x) + fuzz);
+        if t < lo || t > hi {
+            let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", self.xold, self.x);
+            return Err(self.invalid(message));
+        }
+        let mut out = std::mem::take(&mut self.work.dense);
+        interpolate(&self.c, &self.work, &self.y, self.x, self.hold, t, k, &mut out);
+        self.work.dense = out;
+        Ok(&self.work.dense)
+    }
+
+    /// Restarts at (t0, y0): step-size history, Jacobian and polynomial are dropped; options
+    /// and statistics are kept.
+    pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        if y0.len() != self.n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.n);
+            return Err(self.invalid(message));
+        }
+        self.x = t0;
+        self.xold = t0;
+        self.y.copy_from_slice(y0);
+        self.t_out = t0;
+        self.y_out.copy_from_slice(y0);
+        self.f0_valid = false;
+        self.update_scal();
+        self.started = false;
+        self.have_step = false;
+        self.reject = false;
+        self.faccon = 1.0;
+        self.theta = THET;
+        self.naccpt = 0;
+        self.caljac = false;
+        self.action = Action::Jacobian;
+        self.lu_h = f64::NAN;
+        self.stats.reinits += 1;
+        Ok(())
+    }
+
+    /// Statistics over the integrator's whole life (restarts included). `lin_setups` counts
+    /// one per pair of real and complex factorisations.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<S: OdeSystem> Integrator for Radau5<S> {
+    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        Radau5::advance(self, tout, task)
+    }
+    fn state(&self) -> &[f64] {
+        Radau5::state(self)
+    }
+    fn t(&self) -> f64 {
+        Radau5::t(self)
+    }
+    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        Radau5::dense(self, t, k)
+    }
+    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        Radau5::reinit(self, t0, y0)
+    }
+    fn stats(&self) -> Stats {
+        Radau5::stats(self)
+    }
+    fn name(&self) -> &'static str {
+        NAME
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn real_and_complex_lu_solve() {
+        let n = 3;
+        // Column-major, needs pivoting (zero leading entry).
+        let a = [0.0, 2.0, 1.0, 1.0, 1.0, 3.0, 2.0, -1.0, 1.0];
+        let x = [1.0, -2.0, 0.5];
+        let mut b = [0.0; 3];
+        for j in 0..n {
+            for i in 0..n {
+                b[i] += a[j * n + i] * x[j];
+            }
+        }
+        let (mut lu, mut ip) = (a, [0; 3]);
+        assert!(lu_real(&mut lu, &mut ip, n));
+        solve_real(&lu, &ip, n, &mut b);
+        for i in 0..n {
+            assert!((b[i] - x[i]).abs() < 1e-14, "{b:?}");
+        }
+        // Complex: (A + i·D) (xr + i·xi) = b.
+        let ai = [0.5, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 2.0];
+        let xi = [0.3, 0.0, -1.0];
+        let (mut br, mut bi) = ([0.0; 3], [0.0; 3]);
+        for j in 0..n {
+            for i in 0..n {
+                let (mr, mi) = (a[j * n + i], ai[j * n + i]);
+                br[i] += mr * x[j] - mi * xi[j];
+                bi[i] += mr * xi[j] + mi * x[j];
+            }
+        }
+        let (mut lr, mut li, mut ip) = (a, ai, [0; 3]);
+        assert!(lu_complex(&mut lr, &mut li, &mut ip, n));
+        solve_complex(&lr, &li, &ip, n, &mut br, &mut bi);
+        for i in 0..n {
+            assert!((br[i] - x[i]).abs() < 1e-14 && (bi[i] - xi[i]).abs() < 1e-14, "{br:?} {bi:?}");
+        }
+        let mut singular = [1.0, 2.0, 2.0, 4.0];
+        assert!(!lu_real(&mut singular, &mut [0; 2], 2));
+    }
+
+    #[test]
+    fn transformation_diagonalises_the_inverse_coefficient_matrix() {
+        // T⁻¹ A⁻¹ T must be diag(γ) ⊕ [[α, −β], [β, α]] (RADAU5's convention).
+        let sq6 = 6f64.sqrt();
+        let a = [
+            [(88.0 - 7.0 * sq6) / 360.0, (296.0 - 169.0 * sq6) / 1800.0, (-2.0 + 3.0 * sq6) / 225.0],
+            [(296.0 + 169.0 * sq6) / 1800.0, (88.0 + 7.0 * sq6) / 360.0, (-2.0 - 3.0 * sq6) / 225.0],
+            [(16.0 - sq6) / 36.0, (16.0 + sq6) / 36.0, 1.0 / 9.0],
+        ];
+        let t = [[T11, T12, T13], [T21, T22, T23], [T31, 1.0, 0.0]];
+        let ti = [[TI11, TI12, TI13], [TI21, TI22, TI23], [TI31, TI32, TI33]];
+        let mul = |p: &[[f64; 3]; 3], q: &[[f64; 3]; 3]| {
+            let mut r = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    r[i][j] = (0..3).map(|k| p[i][k] * q[k][j]).sum();
+                }
+            }
+            r
+        };
+        // T⁻¹ A T = Λ⁻¹ (the inverse of the block form above).
+        let lam_inv = mul(&mul(&ti, &a), &t);
+        let c = Coeffs::new();
+        let g = 1.0 / c.u1;
+        assert!((lam_inv[0][0] - g).abs() < 1e-14, "{lam_inv:?}");
+        let cno = c.alph * c.alph + c.beta * c.beta;
+        // Inverse of [[α, −β], [β, α]] is [[α, β], [−β, α]]/(α² + β²).
+        assert!((lam_inv[1][1] - c.alph / cno).abs() < 1e-13, "{lam_inv:?}");
+        assert!((lam_inv[2][2] - c.alph / cno).abs() < 1e-13, "{lam_inv:?}");
+        assert!((lam_inv[1][2] - c.beta / cno).abs() < 1e-13, "{lam_inv:?}");
+        assert!((lam_inv[2][1] + c.beta / cno).abs() < 1e-13, "{lam_inv:?}");
+        for (i, j) in [(0, 1), (0, 2), (1, 0), (2, 0)] {
+            assert!(lam_inv[i][j].abs() < 1e-13, "{lam_inv:?}");
+        }
+    }
+}
