@@ -9,6 +9,7 @@
 #![deny(unsafe_code)]
 
 pub mod analysis;
+pub mod compare;
 pub mod engine;
 pub mod integrate;
 pub mod model;

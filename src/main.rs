@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
-use stickslip::{engine, report, scene, stress};
+use stickslip::{compare, engine, report, scene, stress};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
 
@@ -32,6 +32,26 @@ enum Command {
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
+    /// Cross-check: run a scene with several methods and compare the cycle, or compare a
+    /// user's trajectory (CSV t,u,v,theta or JSON) or report against a CVODE reference.
+    Compare {
+        /// Scene file (its model and initial state; its tolerances for --methods).
+        scene: PathBuf,
+        /// Comma-separated methods, e.g. cvode-bdf,arkode-dirk,radau5.
+        #[arg(long, value_delimiter = ',', conflicts_with = "against")]
+        methods: Vec<String>,
+        /// A user's trajectory or report to check against the reference.
+        #[arg(long, value_name = "FILE")]
+        against: Option<PathBuf>,
+        /// Tolerance for --against (relative for u, θ and report values; absolute in ln v).
+        /// Inside a slip a fixed-time comparison turns a phase error δt into δ ln v = (dw/dt) δt,
+        /// so two accurate solvers differ there by ~1e-5: see docs/compare.md.
+        #[arg(long, default_value_t = 1e-4)]
+        tolerance: f64,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Run the numerical stress grid (γ, ξ, ε, tolerances, far-off starts, every method).
     /// Exit 1 if any cell panics, reports a non-finite number or methods disagree.
     Stress {
@@ -120,6 +140,86 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
     Ok(())
 }
 
+fn read_scene(path: &std::path::Path) -> Result<scene::Scene, Failure> {
+    let text = std::fs::read_to_string(path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))
+}
+
+fn print_json(value: &impl serde::Serialize) {
+    println!("{}", serde_json::to_string_pretty(value).expect("serialisable"));
+}
+
+fn compare_command(
+    path: PathBuf,
+    methods: Vec<String>,
+    against: Option<PathBuf>,
+    tolerance: f64,
+    json: bool,
+) -> Result<(), Failure> {
+    let scene = read_scene(&path)?;
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
+    }
+    if let Some(file) = against {
+        let text = std::fs::read_to_string(&file).map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
+        let data = compare::read_user_data(&text).map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
+        let failed = |e: stickslip::integrate::SolverError| Failure(1, format!("reference run failed: {e}"));
+        return match data {
+            compare::UserData::Trajectory(t) => {
+                let c = compare::against_trajectory(&scene, &t, tolerance).map_err(failed)?;
+                if json {
+                    print_json(&c);
+                } else {
+                    println!("{} samples against {}", c.samples, c.reference);
+                    println!("max deviation: u {:.2e}, ln v {:.2e}, θ {:.2e} (tolerance {:.1e})", c.max_deviation[0], c.max_deviation[1], c.max_deviation[2], c.tolerance);
+                    match &c.first_divergence {
+                        Some((t, q, theirs, ours)) => println!("first divergence at t = {t}: {q} = {theirs} (reference {ours})"),
+                        None => println!("agrees within tolerance at every sample"),
+                    }
+                }
+                Ok(())
+            }
+            compare::UserData::Report(r) => {
+                let c = compare::against_report(&scene, &r, tolerance).map_err(failed)?;
+                if json {
+                    print_json(&c);
+                } else {
+                    for (key, theirs, ours, rel, beyond) in &c.rows {
+                        println!("{key:<16} yours {theirs:<22} ours {ours:<22} {rel:.1e}{}", if *beyond { "  BEYOND TOLERANCE" } else { "" });
+                    }
+                }
+                Ok(())
+            }
+        };
+    }
+    if methods.is_empty() {
+        return Err(Failure(2, "give --methods a,b,... or --against FILE".into()));
+    }
+    let parsed = methods
+        .iter()
+        .map(|m| {
+            scene::Method::ALL.iter().find(|(n, _)| n == m).map(|(_, x)| *x).ok_or_else(|| {
+                let names: Vec<&str> = scene::Method::ALL.iter().map(|(n, _)| *n).collect();
+                Failure(2, format!("--methods: unknown method \"{m}\"; use {}", names.join(", ")))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let c = compare::methods(&scene, &parsed);
+    if json {
+        print_json(&c);
+    } else {
+        for ((m, status), (_, time)) in c.runs.iter().zip(&c.wall_time_s) {
+            println!("{m:<12} {status} ({})", time.map_or("-".into(), |t| format!("{:.3} s", t)));
+        }
+        for row in &c.rows {
+            let values: Vec<String> = row.values.iter().map(|(m, v)| format!("{m}={}", v.map_or("-".into(), |v| format!("{v:.12}")))).collect();
+            let flag = if row.outliers.is_empty() { String::new() } else { format!("  OUTLIERS: {}", row.outliers.join(", ")) };
+            println!("{:<16} spread {:<9} (allowed {:.0e}) {}{flag}", row.quantity, row.spread.map_or("-".into(), |s| format!("{s:.1e}")), row.allowed, values.join("  "));
+        }
+    }
+    Ok(())
+}
+
 fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
     let cells = stress::grid(quick);
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -166,6 +266,7 @@ fn main() -> ExitCode {
         Command::Run { scene, json, out } => run_command(scene, json, out),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
+        Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())
