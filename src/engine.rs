@@ -1,7 +1,7 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
 use crate::analysis::{cycle, hopf, paper};
-use crate::integrate::{ErrorKind, Integrator, Options, Radau5, SolverError, Tolerance};
+use crate::integrate::{ErrorKind, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
 use crate::model::Drr;
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{Method, Scene, SolverSpec};
@@ -10,7 +10,14 @@ use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
 pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    let cvode_options = Options::new(spec.rtol, Tolerance::PerComponent(spec.atol.to_vec()));
+    // Steps of at most 1/8 of the linear period 2π/ω_c: longer steps let BDF damp the
+    // growing oscillation near an unstable fixed point (its stability region reaches into the
+    // right half-plane), and a start within 1e-10 of it then never grows.
+    let max_step = hopf::analyse(&drr).period_c / 8.0;
+    let cvode_options = Options {
+        max_step: Some(max_step),
+        ..Options::new(spec.rtol, Tolerance::PerComponent(spec.atol.to_vec()))
+    };
     // ARKStep: allow 20 error-test failures per step (as SUNDIALS' ark_robertson_root does);
     // its default of 7 fails at rtol 1e-11 on the stick at γ = 1e4.
     let ark_options = Options { max_err_test_fails: Some(20), ..cvode_options.clone() };
@@ -33,6 +40,8 @@ pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn
             (Box::new(Solver::arkstep(drr, ArkMethod::Erk(t), ark, 0.0, y0, &ark_options)?), vec![t.name().into()])
         }
         Method::Radau5 => (Box::new(Radau5::new(drr, 0.0, y0, options)?), vec![]),
+        // The DRR system is autonomous: no ∂f/∂t evaluations.
+        Method::Rodas5p => (Box::new(Rodas5p::new(drr, 0.0, y0, options)?.autonomous()), vec![]),
         Method::ArkodeImex => {
             let (default_i, default_e) = sundials::default_imex_tables();
             let implicit = spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or(default_i);
@@ -77,10 +86,9 @@ fn non_finite(what: &str) -> SolverError {
 pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
-    let (mut integ, tables) = integrator(drr, &scene.solver, &scene.initial)?;
     let a = &scene.analyses;
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
-    let cycle_report = match &a.cycle {
+    let cycle_run = match &a.cycle {
         Some(o) => {
             let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
             let settings = cycle::CycleSettings {
@@ -93,9 +101,15 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
                 ..defaults
             };
             let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
-            Some(cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| diagnose(&drr, e))?)
+            let (mut integ, tables) = integrator(drr, &scene.solver, &scene.initial)?;
+            let report = cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| diagnose(&drr, e))?;
+            Some((report, integ.name().to_string(), tables, integ.stats()))
         }
         None => None,
+    };
+    let (cycle_report, integrator_name, tables, stats) = match cycle_run {
+        Some((r, name, tables, stats)) => (Some(r), name, tables, stats),
+        None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
     };
     if linear.as_ref().is_some_and(|h| !h.is_finite()) {
         return Err(non_finite("hopf"));
@@ -112,6 +126,9 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         slip_half_width: v.slip_half_width.map(|w| w * u.time_scale),
         slip_duration: v.slip_duration * u.time_scale,
     });
+    if physical.as_ref().is_some_and(|p| ![p.period, p.t0, p.slip_duration].iter().chain(&p.slip_half_width).all(|v| v.is_finite())) {
+        return Err(non_finite("physical"));
+    }
     let paper = match (&linear, a.paper) {
         (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
         _ => None,
@@ -132,11 +149,11 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         },
         solver: SolverSection {
             method: scene.solver.method,
-            integrator: integ.name().into(),
+            integrator: integrator_name,
             rtol: scene.solver.rtol,
             atol: scene.solver.atol,
             tables,
-            stats: integ.stats(),
+            stats,
         },
         units: scene.units.clone(),
         hopf: linear.filter(|_| a.hopf),

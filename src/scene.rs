@@ -153,17 +153,20 @@ pub enum Method {
     ArkodeErk,
     /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
     Radau5,
+    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
+    Rodas5p,
 }
 
 impl Method {
     /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 6] = [
+    pub const ALL: [(&'static str, Method); 7] = [
         ("cvode-bdf", Method::CvodeBdf),
         ("cvode-adams", Method::CvodeAdams),
         ("arkode-dirk", Method::ArkodeDirk),
         ("arkode-imex", Method::ArkodeImex),
         ("arkode-erk", Method::ArkodeErk),
         ("radau5", Method::Radau5),
+        ("rodas5p", Method::Rodas5p),
     ];
 
     /// The scene name, e.g. "cvode-bdf".
@@ -173,7 +176,7 @@ impl Method {
 
     /// Whether the method is meant for stiff problems.
     pub fn is_stiff(self) -> bool {
-        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5)
+        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p)
     }
 }
 
@@ -287,6 +290,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         }
     };
     let gamma = positive("model.gamma", gamma, "γ = (D_c/v0)·√(k/M), e.g. 1e3", err)?;
+    if !(1e-100..=1e100).contains(&gamma) {
+        return Err(err("model.gamma", format!("{gamma:e} is outside 1e-100 … 1e100 (γ² must be a normal double)")));
+    }
     let xi = positive("model.xi", xi, "ξ = k·D_c/A, of order one, e.g. 0.7", err)?;
     let epsilon = finite("model.epsilon", epsilon, err)?;
     let friction = match m.friction.clone().unwrap_or(RawFriction::Log) {
@@ -302,6 +308,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let units = match raw.units.clone() {
         Some(u) => {
             positive("units.time_scale", u.time_scale, "D_c/v0 in units.time_unit, e.g. 2.7 (years)", err)?;
+            if u.time_scale > 1e100 {
+                return Err(err("units.time_scale", format!("{:e} is too large (physical times would overflow); at most 1e100", u.time_scale)));
+            }
             if u.time_unit.trim().is_empty() {
                 return Err(err("units.time_unit", "must name the unit, e.g. \"years\"".into()));
             }
@@ -323,7 +332,7 @@ fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String
     let (u, v, theta) = raw.map_or((None, None, None), |r| (r.u, r.v, r.theta));
     let theta = finite("initial.theta", theta.unwrap_or(theta_star), err)?;
     let w = match v {
-        Some(v) => positive("initial.v", v, "velocity, e.g. 0.5; give ln v range 1e-300..1e300", err)?.ln(),
+        Some(v) => positive("initial.v", v, "a velocity in units of v0, e.g. 0.5", err)?.ln(),
         None => match u {
             Some(u) => drr.manifold_w(finite("initial.u", u, err)?, theta).ok_or_else(|| {
                 err("initial.v", format!("no point of the slow manifold has u = {u}, θ = {theta} for this friction law; give v"))
@@ -335,6 +344,9 @@ fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String
         Some(u) => finite("initial.u", u, err)?,
         None => drr.manifold_u(w, theta),
     };
+    if !(u.is_finite() && w.is_finite() && w.exp().is_finite() && w.exp() > 0.0) {
+        return Err(err("initial", format!("the start (u, ln v, θ) = ({u}, {w}, {theta}) is not representable; keep |u|, |θ| and |ln v| well below 700")));
+    }
     Ok([u, w, theta])
 }
 
@@ -385,6 +397,13 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
         return Err(err("solver.explicit_table", "only \"arkode-imex\" takes an explicit table".into()));
     }
     check_table("solver.explicit_table", &explicit_table, &mut ErkTable::names())?;
+    if method == Method::ArkodeImex && explicit_table.is_none() {
+        if let Some(t) = &table {
+            if ErkTable::from_name(&t.replace("_DIRK_", "_ERK_")).is_none() {
+                return Err(err("solver.table", format!("\"{t}\" has no explicit partner; use an ARK pair (e.g. ARK436L2SA_DIRK_6_3_4) or give solver.explicit_table")));
+            }
+        }
+    }
     if raw.and_then(|r| r.max_steps).is_some() {
         return Err(err("solver.max_steps", "set the step budget with {\"cycle\": {\"max_steps\": N}}".into()));
     }
@@ -421,13 +440,22 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                 let o: RawCycleOptions = serde_json::from_value(options_of("cycle")?)
                     .map_err(|e| err(&format!("{field}.cycle"), e.to_string()))?;
                 if let Some(t) = o.tolerance {
-                    positive(&format!("{field}.cycle.tolerance"), t, "relative, e.g. 1e-8", err)?;
+                    if !(t > 0.0 && t <= 0.1) {
+                        return Err(err(&format!("{field}.cycle.tolerance"), format!("{t} must be in (0, 0.1], e.g. 1e-7")));
+                    }
                 }
                 if let Some(t) = o.max_time {
-                    positive(&format!("{field}.cycle.max_time"), t, "dimensionless time, e.g. 1e5", err)?;
+                    if !(t.is_finite() && t >= 1.0) {
+                        return Err(err(&format!("{field}.cycle.max_time"), format!("{t} must be a finite time ≥ 1, e.g. 1e5")));
+                    }
                 }
-                if o.settle == Some(0) || o.max_cycles == Some(0) || o.max_steps == Some(0) {
-                    return Err(err(&format!("{field}.cycle"), "settle, max_cycles and max_steps must be ≥ 1".into()));
+                let bounds = [("settle", o.settle.map(|v| v as u64), 1000), ("max_cycles", o.max_cycles.map(|v| v as u64), 10_000_000), ("max_steps", o.max_steps, u64::MAX)];
+                for (name, value, max) in bounds {
+                    if let Some(v) = value {
+                        if v == 0 || v > max {
+                            return Err(err(&format!("{field}.cycle.{name}"), format!("{v} must be between 1 and {max}")));
+                        }
+                    }
                 }
                 out.cycle = Some(CycleOptions {
                     tolerance: o.tolerance,
@@ -443,8 +471,8 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                 };
                 let t: RawTrajectory =
                     serde_json::from_value(v).map_err(|e| err(&format!("{field}.trajectory"), e.to_string()))?;
-                if t.cycles == 0 {
-                    return Err(err(&format!("{field}.trajectory.cycles"), "must be ≥ 1".into()));
+                if t.cycles == 0 || t.cycles > 10_000 {
+                    return Err(err(&format!("{field}.trajectory.cycles"), format!("{} must be between 1 and 10000", t.cycles)));
                 }
                 out.trajectory_cycles = Some(t.cycles);
             }

@@ -25,9 +25,10 @@
 //!
 //! Convergence rule: the orbit is periodic (period 1) when, for `settle` consecutive pairs of
 //! cycles, the period and ln v_max change by less than `tolerance` (relative; absolute for
-//! ln v_max below 1). If instead cycle k matches cycle k−n (n = 2..4) for `settle`
-//! consecutive cycles, the orbit has period n and its n distinct cycles are reported. A cycle
-//! whose w range falls below 1e-9 means the oscillation died out: the fixed point is stable.
+//! ln v_max below 1); the first cycle, from the start, is never used. If instead cycle k matches cycle k−n (n = 2..4) for `settle`
+//! consecutive cycles, the orbit has period n and its n distinct cycles are reported. At a
+//! linearly stable fixed point, a cycle whose w range falls below 1e-9 (or shrinks steadily)
+//! means the oscillation died out.
 
 use super::events::{self, Knot};
 use crate::integrate::{ErrorKind, Integrator, OdeSystem, SolverError, Task};
@@ -37,7 +38,7 @@ use serde::Serialize;
 /// How the cycle analysis runs; defaults documented on each field.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CycleSettings {
-    /// Relative tolerance of the convergence rule (default max(1e-7, 1000·rtol)).
+    /// Relative tolerance of the convergence rule (default 1000·rtol within [1e-7, 1e-3]).
     pub tolerance: f64,
     /// Consecutive agreeing cycle pairs required (default 3).
     pub settle: usize,
@@ -58,7 +59,7 @@ impl CycleSettings {
     pub fn defaults(rtol: f64, atol_w: f64) -> Self {
         Self {
             w_tolerance: (rtol, atol_w),
-            tolerance: (1000.0 * rtol).max(1e-7),
+            tolerance: (1000.0 * rtol).clamp(1e-7, 1e-3),
             settle: 3,
             max_cycles: 1000,
             max_time: 1e6,
@@ -203,6 +204,9 @@ impl TrajectoryCycle {
     }
 }
 
+/// The `tout` of every one-step call, past any time a segment reaches.
+const HORIZON: f64 = 1e6;
+
 /// One step end: local time, state and the interpolant's derivative.
 #[derive(Debug, Clone, Copy)]
 struct Sample {
@@ -271,7 +275,7 @@ impl<'a> Tracker<'a> {
         SolverError {
             solver: self.integ.name(),
             kind,
-            t: self.elapsed + self.integ.t(),
+            t: self.integ.t(),
             state: self.integ.state().to_vec(),
             flag: 0,
             message,
@@ -373,9 +377,14 @@ impl<'a> Tracker<'a> {
                 }
             }
             Event::MinW => {
-                self.rise_rate = 0.0;
-                self.rise.clear();
-                self.rise.push(Knot { t, x: y[W], dx: 0.0 });
+                // A wiggle during a rise (cycle open, no peak yet) keeps the rise buffer: the
+                // half-maximum crossing may lie before it.
+                let rising = self.open.as_ref().is_some_and(|c| c.peak.is_none());
+                if !rising {
+                    self.rise_rate = 0.0;
+                    self.rise.clear();
+                    self.rise.push(Knot { t, x: y[W], dx: 0.0 });
+                }
             }
             Event::MaxW => {
                 // The cycle's peak is its highest maximum of w with v > 1: a wiggle earlier in
@@ -388,7 +397,7 @@ impl<'a> Tracker<'a> {
                 let level = y[W] - std::f64::consts::LN_2;
                 let mut knots: Vec<Knot> = self.rise.iter().copied().filter(|k| k.t < t).collect();
                 knots.push(Knot { t, x: y[W], dx: 0.0 });
-                c.half_rise = events::upward_crossing(&knots, level).map(|tr| c.origin + tr);
+                c.half_rise = events::last_upward_crossing(&knots, level).map(|tr| c.origin + tr);
                 c.half_fall = None;
                 self.rebase_in_rise = false;
                 return Ok(true);
@@ -437,6 +446,21 @@ impl<'a> Tracker<'a> {
         self.closed.push(values);
     }
 
+    /// The half-maximum fall inside the step that holds the peak (`events` looked for it
+    /// before the peak of this step was known).
+    fn half_fall_in_peak_step(&mut self, next: &Sample) -> Result<(), SolverError> {
+        let Some(c) = &self.open else { return Ok(()) };
+        let (Some((t_peak, y_peak)), None) = (c.peak, c.half_fall) else { return Ok(()) };
+        let (t_local, level) = (t_peak - c.origin, y_peak[W] - std::f64::consts::LN_2);
+        if next.y[W] < level && t_local < next.t {
+            let t = events::refine(self.integ, (t_local, next.t), 0, W, level)?;
+            if let Some(c) = &mut self.open {
+                c.half_fall = Some(c.origin + t);
+            }
+        }
+        Ok(())
+    }
+
     /// Whether a restart at y is safe: the model's dw/dt there, whose error is the solver's
     /// error in G (its tolerance on w over ξ) amplified by γ² e^{−w}, is resolved to 1e-3 of
     /// `rate`, the scale of dw/dt in the current rise.
@@ -465,8 +489,9 @@ impl<'a> Tracker<'a> {
     }
 
     fn step(&mut self) -> Result<(), SolverError> {
-        let horizon = self.prev.t + self.settings.max_time;
-        let step = self.integ.advance(horizon, Task::OneStep)?;
+        // CVODE sizes its first step after a restart from |tout − t|: a fixed horizon keeps
+        // the integration independent of the stopping rules (max_time).
+        let step = self.integ.advance(self.prev.t + HORIZON, Task::OneStep)?;
         self.steps += 1;
         let y = self.integ.state();
         let y = [y[0], y[1], y[2]];
@@ -480,8 +505,15 @@ impl<'a> Tracker<'a> {
         for (t, event) in self.events(&next)? {
             after_peak |= self.handle(t, event)?;
         }
+        if after_peak {
+            self.half_fall_in_peak_step(&next)?;
+        }
         let mut rebase = after_peak && self.restart_safe(&next.y, self.rise_rate);
-        if self.rebase_in_rise && self.restart_safe(&next.y, next.d[W].abs()) {
+        // When f is not resolved anywhere in the rise before the steps reach the clock's
+        // resolution (e.g. γ = 1e12 at rtol 1e-10), re-base anyway once they come within 1e4
+        // ulps of it: a restart may fail there, staying would.
+        let clock_exhausted = next.t - self.prev.t < 1e4 * f64::EPSILON * next.t;
+        if self.rebase_in_rise && (self.restart_safe(&next.y, next.d[W].abs()) || clock_exhausted) {
             self.rebase_in_rise = false;
             rebase = true;
         }
@@ -502,35 +534,40 @@ impl<'a> Tracker<'a> {
 }
 
 /// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or
-/// absolute below 1).
+/// absolute below 1). t0 is not compared: it locates a flat maximum (w'' ~ γ²), fixed only
+/// to ~√(error/γ²), e.g. 1e-7 at γ = 10 while the period is fixed to 1e-11.
 fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
     (a.period - b.period).abs() <= tolerance * a.period.abs()
         && (a.ln_v_max - b.ln_v_max).abs() <= tolerance * a.ln_v_max.abs().max(1.0)
 }
 
-/// n if the last cycles form a period-n orbit (n = 1..4) under the convergence rule. For
-/// n > 1 the consecutive cycles must also differ clearly (by more than 100 × tolerance), so
-/// that noise around a period-1 orbit is never mistaken for a period-n one.
+/// n if the last cycles form a period-n orbit (n = 1..4) under the convergence rule. The
+/// first cycle (from the start) is never used. For n > 1 the consecutive cycles must also
+/// differ clearly (by more than 100 × tolerance), so that noise around a period-1 orbit is
+/// never mistaken for a period-n one.
 fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
     let k = closed.len();
     let lagged = |n: usize, tol: f64| (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], tol));
     (1..=4).find(|&n| {
-        k >= settings.settle + n
+        k > settings.settle.saturating_add(n)
             && lagged(n, settings.tolerance)
             && (n == 1 || (0..settings.settle).all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], 100.0 * settings.tolerance)))
     })
 }
 
-/// Whether the oscillation is dying out: w ranges below 1e-9, or strictly shrinking over the
-/// last 2·settle+1 cycles while the fixed point is linearly stable.
+/// Whether the oscillation is dying out at a linearly stable fixed point: w ranges below
+/// 1e-9, or strictly shrinking over the last 2·settle+1 cycles. (Near an unstable fixed point
+/// a tiny oscillation is a growing one, never a verdict of stability.)
 fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: bool) -> bool {
+    if !linearly_stable {
+        return false;
+    }
     let amplitude = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
     if closed.last().is_some_and(|c| amplitude(c) < 1e-9) {
         return true;
     }
-    let n = 2 * settings.settle + 1;
-    linearly_stable
-        && closed.len() >= n
+    let n = settings.settle.saturating_mul(2).saturating_add(1);
+    closed.len() >= n
         && closed[closed.len() - n..].windows(2).all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
 }
 
@@ -597,10 +634,15 @@ pub fn analyse(
     let fixed = drr.fixed_point();
     let mut seen = 0;
     let outcome = loop {
-        tracker.step()?;
+        if let Err(mut e) = tracker.step() {
+            e.t += tracker.elapsed;
+            return Err(e);
+        }
         if tracker.steps > settings.max_steps {
             let message = format!("{} steps without settling on a cycle (cycle.max_steps)", settings.max_steps);
-            return Err(tracker.failure(ErrorKind::TooMuchWork, message));
+            let mut e = tracker.failure(ErrorKind::TooMuchWork, message);
+            e.t += tracker.elapsed;
+            return Err(e);
         }
         let time = tracker.elapsed + tracker.integ.t();
         if tracker.closed.len() > seen {
@@ -615,14 +657,15 @@ pub fn analyse(
                 break CycleStatus::NotConverged;
             }
         }
-        if tracker.steps.is_multiple_of(256) {
+        let out_of_time = time >= settings.max_time;
+        if linearly_stable && (out_of_time || tracker.steps.is_multiple_of(256)) {
             let y = tracker.integ.state();
             let near = (0..3).all(|i| (y[i] - fixed[i]).abs() < 1e-10 * (1.0 + fixed[i].abs()));
             if near {
                 break CycleStatus::FixedPoint;
             }
         }
-        if time >= settings.max_time {
+        if out_of_time {
             break CycleStatus::NotConverged;
         }
     };
@@ -658,13 +701,13 @@ pub fn analyse(
         cycles_computed: closed.len(),
         time_integrated,
         convergence_rule: format!(
-            "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle pairs \
-             (lag n = 1..4 for period-n orbits); fixed point when the w range of a cycle is below 1e-9, \
-             shrinks over {} consecutive cycles at a linearly stable fixed point, or the state is within \
-             1e-10 of the fixed point",
+            "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle \
+             pairs (lag n = 1..4 for period-n orbits), the first cycle never used; fixed point, only when \
+             linearly stable, when the w range of a cycle is below 1e-9, shrinks over {} consecutive \
+             cycles, or the state is within 1e-10 of the fixed point",
             settings.tolerance,
             settings.settle,
-            2 * settings.settle + 1
+            settings.settle.saturating_mul(2).saturating_add(1)
         ),
         tolerance: settings.tolerance,
         trajectory: tracker.trajectories,
@@ -730,7 +773,8 @@ mod tests {
         let shrinking: Vec<CycleValues> = (0..8).map(|k| cycle(7.0, 0.5 * 0.8f64.powi(k), -0.5 * 0.8f64.powi(k))).collect();
         assert!(decaying(&shrinking, &settings(), true));
         assert!(!decaying(&shrinking, &settings(), false));
-        assert!(decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), false), "a vanished amplitude needs no Hopf verdict");
+        assert!(decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), true));
+        assert!(!decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), false), "near an unstable fixed point it is growing");
     }
 
     #[test]

@@ -76,10 +76,10 @@ pub fn hermite(a: Knot, b: Knot, t: f64) -> f64 {
         + (s3 - s2) * h * b.dx
 }
 
-/// The first upward crossing of `level` after the start of `knots`, located on the cubic
-/// Hermite interpolant by bisection; None if there is none.
-pub fn upward_crossing(knots: &[Knot], level: f64) -> Option<f64> {
-    let i = knots.windows(2).position(|k| k[0].x < level && k[1].x >= level)?;
+/// The last upward crossing of `level` in `knots`, located on the cubic Hermite
+/// interpolant by bisection; None if there is none.
+pub fn last_upward_crossing(knots: &[Knot], level: f64) -> Option<f64> {
+    let i = knots.windows(2).rposition(|k| k[0].x < level && k[1].x >= level)?;
     let (a, b) = (knots[i], knots[i + 1]);
     let (mut lo, mut hi) = (a.t, b.t);
     for _ in 0..200 {
@@ -111,15 +111,15 @@ mod tests {
     }
 
     #[test]
-    fn upward_crossing_of_a_sampled_sine() {
+    fn last_upward_crossing_of_a_sampled_sine() {
         let knots: Vec<Knot> = (0..40)
             .map(|i| {
                 let t = -1.0 + 0.1 * i as f64;
                 Knot { t, x: t.sin(), dx: t.cos() }
             })
             .collect();
-        let t = upward_crossing(&knots, 0.5).unwrap();
+        let t = last_upward_crossing(&knots, 0.5).unwrap();
         assert!((t - 0.5f64.asin()).abs() < 1e-6, "{t}");
-        assert!(upward_crossing(&knots, 2.0).is_none());
+        assert!(last_upward_crossing(&knots, 2.0).is_none());
     }
 }

@@ -4,9 +4,11 @@
 
 mod error;
 mod integrator;
+mod linalg;
 mod options;
 mod problem;
 mod radau5;
+mod rodas5p;
 mod stats;
 
 pub use error::{ErrorKind, SolverError};
@@ -14,6 +16,7 @@ pub use integrator::Integrator;
 pub use options::{Options, Tolerance};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
 pub use radau5::Radau5;
+pub use rodas5p::Rodas5p;
 pub use stats::Stats;
 
 /// How far one call to a solver's `advance` goes.

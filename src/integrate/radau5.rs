@@ -34,6 +34,7 @@
 // RADAU5's coefficients are kept with the digits it publishes.
 #![allow(clippy::excessive_precision)]
 
+use super::linalg::{lu_real, rms, solve_real};
 use super::{
     ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task,
     Tolerance,
@@ -278,72 +279,6 @@ pub struct Radau5<S: OdeSystem> {
 impl<S: OdeSystem> std::fmt::Debug for Radau5<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Radau5").field("n", &self.n).field("t", &self.t_out).field("t_internal", &self.x).finish()
-    }
-}
-
-/// Scaled RMS norm ‖v/scal‖.
-fn rms(v: &[f64], scal: &[f64]) -> f64 {
-    let sum: f64 = v.iter().zip(scal).map(|(a, s)| (a / s) * (a / s)).sum();
-    (sum / v.len() as f64).sqrt()
-}
-
-/// LU factorisation with partial pivoting of the column-major n×n matrix `a` (LINPACK DGEFA
-/// layout: row interchanges applied to the columns to the right only). False if singular.
-fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
-    for k in 0..n {
-        let col = k * n;
-        let mut p = k;
-        let mut big = a[col + k].abs();
-        for i in k + 1..n {
-            let v = a[col + i].abs();
-            if v > big {
-                big = v;
-                p = i;
-            }
-        }
-        ip[k] = p;
-        if big == 0.0 || !big.is_finite() {
-            return false;
-        }
-        if p != k {
-            for j in k..n {
-                a.swap(j * n + k, j * n + p);
-            }
-        }
-        let inv = 1.0 / a[col + k];
-        for i in k + 1..n {
-            a[col + i] *= -inv;
-        }
-        for j in k + 1..n {
-            let t = a[j * n + k];
-            if t != 0.0 {
-                for i in k + 1..n {
-                    a[j * n + i] += a[col + i] * t;
-                }
-            }
-        }
-    }
-    true
-}
-
-/// Solves with the factors of [`lu_real`], in place.
-fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
-    for k in 0..n {
-        let p = ip[k];
-        if p != k {
-            b.swap(k, p);
-        }
-        let t = b[k];
-        for i in k + 1..n {
-            b[i] += a[k * n + i] * t;
-        }
-    }
-    for k in (0..n).rev() {
-        b[k] /= a[k * n + k];
-        let t = -b[k];
-        for i in 0..k {
-            b[i] += a[k * n + i] * t;
-        }
     }
 }
 

@@ -153,7 +153,7 @@ fn classify(flag: c_int) -> ErrorKind {
 
 /// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
 /// for ERK) leave their counter at zero.
-unsafe fn read_stats(m: *mut c_void) -> Stats {
+unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
     let mut s = Stats::default();
     let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
         let mut v: c_long = 0;
@@ -168,8 +168,10 @@ unsafe fn read_stats(m: *mut c_void) -> Stats {
     s.step_solve_fails = count(ffi::ARKStepGetNumStepSolveFails);
     s.nonlin_iters = count(ffi::ARKStepGetNumNonlinSolvIters);
     s.nonlin_conv_fails = count(ffi::ARKStepGetNumNonlinSolvConvFails);
-    s.jac_evals = count(ffi::ARKStepGetNumJacEvals);
-    s.rhs_evals_jacobian = count(ffi::ARKStepGetNumLinRhsEvals);
+    if has_linear_solver {
+        s.jac_evals = count(ffi::ARKStepGetNumJacEvals);
+        s.rhs_evals_jacobian = count(ffi::ARKStepGetNumLinRhsEvals);
+    }
     s.root_evals = count(ffi::ARKStepGetNumGEvals);
     let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
     let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =

@@ -52,7 +52,7 @@ fn classify(flag: c_int) -> ErrorKind {
 
 /// Reads CVODE's counters. Getters that do not apply (no root functions, no linear solver)
 /// leave their counter at zero.
-unsafe fn read_stats(m: *mut c_void) -> Stats {
+unsafe fn read_stats(m: *mut c_void, _has_linear_solver: bool) -> Stats {
     let mut s = Stats::default();
     let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
         let mut v: c_long = 0;

@@ -41,8 +41,9 @@ pub(crate) struct Api {
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
     pub reinit_resets_counters: bool,
-    /// Reads the raw counters.
-    pub read_stats: unsafe fn(Mem) -> Stats,
+    /// Reads the raw counters (linear-solver ones only when there is a linear solver: asking
+    /// otherwise goes through the error handler).
+    pub read_stats: unsafe fn(Mem, bool) -> Stats,
     /// Maps a negative return code to an error kind.
     pub classify: fn(c_int) -> ErrorKind,
 }
@@ -62,7 +63,10 @@ pub struct Solver<S> {
     y: SerialVector,
     scratch: SerialVector,
     _atol: Option<SerialVector>,
-    shared: Box<Shared<S>>,
+    /// The user data SUNDIALS calls back with: a leaked `Box`, reclaimed in `Drop` after the
+    /// solver memory is freed. Held as a raw pointer (not a `Box`) so that Rust never asserts
+    /// unique access to it while SUNDIALS holds pointers into it.
+    shared: NonNull<Shared<S>>,
     t: f64,
     fail_on_step_underflow: bool,
     counters_before_reinit: Stats,
@@ -122,6 +126,7 @@ impl<S> Solver<S> {
         };
         let mem = NonNull::new(create(&y, &ctx)).ok_or_else(|| resource("solver memory"))?;
         let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag: Diagnostics::default() });
+        let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
             api,
@@ -137,8 +142,10 @@ impl<S> Solver<S> {
             ctx,
         };
         let m = solver.mem.as_ptr();
-        let user_data = &mut *solver.shared as *mut Shared<S> as *mut c_void;
-        let diag = &mut solver.shared.diag as *mut Diagnostics as *mut c_void;
+        let user_data = solver.shared.as_ptr() as *mut c_void;
+        // SAFETY: `shared` points to a live, leaked Box; taking a field's address creates no
+        // reference.
+        let diag = unsafe { &raw mut (*solver.shared.as_ptr()).diag } as *mut c_void;
         // SAFETY: `m` is live solver memory; `user_data` and `diag` point into the boxed
         // `Shared`, which lives (at a fixed address) as long as the solver memory.
         solver.check(unsafe { (api.set_err_handler)(m, Some(callbacks::error_handler), diag) })?;
@@ -205,6 +212,21 @@ impl<S> Solver<S> {
         Ok(())
     }
 
+    /// The callback data, shared. Called only between SUNDIALS calls (or from getters that do
+    /// not call back), so no callback holds a reference at the same time.
+    fn shared(&self) -> &Shared<S> {
+        // SAFETY: the pointer comes from a leaked Box freed only in Drop; no `&mut` to it is
+        // alive while `&self` is borrowed (callbacks run only inside `&mut self` methods).
+        unsafe { self.shared.as_ref() }
+    }
+
+    /// The callback data, exclusively (between SUNDIALS calls).
+    fn shared_mut(&mut self) -> &mut Shared<S> {
+        // SAFETY: as in `shared`; `&mut self` excludes every other access, and no SUNDIALS
+        // call (hence no callback) is in progress.
+        unsafe { self.shared.as_mut() }
+    }
+
     /// Raw solver memory, for solver-specific setters in the constructors.
     pub(crate) fn mem(&self) -> Mem {
         self.mem.as_ptr()
@@ -212,15 +234,15 @@ impl<S> Solver<S> {
 
     /// Turns a SUNDIALS return code into `Ok` or a typed error at the current time and state.
     pub(crate) fn check(&mut self, flag: c_int) -> Result<c_int, SolverError> {
-        if let Some(panic) = self.shared.diag.panic.take() {
+        if let Some(panic) = self.shared_mut().diag.panic.take() {
             return Err(self.error(ErrorKind::CallbackPanic, flag, panic));
         }
         if flag >= 0 {
             return Ok(flag);
         }
         let kind = (self.api.classify)(flag);
-        let mut message = self.shared.diag.last_error.take().unwrap_or_default();
-        if let Some(why) = self.shared.diag.root_failure.take() {
+        let mut message = self.shared_mut().diag.last_error.take().unwrap_or_default();
+        if let Some(why) = self.shared_mut().diag.root_failure.take() {
             message.push_str(&format!(" [{why}]"));
         }
         Err(self.error(kind, flag, message))
@@ -243,13 +265,13 @@ impl<S> Solver<S> {
             Task::Normal => 1,
             Task::OneStep => 2,
         };
-        self.shared.diag.begin_call();
+        self.shared_mut().diag.begin_call();
         let mut t = self.t;
         // SAFETY: live solver memory; `y` is a vector of the system's length owned by us;
         // callbacks reach `shared`, which outlives the call.
         let flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         self.t = t;
-        let (nonfinite, underflows) = self.shared.diag.since_call();
+        let (nonfinite, underflows) = self.shared_mut().diag.since_call();
         let flag = self.check(flag).map_err(|mut e| {
             // Name the root cause: SUNDIALS reports its consequence (e.g. "too much work"
             // when t + h = t stalls time, or repeated failures after NaN values).
@@ -267,14 +289,14 @@ impl<S> Solver<S> {
             e
         })?;
         if self.fail_on_step_underflow && underflows > 0 {
-            let warning = self.shared.diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
+            let warning = self.shared().diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
             let message = format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
             return Err(self.error(ErrorKind::StepUnderflow, flag, message));
         }
         let event = match flag {
             1 => StepEvent::StopTime,
             2 => {
-                let mut info = vec![0 as c_int; self.shared.root_count];
+                let mut info = vec![0 as c_int; self.shared().root_count];
                 // SAFETY: `info` has one slot per root function declared to SUNDIALS.
                 let f = unsafe { (self.api.get_root_info)(self.mem.as_ptr(), info.as_mut_ptr()) };
                 self.check(f)?;
@@ -310,8 +332,8 @@ impl<S> Solver<S> {
         let Some(roots) = roots else {
             // SAFETY: live memory; zero root functions disables root finding.
             self.check(unsafe { (self.api.root_init)(m, 0, None) })?;
-            self.shared.roots = None;
-            self.shared.root_count = 0;
+            self.shared_mut().roots = None;
+            self.shared_mut().root_count = 0;
             return Ok(());
         };
         let bad_directions = !roots.directions.is_empty()
@@ -323,12 +345,16 @@ impl<S> Solver<S> {
             );
             return Err(self.error(ErrorKind::InvalidInput, 0, message));
         }
-        self.shared.roots = Some(roots.function);
-        self.shared.root_count = roots.count;
-        // SAFETY: live memory; the trampoline reads `root_count` values from `shared`, which
-        // now matches the count declared here.
+        let Ok(count) = c_int::try_from(roots.count) else {
+            let message = format!("roots: count = {} exceeds what SUNDIALS can take", roots.count);
+            return Err(self.error(ErrorKind::InvalidInput, 0, message));
+        };
+        // SAFETY: live memory; SUNDIALS allocates `count` slots and calls the trampoline only
+        // during later `advance` calls, after `root_count` below is set to the same count.
         let trampoline: ffi::CVRootFn = Some(callbacks::roots::<S>);
-        self.check(unsafe { (self.api.root_init)(m, roots.count as c_int, trampoline) })?;
+        self.check(unsafe { (self.api.root_init)(m, count, trampoline) })?;
+        self.shared_mut().roots = Some(roots.function);
+        self.shared_mut().root_count = roots.count;
         if !roots.directions.is_empty() {
             let mut directions: Vec<c_int> = roots.directions.clone();
             // SAFETY: `directions` holds one entry per root function; SUNDIALS copies it.
@@ -350,11 +376,11 @@ impl<S> Solver<S> {
     /// Restarts the integration at (t0, y0), keeping options, tolerances, root functions and
     /// the running statistics.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        if y0.len() != self.shared.dim || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.shared.dim);
+        if y0.len() != self.shared().dim || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.shared().dim);
             return Err(self.error(ErrorKind::InvalidInput, 0, message));
         }
-        let before = self.raw_stats();
+        let before = if self.api.reinit_resets_counters { self.raw_stats() } else { Stats::default() };
         self.y.as_mut_slice().copy_from_slice(y0);
         // SAFETY: live memory; SUNDIALS copies `y` into its own history arrays.
         let flag = unsafe { (self.api.reinit)(self.mem.as_ptr(), t0, self.y.raw()) };
@@ -369,27 +395,27 @@ impl<S> Solver<S> {
 
     fn raw_stats(&self) -> Stats {
         // SAFETY: live solver memory; the reader only calls getters.
-        unsafe { (self.api.read_stats)(self.mem.as_ptr()) }
+        unsafe { (self.api.read_stats)(self.mem.as_ptr(), self.linear.is_some()) }
     }
 
     /// Statistics over the solver's whole life, restarts included.
     pub fn stats(&self) -> Stats {
         let mut stats = self.counters_before_reinit;
         stats.accumulate(&self.raw_stats());
-        stats.step_underflow_warnings = self.shared.diag.step_underflows;
-        stats.nonfinite_rhs = self.shared.diag.nonfinite_rhs;
+        stats.step_underflow_warnings = self.shared().diag.step_underflows;
+        stats.nonfinite_rhs = self.shared().diag.nonfinite_rhs;
         stats.reinits = self.reinits;
         stats
     }
 
     /// Warnings SUNDIALS issued (the first 64), e.g. "t + h = t".
     pub fn warnings(&self) -> &[String] {
-        &self.shared.diag.warnings
+        &self.shared().diag.warnings
     }
 
     /// The system being integrated.
     pub fn system(&self) -> &S {
-        &self.shared.system
+        &self.shared().system
     }
 
     /// The solver family name ("CVODE" or "ARKStep").
@@ -425,9 +451,13 @@ impl<S> Integrator for Solver<S> {
 impl<S> Drop for Solver<S> {
     fn drop(&mut self) {
         let mut mem = self.mem.as_ptr();
-        // SAFETY: frees the solver memory exactly once, before the linear solver, vectors,
-        // user data and context (dropped afterwards in field order).
-        unsafe { (self.api.free)(&mut mem) };
+        // SAFETY: frees the solver memory exactly once, before the linear solver, vectors and
+        // context (dropped afterwards in field order); then no callback can run, and the leaked
+        // user data is reclaimed exactly once.
+        unsafe {
+            (self.api.free)(&mut mem);
+            drop(Box::from_raw(self.shared.as_ptr()));
+        }
     }
 }
 

@@ -1,0 +1,99 @@
+//! Small dense linear algebra shared by the homemade integrators (Radau5, Rodas5p): LU
+//! factorisation with partial pivoting of column-major n×n matrices in place (no allocation),
+//! the matching solve, and the scaled RMS norm of the step-size controls.
+
+/// Scaled RMS norm ‖v/scal‖.
+pub(super) fn rms(v: &[f64], scal: &[f64]) -> f64 {
+    let sum: f64 = v.iter().zip(scal).map(|(a, s)| (a / s) * (a / s)).sum();
+    (sum / v.len() as f64).sqrt()
+}
+
+/// LU factorisation with partial pivoting of the column-major n×n matrix `a` (LINPACK DGEFA
+/// layout: row interchanges applied to the columns to the right only). False if singular.
+pub(super) fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    for k in 0..n {
+        let col = k * n;
+        let mut p = k;
+        let mut big = a[col + k].abs();
+        for i in k + 1..n {
+            let v = a[col + i].abs();
+            if v > big {
+                big = v;
+                p = i;
+            }
+        }
+        ip[k] = p;
+        if big == 0.0 || !big.is_finite() {
+            return false;
+        }
+        if p != k {
+            for j in k..n {
+                a.swap(j * n + k, j * n + p);
+            }
+        }
+        let inv = 1.0 / a[col + k];
+        for i in k + 1..n {
+            a[col + i] *= -inv;
+        }
+        for j in k + 1..n {
+            let t = a[j * n + k];
+            if t != 0.0 {
+                for i in k + 1..n {
+                    a[j * n + i] += a[col + i] * t;
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Solves with the factors of [`lu_real`], in place.
+pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
+    for k in 0..n {
+        let p = ip[k];
+        if p != k {
+            b.swap(k, p);
+        }
+        let t = b[k];
+        for i in k + 1..n {
+            b[i] += a[k * n + i] * t;
+        }
+    }
+    for k in (0..n).rev() {
+        b[k] /= a[k * n + k];
+        let t = -b[k];
+        for i in 0..k {
+            b[i] += a[k * n + i] * t;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lu_solves_with_pivoting_and_detects_singularity() {
+        let n = 3;
+        // Column-major, needs pivoting (zero leading entry).
+        let a = [0.0, 2.0, 1.0, 1.0, 1.0, 3.0, 2.0, -1.0, 1.0];
+        let x = [1.0, -2.0, 0.5];
+        let mut b = [0.0; 3];
+        for j in 0..n {
+            for i in 0..n {
+                b[i] += a[j * n + i] * x[j];
+            }
+        }
+        let (mut lu, mut ip) = (a, [0; 3]);
+        assert!(lu_real(&mut lu, &mut ip, n));
+        solve_real(&lu, &ip, n, &mut b);
+        for i in 0..n {
+            assert!((b[i] - x[i]).abs() < 1e-14, "{b:?}");
+        }
+        let mut singular = [1.0, 2.0, 2.0, 4.0];
+        assert!(!lu_real(&mut singular, &mut [0; 2], 2));
+        let mut nan = [f64::NAN, 0.0, 0.0, 1.0];
+        assert!(!lu_real(&mut nan, &mut [0; 2], 2));
+        assert!((rms(&[3.0, 4.0], &[1.0, 2.0]) - 6.5f64.sqrt()).abs() < 1e-15);
+    }
+}

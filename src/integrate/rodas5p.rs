@@ -1,0 +1,1091 @@
+//! Rodas5P: the Rosenbrock method of G. Steinebach, "Construction of Rosenbrock–Wanner method
+//! Rodas5P and numerical benchmarks within the Julia Differential Equations package", BIT
+//! Numer. Math. 63, 27 (2023) (the successor of RODASP and of Rodas4P2, from his "Improvement
+//! of Rosenbrock–Wanner method RODASP", 2020) — order 5 with an embedded order-4 solution,
+//! 8 stages, stiffly accurate (and so is the embedded solution), L-stable, with a continuous
+//! output of order 4. The coefficients are those of the Julia package OrdinaryDiffEq.jl
+//! (`Rodas5PTableau` in lib/OrdinaryDiffEqRosenbrock/src/rosenbrock_tableaus.jl), in
+//! Hairer–Wanner's transformed form (Solving ODEs II, IV.7, (7.25)): with W = I/(hγ) − J,
+//!
+//!   W k_i = f(t + c_i h, y + Σ_{j<i} a_ij k_j) + Σ_{j<i} (c_ij/h) k_j + h d_i ∂f/∂t,
+//!   y_new = y + Σ_{j<8} a_8j k_j + k_8,   error estimate k_8,
+//!
+//! and the dense output y(t + θh) = (1−θ) y + θ (y_new + (1−θ)(K1 + θ(K2 + θ K3))) with
+//! K_m = Σ_i h_mi k_i. The unit tests below recover the classical coefficients (α, Γ, b) from
+//! this form and check every order condition (all rooted trees up to order 5 for the
+//! solution, order 4 for the embedded one and for the dense output at any θ), the stiff
+//! accuracy and R(∞) = 0.
+//!
+//! Step-size control as in Hairer–Wanner's code RODAS: the error is the scaled RMS norm of the
+//! difference between the two solutions with weights atol + rtol·max(|y|, |y_new|) (no
+//! tolerance transformation), h_new = h/clamp(err^{1/5}/0.9, 1/6, 5) (so 0.2 ≤ h_new/h ≤ 6),
+//! Gustafsson's predictive controller on consecutive accepted steps, no increase right after
+//! a rejection, a first step cut by 10 when rejected. Acceptance when err ≤ 1.
+//!
+//! Jacobian: a Rosenbrock method is linearly implicit and needs the exact Jacobian at every
+//! step (it is evaluated once per step and kept across rejections, the LU factors of W are
+//! renewed whenever h changes). Use an analytic Jacobian ([`OdeSystem::has_jacobian`]): the
+//! forward-difference one (RADAU5's increments, n extra right-hand-side calls) works, but its
+//! O(√u) error goes straight into the stages — there is no Newton iteration to correct it.
+//!
+//! Time dependence: the method needs ∂f/∂t as well, which [`OdeSystem`] does not provide. It is
+//! taken by a forward difference in t (as RODAS does with IFCN = 1; one extra right-hand-side
+//! call per Jacobian, counted in [`Stats::rhs_evals_jacobian`]); it is exact (zero) for an
+//! autonomous system, where [`Rodas5p::autonomous`] saves that call. For non-autonomous
+//! systems this finite difference limits the attainable accuracy (relative error ~1e-8 in
+//! ∂f/∂t); the stick-slip systems of this crate are autonomous.
+//!
+//! Error flags ([`SolverError::flag`]), RODAS's IDID where it has one: −1 invalid input, −2 too
+//! many steps, −3 step size too small, −4 matrix repeatedly singular, −6 right-hand-side failure,
+//! −7 repeated error-test failures.
+
+// The published coefficients are kept with all their digits.
+#![allow(clippy::excessive_precision)]
+
+use super::linalg::{lu_real, rms, solve_real};
+use super::{
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task,
+    Tolerance,
+};
+
+const NAME: &str = "Rodas5P";
+/// Unit roundoff as in RODAS (WORK(1) default).
+const UROUND: f64 = 1e-16;
+/// Safety factor of the step-size control.
+const SAFE: f64 = 0.9;
+/// 1/FAC1 ≤ h_new/h ≤ 1/FAC2 (RODAS's WORK(3) = 0.2, WORK(4) = 6).
+const FAC1: f64 = 5.0;
+const FAC2: f64 = 1.0 / 6.0;
+/// The error estimate is O(h⁵).
+const EXPONENT: f64 = 0.2;
+/// Consecutive singular matrices W within one step before giving up.
+const MAX_SINGULAR: u32 = 5;
+/// Non-finite right-hand sides within one step before giving up.
+const MAX_NONFINITE: u32 = 10;
+const DEFAULT_MAX_STEPS: i64 = 500;
+const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
+
+/// Number of stages.
+const STAGES: usize = 8;
+/// The diagonal coefficient γ.
+const GAMMA: f64 = 0.21193756319429014;
+/// a_ij (j < i): stage points y + Σ a_ij k_j.
+#[rustfmt::skip]
+const A: [[f64; 7]; STAGES] = [
+    [0.0; 7],
+    [3.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [2.849394379747939, 0.45842242204463923, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [-6.954028509809101, 2.489845061869568, -10.358996098473584, 0.0, 0.0, 0.0, 0.0],
+    [2.8029986275628964, 0.5072464736228206, -0.3988312541770524, -0.04721187230404641, 0.0, 0.0, 0.0],
+    [-7.502846399306121, 2.561846144803919, -11.627539656261098, -0.18268767659942256, 0.030198172008377946, 0.0, 0.0],
+    [-7.502846399306121, 2.561846144803919, -11.627539656261098, -0.18268767659942256, 0.030198172008377946, 1.0, 0.0],
+    [-7.502846399306121, 2.561846144803919, -11.627539656261098, -0.18268767659942256, 0.030198172008377946, 1.0, 1.0],
+];
+/// c_ij (j < i): the coupling terms (c_ij/h) k_j.
+#[rustfmt::skip]
+const C: [[f64; 7]; STAGES] = [
+    [0.0; 7],
+    [-14.155112264123755, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [-17.97296035885952, -2.859693295451294, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [147.12150275711716, -1.41221402718213, 71.68940251302358, 0.0, 0.0, 0.0, 0.0],
+    [165.43517024871676, -0.4592823456491126, 42.90938336958603, -5.961986721573306, 0.0, 0.0, 0.0],
+    [24.854864614690072, -3.0009227002832186, 47.4931110020768, 5.5814197821558125, -0.6610691825249471, 0.0, 0.0],
+    [30.91273214028599, -3.1208243349937974, 77.79954646070892, 34.28646028294783, -19.097331116725623, -28.087943162872662, 0.0],
+    [37.80277123390563, -3.2571969029072276, 112.26918849496327, 66.9347231244047, -40.06618937091002, -54.66780262877968, -9.48861652309627],
+];
+/// The nodes c_i (c_2 = 3γ).
+const NODES: [f64; STAGES] =
+    [0.0, 0.6358126895828704, 0.4095798393397535, 0.9769306725060716, 0.4288403609558664, 1.0, 1.0, 1.0];
+/// d_i = Σ_j γ_ij: the coefficients of h ∂f/∂t.
+const D: [f64; STAGES] =
+    [0.21193756319429014, -0.42387512638858027, -0.3384627126235924, 1.8046452872882734, 2.325825639765069, 0.0, 0.0, 0.0];
+/// Dense output: K_m = Σ_i h_mi k_i.
+#[rustfmt::skip]
+const HD: [[f64; STAGES]; 3] = [
+    [25.948786856663858, -2.5579724845846235, 10.433815404888879, -2.3679251022685204, 0.524948541321073, 1.1241088310450404, 0.4272876194431874, -0.17202221070155493],
+    [-9.91568850695171, -0.9689944594115154, 3.0438037242978453, -24.495224566215796, 20.176138334709044, 15.98066361424651, -6.789040303419874, -6.710236069923372],
+    [11.419903575922262, 2.8879645146136994, 72.92137995996029, 80.12511834622643, -52.072871366152654, -59.78993625266729, -0.15582684282751913, 4.883087185713722],
+];
+
+/// Work arrays, allocated once.
+#[derive(Debug, Clone)]
+struct Work {
+    /// The stage increments k_1..k_8, stage-major (k_i at [i·n, (i+1)·n)).
+    k: Vec<f64>,
+    /// Stage point; after the last stage, the embedded (order-4) solution.
+    u: Vec<f64>,
+    ynew: Vec<f64>,
+    fnew: Vec<f64>,
+    tmp: Vec<f64>,
+    /// Error weights.
+    scal: Vec<f64>,
+    /// ∂f/∂t at the current point.
+    dfdt: Vec<f64>,
+    /// Jacobian, column-major.
+    jac: Vec<f64>,
+    /// LU factors of W = I/(hγ) − J and pivots.
+    e: Vec<f64>,
+    ip: Vec<usize>,
+    /// Start of the last step and its dense-output coefficients K1, K2, K3 (stage-major).
+    yold: Vec<f64>,
+    cont: Vec<f64>,
+    dense: Vec<f64>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        let v = || vec![0.0; n];
+        Self {
+            k: vec![0.0; STAGES * n],
+            u: v(),
+            ynew: v(),
+            fnew: v(),
+            tmp: v(),
+            scal: v(),
+            dfdt: v(),
+            jac: vec![0.0; n * n],
+            e: vec![0.0; n * n],
+            ip: vec![0; n],
+            yold: v(),
+            cont: vec![0.0; 3 * n],
+            dense: v(),
+        }
+    }
+}
+
+/// The Rosenbrock method Rodas5P (Steinebach, BIT 2023; order 5(4), 8 stages, stiffly accurate,
+/// L-stable, continuous output of order 4) with RODAS's step-size control, on the system `S`.
+/// One Jacobian (and, unless [`Rodas5p::autonomous`], one finite-difference ∂f/∂t) per step,
+/// one LU factorisation of I/(hγ) − J per step attempt, seven right-hand-side calls per step
+/// attempt (the stages) and one at each accepted point (f there, which the next step starts
+/// from), no Newton iteration.
+///
+/// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous
+/// output is a quartic), `reinit` restarts with fresh step-size history and accumulated
+/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `max_steps` (per Normal
+/// call, default 500), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
+/// disabled once reached, as in SUNDIALS), `max_err_test_fails` (consecutive rejections,
+/// default 50), `fail_on_step_underflow`. `max_order` (the order is 5), `max_nonlin_iters`,
+/// `max_conv_fails` and `nonlin_conv_coef` (there is no nonlinear iteration) are ignored.
+///
+/// Non-autonomous systems: ∂f/∂t is a forward difference (see the module documentation).
+pub struct Rodas5p<S: OdeSystem> {
+    system: S,
+    n: usize,
+    rtol: f64,
+    atol: Vec<f64>,
+    // Options.
+    max_steps: u64,
+    hmin: f64,
+    hmax: f64,
+    initial_step: Option<f64>,
+    stop_time: Option<f64>,
+    max_err_test_fails: u32,
+    fail_on_step_underflow: bool,
+    fixed_h: Option<f64>,
+    autonomous: bool,
+    // Integration state.
+    x: f64,
+    y: Vec<f64>,
+    /// f(x, y), valid when `f0_valid`.
+    f0: Vec<f64>,
+    f0_valid: bool,
+    /// Direction, step size and step history set up (after new/reinit: at the first advance).
+    started: bool,
+    posneg: f64,
+    /// Step size to try next (signed).
+    h: f64,
+    /// Last accepted step (signed) and its start.
+    hold: f64,
+    xold: f64,
+    /// An accepted step exists since the last (re)start: the dense output is valid.
+    have_step: bool,
+    reject: bool,
+    /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
+    naccpt: u64,
+    hacc: f64,
+    erracc: f64,
+    /// The Jacobian (and ∂f/∂t) are those of the current point.
+    jac_current: bool,
+    /// Step size the LU factors were computed for (NaN: none valid).
+    lu_h: f64,
+    // Returned state.
+    t_out: f64,
+    y_out: Vec<f64>,
+    work: Work,
+    stats: Stats,
+}
+
+impl<S: OdeSystem> std::fmt::Debug for Rodas5p<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Rodas5p").field("n", &self.n).field("t", &self.t_out).field("t_internal", &self.x).finish()
+    }
+}
+
+fn all_finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// Evaluates the k-th time derivative of the continuous output of the last step [x − hold, x]
+/// at t into `out`.
+fn interpolate(w: &Work, y: &[f64], x: f64, hold: f64, t: f64, k: u32, out: &mut [f64]) {
+    let n = out.len();
+    // θ = 1 + s exactly 1 and 1 − θ exactly 0 at the step end: the output ends on y.
+    let s = (t - x) / hold;
+    let (th, th1) = (1.0 + s, -s);
+    for i in 0..n {
+        let (y0, y1) = (w.yold[i], y[i]);
+        let (k1, k2, k3) = (w.cont[i], w.cont[n + i], w.cont[2 * n + i]);
+        out[i] = match k {
+            0 => th1 * y0 + th * (y1 + th1 * (k1 + th * (k2 + th * k3))),
+            1 => ((y1 - y0 + k1) + th * (2.0 * (k2 - k1) + th * (3.0 * (k3 - k2) - 4.0 * th * k3))) / hold,
+            2 => (2.0 * (k2 - k1) + th * (6.0 * (k3 - k2) - 12.0 * th * k3)) / (hold * hold),
+            3 => (6.0 * (k3 - k2) - 24.0 * th * k3) / (hold * hold * hold),
+            _ => -24.0 * k3 / (hold * hold * hold * hold),
+        };
+    }
+}
+
+impl<S: OdeSystem> Rodas5p<S> {
+    /// A Rodas5P integrator of `system` starting at (t0, y0). Errors (InvalidInput): a system
+    /// without components, y0 of the wrong length or non-finite, non-finite t0, invalid
+    /// options.
+    pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
+        let n = system.dim();
+        let invalid = |message: String| SolverError {
+            solver: NAME,
+            kind: ErrorKind::InvalidInput,
+            t: t0,
+            state: y0.to_vec(),
+            flag: -1,
+            message,
+        };
+        if n == 0 {
+            return Err(invalid("the system has no components".into()));
+        }
+        if y0.len() != n {
+            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
+        }
+        if !t0.is_finite() {
+            return Err(invalid(format!("t0 = {t0} must be finite")));
+        }
+        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
+        }
+        options.validate(n).map_err(invalid)?;
+        let atol: Vec<f64> = match &options.atol {
+            Tolerance::Scalar(a) => vec![*a; n],
+            Tolerance::PerComponent(v) => v.clone(),
+        };
+        let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
+        Ok(Self {
+            system,
+            n,
+            rtol: options.rtol,
+            atol,
+            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
+            hmin: options.min_step.unwrap_or(0.0),
+            hmax: options.max_step.unwrap_or(f64::INFINITY),
+            initial_step: options.initial_step,
+            stop_time: options.stop_time,
+            max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
+            fail_on_step_underflow: options.fail_on_step_underflow,
+            fixed_h: None,
+            autonomous: false,
+            x: t0,
+            y: y0.to_vec(),
+            f0: vec![0.0; n],
+            f0_valid: false,
+            started: false,
+            posneg: 1.0,
+            h: 0.0,
+            hold: 0.0,
+            xold: t0,
+            have_step: false,
+            reject: false,
+            naccpt: 0,
+            hacc: 0.0,
+            erracc: 0.0,
+            jac_current: false,
+            lu_h: f64::NAN,
+            t_out: t0,
+            y_out: y0.to_vec(),
+            work: Work::new(n),
+            stats: Stats { last_order: 5, ..Stats::default() },
+        })
+    }
+
+    /// Declares f independent of t: ∂f/∂t is taken as zero instead of by a finite difference,
+    /// which saves one right-hand-side call per step. Wrong (order loss) if f depends on t.
+    pub fn autonomous(mut self) -> Self {
+        self.autonomous = true;
+        self
+    }
+
+    /// Testing aid: integrate with the constant step `h` (clipped only at the stop time), every
+    /// step accepted whatever its error estimate; a singular matrix or a non-finite right-hand
+    /// side is then an error.
+    #[doc(hidden)]
+    pub fn fixed_step(mut self, h: f64) -> Self {
+        self.fixed_h = Some(h);
+        self
+    }
+
+    /// The system being integrated.
+    pub fn system(&self) -> &S {
+        &self.system
+    }
+
+    fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
+        SolverError { solver: NAME, kind, t: self.x, state: self.y.clone(), flag, message }
+    }
+
+    /// Error weights atol + rtol·max(|y|, |other|) into `work.scal`.
+    fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, y: &[f64], other: &[f64]) {
+        for i in 0..scal.len() {
+            let s = atol[i] + rtol * y[i].abs().max(other[i].abs());
+            scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+        }
+    }
+
+    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
+    fn ensure_f0(&mut self) -> bool {
+        if !self.f0_valid {
+            self.system.rhs(self.x, &self.y, &mut self.f0);
+            self.stats.rhs_evals += 1;
+            if !all_finite(&self.f0) {
+                self.stats.nonfinite_rhs += 1;
+                return false;
+            }
+            self.f0_valid = true;
+        }
+        true
+    }
+
+    /// First advance after new/reinit: direction, f(t0, y0), initial step.
+    fn start(&mut self, tout: f64, task: Task) -> Result<(), SolverError> {
+        if self.started {
+            return Ok(());
+        }
+        self.posneg = if tout < self.x { -1.0 } else { 1.0 };
+        if !self.ensure_f0() {
+            return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side at the initial point is not finite".into()));
+        }
+        let mut bound = self.hmax;
+        if task == Task::Normal && tout != self.x {
+            bound = bound.min((tout - self.x).abs());
+        }
+        if let Some(ts) = self.stop_time {
+            if (ts - self.x) * self.posneg > 0.0 {
+                bound = bound.min((ts - self.x).abs());
+            }
+        }
+        let h = match (self.fixed_h, self.initial_step) {
+            (Some(h), _) => h,
+            (None, Some(h)) => h.min(bound),
+            (None, None) => self.estimate_initial_step(bound),
+        };
+        self.h = self.posneg * h.max(self.hmin);
+        self.started = true;
+        Ok(())
+    }
+
+    /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁵ (the embedded
+    /// estimate's order), measured with the weights atol + rtol·|y0|.
+    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+        let w = &mut self.work;
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.y, &self.y);
+        let d0 = rms(&self.y, &w.scal);
+        let d1 = rms(&self.f0, &w.scal);
+        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+        h0 = h0.min(bound).max(100.0 * UROUND * self.x.abs()).max(f64::MIN_POSITIVE);
+        let mut d2 = None;
+        for _ in 0..12 {
+            let th = self.posneg * h0;
+            for i in 0..self.n {
+                w.tmp[i] = self.y[i] + th * self.f0[i];
+            }
+            self.system.rhs(self.x + th, &w.tmp, &mut w.fnew);
+            self.stats.rhs_evals += 1;
+            if all_finite(&w.fnew) {
+                for i in 0..self.n {
+                    w.tmp[i] = w.fnew[i] - self.f0[i];
+                }
+                d2 = Some(rms(&w.tmp, &w.scal) / h0);
+                break;
+            }
+            self.stats.nonfinite_rhs += 1;
+            h0 *= 0.1;
+        }
+        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
+        let dm = d1.max(d2);
+        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(EXPONENT) };
+        (100.0 * h0).min(h1).min(bound)
+    }
+
+    /// Jacobian at (x, y) into `work.jac` (analytic, or forward differences with RADAU5's
+    /// increments √(u·max(1e-5, |y_i|))) and, unless autonomous, ∂f/∂t by a forward difference
+    /// with RODAS's increment √(u·max(1e-5, |t|)) (backward if f is not finite ahead). False if
+    /// either is not finite.
+    fn compute_jacobian(&mut self) -> bool {
+        let n = self.n;
+        self.stats.jac_evals += 1;
+        let w = &mut self.work;
+        if self.system.has_jacobian() {
+            w.jac.iter_mut().for_each(|v| *v = 0.0);
+            let mut m = JacobianMatrix::new(&mut w.jac, n);
+            self.system.jacobian(self.x, &self.y, &mut m);
+        } else {
+            w.tmp.copy_from_slice(&self.y);
+            for j in 0..n {
+                let ysafe = w.tmp[j];
+                let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
+                w.tmp[j] = ysafe + delt;
+                let delt = w.tmp[j] - ysafe;
+                self.system.rhs(self.x, &w.tmp, &mut w.fnew);
+                self.stats.rhs_evals_jacobian += 1;
+                for i in 0..n {
+                    w.jac[j * n + i] = (w.fnew[i] - self.f0[i]) / delt;
+                }
+                w.tmp[j] = ysafe;
+            }
+        }
+        if !all_finite(&w.jac) {
+            return false;
+        }
+        if self.autonomous {
+            return true;
+        }
+        let delt = (UROUND * self.x.abs().max(1e-5)).sqrt();
+        for direction in [self.posneg, -self.posneg] {
+            let xd = self.x + direction * delt;
+            let delt = xd - self.x;
+            self.system.rhs(xd, &self.y, &mut w.fnew);
+            self.stats.rhs_evals_jacobian += 1;
+            if !all_finite(&w.fnew) {
+                self.stats.nonfinite_rhs += 1;
+                continue;
+            }
+            for i in 0..n {
+                w.dfdt[i] = (w.fnew[i] - self.f0[i]) / delt;
+            }
+            if all_finite(&w.dfdt) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// LU factors of I/(hγ) − J. False if singular.
+    fn decompose(&mut self) -> bool {
+        let n = self.n;
+        let fac = 1.0 / (self.h * GAMMA);
+        let w = &mut self.work;
+        for (e, j) in w.e.iter_mut().zip(&w.jac) {
+            *e = -j;
+        }
+        for j in 0..n {
+            w.e[j * n + j] += fac;
+        }
+        self.stats.lin_setups += 1;
+        let ok = lu_real(&mut w.e, &mut w.ip, n);
+        self.lu_h = if ok { self.h } else { f64::NAN };
+        ok
+    }
+
+    /// The eight stages and the new solution `work.ynew` (the embedded one in `work.u`). False
+    /// if a right-hand side was not finite.
+    fn stages(&mut self) -> bool {
+        let n = self.n;
+        let (x, h) = (self.x, self.h);
+        let w = &mut self.work;
+        for s in 0..STAGES {
+            let (done, rest) = w.k.split_at_mut(s * n);
+            let ks = &mut rest[..n];
+            if s == 0 {
+                ks.copy_from_slice(&self.f0);
+            } else {
+                for i in 0..n {
+                    let mut v = self.y[i];
+                    for j in 0..s {
+                        v += A[s][j] * done[j * n + i];
+                    }
+                    w.u[i] = v;
+                }
+                self.system.rhs(x + NODES[s] * h, &w.u, ks);
+                self.stats.rhs_evals += 1;
+                if !all_finite(ks) {
+                    self.stats.nonfinite_rhs += 1;
+                    return false;
+                }
+                for i in 0..n {
+                    let mut v = 0.0;
+                    for j in 0..s {
+                        v += C[s][j] * done[j * n + i];
+                    }
+                    ks[i] += v / h;
+                }
+            }
+            if !self.autonomous && D[s] != 0.0 {
+                let hd = h * D[s];
+                for (k, ft) in ks.iter_mut().zip(&w.dfdt) {
+                    *k += hd * ft;
+                }
+            }
+            solve_real(&w.e, &w.ip, n, ks);
+        }
+        let last = &w.k[(STAGES - 1) * n..];
+        for ((ynew, u), k) in w.ynew.iter_mut().zip(&w.u).zip(last) {
+            *ynew = u + k;
+        }
+        true
+    }
+
+    /// The scaled norm of the error estimate k_8 = y_new − ŷ_new (1e20 if not finite).
+    fn estimate_error(&mut self) -> f64 {
+        let n = self.n;
+        let w = &mut self.work;
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.y, &w.ynew);
+        let err = rms(&w.k[(STAGES - 1) * n..], &w.scal);
+        if err.is_finite() {
+            err
+        } else {
+            1e20
+        }
+    }
+
+    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
+    /// `min_step`.
+    fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
+        let mut hnew = hnew;
+        if hnew.abs() < self.hmin {
+            if self.h.abs() <= self.hmin {
+                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
+                return Err(self.error(kind, flag, message));
+            }
+            hnew = self.posneg * self.hmin;
+        }
+        self.h = hnew;
+        self.reject = true;
+        Ok(())
+    }
+
+    /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step.
+    fn nonfinite_failure(&mut self, count: &mut u32) -> Result<(), SolverError> {
+        *count += 1;
+        if *count >= MAX_NONFINITE || self.fixed_h.is_some() {
+            let message = format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
+            return Err(self.error(ErrorKind::RhsFailure, -6, message));
+        }
+        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
+    }
+
+    /// One accepted step (with as many attempts as needed). Returns true if it ended at the
+    /// stop time.
+    fn step(&mut self) -> Result<bool, SolverError> {
+        let (mut nonfinite, mut singular, mut rejections) = (0u32, 0u32, 0u32);
+        if let Some(ts) = self.stop_time {
+            if (ts - self.x) * self.posneg <= 0.0 {
+                self.stop_time = None;
+            }
+        }
+        loop {
+            if let Some(h) = self.fixed_h {
+                if self.h.abs() != h {
+                    self.h = self.posneg * h;
+                }
+            }
+            // Do not step past the stop time.
+            let planned = self.h;
+            let mut last = false;
+            if let Some(ts) = self.stop_time {
+                if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
+                    self.h = ts - self.x;
+                    last = true;
+                }
+            }
+            // Step underflow (RODAS: 0.1·|h| ≤ u·|x|).
+            if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
+                let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
+                if self.fail_on_step_underflow || self.x + self.h == self.x {
+                    return Err(self.error(ErrorKind::StepUnderflow, -3, message));
+                }
+                self.stats.step_underflow_warnings += 1;
+            }
+            // Jacobian (once per point) and LU factors (once per step size).
+            if !self.jac_current {
+                if !self.compute_jacobian() {
+                    return Err(self.error(ErrorKind::RhsFailure, -6, "the Jacobian or ∂f/∂t is not finite".into()));
+                }
+                self.jac_current = true;
+                self.lu_h = f64::NAN;
+            }
+            if self.lu_h != self.h && !self.decompose() {
+                singular += 1;
+                if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
+                    let message = format!("matrix I/(hγ) − J singular {singular} times (h = {:e})", self.h);
+                    return Err(self.error(ErrorKind::LinearSolver, -4, message));
+                }
+                self.reduce(0.5 * self.h, ErrorKind::LinearSolver, -4, "singular matrix")?;
+                continue;
+            }
+            self.stats.step_attempts += 1;
+            if !self.stages() {
+                self.nonfinite_failure(&mut nonfinite)?;
+                continue;
+            }
+            let err = self.estimate_error();
+            // The new step size.
+            let mut quot = (err.powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
+            let mut hnew = self.h / quot;
+            if err <= 1.0 || self.fixed_h.is_some() {
+                // f at the new point (needed next anyway): a non-finite one fails the step.
+                let xph = if last { self.stop_time.unwrap_or(self.x + self.h) } else { self.x + self.h };
+                let w = &mut self.work;
+                self.system.rhs(xph, &w.ynew, &mut w.fnew);
+                self.stats.rhs_evals += 1;
+                if !all_finite(&w.fnew) {
+                    self.stats.nonfinite_rhs += 1;
+                    self.nonfinite_failure(&mut nonfinite)?;
+                    continue;
+                }
+                self.accept(xph, err, &mut quot, &mut hnew);
+                let h = self.h;
+                // The next step size (RODAS's acceptance branch).
+                hnew = self.posneg * hnew.abs().min(self.hmax).max(self.hmin);
+                if self.reject {
+                    hnew = self.posneg * hnew.abs().min(h.abs());
+                }
+                self.reject = false;
+                if last {
+                    self.stop_time = None;
+                    hnew = planned;
+                }
+                if let Some(hf) = self.fixed_h {
+                    hnew = self.posneg * hf;
+                }
+                self.h = hnew;
+                self.stats.current_step = self.h;
+                return Ok(last);
+            }
+            // Rejected by the error test.
+            self.stats.err_test_fails += 1;
+            rejections += 1;
+            if rejections >= self.max_err_test_fails {
+                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.h);
+                return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+            }
+            let hnew = if self.have_step { hnew } else { 0.1 * self.h };
+            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+        }
+    }
+
+    /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new state
+    /// (RODAS's acceptance branch).
+    fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
+        let h = self.h;
+        let n = self.n;
+        self.naccpt += 1;
+        if self.naccpt > 1 {
+            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
+            *quot = quot.max(facgus);
+            *hnew = h / *quot;
+        }
+        self.hacc = h;
+        self.erracc = err.max(1e-2);
+        self.xold = self.x;
+        self.hold = h;
+        self.x = xph;
+        let w = &mut self.work;
+        for (m, row) in HD.iter().enumerate() {
+            for i in 0..n {
+                let mut v = 0.0;
+                for (s, c) in row.iter().enumerate() {
+                    v += c * w.k[s * n + i];
+                }
+                w.cont[m * n + i] = v;
+            }
+        }
+        w.yold.copy_from_slice(&self.y);
+        std::mem::swap(&mut self.y, &mut w.ynew);
+        std::mem::swap(&mut self.f0, &mut w.fnew);
+        self.f0_valid = true;
+        self.have_step = true;
+        self.jac_current = false;
+        if self.stats.steps == 0 {
+            self.stats.initial_step = h;
+        }
+        self.stats.steps += 1;
+        self.stats.last_step = h;
+    }
+
+    fn invalid(&self, message: String) -> SolverError {
+        SolverError { solver: NAME, kind: ErrorKind::InvalidInput, t: self.t_out, state: self.y_out.clone(), flag: -1, message }
+    }
+
+    fn advance_inner(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        if !tout.is_finite() {
+            return Err(self.invalid(format!("tout = {tout} must be finite")));
+        }
+        if let Some(h) = self.fixed_h {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(self.invalid(format!("fixed step {h} must be finite and > 0")));
+            }
+        }
+        self.start(tout, task)?;
+        if task == Task::OneStep {
+            let stopped = self.step()?;
+            self.t_out = self.x;
+            self.y_out.copy_from_slice(&self.y);
+            let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
+            return Ok(Step { t: self.x, event });
+        }
+        let mut taken = 0u64;
+        let mut stopped = false;
+        loop {
+            if (self.x - tout) * self.posneg >= 0.0 {
+                if tout == self.x {
+                    self.y_out.copy_from_slice(&self.y);
+                } else if self.have_step && (tout - self.xold) * self.posneg >= -self.fuzz() {
+                    interpolate(&self.work, &self.y, self.x, self.hold, tout, 0, &mut self.y_out);
+                } else {
+                    let message = format!("tout = {tout:e} is behind the last step (t = {:e})", self.x);
+                    return Err(self.invalid(message));
+                }
+                self.t_out = tout;
+                return Ok(Step { t: tout, event: StepEvent::Reached });
+            }
+            if stopped {
+                self.t_out = self.x;
+                self.y_out.copy_from_slice(&self.y);
+                return Ok(Step { t: self.x, event: StepEvent::StopTime });
+            }
+            if taken >= self.max_steps {
+                let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", self.max_steps);
+                return Err(self.error(ErrorKind::TooMuchWork, -2, message));
+            }
+            stopped = self.step()?;
+            taken += 1;
+        }
+    }
+
+    fn fuzz(&self) -> f64 {
+        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
+    }
+
+    /// See [`Integrator::advance`]. On an error, [`Rodas5p::t`] and [`Rodas5p::state`] are the
+    /// last accepted step's end.
+    pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        let nonfinite_before = self.stats.nonfinite_rhs;
+        self.advance_inner(tout, task).map_err(|mut e| {
+            if e.kind != ErrorKind::InvalidInput {
+                self.t_out = self.x;
+                self.y_out.copy_from_slice(&self.y);
+            }
+            // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
+            // point where f turns non-finite end in a step underflow or too much work.
+            let nonfinite = self.stats.nonfinite_rhs - nonfinite_before;
+            if nonfinite > 0 {
+                if e.kind != ErrorKind::InvalidInput {
+                    e.kind = ErrorKind::RhsFailure;
+                }
+                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            }
+            e
+        })
+    }
+
+    /// The state at [`Rodas5p::t`].
+    pub fn state(&self) -> &[f64] {
+        &self.y_out
+    }
+
+    /// Time of the last return.
+    pub fn t(&self) -> f64 {
+        self.t_out
+    }
+
+    /// The k-th derivative (k ≤ 4) of the continuous output at t inside the last step
+    /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
+    pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        if !t.is_finite() || k > 4 {
+            return Err(self.invalid(format!("dense output needs a finite t and k ≤ 4, got t = {t}, k = {k}")));
+        }
+        if !self.have_step {
+            if t != self.x || k > 1 {
+                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", self.x);
+                return Err(self.invalid(message));
+            }
+            if k == 0 {
+                self.work.dense.copy_from_slice(&self.y);
+            } else {
+                if !self.ensure_f0() {
+                    return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
+                }
+                self.work.dense.copy_from_slice(&self.f0);
+            }
+            return Ok(&self.work.dense);
+        }
+        let fuzz = self.fuzz();
+        let (lo, hi) = (self.xold.min(self.x) - fuzz, self.xold.max(self.x) + fuzz);
+        if t < lo || t > hi {
+            let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", self.xold, self.x);
+            return Err(self.invalid(message));
+        }
+        let mut out = std::mem::take(&mut self.work.dense);
+        interpolate(&self.work, &self.y, self.x, self.hold, t, k, &mut out);
+        self.work.dense = out;
+        Ok(&self.work.dense)
+    }
+
+    /// Restarts at (t0, y0): step-size history, Jacobian and continuous output are dropped;
+    /// options and statistics are kept.
+    pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        if y0.len() != self.n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.n);
+            return Err(self.invalid(message));
+        }
+        self.x = t0;
+        self.xold = t0;
+        self.y.copy_from_slice(y0);
+        self.t_out = t0;
+        self.y_out.copy_from_slice(y0);
+        self.f0_valid = false;
+        self.started = false;
+        self.have_step = false;
+        self.reject = false;
+        self.naccpt = 0;
+        self.jac_current = false;
+        self.lu_h = f64::NAN;
+        self.stats.reinits += 1;
+        Ok(())
+    }
+
+    /// Statistics over the integrator's whole life (restarts included). `rhs_evals_jacobian`
+    /// includes the finite-difference ∂f/∂t calls; `nonlin_iters` stays 0.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+}
+
+impl<S: OdeSystem> Integrator for Rodas5p<S> {
+    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        Rodas5p::advance(self, tout, task)
+    }
+    fn state(&self) -> &[f64] {
+        Rodas5p::state(self)
+    }
+    fn t(&self) -> f64 {
+        Rodas5p::t(self)
+    }
+    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        Rodas5p::dense(self, t, k)
+    }
+    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        Rodas5p::reinit(self, t0, y0)
+    }
+    fn stats(&self) -> Stats {
+        Rodas5p::stats(self)
+    }
+    fn name(&self) -> &'static str {
+        NAME
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Matrix = [[f64; STAGES]; STAGES];
+
+    fn full(rows: &[[f64; 7]; STAGES]) -> Matrix {
+        let mut m = [[0.0; STAGES]; STAGES];
+        for i in 0..STAGES {
+            m[i][..7].copy_from_slice(&rows[i]);
+        }
+        m
+    }
+
+    fn mul(p: &Matrix, q: &Matrix) -> Matrix {
+        let mut r = [[0.0; STAGES]; STAGES];
+        for i in 0..STAGES {
+            for j in 0..STAGES {
+                r[i][j] = (0..STAGES).map(|k| p[i][k] * q[k][j]).sum();
+            }
+        }
+        r
+    }
+
+    fn row_times(v: &[f64; STAGES], m: &Matrix) -> [f64; STAGES] {
+        let mut r = [0.0; STAGES];
+        for j in 0..STAGES {
+            r[j] = (0..STAGES).map(|k| v[k] * m[k][j]).sum();
+        }
+        r
+    }
+
+    /// The classical coefficients: Γ = (I/γ − C)⁻¹ (lower triangular, γ on the diagonal),
+    /// α = A Γ, b = m Γ with m = (a_8·, 1) and b̂ = (a_8·, 0) Γ (Hairer–Wanner II, (7.25)).
+    fn classical() -> (Matrix, Matrix, [f64; STAGES], [f64; STAGES]) {
+        let c = full(&C);
+        let mut gamma = [[0.0; STAGES]; STAGES];
+        for j in 0..STAGES {
+            let mut x = [0.0; STAGES];
+            for i in 0..STAGES {
+                let mut r = if i == j { 1.0 } else { 0.0 };
+                for (k, xk) in x.iter().enumerate().take(i) {
+                    r += c[i][k] * xk;
+                }
+                x[i] = r * GAMMA;
+            }
+            for (row, xi) in gamma.iter_mut().zip(x) {
+                row[j] = xi;
+            }
+        }
+        let a = full(&A);
+        let alpha = mul(&a, &gamma);
+        let mut m = a[STAGES - 1];
+        let embedded = row_times(&m, &gamma);
+        m[STAGES - 1] = 1.0;
+        (alpha, gamma, row_times(&m, &gamma), embedded)
+    }
+
+    /// Rooted trees as sorted lists of subtrees.
+    #[derive(Clone, PartialEq, Eq, PartialOrd, Ord, Debug)]
+    struct Tree(Vec<Tree>);
+
+    impl Tree {
+        fn order(&self) -> usize {
+            1 + self.0.iter().map(Tree::order).sum::<usize>()
+        }
+        fn factorial(&self) -> f64 {
+            self.order() as f64 * self.0.iter().map(Tree::factorial).product::<f64>()
+        }
+    }
+
+    /// All rooted trees with up to `max` vertices.
+    fn trees(max: usize) -> Vec<Tree> {
+        let mut all = vec![Tree(vec![])];
+        for _ in 1..max {
+            let mut next = all.clone();
+            for t in &all {
+                // Graft a new leaf onto every vertex of t (all trees of order + 1 arise).
+                fn graft(t: &Tree, out: &mut Vec<Tree>) {
+                    let mut children = t.0.clone();
+                    children.push(Tree(vec![]));
+                    children.sort();
+                    out.push(Tree(children));
+                    for (i, child) in t.0.iter().enumerate() {
+                        let mut grafted = Vec::new();
+                        graft(child, &mut grafted);
+                        for g in grafted {
+                            let mut children = t.0.clone();
+                            children[i] = g;
+                            children.sort();
+                            out.push(Tree(children));
+                        }
+                    }
+                }
+                graft(t, &mut next);
+            }
+            next.sort();
+            next.dedup();
+            all = next;
+        }
+        all
+    }
+
+    /// Stage weights of the B-series of k_i for tree t: k_i(τ) = 1, k_i([t₁…t_m]) =
+    /// Π_l Σ_j α_ij k_j(t_l), plus Σ_{j≤i} γ_ij k_j(t₁) when m = 1 (the hJ Σ γ_ij k_j term).
+    fn stage_weights(t: &Tree, alpha: &Matrix, gamma: &Matrix) -> [f64; STAGES] {
+        let subs: Vec<[f64; STAGES]> = t.0.iter().map(|u| stage_weights(u, alpha, gamma)).collect();
+        let mut k = [0.0; STAGES];
+        for i in 0..STAGES {
+            let mut v = 1.0;
+            for s in &subs {
+                v *= (0..i).map(|j| alpha[i][j] * s[j]).sum::<f64>();
+            }
+            if subs.len() == 1 {
+                v += (0..=i).map(|j| gamma[i][j] * subs[0][j]).sum::<f64>();
+            }
+            k[i] = v;
+        }
+        k
+    }
+
+    #[test]
+    fn order_conditions_hold_up_to_order_five_and_four() {
+        let (alpha, gamma, b, bhat) = classical();
+        let all = trees(6);
+        assert_eq!(all.iter().filter(|t| t.order() <= 5).count(), 17);
+        assert_eq!(all.len(), 37);
+        // Dense-output weights b_i(θ) = θ b_i + θ(1−θ) Σ_m θ^{m−1} (H Γ)_mi.
+        let hg: Vec<[f64; STAGES]> = HD.iter().map(|row| row_times(row, &gamma)).collect();
+        let dense = |th: f64| {
+            let mut w = [0.0; STAGES];
+            for i in 0..STAGES {
+                w[i] = th * b[i] + th * (1.0 - th) * (hg[0][i] + th * (hg[1][i] + th * hg[2][i]));
+            }
+            w
+        };
+        let mut sixth_order_defect = 0.0f64;
+        for t in &all {
+            let k = stage_weights(t, &alpha, &gamma);
+            let exact = 1.0 / t.factorial();
+            let defect = |w: &[f64; STAGES]| (0..STAGES).map(|i| w[i] * k[i]).sum::<f64>() - exact;
+            let (p, q) = (defect(&b), defect(&bhat));
+            match t.order() {
+                1..=4 => assert!(p.abs() < 1e-13 && q.abs() < 1e-13, "{t:?}: {p:e}, {q:e}"),
+                5 => {
+                    assert!(p.abs() < 1e-13, "order 5, {t:?}: {p:e}");
+                    assert!(q.abs() > 1e-5, "the embedded method is of order 4 only: {t:?}");
+                }
+                _ => sixth_order_defect = sixth_order_defect.max(p.abs()),
+            }
+            if t.order() <= 4 {
+                for th in [0.1, 0.3, 0.5, 0.7, 0.9] {
+                    let d = (0..STAGES).map(|i| dense(th)[i] * k[i]).sum::<f64>() - th.powi(t.order() as i32) * exact;
+                    assert!(d.abs() < 1e-13, "dense output, θ = {th}, {t:?}: {d:e}");
+                }
+            }
+        }
+        assert!(sixth_order_defect > 1e-4, "order exactly 5");
+        // Consistency: c_i = Σ_j α_ij, d_i = Σ_j γ_ij (autonomous ≡ non-autonomous form).
+        for i in 0..STAGES {
+            assert!((alpha[i].iter().sum::<f64>() - NODES[i]).abs() < 1e-13, "c_{i}");
+            assert!((gamma[i].iter().sum::<f64>() - D[i]).abs() < 1e-13, "d_{i}");
+            assert!((gamma[i][i] - GAMMA).abs() < 1e-15);
+        }
+        // Stiffly accurate: b_j = α_8j + γ_8j and b̂_j = α_7j + γ_7j.
+        for j in 0..STAGES {
+            assert!((b[j] - alpha[7][j] - gamma[7][j]).abs() < 1e-13);
+            assert!((bhat[j] - alpha[6][j] - gamma[6][j]).abs() < 1e-13);
+        }
+        assert!((b.iter().sum::<f64>() - 1.0).abs() < 1e-13 && (bhat.iter().sum::<f64>() - 1.0).abs() < 1e-13);
+    }
+
+    /// One step of the method on y' = λy with h = 1: (R(z), R̂(z)).
+    fn stability(z: f64) -> (f64, f64) {
+        let mut u = [0.0; STAGES];
+        for i in 0..STAGES {
+            let g = 1.0 + (0..i).map(|j| A[i][j] * u[j]).sum::<f64>();
+            let rhs = z * g + (0..i).map(|j| C[i][j] * u[j]).sum::<f64>();
+            u[i] = rhs / (1.0 / GAMMA - z);
+        }
+        let embedded = 1.0 + (0..7).map(|j| A[7][j] * u[j]).sum::<f64>();
+        (embedded + u[7], embedded)
+    }
+
+    #[test]
+    fn stability_function_vanishes_at_infinity() {
+        for z in [-1e8, -1e12] {
+            let (r, rhat) = stability(z);
+            assert!(r.abs() < 20.0 / z.abs() && rhat.abs() < 20.0 / z.abs(), "R({z}) = {r:e}, R̂ = {rhat:e}");
+        }
+        let (r, _) = stability(-0.1);
+        assert!((r - (-0.1f64).exp()).abs() < 1e-8, "R(−0.1) = {r} ≈ e^−0.1");
+        for z in [-0.5, -1.0, -10.0, -100.0, -1e4] {
+            assert!(stability(z).0.abs() < 1.0 && stability(z).1.abs() < 1.0, "|R({z})| < 1");
+        }
+    }
+}

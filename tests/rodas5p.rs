@@ -1,0 +1,639 @@
+//! The homemade Rosenbrock integrator Rodas5P: convergence orders with fixed steps, the stiff
+//! van der Pol benchmark against the Test Set reference, dense output, the DRR model at
+//! γ = 1e8, the Integrator contract (Normal/OneStep, stop time, restarts, statistics) and typed
+//! errors. Mirrors tests/radau5.rs.
+
+use stickslip::integrate::{
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, StepEvent, Task, Tolerance,
+};
+use stickslip::model::{Drr, DrrParams, Friction};
+use stickslip::sundials::{CvodeSettings, Solver};
+
+/// y' = 1 + y², y(0) = 0: y = tan t (nonlinear, non-stiff; finite-difference Jacobian).
+struct Tan;
+
+impl OdeSystem for Tan {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = 1.0 + y[0] * y[0];
+    }
+}
+
+/// Harmonic oscillator x' = v, v' = −x from (0, 1): x = sin t, v = cos t.
+struct Oscillator;
+
+impl OdeSystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[1];
+        dydt[1] = -y[0];
+    }
+}
+
+/// A nonlinear system with every elementary differential of order ≤ 5 independent:
+/// y = φ(z) with z' = M z (rotation in (z1, z2), decay of z3) and φ(z) = (z1, z2 + z1²,
+/// z3 + z1 z2), so f(y) = Dφ(φ⁻¹(y)) M φ⁻¹(y) (finite-difference Jacobian).
+struct Warped;
+
+impl Warped {
+    fn z(y: &[f64]) -> [f64; 3] {
+        let z1 = y[0];
+        let z2 = y[1] - z1 * z1;
+        [z1, z2, y[2] - z1 * z2]
+    }
+    fn exact(t: f64) -> [f64; 3] {
+        // z(0) = (0.3, 0.8, 1): z1 = 0.3 cos t + 0.8 sin t, z2 = −0.3 sin t + 0.8 cos t.
+        let (s, c) = t.sin_cos();
+        let z = [0.3 * c + 0.8 * s, -0.3 * s + 0.8 * c, (-0.5 * t).exp()];
+        [z[0], z[1] + z[0] * z[0], z[2] + z[0] * z[1]]
+    }
+}
+
+impl OdeSystem for Warped {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        let z = Self::z(y);
+        let dz = [z[1], -z[0], -0.5 * z[2]];
+        dydt[0] = dz[0];
+        dydt[1] = dz[1] + 2.0 * z[0] * dz[0];
+        dydt[2] = dz[2] + dz[0] * z[1] + z[0] * dz[1];
+    }
+}
+
+/// y' = y cos t, y(0) = 1: y = e^{sin t} (non-autonomous: needs ∂f/∂t).
+struct Forced;
+
+impl OdeSystem for Forced {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[0] * t.cos();
+    }
+}
+
+/// Prothero–Robinson y' = −λ (y − cos t) − sin t, exact y = cos t from y(0) = 1.
+struct ProtheroRobinson(f64);
+
+impl OdeSystem for ProtheroRobinson {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = -self.0 * (y[0] - t.cos()) - t.sin();
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 0, -self.0);
+    }
+}
+
+/// y' = k·y with an analytic Jacobian.
+struct Linear(f64);
+
+impl OdeSystem for Linear {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = self.0 * y[0];
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 0, self.0);
+    }
+}
+
+/// Van der Pol in the Test Set's scaled form: y1' = y2, y2' = ((1 − y1²) y2 − y1)/ε.
+#[derive(Clone, Copy)]
+struct VanDerPol(f64);
+
+impl OdeSystem for VanDerPol {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[1];
+        dydt[1] = ((1.0 - y[0] * y[0]) * y[1] - y[0]) / self.0;
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 1, 1.0);
+        jac.set(1, 0, (-2.0 * y[0] * y[1] - 1.0) / self.0);
+        jac.set(1, 1, (1.0 - y[0] * y[0]) / self.0);
+    }
+}
+
+/// A right-hand side that returns NaN once t passes `from`.
+struct NanAfter(f64);
+
+impl OdeSystem for NanAfter {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = if t > self.0 { f64::NAN } else { -y[0] };
+    }
+}
+
+/// Integrates to `tend` with the constant step h (the stop time makes the last step land on
+/// `tend` exactly) and returns y(tend).
+fn fixed_step<S: OdeSystem>(solver: Rodas5p<S>, tend: f64, h: f64) -> Vec<f64> {
+    let mut solver = solver.fixed_step(h);
+    let step = solver.advance(tend + 1.0, Task::Normal).unwrap();
+    assert_eq!(step, stickslip::integrate::Step { t: tend, event: StepEvent::StopTime });
+    let expected = (tend / h).round() as u64;
+    assert_eq!(solver.stats().steps, expected, "h = {h}");
+    solver.state().to_vec()
+}
+
+fn fixed_options(tend: f64) -> Options {
+    Options { stop_time: Some(tend), max_steps: Some(100_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) }
+}
+
+fn rodas<S: OdeSystem>(system: S, y0: &[f64], tend: f64) -> Rodas5p<S> {
+    Rodas5p::new(system, 0.0, y0, &fixed_options(tend)).unwrap()
+}
+
+/// Numbers in scientific notation with 16 digits.
+fn sci(v: &[f64]) -> String {
+    v.iter().map(|x| format!("{x:.16e}")).collect::<Vec<_>>().join(", ")
+}
+
+/// Observed orders log2(e(h)/e(h/2)) for successive halvings.
+fn observed_orders(errors: &[f64]) -> Vec<f64> {
+    errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
+}
+
+fn distance(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+}
+
+#[test]
+fn fixed_steps_converge_with_order_five_on_smooth_problems() {
+    let tan: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
+        .iter()
+        .map(|&h| (fixed_step(rodas(Tan, &[0.0], 1.0), 1.0, h)[0] - 1f64.tan()).abs())
+        .collect();
+    let oscillator: Vec<f64> = [0.5, 0.25, 0.125, 0.0625]
+        .iter()
+        .map(|&h| distance(&fixed_step(rodas(Oscillator, &[0.0, 1.0], 2.0), 2.0, h), &[2f64.sin(), 2f64.cos()]))
+        .collect();
+    let warped: Vec<f64> = [0.4, 0.2, 0.1, 0.05]
+        .iter()
+        .map(|&h| distance(&fixed_step(rodas(Warped, &Warped::exact(0.0), 2.0), 2.0, h), &Warped::exact(2.0)))
+        .collect();
+    // Non-autonomous: ∂f/∂t by a forward difference.
+    let forced: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
+        .iter()
+        .map(|&h| (fixed_step(rodas(Forced, &[1.0], 2.0), 2.0, h)[0] - 2f64.sin().exp()).abs())
+        .collect();
+    // On linear problems only the stability function counts: it matches e^z to order 6 (the
+    // tall-tree condition of order 6 holds), so the oscillator shows order 6.
+    for (name, errors, order) in
+        [("tan", tan, 5.0), ("oscillator", oscillator, 6.0), ("warped", warped, 5.0), ("forced", forced, 5.0)]
+    {
+        let orders = observed_orders(&errors);
+        println!("{name}: errors {}, observed orders {orders:.3?}", sci(&errors));
+        assert!(orders.iter().all(|p| (p - order).abs() < 0.35), "{name}: errors {}, orders {orders:?}", sci(&errors));
+    }
+    // On an autonomous system the finite-difference ∂f/∂t is exactly zero: declaring the system
+    // autonomous changes nothing but the number of right-hand-side calls.
+    let plain = rodas(Warped, &Warped::exact(0.0), 2.0).fixed_step(0.1);
+    let declared = rodas(Warped, &Warped::exact(0.0), 2.0).autonomous().fixed_step(0.1);
+    let mut runs = [plain, declared];
+    for r in &mut runs {
+        r.advance(3.0, Task::Normal).unwrap();
+    }
+    assert_eq!(runs[0].state(), runs[1].state());
+    let (a, b) = (runs[0].stats(), runs[1].stats());
+    assert_eq!((a.steps, a.rhs_evals, a.jac_evals), (b.steps, b.rhs_evals, b.jac_evals));
+    assert_eq!(a.rhs_evals_jacobian, b.rhs_evals_jacobian + a.jac_evals, "one ∂f/∂t call per Jacobian");
+    assert_eq!(a.rhs_evals, 8 * a.steps + 1, "7 stages + f at the new point per step, f(t0, y0) once");
+}
+
+#[test]
+fn fixed_steps_on_stiff_prothero_robinson_do_not_collapse() {
+    // With hλ ≫ 1 the error stays small (∝ 1/λ) and still falls like h³: no collapse of the
+    // order (Rodas5P was built with Prothero–Robinson in view, as Rodas4P and Rodas4P2).
+    for lambda in [1e3, 1e6] {
+        let errors: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
+            .iter()
+            .map(|&h| (fixed_step(rodas(ProtheroRobinson(lambda), &[1.0], 1.0), 1.0, h)[0] - 1f64.cos()).abs())
+            .collect();
+        let orders = observed_orders(&errors);
+        println!("Prothero–Robinson λ = {lambda:e}: errors {}, observed orders {orders:.3?}", sci(&errors));
+        // Measured: λ = 1e3 errors 2.5e-8 … 1.6e-12 (orders 3.5, 3.9, 6.5 through the
+        // transition hλ ~ 1); λ = 1e6 errors 3.3e-11 … 5.6e-14 (orders 3.10, 3.06, 3.04: the
+        // error behaves like h³/λ, the same with an exact ∂f/∂t through the autonomised form).
+        assert!(errors.iter().all(|&e| e < 5e-8 * 1e3 / lambda), "errors {}", sci(&errors));
+        assert!(orders.iter().all(|&p| p > 2.95), "errors {}, orders {orders:?}", sci(&errors));
+    }
+}
+
+#[test]
+fn van_der_pol_eps_1e6_against_the_test_set() {
+    // Test Set for IVP Solvers (Mazzia & Magherini), problem VDPOL: reference at t = 2.
+    let reference = [0.1706167732170483e1, -0.8928097010247975];
+    for rtol in [1e-6, 1e-8, 1e-10] {
+        let options = Options { max_steps: Some(1_000_000), ..Options::new(rtol, Tolerance::Scalar(rtol)) };
+        let mut rodas = Rodas5p::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap().autonomous();
+        assert_eq!(rodas.advance(2.0, Task::Normal).unwrap().event, StepEvent::Reached);
+        assert_eq!(rodas.t(), 2.0);
+        let mut radau = Radau5::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap();
+        radau.advance(2.0, Task::Normal).unwrap();
+        let mut cvode = Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options).unwrap();
+        cvode.advance(2.0, Task::Normal).unwrap();
+        let ours = rodas.state().to_vec();
+        let relative: Vec<f64> = (0..2).map(|i| ((ours[i] - reference[i]) / reference[i]).abs()).collect();
+        let rel = |y: &[f64]| (0..2).map(|i| ((y[i] - reference[i]) / reference[i]).abs()).fold(0.0, f64::max);
+        let (s, r, c) = (rodas.stats(), radau.stats(), cvode.stats());
+        println!(
+            "rtol = atol = {rtol:e}: Rodas5P {} (relative errors {:.1e}, {:.1e}): {} steps ({} attempts, {} rejected), \
+             {} RHS, {} Jacobians, {} LU | Radau5 error {:.1e}: {} steps, {} RHS, {} LU | CVODE error {:.1e}: {} steps, {} RHS, {} LU",
+            sci(&ours),
+            relative[0],
+            relative[1],
+            s.steps,
+            s.step_attempts,
+            s.err_test_fails,
+            s.rhs_evals,
+            s.jac_evals,
+            s.lin_setups,
+            rel(radau.state()),
+            r.steps,
+            r.rhs_evals,
+            r.lin_setups,
+            rel(cvode.state()),
+            c.steps,
+            c.rhs_evals,
+            c.lin_setups
+        );
+        assert_eq!((s.last_order, s.rhs_evals_jacobian, s.nonlin_iters), (5, 0, 0));
+        assert!(s.step_attempts == s.steps + s.err_test_fails && s.lin_setups == s.step_attempts, "{s:?}");
+        assert_eq!(s.jac_evals, s.steps, "one Jacobian per step, kept across rejections: {s:?}");
+        assert_eq!(
+            s.rhs_evals,
+            7 * s.step_attempts + s.steps + 2,
+            "7 stages per attempt, f at each accepted point, f(t0) and the initial-step probe"
+        );
+        if rtol <= 1e-10 {
+            assert!(relative.iter().all(|&e| e < 1e-6), "relative errors {relative:?}");
+        }
+    }
+}
+
+#[test]
+fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
+    let vdp = VanDerPol(1.0);
+    let thetas = [0.1, 0.25, 0.5, 0.75, 0.9];
+    for rtol in [1e-6, 1e-8] {
+        let atol = rtol;
+        let scale = |y: f64| rtol * y.abs() + atol;
+        let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
+        let mut solver = Rodas5p::new(vdp, 0.0, &[2.0, 0.0], &options).unwrap();
+        let (mut samples, mut prev) = (Vec::new(), 0.0);
+        let (mut defect, mut fd_mismatch) = (0.0f64, 0.0f64);
+        let mut previous_end = vec![2.0, 0.0];
+        while solver.t() < 3.0 {
+            let step = solver.advance(3.0, Task::OneStep).unwrap();
+            let end = solver.state().to_vec();
+            assert_eq!(solver.dense(step.t, 0).unwrap(), &end[..], "the continuous output ends at the step end");
+            // ... and starts at the previous step end (up to rounding in θ).
+            let start = solver.dense(prev, 0).unwrap().to_vec();
+            for i in 0..2 {
+                assert!((start[i] - previous_end[i]).abs() <= 1e-13 * (1.0 + previous_end[i].abs()), "{start:?}");
+            }
+            previous_end = end.clone();
+            samples.push((step.t, end, true));
+            let h = step.t - prev;
+            for &theta in &thetas {
+                let t = prev + theta * h;
+                let y = solver.dense(t, 0).unwrap().to_vec();
+                let d = solver.dense(t, 1).unwrap().to_vec();
+                let mut f = [0.0; 2];
+                vdp.rhs(t, &y, &mut f);
+                defect = defect.max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
+                samples.push((t, y.clone(), false));
+                // dense(t, k + 1) is the derivative of dense(t, k).
+                let delta = 1e-5 * h;
+                for k in 0..4 {
+                    let up = solver.dense(t + delta, k).unwrap().to_vec();
+                    let down = solver.dense(t - delta, k).unwrap().to_vec();
+                    let dk = solver.dense(t, k + 1).unwrap().to_vec();
+                    for i in 0..2 {
+                        let fd = (up[i] - down[i]) / (2.0 * delta);
+                        let size = dk[i].abs() + (up[i].abs() + down[i].abs()) / h;
+                        fd_mismatch = fd_mismatch.max((fd - dk[i]).abs() / (1.0 + size));
+                    }
+                }
+            }
+            prev = step.t;
+        }
+        // A much tighter run, interpolating at the same times (Normal task).
+        let tight = Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
+        let mut reference = Radau5::new(vdp, 0.0, &[2.0, 0.0], &tight).unwrap();
+        samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (mut at_ends, mut inside) = (0.0f64, 0.0f64);
+        for (t, y, is_end) in &samples {
+            reference.advance(*t, Task::Normal).unwrap();
+            let r = reference.state();
+            let e = (0..2).map(|i| (y[i] - r[i]).abs() / scale(r[i])).fold(0.0, f64::max);
+            if *is_end {
+                at_ends = at_ends.max(e);
+            } else {
+                inside = inside.max(e);
+            }
+        }
+        println!(
+            "rtol {rtol:e}: {} steps; error/tol at step ends {at_ends:.2}, inside steps {inside:.2}; \
+             |dense'(t) − f(dense(t))|/tol {defect:.1}; finite-difference mismatch of the derivatives {fd_mismatch:.1e}",
+            solver.stats().steps
+        );
+        // Measured (rtol 1e-6, 1e-8): inside 1.74, 2.60 × tol against 1.63, 2.53 at the step ends
+        // (the order-4 continuous output adds almost nothing to the global error); the defect
+        // of the interpolant 35 and 94 × tol (Radau5's cubic: 450 and 5300 between its nodes).
+        assert!(inside < 10.0 && inside < 2.0 * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
+        assert!(defect < 1e3, "defect {defect}");
+        assert!(fd_mismatch < 1e-5, "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}");
+    }
+}
+
+/// OneStep integration of the DRR model from `y0` to total time `tend`, re-basing time (a
+/// restart at local t = 0) at the first step end after each slip peak, as the cycle engine
+/// does. Returns (steps, peak times).
+fn drr_cycles(integ: &mut dyn Integrator, tend: f64) -> Result<(u64, Vec<f64>), stickslip::integrate::SolverError> {
+    let (mut elapsed, mut steps, mut peaks) = (0.0, 0u64, Vec::new());
+    let mut prev_dw = integ.dense(integ.t(), 1)?[1];
+    let mut rebase_pending = false;
+    while elapsed + integ.t() < tend {
+        let step = integ.advance(1e6, Task::OneStep)?;
+        steps += 1;
+        let y = integ.state().to_vec();
+        let dw = integ.dense(step.t, 1)?[1];
+        if prev_dw > 0.0 && dw <= 0.0 && y[1] > 5.0 {
+            peaks.push(elapsed + step.t);
+            rebase_pending = true;
+        } else if rebase_pending {
+            integ.reinit(0.0, &y)?;
+            elapsed += step.t;
+            rebase_pending = false;
+        }
+        prev_dw = dw;
+    }
+    Ok((steps, peaks))
+}
+
+#[test]
+fn drr_at_gamma_1e8_from_the_slow_manifold() {
+    let drr = Drr::new(DrrParams { gamma: 1e8, xi: 0.8, epsilon: 1.0, friction: Friction::Log });
+    let (w, theta) = (0.5f64.ln(), drr.fixed_point()[2]);
+    let y0 = [drr.manifold_u(w, theta), w, theta];
+    let options = |rtol: f64| Options::new(rtol, Tolerance::PerComponent(vec![rtol * 1e-2; 3]));
+
+    // Without re-basing, the arrest after the first slip needs steps below the spacing of t
+    // (measured: after 561 steps, at t = 5.0764), as for Radau5 and CVODE.
+    let mut plain = Rodas5p::new(drr, 0.0, &y0, &options(1e-8)).unwrap().autonomous();
+    let error = loop {
+        match plain.advance(100.0, Task::OneStep) {
+            Ok(step) => assert!(step.t < 100.0, "expected a step underflow in the first arrest"),
+            Err(e) => break e,
+        }
+    };
+    println!("DRR γ = 1e8 without re-basing: {:?} at t = {} after {} steps", error.kind, error.t, plain.stats().steps);
+    assert_eq!(error.kind, ErrorKind::StepUnderflow, "{error}");
+    assert!(error.t > 5.0 && error.t < 5.1 && error.state.iter().all(|v| v.is_finite()), "{error}");
+
+    for rtol in [1e-8, 1e-10] {
+        let mut rodas = Rodas5p::new(drr, 0.0, &y0, &options(rtol)).unwrap().autonomous();
+        let (steps, peaks) = drr_cycles(&mut rodas, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let s = rodas.stats();
+        let mut radau = Radau5::new(drr, 0.0, &y0, &options(rtol)).unwrap();
+        let (radau_steps, radau_peaks) = drr_cycles(&mut radau, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let r = radau.stats();
+        let mut cvode = Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
+        let (cvode_steps, cvode_peaks) = drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let c = cvode.stats();
+        println!(
+            "DRR γ = 1e8, rtol {rtol:e}, t ∈ [0, 100]: Rodas5P {steps} steps ({} attempts, {} rejected), {} RHS, \
+             {} Jacobians, {} LU, {} restarts, peaks at {peaks:.9?}; Radau5 {radau_steps} steps, {} RHS, {} LU, \
+             peaks at {radau_peaks:.9?}; CVODE {cvode_steps} steps, {} RHS, {} LU, peaks at {cvode_peaks:.9?}",
+            s.step_attempts,
+            s.err_test_fails,
+            s.rhs_evals,
+            s.jac_evals,
+            s.lin_setups,
+            s.reinits,
+            r.rhs_evals,
+            r.lin_setups,
+            c.rhs_evals,
+            c.lin_setups
+        );
+        assert_eq!(s.steps, steps);
+        assert_eq!(s.reinits, peaks.len() as u64);
+        assert_eq!(peaks.len(), cvode_peaks.len());
+        assert_eq!(peaks.len(), radau_peaks.len());
+        assert!(!peaks.is_empty());
+        if rtol <= 1e-10 {
+            for (a, b) in peaks.iter().zip(&cvode_peaks) {
+                assert!(((a - b) / b).abs() < 1e-6, "peaks {peaks:?} vs CVODE {cvode_peaks:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn normal_and_one_step_tasks_follow_the_contract() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    let mut solver = Rodas5p::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap();
+    assert_eq!(solver.name(), "Rodas5P");
+    // Before any step: only t0.
+    assert_eq!(solver.dense(0.0, 0).unwrap(), &[0.0, 1.0]);
+    assert_eq!(solver.dense(0.0, 1).unwrap(), &[1.0, 0.0]);
+    assert_eq!(solver.dense(0.1, 0).unwrap_err().kind, ErrorKind::InvalidInput);
+    assert_eq!(solver.dense(0.0, 2).unwrap_err().kind, ErrorKind::InvalidInput);
+
+    // Normal: steps past tout and interpolates; the internal state runs on separately.
+    let step = solver.advance(1.0, Task::Normal).unwrap();
+    assert_eq!(step, stickslip::integrate::Step { t: 1.0, event: StepEvent::Reached });
+    assert_eq!(solver.t(), 1.0);
+    assert!((solver.state()[0] - 1f64.sin()).abs() < 1e-7 && (solver.state()[1] - 1f64.cos()).abs() < 1e-7);
+    let interpolated = solver.dense(1.0, 0).unwrap().to_vec();
+    assert_eq!(solver.state(), &interpolated[..]);
+    let steps = solver.stats().steps;
+
+    // tout inside the last step: no new step.
+    let next = solver.advance(1.0 + 1e-9, Task::Normal).unwrap();
+    assert_eq!(next.t, 1.0 + 1e-9);
+    assert_eq!(solver.stats().steps, steps);
+    // OneStep continues from the internal step end (beyond tout), one step per call.
+    let one = solver.advance(10.0, Task::OneStep).unwrap();
+    assert!(one.t > 1.0 && solver.stats().steps == steps + 1, "{one:?}");
+    let state = solver.state().to_vec();
+    assert_eq!(solver.dense(one.t, 0).unwrap(), &state[..]);
+    let end = one.t;
+    let (y, dy) = (solver.state().to_vec(), solver.dense(end, 1).unwrap().to_vec());
+    assert!((y[0] - end.sin()).abs() < 1e-7 && (dy[0] - end.cos()).abs() < 1e-6, "{y:?} {dy:?}");
+    // Derivatives up to the quartic's fourth; k = 5 is refused, as are times outside the step.
+    let d4 = solver.dense(end, 4).unwrap().to_vec();
+    assert!((d4[0] - end.sin()).abs() < 0.1 && (d4[1] - end.cos()).abs() < 0.1, "{d4:?}");
+    assert_eq!(solver.dense(end, 5).unwrap_err().kind, ErrorKind::InvalidInput);
+    assert_eq!(solver.dense(end + 1.0, 0).unwrap_err().kind, ErrorKind::InvalidInput);
+    assert_eq!(solver.dense(f64::NAN, 0).unwrap_err().kind, ErrorKind::InvalidInput);
+    // tout behind the last step.
+    assert_eq!(solver.advance(0.5, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
+    assert_eq!(solver.advance(f64::NAN, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
+
+    // Restart: statistics accumulate, the step history starts afresh.
+    let before = solver.stats();
+    solver.reinit(0.0, &[0.0, 1.0]).unwrap();
+    assert_eq!((solver.t(), solver.state()), (0.0, &[0.0, 1.0][..]));
+    assert_eq!(solver.dense(0.5, 0).unwrap_err().kind, ErrorKind::InvalidInput, "no step since the restart");
+    solver.advance(2.0, Task::Normal).unwrap();
+    let after = solver.stats();
+    assert_eq!(after.reinits, 1);
+    assert!(after.steps > before.steps && after.rhs_evals > before.rhs_evals);
+    assert_eq!(after.initial_step, before.initial_step, "the very first step of the run");
+    assert!((solver.state()[0] - 2f64.sin()).abs() < 1e-7);
+    assert_eq!(solver.reinit(0.0, &[1.0]).unwrap_err().kind, ErrorKind::InvalidInput);
+
+    // Finite-difference Jacobian: n RHS calls per Jacobian plus one for ∂f/∂t, counted apart.
+    let s = solver.stats();
+    assert!(s.jac_evals > 0 && s.rhs_evals_jacobian == 3 * s.jac_evals, "{s:?}");
+    assert_eq!(s.jac_evals, s.steps, "{s:?}");
+    assert_eq!(s.nonlin_iters, 0);
+}
+
+#[test]
+fn stop_time_max_step_and_backward_integration() {
+    let options = Options {
+        stop_time: Some(0.75),
+        max_step: Some(0.05),
+        ..Options::new(1e-8, Tolerance::Scalar(1e-10))
+    };
+    let mut solver = Rodas5p::new(Linear(-1.0), 0.0, &[1.0], &options).unwrap();
+    let step = solver.advance(1.0, Task::Normal).unwrap();
+    assert_eq!(step, stickslip::integrate::Step { t: 0.75, event: StepEvent::StopTime });
+    assert!((solver.state()[0] - (-0.75f64).exp()).abs() < 1e-9);
+    assert!(solver.stats().last_step <= 0.05 + 1e-15);
+    // The stop time is disabled once reached (as in SUNDIALS).
+    assert_eq!(solver.advance(1.0, Task::Normal).unwrap().event, StepEvent::Reached);
+    assert!((solver.state()[0] - (-1f64).exp()).abs() < 1e-9);
+
+    // OneStep lands on the stop time exactly.
+    let options = Options { stop_time: Some(0.3), ..Options::new(1e-6, Tolerance::Scalar(1e-8)) };
+    let mut solver = Rodas5p::new(Linear(-1.0), 0.0, &[1.0], &options).unwrap();
+    let last = loop {
+        let step = solver.advance(10.0, Task::OneStep).unwrap();
+        if step.event != StepEvent::Reached {
+            break step;
+        }
+        assert!(step.t < 0.3);
+    };
+    assert_eq!(last, stickslip::integrate::Step { t: 0.3, event: StepEvent::StopTime });
+
+    // Backward in time: y' = −y from y(0) = 1 to t = −1 gives e.
+    let mut backward =
+        Rodas5p::new(Linear(-1.0), 0.0, &[1.0], &Options::new(1e-10, Tolerance::Scalar(1e-12))).unwrap();
+    backward.advance(-1.0, Task::Normal).unwrap();
+    assert!((backward.state()[0] - std::f64::consts::E).abs() < 1e-8, "{}", backward.state()[0]);
+    let end = backward.advance(-5.0, Task::OneStep).unwrap().t;
+    assert!(end < -1.0 && backward.dense(end, 0).is_ok());
+}
+
+#[test]
+fn failures_are_typed_errors_with_time_and_state() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+
+    // NaN from t > 0.5 on: halved steps do not help; the error names the RHS.
+    let mut solver = Rodas5p::new(NanAfter(0.5), 0.0, &[1.0], &options).unwrap();
+    let e = solver.advance(1.0, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
+    assert!(e.t <= 0.5 && e.t > 0.4 && e.state.len() == 1 && e.state[0].is_finite(), "{e}");
+    assert!(solver.stats().nonfinite_rhs >= 10);
+    assert_eq!((solver.t(), solver.state()), (e.t, &e.state[..]));
+    // NaN at the initial point.
+    let e = Rodas5p::new(NanAfter(-1.0), 0.0, &[1.0], &options).unwrap().advance(1.0, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
+    // NaN with a fixed step: no escape.
+    let mut fixed = Rodas5p::new(NanAfter(0.5), 0.0, &[1.0], &options).unwrap().fixed_step(0.3);
+    assert_eq!(fixed.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::RhsFailure);
+
+    // The step budget of one Normal call.
+    let few = Options { max_steps: Some(10), ..options.clone() };
+    let mut solver = Rodas5p::new(Oscillator, 0.0, &[0.0, 1.0], &few).unwrap();
+    let e = solver.advance(100.0, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::TooMuchWork, "{e}");
+    assert_eq!(solver.stats().steps, 10);
+    assert!(e.t > 0.0 && e.t < 100.0);
+    assert_eq!((solver.t(), solver.state()), (e.t, &e.state[..]));
+    // The budget is per call: the next call goes on.
+    solver.advance(e.t + 0.1, Task::Normal).unwrap();
+
+    // A singular matrix: y' = λy with λ = 1/(γh) exactly (fixed step, no escape).
+    let h = 0.5;
+    let gamma = 0.21193756319429014;
+    let mut solver = Rodas5p::new(Linear(1.0 / (gamma * h)), 0.0, &[1.0], &options).unwrap().fixed_step(h);
+    let e = solver.advance(1.0, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::LinearSolver, "{e}");
+    // Adaptive steps escape the same singularity by halving h.
+    let adaptive = Options { initial_step: Some(h), ..options.clone() };
+    let mut adaptive = Rodas5p::new(Linear(1.0 / (gamma * h)), 0.0, &[1.0], &adaptive).unwrap();
+    adaptive.advance(0.1, Task::Normal).unwrap();
+
+    // Repeated error-test failures: a tiny budget of rejections with a huge first step.
+    let strict = Options { max_err_test_fails: Some(1), initial_step: Some(10.0), ..options.clone() };
+    let mut solver = Rodas5p::new(Tan, 0.0, &[0.0], &strict).unwrap();
+    assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::ErrorTestFailures);
+    // ... or a minimum step that is too large.
+    let floor = Options { min_step: Some(0.5), ..options.clone() };
+    let mut solver = Rodas5p::new(Tan, 0.0, &[0.0], &floor).unwrap();
+    assert_eq!(solver.advance(1.5, Task::Normal).unwrap_err().kind, ErrorKind::ErrorTestFailures);
+
+    // Time too large for the steps the problem needs: t + h = t.
+    let mut solver = Rodas5p::new(Linear(-1.0), 1e20, &[1.0], &options).unwrap();
+    let e = solver.advance(1e20 + 1e6, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::StepUnderflow, "{e}");
+
+    // A Jacobian that is not finite.
+    struct BadJacobian;
+    impl OdeSystem for BadJacobian {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+            dydt[0] = -y[0];
+        }
+        fn has_jacobian(&self) -> bool {
+            true
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+            jac.set(0, 0, f64::INFINITY);
+        }
+    }
+    let e = Rodas5p::new(BadJacobian, 0.0, &[1.0], &options).unwrap().advance(1.0, Task::Normal).unwrap_err();
+    assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
+
+    // Invalid input.
+    let bad = |r: Result<Rodas5p<Oscillator>, stickslip::integrate::SolverError>| r.map(|_| ()).unwrap_err().kind;
+    assert_eq!(bad(Rodas5p::new(Oscillator, 0.0, &[0.0], &options)), ErrorKind::InvalidInput);
+    assert_eq!(bad(Rodas5p::new(Oscillator, 0.0, &[f64::NAN, 0.0], &options)), ErrorKind::InvalidInput);
+    assert_eq!(bad(Rodas5p::new(Oscillator, f64::INFINITY, &[0.0, 0.0], &options)), ErrorKind::InvalidInput);
+    let negative = Options::new(-1.0, Tolerance::Scalar(1e-8));
+    assert_eq!(bad(Rodas5p::new(Oscillator, 0.0, &[0.0, 0.0], &negative)), ErrorKind::InvalidInput);
+    let mut solver = Rodas5p::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().fixed_step(-1.0);
+    assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
+}
+
