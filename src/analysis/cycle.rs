@@ -556,14 +556,17 @@ fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize
 }
 
 /// Whether the oscillation is dying out at a linearly stable fixed point: w ranges below
-/// 1e-9, or strictly shrinking over the last 2·settle+1 cycles. (Near an unstable fixed point
+/// max(1e-9, 1e3 × the solver's tolerance on w) (integration noise), or strictly shrinking
+/// over the last 2·settle+1 cycles. (Near an unstable fixed point
 /// a tiny oscillation is a growing one, never a verdict of stability.)
 fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: bool) -> bool {
     if !linearly_stable {
         return false;
     }
     let amplitude = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
-    if closed.last().is_some_and(|c| amplitude(c) < 1e-9) {
+    // Below 1e3 × the solver's error in ln v, an "oscillation" is integration noise.
+    let (rtol, atol) = settings.w_tolerance;
+    if closed.last().is_some_and(|c| amplitude(c) < 1e-9f64.max(1e3 * (rtol + atol))) {
         return true;
     }
     let n = settings.settle.saturating_mul(2).saturating_add(1);
@@ -647,11 +650,11 @@ pub fn analyse(
         let time = tracker.elapsed + tracker.integ.t();
         if tracker.closed.len() > seen {
             seen = tracker.closed.len();
-            if let Some(n) = periodicity(&tracker.closed, settings) {
-                break if n == 1 { CycleStatus::Periodic } else { CycleStatus::PeriodN };
-            }
             if decaying(&tracker.closed, settings, linearly_stable) {
                 break CycleStatus::FixedPoint;
+            }
+            if let Some(n) = periodicity(&tracker.closed, settings) {
+                break if n == 1 { CycleStatus::Periodic } else { CycleStatus::PeriodN };
             }
             if seen >= settings.max_cycles {
                 break CycleStatus::NotConverged;
@@ -703,8 +706,8 @@ pub fn analyse(
         convergence_rule: format!(
             "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle \
              pairs (lag n = 1..4 for period-n orbits), the first cycle never used; fixed point, only when \
-             linearly stable, when the w range of a cycle is below 1e-9, shrinks over {} consecutive \
-             cycles, or the state is within 1e-10 of the fixed point",
+             linearly stable, when the w range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks \
+             over {} consecutive cycles, or the state is within 1e-10 of the fixed point",
             settings.tolerance,
             settings.settle,
             settings.settle.saturating_mul(2).saturating_add(1)
