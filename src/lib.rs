@@ -16,4 +16,5 @@ pub mod model;
 pub mod report;
 pub mod scene;
 pub mod stress;
+pub mod sweep;
 pub mod sundials;

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
-use stickslip::{compare, engine, report, scene, stress};
+use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
 
@@ -51,6 +51,37 @@ enum Command {
         /// Print JSON.
         #[arg(long)]
         json: bool,
+    },
+    /// Sweep scene parameters: one JSON line per point (parallel, resumable, shardable).
+    Sweep {
+        /// Scene file (model given as gamma/xi/epsilon).
+        scene: PathBuf,
+        /// NAME=START:STOP:COUNT[:log] for gamma, xi, epsilon or alpha; repeat for a grid.
+        #[arg(long = "param", required = true)]
+        params: Vec<String>,
+        /// Output file (JSON Lines).
+        #[arg(long)]
+        out: PathBuf,
+        /// Continue a killed sweep: keep the rows in --out and run only the missing points.
+        #[arg(long)]
+        resume: bool,
+        /// K/N: run only the points with index % N == K − 1 (for cluster job arrays).
+        #[arg(long)]
+        shard: Option<String>,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
+    /// Merge sweep outputs (e.g. shards) into one file sorted by point index.
+    Merge {
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Expected number of points: missing indices are listed (exit 1).
+        #[arg(long)]
+        total: Option<usize>,
+        /// Input files.
+        inputs: Vec<PathBuf>,
     },
     /// Run the numerical stress grid (γ, ξ, ε, tolerances, far-off starts, every method).
     /// Exit 1 if any cell panics, reports a non-finite number or methods disagree.
@@ -220,6 +251,52 @@ fn compare_command(
     Ok(())
 }
 
+fn sweep_command(
+    path: PathBuf,
+    specs: Vec<String>,
+    out: PathBuf,
+    resume: bool,
+    shard: Option<String>,
+    threads: Option<usize>,
+) -> Result<(), Failure> {
+    let text = std::fs::read_to_string(&path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
+    let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
+    let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;
+    sweep::check_base(&base, &axes).map_err(|e| Failure(2, format!("{}: {e}", path.display())))?;
+    let shard = shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e))?;
+    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let started = std::time::Instant::now();
+    let terminal = std::io::stderr().is_terminal();
+    let progress = |done: usize, total: usize| {
+        if terminal {
+            let elapsed = started.elapsed().as_secs_f64();
+            let eta = elapsed / done as f64 * (total - done) as f64;
+            eprint!("\rsweep: {done}/{total} points, {elapsed:.0} s, ETA {eta:.0} s   ");
+        }
+    };
+    let ran = sweep::run(&base, &axes, &out, resume, shard, threads, &progress)
+        .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    if terminal {
+        eprintln!();
+    }
+    println!("sweep: {ran} points run into {} in {:.1} s", out.display(), started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Result<(), Failure> {
+    let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+    let (rows, missing) = sweep::merge(&paths, total).map_err(|e| Failure(2, format!("cannot read inputs: {e}")))?;
+    let text: String = rows.iter().map(|r| serde_json::to_string(r).expect("a row serialises") + "\n").collect();
+    report::write_atomic(&out, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    println!("merge: {} rows into {}", rows.len(), out.display());
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(Failure(1, format!("{} points missing: {:?}", missing.len(), &missing[..missing.len().min(20)])))
+    }
+}
+
 fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
     let cells = stress::grid(quick);
     let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -266,6 +343,8 @@ fn main() -> ExitCode {
         Command::Run { scene, json, out } => run_command(scene, json, out),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
+        Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
+        Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());

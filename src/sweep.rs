@@ -1,0 +1,238 @@
+//! Parameter sweeps: one JSON object per point (JSON Lines), parallel over cores, resumable
+//! after a kill, and shardable across machines with a merge step.
+//!
+//! A point's row holds its index, its parameters and the scene's requested report sections
+//! (the keys of `stickslip run`), or the error that ended it. Rows carry no wall time, so a
+//! sweep's rows do not depend on scheduling: a killed and resumed sweep yields exactly the rows
+//! of an uninterrupted one. Rows are appended as points finish (one write per line); `merge`
+//! sorts them by index and checks that none is missing.
+
+use crate::engine;
+use crate::scene;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One swept parameter: NAME=START:STOP:COUNT[:log].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// Scene field: gamma, xi, epsilon or alpha (power-law exponent).
+    pub name: String,
+    /// The values, in order.
+    pub values: Vec<f64>,
+}
+
+/// Parses `NAME=START:STOP:COUNT[:log]`; the error says what is wrong.
+pub fn parse_axis(spec: &str) -> Result<Axis, String> {
+    let usage = "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
+    let (name, range) = spec.split_once('=').ok_or_else(|| format!("--param {spec:?}: {usage}"))?;
+    if !["gamma", "xi", "epsilon", "alpha"].contains(&name) {
+        return Err(format!("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon or alpha"));
+    }
+    let parts: Vec<&str> = range.split(':').collect();
+    let log = match parts.get(3) {
+        None => false,
+        Some(&"log") => true,
+        Some(other) => return Err(format!("--param {spec:?}: {other:?} is not \"log\"; {usage}")),
+    };
+    if parts.len() < 3 || parts.len() > 4 {
+        return Err(format!("--param {spec:?}: {usage}"));
+    }
+    let number = |s: &str| s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("--param {spec:?}: {s:?} is not a finite number"));
+    let (start, stop) = (number(parts[0])?, number(parts[1])?);
+    let count: usize = parts[2].parse().ok().filter(|&n| n >= 1).ok_or_else(|| format!("--param {spec:?}: COUNT {:?} must be an integer ≥ 1", parts[2]))?;
+    if log && (start <= 0.0 || stop <= 0.0) {
+        return Err(format!("--param {spec:?}: a log axis needs START and STOP > 0"));
+    }
+    let values = (0..count)
+        .map(|i| {
+            let f = if count == 1 { 0.0 } else { i as f64 / (count - 1) as f64 };
+            if log { 10f64.powf(start.log10() + f * (stop.log10() - start.log10())) } else { start + f * (stop - start) }
+        })
+        .collect();
+    Ok(Axis { name: name.into(), values })
+}
+
+/// The points of the grid (the cartesian product of the axes, first axis slowest).
+pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
+    let mut points = vec![BTreeMap::new()];
+    for axis in axes {
+        points = points
+            .into_iter()
+            .flat_map(|p| axis.values.iter().map(move |&v| {
+                let mut q = p.clone();
+                q.insert(axis.name.clone(), v);
+                q
+            }))
+            .collect();
+    }
+    points
+}
+
+/// One row of a sweep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Index of the point in the full grid.
+    pub index: usize,
+    /// The swept parameters.
+    pub params: BTreeMap<String, f64>,
+    /// The requested report sections (hopf, cycle, paper, physical), or null on error.
+    pub report: Option<serde_json::Value>,
+    /// The error that ended the point, if any (exit-code-1 cases of `stickslip run`).
+    pub error: Option<String>,
+}
+
+/// `K/N`: this process runs the points with index % N == K − 1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based shard number.
+    pub k: usize,
+    /// Number of shards.
+    pub n: usize,
+}
+
+/// Parses `K/N` with 1 ≤ K ≤ N.
+pub fn parse_shard(spec: &str) -> Result<Shard, String> {
+    let (k, n) = spec.split_once('/').ok_or_else(|| format!("--shard {spec:?}: expected K/N, e.g. 3/8"))?;
+    let (k, n): (usize, usize) = (k.parse().map_err(|_| format!("--shard {spec:?}: K is not an integer"))?, n.parse().map_err(|_| format!("--shard {spec:?}: N is not an integer"))?);
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("--shard {spec:?}: need 1 ≤ K ≤ N"));
+    }
+    Ok(Shard { k, n })
+}
+
+/// The scene JSON with the point's parameters set (model.gamma, model.xi, model.epsilon,
+/// model.friction.power.alpha); parsing it again re-validates everything and recomputes the
+/// default start on the slow manifold.
+fn scene_at(base: &serde_json::Value, params: &BTreeMap<String, f64>) -> serde_json::Value {
+    let mut s = base.clone();
+    for (name, &v) in params {
+        let slot = match name.as_str() {
+            "alpha" => &mut s["model"]["friction"]["power"]["alpha"],
+            other => &mut s["model"][other],
+        };
+        *slot = serde_json::json!(v);
+    }
+    s
+}
+
+/// Checks that a scene can be swept over these axes; the error says why not.
+pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), String> {
+    if base["model"].get("dimensional").is_some() {
+        return Err("sweeps set gamma/xi/epsilon: give the scene's model as gamma, xi, epsilon, not dimensional".into());
+    }
+    if axes.iter().any(|a| a.name == "alpha") && base["model"]["friction"].get("power").is_none() {
+        return Err("--param alpha needs a scene with \"friction\": {\"power\": {\"alpha\": ...}}".into());
+    }
+    Ok(())
+}
+
+/// Runs one point: the scene with its parameters (validated as `stickslip run` would), the
+/// requested report sections kept and the wall time dropped.
+pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<String, f64>) -> Row {
+    let json = scene_at(base, params);
+    let outcome = scene::parse(&json.to_string(), "sweep point")
+        .map_err(|e| e.to_string())
+        .and_then(|s| engine::run(&s, serde_json::Value::Null).map_err(|e| e.to_string()));
+    match outcome {
+        Ok(report) => {
+            let mut json = serde_json::to_value(&report).expect("a report serialises");
+            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical"]
+                .iter()
+                .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
+                .collect();
+            Row { index, params: params.clone(), report: Some(serde_json::Value::Object(sections)), error: None }
+        }
+        Err(e) => Row { index, params: params.clone(), report: None, error: Some(e) },
+    }
+}
+
+/// Reads the rows already in `path` (for --resume), dropping a trailing partial line left by
+/// a kill and rewriting the file without it.
+pub fn read_done(path: &Path) -> std::io::Result<Vec<Row>> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e),
+    };
+    let mut rows = Vec::new();
+    let mut good = String::new();
+    for line in text.split_inclusive('\n') {
+        match (line.ends_with('\n'), serde_json::from_str::<Row>(line.trim_end())) {
+            (true, Ok(row)) => {
+                good.push_str(line);
+                rows.push(row);
+            }
+            _ => break,
+        }
+    }
+    if good.len() != text.len() {
+        crate::report::write_atomic(path, &good)?;
+    }
+    Ok(rows)
+}
+
+/// Runs the sweep into `out` (appending; with `resume`, skipping points already there).
+/// Returns the number of points run now.
+pub fn run(
+    base: &serde_json::Value,
+    axes: &[Axis],
+    out: &Path,
+    resume: bool,
+    shard: Option<Shard>,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> std::io::Result<usize> {
+    let done: std::collections::BTreeSet<usize> = if resume {
+        read_done(out)?.into_iter().map(|r| r.index).collect()
+    } else {
+        std::fs::write(out, "")?;
+        Default::default()
+    };
+    let todo: Vec<(usize, BTreeMap<String, f64>)> = points(axes)
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| shard.is_none_or(|s| i % s.n == s.k - 1) && !done.contains(i))
+        .collect();
+    let file = Mutex::new(std::fs::OpenOptions::new().append(true).create(true).open(out)?);
+    let next = AtomicUsize::new(0);
+    let finished = AtomicUsize::new(0);
+    let failure: Mutex<Option<std::io::Error>> = Mutex::new(None);
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some((index, params)) = todo.get(i) else { break };
+                let row = run_point(base, *index, params);
+                let line = serde_json::to_string(&row).expect("a row serialises") + "\n";
+                let mut f = file.lock().unwrap_or_else(|e| e.into_inner());
+                if let Err(e) = f.write_all(line.as_bytes()).and_then(|_| f.flush()) {
+                    *failure.lock().unwrap_or_else(|e| e.into_inner()) = Some(e);
+                    break;
+                }
+                drop(f);
+                progress(finished.fetch_add(1, Ordering::Relaxed) + 1, todo.len());
+            });
+        }
+    });
+    match failure.into_inner().unwrap_or_else(|e| e.into_inner()) {
+        Some(e) => Err(e),
+        None => Ok(todo.len()),
+    }
+}
+
+/// Merges shard outputs: rows sorted by index, duplicates dropped (they are identical), and
+/// the missing indices of the full grid listed.
+pub fn merge(inputs: &[&Path], total: Option<usize>) -> std::io::Result<(Vec<Row>, Vec<usize>)> {
+    let mut rows: BTreeMap<usize, Row> = BTreeMap::new();
+    for path in inputs {
+        for row in read_done(path)? {
+            rows.entry(row.index).or_insert(row);
+        }
+    }
+    let missing = total.map_or_else(Vec::new, |n| (0..n).filter(|i| !rows.contains_key(i)).collect());
+    Ok((rows.into_values().collect(), missing))
+}
