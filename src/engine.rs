@@ -1,7 +1,7 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
 use crate::analysis::{cycle, hopf, paper};
-use crate::integrate::{ErrorKind, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
+use crate::integrate::{ErrorKind, Extrapolation, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
 use crate::model::Drr;
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{Method, Scene, SolverSpec};
@@ -42,6 +42,7 @@ pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn
         Method::Radau5 => (Box::new(Radau5::new(drr, 0.0, y0, options)?), vec![]),
         // The DRR system is autonomous: no ∂f/∂t evaluations.
         Method::Rodas5p => (Box::new(Rodas5p::new(drr, 0.0, y0, options)?.autonomous()), vec![]),
+        Method::Extrapolation => (Box::new(Extrapolation::new(drr, 0.0, y0, options)?), vec![]),
         Method::ArkodeImex => {
             let (default_i, default_e) = sundials::default_imex_tables();
             let implicit = spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or(default_i);

@@ -155,11 +155,14 @@ pub enum Method {
     Radau5,
     /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
     Rodas5p,
+    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
+    /// modified midpoint, the family the paper used; pure Rust).
+    Extrapolation,
 }
 
 impl Method {
     /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 7] = [
+    pub const ALL: [(&'static str, Method); 8] = [
         ("cvode-bdf", Method::CvodeBdf),
         ("cvode-adams", Method::CvodeAdams),
         ("arkode-dirk", Method::ArkodeDirk),
@@ -167,6 +170,7 @@ impl Method {
         ("arkode-erk", Method::ArkodeErk),
         ("radau5", Method::Radau5),
         ("rodas5p", Method::Rodas5p),
+        ("extrapolation", Method::Extrapolation),
     ];
 
     /// The scene name, e.g. "cvode-bdf".
@@ -176,7 +180,7 @@ impl Method {
 
     /// Whether the method is meant for stiff problems.
     pub fn is_stiff(self) -> bool {
-        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p)
+        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p | Method::Extrapolation)
     }
 }
 

@@ -64,7 +64,7 @@ fn cvode_arkode_and_radau5_agree_on_the_period_for_large_gamma() {
             r.cycle.unwrap().values.unwrap().period
         };
         let bdf = period("cvode-bdf");
-        for name in ["arkode-dirk", "arkode-imex", "radau5", "rodas5p"] {
+        for name in ["arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"] {
             let p = period(name);
             let rel = (p - bdf).abs() / bdf;
             assert!(rel < 1e-7, "γ = {gamma}: cvode-bdf {bdf} vs {name} {p} ({rel:.1e})");
@@ -74,7 +74,7 @@ fn cvode_arkode_and_radau5_agree_on_the_period_for_large_gamma() {
 
 #[test]
 fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
-    for method in ["cvode-bdf", "arkode-dirk", "arkode-imex", "radau5", "rodas5p"] {
+    for method in ["cvode-bdf", "arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"] {
         let solver = format!(r#""solver": {{"method": "{method}"}},"#);
         let r = run(&cycle_scene(1e8, 0.8, 1.0, &solver));
         let c = r.cycle.unwrap();

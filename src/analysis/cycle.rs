@@ -547,12 +547,25 @@ fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
 /// never mistaken for a period-n one.
 fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
     let k = closed.len();
+    // An "orbit" whose ln v range is within the integration noise is not one (found by the
+    // stress grid: L-stable methods at rtol 1e-4 settle on such a wiggle at an unstable
+    // fixed point, while the true orbit is a relaxation cycle).
+    if closed.last().is_none_or(|c| c.ln_v_max - c.ln_v_min < noise_floor(settings)) {
+        return None;
+    }
     let lagged = |n: usize, tol: f64| (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], tol));
     (1..=4).find(|&n| {
         k > settings.settle.saturating_add(n)
             && lagged(n, settings.tolerance)
             && (n == 1 || (0..settings.settle).all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], 100.0 * settings.tolerance)))
     })
+}
+
+/// The ln v range below which an oscillation is integration noise: max(1e-9, 1e3 × the
+/// solver's tolerance on w).
+fn noise_floor(settings: &CycleSettings) -> f64 {
+    let (rtol, atol) = settings.w_tolerance;
+    1e-9f64.max(1e3 * (rtol + atol))
 }
 
 /// Whether the oscillation is dying out at a linearly stable fixed point: w ranges below
@@ -564,9 +577,7 @@ fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: b
         return false;
     }
     let amplitude = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
-    // Below 1e3 × the solver's error in ln v, an "oscillation" is integration noise.
-    let (rtol, atol) = settings.w_tolerance;
-    if closed.last().is_some_and(|c| amplitude(c) < 1e-9f64.max(1e3 * (rtol + atol))) {
+    if closed.last().is_some_and(|c| amplitude(c) < noise_floor(settings)) {
         return true;
     }
     let n = settings.settle.saturating_mul(2).saturating_add(1);
@@ -705,7 +716,8 @@ pub fn analyse(
         time_integrated,
         convergence_rule: format!(
             "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle \
-             pairs (lag n = 1..4 for period-n orbits), the first cycle never used; fixed point, only when \
+             pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \
+             max(1e-9, 1e3 (rtol + atol)); fixed point, only when \
              linearly stable, when the w range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks \
              over {} consecutive cycles, or the state is within 1e-10 of the fixed point",
             settings.tolerance,

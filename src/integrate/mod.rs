@@ -3,6 +3,7 @@
 //! statistics it reports and the typed errors it returns.
 
 mod error;
+mod extrapolation;
 mod integrator;
 mod linalg;
 mod options;
@@ -12,6 +13,7 @@ mod rodas5p;
 mod stats;
 
 pub use error::{ErrorKind, SolverError};
+pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{Options, Tolerance};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
