@@ -191,7 +191,7 @@ fn check(trajectory: Trajectory) -> Result<Trajectory, String> {
     if trajectory.t.len() < 2 {
         return Err("a trajectory needs at least two samples".into());
     }
-    if let Some(i) = trajectory.t.windows(2).position(|w| !(w[1] > w[0])) {
+    if let Some(i) = trajectory.t.windows(2).position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater)) {
         return Err(format!("times must increase: row {} (t = {}) follows t = {}", i + 2, trajectory.t[i + 1], trajectory.t[i]));
     }
     if let Some(i) = trajectory.y.iter().position(|y| !(y.iter().all(|v| v.is_finite()) && y[1] > 0.0)) {
