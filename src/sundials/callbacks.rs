@@ -99,6 +99,7 @@ pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
     // `y` and `ydot` are distinct serial vectors of length `dim` owned by SUNDIALS for the
     // duration of this call.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
     rhs_code(&mut shared.diag, dy, |dy| system.rhs(t, y, dy))
@@ -113,6 +114,7 @@ pub(crate) unsafe extern "C" fn rhs_explicit<S: ImexSystem>(
 ) -> c_int {
     // SAFETY: as in `rhs`.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
     rhs_code(&mut shared.diag, dy, |dy| system.rhs_explicit(t, y, dy))
@@ -127,6 +129,7 @@ pub(crate) unsafe extern "C" fn rhs_implicit<S: ImexSystem>(
 ) -> c_int {
     // SAFETY: as in `rhs`.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
     rhs_code(&mut shared.diag, dy, |dy| system.rhs_implicit(t, y, dy))
@@ -146,6 +149,7 @@ unsafe fn jacobian_code<S>(
     // SAFETY: guaranteed by the caller.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
     let n = shared.dim;
+    // SAFETY: `y` is a serial vector of length `n`, valid for this call (caller's guarantee).
     let y = unsafe { slice(y, n) };
     // SAFETY: a dense SUNMatrix stores n*n reals contiguously in column-major order.
     let storage = unsafe { std::slice::from_raw_parts_mut(ffi::SUNDenseMatrix_Data(jac), n * n) };
@@ -199,7 +203,9 @@ pub(crate) unsafe extern "C" fn roots<S>(
     // SAFETY: `data` is the registered `Shared<S>`; `gout` has room for the `root_count`
     // values declared to SUNDIALS in the root-init call that installed this trampoline.
     let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    // SAFETY: `y` is a serial vector of length `dim`, valid for this call.
     let y = unsafe { slice(y, shared.dim) };
+    // SAFETY: `gout` has `root_count` slots: SUNDIALS allocated that many in the root-init call.
     let g = unsafe { std::slice::from_raw_parts_mut(gout, shared.root_count) };
     let Some(function) = shared.roots.as_mut() else {
         shared.diag.root_failure = Some("root function called but none is set".into());

@@ -149,15 +149,18 @@ impl<S> Solver<S> {
         // SAFETY: `m` is live solver memory; `user_data` and `diag` point into the boxed
         // `Shared`, which lives (at a fixed address) as long as the solver memory.
         solver.check(unsafe { (api.set_err_handler)(m, Some(callbacks::error_handler), diag) })?;
+        // SAFETY: `m` is live; `user_data` points into the leaked `Shared`, alive until Drop, after the memory is freed.
         solver.check(unsafe { (api.set_user_data)(m, user_data) })?;
         // Every "t + h = t" warning reaches the handler and is counted (SUNDIALS stops
         // issuing them after 10 by default).
+        // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
         solver.check(unsafe { (api.set_max_hnil_warns)(m, c_int::MAX) })?;
         match &atol {
             // SAFETY: `m` is live; the tolerance vector is kept alive in `_atol` below.
             Some(v) => solver.check(unsafe { (api.sv_tolerances)(m, options.rtol, v.raw()) })?,
             None => {
                 let Tolerance::Scalar(a) = options.atol else { unreachable!("matched above") };
+                // SAFETY: `m` is live; scalar tolerances are copied.
                 solver.check(unsafe { (api.ss_tolerances)(m, options.rtol, a) })?
             }
         };
@@ -171,6 +174,7 @@ impl<S> Solver<S> {
             solver.check(unsafe { (api.set_linear_solver)(m, linear.solver(), linear.matrix()) })?;
             solver.linear = Some(linear);
             if jacobian.is_some() {
+                // SAFETY: `m` is live and has a linear solver attached just above; the trampoline matches CVLsJacFn/ARKLsJacFn.
                 solver.check(unsafe { (api.set_jac_fn)(m, jacobian) })?;
             }
         }
@@ -183,30 +187,39 @@ impl<S> Solver<S> {
         // SAFETY (all calls below): `m` is live solver memory and each setter only stores a
         // scalar option.
         if let Some(v) = o.max_steps {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_max_num_steps)(m, v as c_long) })?;
         }
         if let Some(v) = o.initial_step {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_init_step)(m, v) })?;
         }
         if let Some(v) = o.min_step {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_min_step)(m, v) })?;
         }
         if let Some(v) = o.max_step {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_max_step)(m, v) })?;
         }
         if let Some(v) = o.stop_time {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_stop_time)(m, v) })?;
         }
         if let Some(v) = o.max_err_test_fails {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_max_err_test_fails)(m, v) })?;
         }
         if let Some(v) = o.max_nonlin_iters {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_max_nonlin_iters)(m, v) })?;
         }
         if let Some(v) = o.max_conv_fails {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_max_conv_fails)(m, v) })?;
         }
         if let Some(v) = o.nonlin_conv_coef {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_nonlin_conv_coef)(m, v) })?;
         }
         Ok(())
@@ -352,6 +365,7 @@ impl<S> Solver<S> {
         // SAFETY: live memory; SUNDIALS allocates `count` slots and calls the trampoline only
         // during later `advance` calls, after `root_count` below is set to the same count.
         let trampoline: ffi::CVRootFn = Some(callbacks::roots::<S>);
+        // SAFETY: `m` is live; SUNDIALS allocates `count` slots and calls the trampoline only in later `advance` calls, after `root_count` is set to `count` below.
         self.check(unsafe { (self.api.root_init)(m, count, trampoline) })?;
         self.shared_mut().roots = Some(roots.function);
         self.shared_mut().root_count = roots.count;
