@@ -9,30 +9,8 @@ use stickslip::integrate::{
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::sundials::{CvodeSettings, Solver};
 
-/// y' = 1 + y², y(0) = 0: y = tan t (nonlinear, non-stiff; finite-difference Jacobian).
-struct Tan;
-
-impl OdeSystem for Tan {
-    fn dim(&self) -> usize {
-        1
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = 1.0 + y[0] * y[0];
-    }
-}
-
-/// Harmonic oscillator x' = v, v' = −x from (0, 1): x = sin t, v = cos t.
-struct Oscillator;
-
-impl OdeSystem for Oscillator {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = y[1];
-        dydt[1] = -y[0];
-    }
-}
+mod common;
+use common::{Linear, NanAfter, Oscillator, Tan, VanDerPol, drr_cycles, observed_orders, sci};
 
 /// A nonlinear system with every elementary differential of order ≤ 5 independent:
 /// y = φ(z) with z' = M z (rotation in (z1, z2), decay of z3) and φ(z) = (z1, z2 + z1²,
@@ -96,58 +74,6 @@ impl OdeSystem for ProtheroRobinson {
     }
 }
 
-/// y' = k·y with an analytic Jacobian.
-struct Linear(f64);
-
-impl OdeSystem for Linear {
-    fn dim(&self) -> usize {
-        1
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = self.0 * y[0];
-    }
-    fn has_jacobian(&self) -> bool {
-        true
-    }
-    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        jac.set(0, 0, self.0);
-    }
-}
-
-/// Van der Pol in the Test Set's scaled form: y1' = y2, y2' = ((1 − y1²) y2 − y1)/ε.
-#[derive(Clone, Copy)]
-struct VanDerPol(f64);
-
-impl OdeSystem for VanDerPol {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = y[1];
-        dydt[1] = ((1.0 - y[0] * y[0]) * y[1] - y[0]) / self.0;
-    }
-    fn has_jacobian(&self) -> bool {
-        true
-    }
-    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        jac.set(0, 1, 1.0);
-        jac.set(1, 0, (-2.0 * y[0] * y[1] - 1.0) / self.0);
-        jac.set(1, 1, (1.0 - y[0] * y[0]) / self.0);
-    }
-}
-
-/// A right-hand side that returns NaN once t passes `from`.
-struct NanAfter(f64);
-
-impl OdeSystem for NanAfter {
-    fn dim(&self) -> usize {
-        1
-    }
-    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = if t > self.0 { f64::NAN } else { -y[0] };
-    }
-}
-
 /// Integrates to `tend` with the constant step h (the stop time makes the last step land on
 /// `tend` exactly) and returns y(tend).
 fn fixed_step<S: OdeSystem>(solver: Rodas5p<S>, tend: f64, h: f64) -> Vec<f64> {
@@ -165,16 +91,6 @@ fn fixed_options(tend: f64) -> Options {
 
 fn rodas<S: OdeSystem>(system: S, y0: &[f64], tend: f64) -> Rodas5p<S> {
     Rodas5p::new(system, 0.0, y0, &fixed_options(tend)).unwrap()
-}
-
-/// Numbers in scientific notation with 16 digits.
-fn sci(v: &[f64]) -> String {
-    v.iter().map(|x| format!("{x:.16e}")).collect::<Vec<_>>().join(", ")
-}
-
-/// Observed orders log2(e(h)/e(h/2)) for successive halvings.
-fn observed_orders(errors: &[f64]) -> Vec<f64> {
-    errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
 }
 
 fn distance(a: &[f64], b: &[f64]) -> f64 {
@@ -369,31 +285,6 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
         assert!(defect < 1e3, "defect {defect}");
         assert!(fd_mismatch < 1e-5, "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}");
     }
-}
-
-/// OneStep integration of the DRR model from `y0` to total time `tend`, re-basing time (a
-/// restart at local t = 0) at the first step end after each slip peak, as the cycle engine
-/// does. Returns (steps, peak times).
-fn drr_cycles(integ: &mut dyn Integrator, tend: f64) -> Result<(u64, Vec<f64>), stickslip::integrate::SolverError> {
-    let (mut elapsed, mut steps, mut peaks) = (0.0, 0u64, Vec::new());
-    let mut prev_dw = integ.dense(integ.t(), 1)?[1];
-    let mut rebase_pending = false;
-    while elapsed + integ.t() < tend {
-        let step = integ.advance(1e6, Task::OneStep)?;
-        steps += 1;
-        let y = integ.state().to_vec();
-        let dw = integ.dense(step.t, 1)?[1];
-        if prev_dw > 0.0 && dw <= 0.0 && y[1] > 5.0 {
-            peaks.push(elapsed + step.t);
-            rebase_pending = true;
-        } else if rebase_pending {
-            integ.reinit(0.0, &y)?;
-            elapsed += step.t;
-            rebase_pending = false;
-        }
-        prev_dw = dw;
-    }
-    Ok((steps, peaks))
 }
 
 #[test]

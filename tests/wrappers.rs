@@ -7,6 +7,9 @@ use stickslip::integrate::{
 use stickslip::model::robertson::{self, Robertson};
 use stickslip::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
 
+mod common;
+use common::{Oscillator, ProtheroRobinson};
+
 /// y' = −k y, exact solution y0·e^{−kt}.
 struct Decay(f64);
 
@@ -25,32 +28,8 @@ impl OdeSystem for Decay {
     }
 }
 
-/// Harmonic oscillator x' = v, v' = −x from (0, 1): x = sin t, v = cos t.
-struct Oscillator;
-
-impl OdeSystem for Oscillator {
-    fn dim(&self) -> usize {
-        2
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = y[1];
-        dydt[1] = -y[0];
-    }
-}
-
-/// Prothero–Robinson: y' = −λ (y − cos t) − sin t, exact y = cos t; the stiff relaxation is
-/// the implicit part, the forcing −sin t the explicit part.
-struct ProtheroRobinson(f64);
-
-impl OdeSystem for ProtheroRobinson {
-    fn dim(&self) -> usize {
-        1
-    }
-    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = -self.0 * (y[0] - t.cos()) - t.sin();
-    }
-}
-
+/// Prothero–Robinson split: the stiff relaxation is the implicit part, the forcing −sin t the
+/// explicit part.
 impl ImexSystem for ProtheroRobinson {
     fn rhs_explicit(&self, t: f64, _y: &[f64], dydt: &mut [f64]) {
         dydt[0] = -t.sin();

@@ -80,8 +80,9 @@
 //! right-hand-side failure, −7 repeated error-test failures.
 
 use super::linalg::{lu_real, rms, solve_real};
+use super::stepper::{self, all_finite, Core, Stepper};
 use super::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, Tolerance,
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance,
 };
 
 const NAME: &str = "Extrapolation";
@@ -101,8 +102,6 @@ const NONSTIFF_FRACTION: f64 = 0.25;
 /// A switch needs this many failed (passed) tests among the last `WINDOW` ones.
 const REPEATS: u32 = 3;
 const WINDOW: u32 = 5;
-/// Non-finite right-hand sides within one step before giving up.
-const MAX_NONFINITE: u32 = 10;
 /// Consecutive singular iteration matrices before giving up.
 const MAX_SINGULAR: u32 = 5;
 /// Defaults for the failure bounds of one step.
@@ -228,7 +227,6 @@ struct Work {
     poly: Vec<Vec<f64>>,
     /// An explicit step's continuous output before the step is accepted.
     poly_next: Vec<Vec<f64>>,
-    dense: Vec<f64>,
 }
 
 impl Work {
@@ -253,7 +251,6 @@ impl Work {
             ip: vec![0; n],
             poly: (0..dense_len).map(|_| v()).collect(),
             poly_next: (0..dense_len).map(|_| v()).collect(),
-            dense: v(),
         }
     }
 }
@@ -280,14 +277,8 @@ pub struct Extrapolation<S: OdeSystem> {
     rtol: f64,
     atol: Vec<f64>,
     // Options.
-    max_steps: u64,
-    hmin: f64,
-    hmax: f64,
-    initial_step: Option<f64>,
-    stop_time: Option<f64>,
     max_err_test_fails: u32,
     max_row_fails: u32,
-    fail_on_step_underflow: bool,
     /// Testing aids: constant step and column; a scheme without switching.
     fixed: Option<(f64, usize)>,
     forced: Option<Mode>,
@@ -298,20 +289,11 @@ pub struct Extrapolation<S: OdeSystem> {
     /// SEULEX's Jacobian-reuse threshold.
     thet: f64,
     // Integration state.
-    x: f64,
-    y: Vec<f64>,
-    f0: Vec<f64>,
-    f0_valid: bool,
     scal: Vec<f64>,
-    started: bool,
-    posneg: f64,
     mode: Mode,
-    /// Step size to try next (signed) and the target column.
-    h: f64,
     k: usize,
     /// Use the first-step procedure (columns 2..k accepted as soon as one converges).
     first: bool,
-    reject: bool,
     err: f64,
     errold: f64,
     /// Optimal step sizes and work per unit step of the rows computed (1-based).
@@ -328,9 +310,6 @@ pub struct Extrapolation<S: OdeSystem> {
     history: u32,
     switches: u64,
     // Continuous output of the last step.
-    have_step: bool,
-    xold: f64,
-    hold: f64,
     degree: usize,
     /// The last step's continuous output is ODEX's (explicit step), with this many midpoint
     /// derivatives (−1: cubic Hermite only).
@@ -339,28 +318,23 @@ pub struct Extrapolation<S: OdeSystem> {
     kmit_next: isize,
     /// ODEX's bound on the next step from the dense output's error estimate.
     hoptde: f64,
-    // Returned state.
-    t_out: f64,
-    y_out: Vec<f64>,
+    /// Point, last step, returned state, step-sequence options and statistics.
+    core: Core,
     work: Work,
-    stats: Stats,
 }
 
 impl<S: OdeSystem> std::fmt::Debug for Extrapolation<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Extrapolation")
             .field("n", &self.n)
-            .field("t", &self.t_out)
-            .field("t_internal", &self.x)
+            .field("t", &self.core.t_out)
+            .field("t_internal", &self.core.x)
             .field("stiff", &(self.mode == Mode::Implicit))
             .field("switches", &self.switches)
             .finish()
     }
 }
 
-fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
-}
 
 /// Weighted Euclidean norm ‖v/scal‖₂ (SEULEX's stability check).
 fn norm2(v: &[f64], scal: &[f64]) -> f64 {
@@ -442,27 +416,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// non-finite, non-finite t0, invalid options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let invalid = |message: String| SolverError {
-            solver: NAME,
-            kind: ErrorKind::InvalidInput,
-            t: t0,
-            state: y0.to_vec(),
-            flag: -1,
-            message,
-        };
-        if n == 0 {
-            return Err(invalid("the system has no components".into()));
-        }
-        if y0.len() != n {
-            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
-        }
-        if !t0.is_finite() {
-            return Err(invalid(format!("t0 = {t0} must be finite")));
-        }
-        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
-            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
-        }
-        options.validate(n).map_err(invalid)?;
+        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats::default())?;
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![*a; n],
             Tolerance::PerComponent(v) => v.clone(),
@@ -495,32 +449,18 @@ impl<S: OdeSystem> Extrapolation<S> {
             n,
             rtol: options.rtol,
             atol,
-            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
-            hmin: options.min_step.unwrap_or(0.0),
-            hmax: options.max_step.unwrap_or(f64::INFINITY),
-            initial_step: options.initial_step,
-            stop_time: options.stop_time,
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             max_row_fails: positive(options.max_conv_fails, DEFAULT_MAX_ROW_FAILS),
-            fail_on_step_underflow: options.fail_on_step_underflow,
             fixed: None,
             forced: None,
             imp,
             exp,
             lsb,
             thet,
-            x: t0,
-            y: y0.to_vec(),
-            f0: vec![0.0; n],
-            f0_valid: false,
             scal: vec![1.0; n],
-            started: false,
-            posneg: 1.0,
             mode: Mode::Explicit,
-            h: 0.0,
             k: 3,
             first: true,
-            reject: false,
             err: 0.0,
             errold: 1.0,
             hh: vec![0.0; km + 2],
@@ -532,18 +472,13 @@ impl<S: OdeSystem> Extrapolation<S> {
             rho: 0.0,
             history: 0,
             switches: 0,
-            have_step: false,
-            xold: t0,
-            hold: 0.0,
             degree: 0,
             dense_odex: false,
             kmit: -1,
             kmit_next: -1,
             hoptde: f64::INFINITY,
-            t_out: t0,
-            y_out: y0.to_vec(),
+            core,
             work,
-            stats: Stats::default(),
         };
         solver.enter(Mode::Explicit);
         solver.update_scal();
@@ -628,7 +563,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         self.mode = mode;
         self.k = self.initial_k(mode);
         self.first = true;
-        self.reject = false;
+        self.core.reject = false;
         self.history = 0;
         self.theta = 2.0 * self.thet;
         self.caljac = false;
@@ -669,108 +604,47 @@ impl<S: OdeSystem> Extrapolation<S> {
         let ke = self.initial_k(Mode::Explicit);
         let ctl = &self.imp;
         let fac = (self.err / ctl.safe1).powf(1.0 / kc as f64) / ctl.safe2;
-        let h_acc = (h_used.abs() / fac).min(self.hmax);
+        let h_acc = (h_used.abs() / fac).min(self.core.hmax);
         let nonstiff = h_acc * self.rho_jac <= NONSTIFF_FRACTION * self.lsb[ke];
         if self.record(nonstiff) {
             self.switch_to(Mode::Explicit);
         }
     }
 
-    fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
-        SolverError { solver: NAME, kind, t: self.x, state: self.y.clone(), flag, message }
-    }
-
-    fn invalid(&self, message: String) -> SolverError {
-        SolverError {
-            solver: NAME,
-            kind: ErrorKind::InvalidInput,
-            t: self.t_out,
-            state: self.y_out.clone(),
-            flag: -1,
-            message,
-        }
-    }
-
     fn update_scal(&mut self) {
         for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.y[i].abs();
+            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
             self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
         }
-    }
-
-    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
-    fn ensure_f0(&mut self) -> bool {
-        if !self.f0_valid {
-            self.system.rhs(self.x, &self.y, &mut self.f0);
-            self.stats.rhs_evals += 1;
-            if !all_finite(&self.f0) {
-                self.stats.nonfinite_rhs += 1;
-                return false;
-            }
-            self.f0_valid = true;
-        }
-        true
-    }
-
-    /// First advance after new/reinit: direction, f(t0, y0), initial step.
-    fn start(&mut self, tout: f64, task: Task) -> Result<(), SolverError> {
-        if self.started {
-            return Ok(());
-        }
-        self.posneg = if tout < self.x { -1.0 } else { 1.0 };
-        if !self.ensure_f0() {
-            return Err(self.error(
-                ErrorKind::RhsFailure,
-                -6,
-                "the right-hand side at the initial point is not finite".into(),
-            ));
-        }
-        let mut bound = self.hmax;
-        if task == Task::Normal && tout != self.x {
-            bound = bound.min((tout - self.x).abs());
-        }
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg > 0.0 {
-                bound = bound.min((ts - self.x).abs());
-            }
-        }
-        let h = match (self.fixed, self.initial_step) {
-            (Some((h, _)), _) => h,
-            (None, Some(h)) => h.min(bound),
-            (None, None) => self.estimate_initial_step(bound),
-        };
-        self.h = self.posneg * h.max(self.hmin);
-        self.started = true;
-        Ok(())
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an order-5 error, measured with
     /// the scaled norm of the step-size control.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let d0 = rms(&self.y, &self.scal);
-        let d1 = rms(&self.f0, &self.scal);
+        let d0 = rms(&self.core.y, &self.scal);
+        let d1 = rms(&self.core.f0, &self.scal);
         let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
         if !(h0.is_finite() && h0 > 0.0) {
             // Degenerate weights (atol = 0 on a zero component): SEULEX's default.
             h0 = 1e-6;
         }
-        h0 = h0.min(bound).max(100.0 * UROUND * self.x.abs()).max(f64::MIN_POSITIVE);
+        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
         let mut d2 = None;
         for _ in 0..12 {
-            let th = self.posneg * h0;
+            let th = self.core.posneg * h0;
             for i in 0..self.n {
-                self.work.tmp[i] = self.y[i] + th * self.f0[i];
+                self.work.tmp[i] = self.core.y[i] + th * self.core.f0[i];
             }
-            self.system.rhs(self.x + th, &self.work.tmp, &mut self.work.fnew);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x + th, &self.work.tmp, &mut self.work.fnew);
+            self.core.stats.rhs_evals += 1;
             if all_finite(&self.work.fnew) {
                 for i in 0..self.n {
-                    self.work.tmp[i] = self.work.fnew[i] - self.f0[i];
+                    self.work.tmp[i] = self.work.fnew[i] - self.core.f0[i];
                 }
                 d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
                 break;
             }
-            self.stats.nonfinite_rhs += 1;
+            self.core.stats.nonfinite_rhs += 1;
             h0 *= 0.1;
         }
         let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
@@ -788,23 +662,23 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// √(u·max(1e-5, |y_i|))). False if not finite.
     fn compute_jacobian(&mut self) -> bool {
         let n = self.n;
-        self.stats.jac_evals += 1;
+        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
         if self.system.has_jacobian() {
             w.jac.iter_mut().for_each(|v| *v = 0.0);
             let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.x, &self.y, &mut m);
+            self.system.jacobian(self.core.x, &self.core.y, &mut m);
         } else {
-            w.tmp.copy_from_slice(&self.y);
+            w.tmp.copy_from_slice(&self.core.y);
             for j in 0..n {
                 let ysafe = w.tmp[j];
                 let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
                 w.tmp[j] = ysafe + delt;
                 let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.x, &w.tmp, &mut w.fnew);
-                self.stats.rhs_evals_jacobian += 1;
+                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
+                self.core.stats.rhs_evals_jacobian += 1;
                 for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.f0[i]) / delt;
+                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
                 }
                 w.tmp[j] = ysafe;
             }
@@ -818,7 +692,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     fn row_implicit(&mut self, j: usize) -> Result<(), Failure> {
         let n = self.n;
         let m = self.imp.nj[j] as usize;
-        let hj = self.h / self.imp.nj[j];
+        let hj = self.core.h / self.imp.nj[j];
         let hji = 1.0 / hj;
         let w = &mut self.work;
         for (e, a) in w.lu.iter_mut().zip(&w.jac) {
@@ -827,17 +701,17 @@ impl<S: OdeSystem> Extrapolation<S> {
         for i in 0..n {
             w.lu[i * n + i] += hji;
         }
-        self.stats.lin_setups += 1;
+        self.core.stats.lin_setups += 1;
         if !lu_real(&mut w.lu, &mut w.ip, n) {
             return Err(Failure::Singular);
         }
-        self.system.rhs(self.x + hj, &self.y, &mut w.dy);
-        self.stats.rhs_evals += 1;
+        self.system.rhs(self.core.x + hj, &self.core.y, &mut w.dy);
+        self.core.stats.rhs_evals += 1;
         if !all_finite(&w.dy) {
-            self.stats.nonfinite_rhs += 1;
+            self.core.stats.nonfinite_rhs += 1;
             return Err(Failure::NonFinite);
         }
-        w.yh1.copy_from_slice(&self.y);
+        w.yh1.copy_from_slice(&self.core.y);
         w.del.copy_from_slice(&w.dy);
         solve_real(&w.lu, &w.ip, n, &mut w.del);
         let base = self.imp.off[j];
@@ -846,10 +720,10 @@ impl<S: OdeSystem> Extrapolation<S> {
             for i in 0..n {
                 w.yh1[i] += w.del[i];
             }
-            self.system.rhs(self.x + hj * (mm + 1) as f64, &w.yh1, &mut w.dy);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x + hj * (mm + 1) as f64, &w.yh1, &mut w.dy);
+            self.core.stats.rhs_evals += 1;
             if !all_finite(&w.dy) {
-                self.stats.nonfinite_rhs += 1;
+                self.core.stats.nonfinite_rhs += 1;
                 return Err(Failure::NonFinite);
             }
             if mm == 1 && j <= 2 && self.fixed.is_none() {
@@ -883,21 +757,21 @@ impl<S: OdeSystem> Extrapolation<S> {
     fn row_explicit(&mut self, j: usize) -> Result<(), Failure> {
         let n = self.n;
         let m = self.exp.nj[j] as usize;
-        let hj = self.h / self.exp.nj[j];
+        let hj = self.core.h / self.exp.nj[j];
         let w = &mut self.work;
         for i in 0..n {
-            w.yh1[i] = self.y[i];
-            w.yh2[i] = self.y[i] + hj * self.f0[i];
+            w.yh1[i] = self.core.y[i];
+            w.yh2[i] = self.core.y[i] + hj * self.core.f0[i];
         }
         let (mid, off) = (m / 2, self.exp.off[j]);
         for mm in 1..m {
             if mm == mid {
                 w.ysafe[j].copy_from_slice(&w.yh2);
             }
-            self.system.rhs(self.x + hj * mm as f64, &w.yh2, &mut w.dy);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x + hj * mm as f64, &w.yh2, &mut w.dy);
+            self.core.stats.rhs_evals += 1;
             if !all_finite(&w.dy) {
-                self.stats.nonfinite_rhs += 1;
+                self.core.stats.nonfinite_rhs += 1;
                 return Err(Failure::NonFinite);
             }
             w.fsafe[off + mm - 1].copy_from_slice(&w.dy);
@@ -911,8 +785,8 @@ impl<S: OdeSystem> Extrapolation<S> {
                 let (mut del1, mut del2) = (0.0, 0.0);
                 for i in 0..n {
                     let s = self.scal[i];
-                    del1 += (self.f0[i] / s).powi(2);
-                    del2 += ((w.dy[i] - self.f0[i]) / s).powi(2);
+                    del1 += (self.core.f0[i] / s).powi(2);
+                    del2 += ((w.dy[i] - self.core.f0[i]) / s).powi(2);
                 }
                 // ODEX's ‖f(y0 + h_j f0) − f0‖ > 2‖f0‖, with the increments h_j·f floored at
                 // the tolerance scale (as SEULEX's max(1, ‖Δ0‖)): f0 = 0 is no instability.
@@ -923,10 +797,10 @@ impl<S: OdeSystem> Extrapolation<S> {
                 }
             }
         }
-        self.system.rhs(self.x + self.h, &w.yh2, &mut w.dy);
-        self.stats.rhs_evals += 1;
+        self.system.rhs(self.core.x + self.core.h, &w.yh2, &mut w.dy);
+        self.core.stats.rhs_evals += 1;
         if !all_finite(&w.dy) {
-            self.stats.nonfinite_rhs += 1;
+            self.core.stats.nonfinite_rhs += 1;
             return Err(Failure::NonFinite);
         }
         w.fsafe[off + m - 1].copy_from_slice(&w.dy);
@@ -978,7 +852,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             let d = (w.t[1][i] - w.t[2][i]).abs();
             if explicit {
                 // ODEX's weights: atol + rtol·max(|y0|, |y1|).
-                let s = self.atol[i] + self.rtol * self.y[i].abs().max(w.t[1][i].abs());
+                let s = self.atol[i] + self.rtol * self.core.y[i].abs().max(w.t[1][i].abs());
                 self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
                 sum += (d / self.scal[i]).powi(2);
             } else {
@@ -997,7 +871,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let expo = if explicit { 1.0 / (2 * j - 1) as f64 } else { 1.0 / j as f64 };
         let facmin = ctl.fac1.powf(expo);
         let fac = (ctl.fac2 / facmin).min(facmin.max((err / ctl.safe1).powf(expo) / ctl.safe2));
-        self.hh[j] = (self.h.abs() / fac).min(self.hmax);
+        self.hh[j] = (self.core.h.abs() / fac).min(self.core.hmax);
         self.w[j] = ctl.a[j] / self.hh[j];
         Ok(())
     }
@@ -1032,8 +906,8 @@ impl<S: OdeSystem> Extrapolation<S> {
             k -= 1;
         }
         self.k = k;
-        self.h = self.posneg * self.hh[k];
-        self.reject = true;
+        self.core.h = self.core.posneg * self.hh[k];
+        self.core.reject = true;
         None
     }
 
@@ -1059,7 +933,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             for j in 1..k {
                 self.row(j)?;
             }
-            if !(k == 2 || self.reject) {
+            if !(k == 2 || self.core.reject) {
                 if self.err <= 1.0 {
                     return Ok(Some(k - 1));
                 }
@@ -1092,7 +966,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let (km, fac3, fac4) = (ctl.km, ctl.fac3, ctl.fac4);
         let (a, w, hh, k) = (&ctl.a, &self.w, &self.hh, self.k);
         let kopt = if kc == 2 {
-            if self.reject {
+            if self.core.reject {
                 2
             } else {
                 3
@@ -1116,10 +990,10 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             ko
         };
-        let (knew, habs) = if self.reject {
+        let (knew, habs) = if self.core.reject {
             // After a rejection: no increase of the order or the step.
             let kn = kopt.min(kc);
-            (kn, self.h.abs().min(hh[kn]))
+            (kn, self.core.h.abs().min(hh[kn]))
         } else if kopt <= kc {
             (kopt, hh[kopt])
         } else if kc < k && w[kc] < w[kc - 1] * fac4 {
@@ -1128,9 +1002,9 @@ impl<S: OdeSystem> Extrapolation<S> {
             (kopt, hh[kc] * a[kopt] / a[kc])
         };
         self.k = knew;
-        self.reject = false;
+        self.core.reject = false;
         let habs = if self.mode == Mode::Explicit { habs.min(self.hoptde) } else { habs };
-        self.h = self.posneg * habs.min(self.hmax).max(self.hmin);
+        self.core.h = self.core.posneg * habs.min(self.core.hmax).max(self.core.hmin);
     }
 
     /// SEULEX's continuous output after an implicit step accepted in column kc (before y is
@@ -1185,7 +1059,7 @@ impl<S: OdeSystem> Extrapolation<S> {
                 s += sign * w.poly[l][i];
                 sign = -sign;
             }
-            w.poly[kc][i] = top_sign * (self.y[i] - s);
+            w.poly[kc][i] = top_sign * (self.core.y[i] - s);
         }
         self.degree = kc;
     }
@@ -1198,13 +1072,13 @@ impl<S: OdeSystem> Extrapolation<S> {
     #[allow(clippy::needless_range_loop)]
     fn dense_explicit(&mut self, kc: usize) -> f64 {
         let n = self.n;
-        let h = self.h;
+        let h = self.core.h;
         let nj = &self.exp.nj;
         let kmit = 2 * kc as isize - MUDIF as isize + 1;
         let w = &mut self.work;
         // Hermite part: y0, y1 − y0, aspl, bspl.
         for i in 0..n {
-            let (y0, y1, yp0, yp1) = (self.y[i], w.t[1][i], h * self.f0[i], h * w.fnew[i]);
+            let (y0, y1, yp0, yp1) = (self.core.y[i], w.t[1][i], h * self.core.f0[i], h * w.fnew[i]);
             let ydiff = y1 - y0;
             w.poly_next[0][i] = y0;
             w.poly_next[1][i] = ydiff;
@@ -1248,7 +1122,7 @@ impl<S: OdeSystem> Extrapolation<S> {
                     let (mut s, mut binom) = (0.0, 1.0);
                     for r in 0..=d {
                         let idx = m + d - 2 * r;
-                        let f = if idx == 0 { self.f0[i] } else { w.fsafe[offsets[kk] + idx - 1][i] };
+                        let f = if idx == 0 { self.core.f0[i] } else { w.fsafe[offsets[kk] + idx - 1][i] };
                         s += if r % 2 == 0 { binom * f } else { -binom * f };
                         binom = binom * (d - r) as f64 / (r + 1) as f64;
                     }
@@ -1304,7 +1178,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// Accepts the step to `xph` in column kc: continuous output (already built for an explicit
     /// step), new state.
     fn accept(&mut self, xph: f64, kc: usize) {
-        let h = self.h;
+        let h = self.core.h;
         match self.mode {
             Mode::Implicit => {
                 self.dense_implicit(kc);
@@ -1316,101 +1190,57 @@ impl<S: OdeSystem> Extrapolation<S> {
                 self.kmit = self.kmit_next;
             }
         }
-        self.xold = self.x;
-        self.hold = h;
-        self.x = xph;
-        self.y.copy_from_slice(&self.work.t[1]);
+        self.core.xold = self.core.x;
+        self.core.hold = h;
+        self.core.x = xph;
+        self.core.y.copy_from_slice(&self.work.t[1]);
         match self.mode {
             Mode::Explicit => {
-                std::mem::swap(&mut self.f0, &mut self.work.fnew);
-                self.f0_valid = true;
+                std::mem::swap(&mut self.core.f0, &mut self.work.fnew);
+                self.core.f0_valid = true;
             }
-            Mode::Implicit => self.f0_valid = false,
+            Mode::Implicit => self.core.f0_valid = false,
         }
         self.update_scal();
-        self.have_step = true;
+        self.core.have_step = true;
         self.caljac = false;
-        if self.stats.steps == 0 {
-            self.stats.initial_step = h;
+        if self.core.stats.steps == 0 {
+            self.core.stats.initial_step = h;
         }
-        self.stats.steps += 1;
-        self.stats.last_step = h;
-        self.stats.last_order = match self.mode {
+        self.core.stats.steps += 1;
+        self.core.stats.last_step = h;
+        self.core.stats.last_order = match self.mode {
             Mode::Explicit => 2 * kc as i32,
             Mode::Implicit => kc as i32,
         };
-    }
-
-    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
-    /// `min_step`.
-    fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
-        let mut hnew = hnew;
-        if hnew.abs() < self.hmin {
-            if self.h.abs() <= self.hmin {
-                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
-                return Err(self.error(kind, flag, message));
-            }
-            hnew = self.posneg * self.hmin;
-        }
-        self.h = hnew;
-        self.reject = true;
-        Ok(())
-    }
-
-    /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step.
-    fn nonfinite_failure(&mut self, count: &mut u32) -> Result<(), SolverError> {
-        *count += 1;
-        if *count >= MAX_NONFINITE || self.fixed.is_some() {
-            let message =
-                format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
-            return Err(self.error(ErrorKind::RhsFailure, -6, message));
-        }
-        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
     }
 
     /// One accepted step (with as many attempts as needed). Returns true if it ended at the
     /// stop time.
     fn step(&mut self) -> Result<bool, SolverError> {
         let (mut rejections, mut row_fails, mut nonfinite, mut singular, mut attempts) = (0u32, 0u32, 0u32, 0u32, 0u32);
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg <= 0.0 {
-                self.stop_time = None;
-            }
-        }
+        self.core.drop_passed_stop_time();
         loop {
             attempts += 1;
             if attempts > MAX_ATTEMPTS {
-                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.h);
-                return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
+                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
             }
             if let Some((h, _)) = self.fixed {
-                self.h = self.posneg * h;
+                self.core.h = self.core.posneg * h;
             }
             // Do not step past the stop time.
-            let planned = self.h;
-            let mut last = false;
-            if let Some(ts) = self.stop_time {
-                if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
-                    self.h = ts - self.x;
-                    last = true;
-                }
-            }
-            // Step underflow (RADAU5's test: 0.1·|h| ≤ u·|x|).
-            if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
-                let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
-                if self.fail_on_step_underflow || self.x + self.h == self.x {
-                    return Err(self.error(ErrorKind::StepUnderflow, -3, message));
-                }
-                self.stats.step_underflow_warnings += 1;
-            }
+            let planned = self.core.h;
+            let last = self.core.clip_to_stop_time();
+            self.core.check_step_underflow()?;
             let need_jacobian = self.mode == Mode::Implicit && {
-                if self.reject {
+                if self.core.reject {
                     self.theta = 2.0 * self.thet;
                 }
                 self.theta > self.thet && !self.caljac
             };
             if (self.mode == Mode::Explicit || (need_jacobian && !self.system.has_jacobian())) && !self.ensure_f0() {
-                return Err(self.error(
+                return Err(self.core.error(
                     ErrorKind::RhsFailure,
                     -6,
                     "the right-hand side at the current point is not finite".into(),
@@ -1418,28 +1248,28 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             if need_jacobian {
                 if !self.compute_jacobian() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
+                    return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
                 }
                 self.caljac = true;
             }
-            self.stats.step_attempts += 1;
+            self.core.stats.step_attempts += 1;
             self.rho = 0.0;
             self.last_row = 0;
             let first = std::mem::replace(&mut self.first, false);
-            let h_used = self.h;
+            let h_used = self.core.h;
             let outcome = self.attempt(first);
             match outcome {
                 Ok(Some(kc)) => {
-                    let xph = if last { self.stop_time.unwrap_or(self.x + self.h) } else { self.x + self.h };
+                    let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
                     if self.mode == Mode::Explicit {
                         // f at the new point (continuous output, next step): a non-finite one
                         // fails the step.
                         let w = &mut self.work;
                         self.system.rhs(xph, &w.t[1], &mut w.fnew);
-                        self.stats.rhs_evals += 1;
+                        self.core.stats.rhs_evals += 1;
                         if !all_finite(&w.fnew) {
-                            self.stats.nonfinite_rhs += 1;
-                            self.nonfinite_failure(&mut nonfinite)?;
+                            self.core.stats.nonfinite_rhs += 1;
+                            self.core.nonfinite_failure(&mut nonfinite, self.fixed.is_some())?;
                             continue;
                         }
                         // ODEX: the interpolant's error estimate bounds the next step and
@@ -1448,16 +1278,16 @@ impl<S: OdeSystem> Extrapolation<S> {
                         let degree = (self.kmit_next + 4).max(1) as f64;
                         self.hoptde = h_used.abs() / errint.powf(1.0 / degree).max(0.01);
                         if errint > 10.0 && self.fixed.is_none() {
-                            self.stats.err_test_fails += 1;
+                            self.core.stats.err_test_fails += 1;
                             rejections += 1;
                             if rejections >= self.max_err_test_fails {
                                 let message = format!(
                                     "{rejections} error-test failures in one step (dense output, h = {h_used:e})"
                                 );
-                                return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+                                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
                             }
-                            let hnew = self.posneg * self.hoptde;
-                            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "dense-output error test")?;
+                            let hnew = self.core.posneg * self.hoptde;
+                            self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "dense-output error test")?;
                             continue;
                         }
                     }
@@ -1466,12 +1296,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                     if self.fixed.is_none() {
                         self.select(kc);
                     } else {
-                        self.reject = false;
+                        self.core.reject = false;
                     }
                     if last {
-                        self.stop_time = None;
+                        self.core.stop_time = None;
                         if self.fixed.is_none() {
-                            self.h = planned;
+                            self.core.h = planned;
                         }
                     }
                     if explicit {
@@ -1479,22 +1309,22 @@ impl<S: OdeSystem> Extrapolation<S> {
                     } else {
                         self.nonstiffness_test(h_used, kc);
                     }
-                    self.stats.current_step = self.h;
+                    self.core.stats.current_step = self.core.h;
                     return Ok(last);
                 }
                 Ok(None) => {
-                    self.stats.err_test_fails += 1;
+                    self.core.stats.err_test_fails += 1;
                     rejections += 1;
                     if rejections >= self.max_err_test_fails {
                         let message = format!(
                             "{rejections} error-test failures in one step (h = {:e}, err = {:e})",
                             h_used, self.err
                         );
-                        return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+                        return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
                     }
-                    let hnew = self.h;
-                    self.h = h_used;
-                    self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+                    let hnew = self.core.h;
+                    self.core.h = h_used;
+                    self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
                     self.stiffness_test(h_used, false);
                 }
                 Err(failure) => {
@@ -1502,41 +1332,41 @@ impl<S: OdeSystem> Extrapolation<S> {
                         let message = format!(
                             "row {} failed ({failure:?}) with the fixed step h = {:e}",
                             self.last_row + 1,
-                            self.h
+                            self.core.h
                         );
                         let (kind, flag) = if failure == Failure::Singular {
                             (ErrorKind::LinearSolver, -4)
                         } else {
                             (ErrorKind::ConvergenceFailures, -5)
                         };
-                        return Err(self.error(kind, flag, message));
+                        return Err(self.core.error(kind, flag, message));
                     }
                     let factor = self.control().safe3;
                     match failure {
                         Failure::NonFinite => {
-                            self.stats.step_solve_fails += 1;
-                            self.nonfinite_failure(&mut nonfinite)?;
+                            self.core.stats.step_solve_fails += 1;
+                            self.core.nonfinite_failure(&mut nonfinite, self.fixed.is_some())?;
                         }
                         Failure::Singular => {
                             singular += 1;
-                            self.stats.step_solve_fails += 1;
+                            self.core.stats.step_solve_fails += 1;
                             if singular >= MAX_SINGULAR {
-                                let message = format!("iteration matrix singular {singular} times (h = {:e})", self.h);
-                                return Err(self.error(ErrorKind::LinearSolver, -4, message));
+                                let message = format!("iteration matrix singular {singular} times (h = {:e})", self.core.h);
+                                return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                             }
-                            self.reduce(factor * self.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
+                            self.core.reduce(factor * self.core.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
                         }
                         Failure::Unstable | Failure::ErrorGrowth => {
                             row_fails += 1;
-                            self.stats.step_solve_fails += 1;
+                            self.core.stats.step_solve_fails += 1;
                             if row_fails >= self.max_row_fails {
                                 let message = format!(
                                     "{row_fails} rows stopped by the stability checks in one step (h = {:e})",
-                                    self.h
+                                    self.core.h
                                 );
-                                return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+                                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
                             }
-                            self.reduce(factor * self.h, ErrorKind::ConvergenceFailures, -5, "stability check")?;
+                            self.core.reduce(factor * self.core.h, ErrorKind::ConvergenceFailures, -5, "stability check")?;
                         }
                     }
                     self.stiffness_test(h_used, failure == Failure::Unstable);
@@ -1547,14 +1377,14 @@ impl<S: OdeSystem> Extrapolation<S> {
 
     /// Evaluates the k-th derivative of the last step's continuous output at t into `out`.
     fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
-        if k == 0 && t == self.x {
-            out.copy_from_slice(&self.y);
+        if k == 0 && t == self.core.x {
+            out.copy_from_slice(&self.core.y);
             return;
         }
         let poly = &self.work.poly;
-        let scale = self.hold.powi(k as i32);
+        let scale = self.core.hold.powi(k as i32);
         if !self.dense_odex {
-            let u = (t - self.x) / self.hold;
+            let u = (t - self.core.x) / self.core.hold;
             let k = k as usize;
             for (i, o) in out.iter_mut().enumerate() {
                 let mut s = 0.0;
@@ -1570,7 +1400,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         // ODEX's form in θ = (t − t_old)/H: y0 + θ·ydiff + g·s with g = θ(1 − θ),
         // s = bspl + (aspl − bspl)θ, plus W(u)·Q(u), u = θ − ½, W = (¼ − u²)²,
         // Q = Σ a_m u^m/m!.
-        let theta = (t - self.xold) / self.hold;
+        let theta = (t - self.core.xold) / self.core.hold;
         let u = theta - 0.5;
         let (g, g1) = (theta * (1.0 - theta), 1.0 - 2.0 * theta);
         let q = 0.25 - u * u;
@@ -1614,146 +1444,35 @@ impl<S: OdeSystem> Extrapolation<S> {
         }
     }
 
-    fn advance_inner(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        if !tout.is_finite() {
-            return Err(self.invalid(format!("tout = {tout} must be finite")));
-        }
-        if let Some((h, k)) = self.fixed {
-            if !(h.is_finite() && h > 0.0) || k == 0 || k > self.control().km {
-                return Err(self.invalid(format!(
-                    "fixed step {h} must be finite and > 0, column {k} in 1..={}",
-                    self.control().km
-                )));
-            }
-        }
-        self.start(tout, task)?;
-        if task == Task::OneStep {
-            let stopped = self.step()?;
-            self.t_out = self.x;
-            self.y_out.copy_from_slice(&self.y);
-            let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
-            return Ok(Step { t: self.x, event });
-        }
-        let mut taken = 0u64;
-        let mut stopped = false;
-        loop {
-            if (self.x - tout) * self.posneg >= 0.0 {
-                if tout == self.x {
-                    self.y_out.copy_from_slice(&self.y);
-                } else if self.have_step && (tout - self.xold) * self.posneg >= -self.fuzz() {
-                    let mut out = std::mem::take(&mut self.y_out);
-                    self.interpolate(tout, 0, &mut out);
-                    self.y_out = out;
-                } else {
-                    let message = format!("tout = {tout:e} is behind the last step (t = {:e})", self.x);
-                    return Err(self.invalid(message));
-                }
-                self.t_out = tout;
-                return Ok(Step { t: tout, event: StepEvent::Reached });
-            }
-            if stopped {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-                return Ok(Step { t: self.x, event: StepEvent::StopTime });
-            }
-            if taken >= self.max_steps {
-                let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", self.max_steps);
-                return Err(self.error(ErrorKind::TooMuchWork, -2, message));
-            }
-            stopped = self.step()?;
-            taken += 1;
-        }
-    }
-
-    fn fuzz(&self) -> f64 {
-        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
-    }
-
     /// See [`Integrator::advance`]. On an error, [`Extrapolation::t`] and
     /// [`Extrapolation::state`] are the last accepted step's end.
     pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        let nonfinite_before = self.stats.nonfinite_rhs;
-        self.advance_inner(tout, task).map_err(|mut e| {
-            if e.kind != ErrorKind::InvalidInput {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-            }
-            // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
-            // point where f turns non-finite end in a step underflow or too much work.
-            let nonfinite = self.stats.nonfinite_rhs - nonfinite_before;
-            if nonfinite > 0 {
-                if e.kind != ErrorKind::InvalidInput {
-                    e.kind = ErrorKind::RhsFailure;
-                }
-                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
-            }
-            e
-        })
+        stepper::advance(self, tout, task)
     }
 
     /// The state at [`Extrapolation::t`].
     pub fn state(&self) -> &[f64] {
-        &self.y_out
+        &self.core.y_out
     }
 
     /// Time of the last return.
     pub fn t(&self) -> f64 {
-        self.t_out
+        self.core.t_out
     }
 
     /// The k-th derivative (k ≤ 3) of the continuous output at t inside the last step
     /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        if !t.is_finite() || k > 3 {
-            return Err(self.invalid(format!("dense output needs a finite t and k ≤ 3, got t = {t}, k = {k}")));
-        }
-        if !self.have_step {
-            if t != self.x || k > 1 {
-                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", self.x);
-                return Err(self.invalid(message));
-            }
-            if k == 0 {
-                self.work.dense.copy_from_slice(&self.y);
-            } else {
-                if !self.ensure_f0() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
-                }
-                self.work.dense.copy_from_slice(&self.f0);
-            }
-            return Ok(&self.work.dense);
-        }
-        let fuzz = self.fuzz();
-        let (lo, hi) = (self.xold.min(self.x) - fuzz, self.xold.max(self.x) + fuzz);
-        if t < lo || t > hi {
-            let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", self.xold, self.x);
-            return Err(self.invalid(message));
-        }
-        let mut out = std::mem::take(&mut self.work.dense);
-        self.interpolate(t, k, &mut out);
-        self.work.dense = out;
-        Ok(&self.work.dense)
+        stepper::dense(self, t, k)
     }
 
     /// Restarts at (t0, y0) with the explicit scheme (unless a scheme is forced): step-size and
     /// order history, Jacobian, continuous output and stiffness-test history are dropped;
     /// options, statistics and the switch count are kept.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        if y0.len() != self.n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message =
-                format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.n);
-            return Err(self.invalid(message));
-        }
-        self.x = t0;
-        self.xold = t0;
-        self.y.copy_from_slice(y0);
-        self.t_out = t0;
-        self.y_out.copy_from_slice(y0);
-        self.f0_valid = false;
+        self.core.restart(t0, y0)?;
         self.update_scal();
-        self.started = false;
-        self.have_step = false;
         self.enter(self.forced.unwrap_or(Mode::Explicit));
-        self.stats.reinits += 1;
         Ok(())
     }
 
@@ -1763,33 +1482,44 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// `err_test_fails` rejections by the error test; `last_order` is the order of the last
     /// accepted step.
     pub fn stats(&self) -> Stats {
-        self.stats
+        self.core.stats
     }
 }
 
-impl<S: OdeSystem> Integrator for Extrapolation<S> {
-    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        Extrapolation::advance(self, tout, task)
+impl<S: OdeSystem> Stepper for Extrapolation<S> {
+    const MAX_DENSE_ORDER: u32 = 3;
+    fn core(&self) -> &Core {
+        &self.core
     }
-    fn state(&self) -> &[f64] {
-        Extrapolation::state(self)
+    fn core_mut(&mut self) -> &mut Core {
+        &mut self.core
     }
-    fn t(&self) -> f64 {
-        Extrapolation::t(self)
+    fn ensure_f0(&mut self) -> bool {
+        self.core.ensure_f0(&self.system)
     }
-    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        Extrapolation::dense(self, t, k)
+    fn fixed_h(&self) -> Option<f64> {
+        self.fixed.map(|(h, _)| h)
     }
-    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        Extrapolation::reinit(self, t0, y0)
+    fn check_fixed(&self) -> Result<(), String> {
+        if let Some((h, k)) = self.fixed {
+            if !(h.is_finite() && h > 0.0) || k == 0 || k > self.control().km {
+                return Err(format!("fixed step {h} must be finite and > 0, column {k} in 1..={}", self.control().km));
+            }
+        }
+        Ok(())
     }
-    fn stats(&self) -> Stats {
-        Extrapolation::stats(self)
+    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+        Extrapolation::estimate_initial_step(self, bound)
     }
-    fn name(&self) -> &'static str {
-        NAME
+    fn step(&mut self) -> Result<bool, SolverError> {
+        Extrapolation::step(self)
+    }
+    fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
+        Extrapolation::interpolate(self, t, k, out);
     }
 }
+
+stepper::integrator_via_stepper!(Extrapolation);
 
 #[cfg(test)]
 mod tests {

@@ -11,6 +11,7 @@ mod problem;
 mod radau5;
 mod rodas5p;
 mod stats;
+mod stepper;
 
 pub use error::{ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;

@@ -35,8 +35,9 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_real};
+use super::stepper::{self, all_finite, Core, Stepper};
 use super::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task,
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
@@ -55,8 +56,6 @@ const FACL: f64 = 5.0;
 const FACR: f64 = 0.125;
 /// Consecutive singular iteration matrices before giving up (RADAU5: 5).
 const MAX_SINGULAR: u32 = 5;
-/// Non-finite right-hand sides within one step before giving up.
-const MAX_NONFINITE: u32 = 10;
 /// Defaults for options RADAU5 does not bound (it relies on the step underflow test).
 const DEFAULT_MAX_STEPS: i64 = 500;
 const DEFAULT_MAX_CONV_FAILS: u32 = 10;
@@ -176,7 +175,6 @@ struct Work {
     e2r: Vec<f64>,
     e2i: Vec<f64>,
     ip2: Vec<usize>,
-    dense: Vec<f64>,
 }
 
 impl Work {
@@ -201,7 +199,6 @@ impl Work {
             e2r: vec![0.0; n * n],
             e2i: vec![0.0; n * n],
             ip2: vec![0; n],
-            dense: v(),
         }
     }
 }
@@ -229,35 +226,13 @@ pub struct Radau5<S: OdeSystem> {
     rtol: f64,
     atol: Vec<f64>,
     // Options.
-    max_steps: u64,
-    hmin: f64,
-    hmax: f64,
-    initial_step: Option<f64>,
-    stop_time: Option<f64>,
     nit: u32,
     fnewt: f64,
     max_conv_fails: u32,
     max_err_test_fails: u32,
-    fail_on_step_underflow: bool,
     fixed_h: Option<f64>,
     // Integration state.
-    x: f64,
-    y: Vec<f64>,
-    /// f(x, y), valid when `f0_valid`.
-    f0: Vec<f64>,
-    f0_valid: bool,
     scal: Vec<f64>,
-    /// Direction, step size and step history set up (after new/reinit: at the first advance).
-    started: bool,
-    posneg: f64,
-    /// Step size to try next (signed).
-    h: f64,
-    /// Last accepted step (signed) and its start.
-    hold: f64,
-    xold: f64,
-    /// An accepted step exists since the last (re)start: the polynomial is valid.
-    have_step: bool,
-    reject: bool,
     faccon: f64,
     theta: f64,
     /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
@@ -269,16 +244,14 @@ pub struct Radau5<S: OdeSystem> {
     action: Action,
     /// Step size the LU factors were computed for (NaN: none).
     lu_h: f64,
-    // Returned state.
-    t_out: f64,
-    y_out: Vec<f64>,
+    /// Point, last step, returned state, step-sequence options and statistics.
+    core: Core,
     work: Work,
-    stats: Stats,
 }
 
 impl<S: OdeSystem> std::fmt::Debug for Radau5<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Radau5").field("n", &self.n).field("t", &self.t_out).field("t_internal", &self.x).finish()
+        f.debug_struct("Radau5").field("n", &self.n).field("t", &self.core.t_out).field("t_internal", &self.core.x).finish()
     }
 }
 
@@ -386,37 +359,13 @@ fn interpolate(c: &Coeffs, w: &Work, y: &[f64], x: f64, hold: f64, t: f64, k: u3
     }
 }
 
-fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
-}
-
 impl<S: OdeSystem> Radau5<S> {
     /// A Radau5 integrator of `system` starting at (t0, y0). Errors (InvalidInput): a system
     /// without components, y0 of the wrong length or non-finite, non-finite t0, invalid
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let invalid = |message: String| SolverError {
-            solver: NAME,
-            kind: ErrorKind::InvalidInput,
-            t: t0,
-            state: y0.to_vec(),
-            flag: -1,
-            message,
-        };
-        if n == 0 {
-            return Err(invalid("the system has no components".into()));
-        }
-        if y0.len() != n {
-            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
-        }
-        if !t0.is_finite() {
-            return Err(invalid(format!("t0 = {t0} must be finite")));
-        }
-        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
-            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
-        }
-        options.validate(n).map_err(invalid)?;
+        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats { last_order: 5, ..Stats::default() })?;
         // RADAU5's tolerance transformation.
         let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
         let atol: Vec<f64> = match &options.atol {
@@ -431,29 +380,12 @@ impl<S: OdeSystem> Radau5<S> {
             c: Coeffs::new(),
             rtol,
             atol,
-            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
-            hmin: options.min_step.unwrap_or(0.0),
-            hmax: options.max_step.unwrap_or(f64::INFINITY),
-            initial_step: options.initial_step,
-            stop_time: options.stop_time,
             nit: positive(options.max_nonlin_iters, DEFAULT_NIT),
             fnewt,
             max_conv_fails: positive(options.max_conv_fails, DEFAULT_MAX_CONV_FAILS),
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
-            fail_on_step_underflow: options.fail_on_step_underflow,
             fixed_h: None,
-            x: t0,
-            y: y0.to_vec(),
-            f0: vec![0.0; n],
-            f0_valid: false,
             scal: vec![1.0; n],
-            started: false,
-            posneg: 1.0,
-            h: 0.0,
-            hold: 0.0,
-            xold: t0,
-            have_step: false,
-            reject: false,
             faccon: 1.0,
             theta: THET,
             naccpt: 0,
@@ -462,10 +394,8 @@ impl<S: OdeSystem> Radau5<S> {
             caljac: false,
             action: Action::Jacobian,
             lu_h: f64::NAN,
-            t_out: t0,
-            y_out: y0.to_vec(),
+            core,
             work: Work::new(n),
-            stats: Stats { last_order: 5, ..Stats::default() },
         };
         solver.update_scal();
         Ok(solver)
@@ -484,82 +414,36 @@ impl<S: OdeSystem> Radau5<S> {
         &self.system
     }
 
-    fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
-        SolverError { solver: NAME, kind, t: self.x, state: self.y.clone(), flag, message }
-    }
-
     fn update_scal(&mut self) {
         for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.y[i].abs();
+            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
             self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
         }
-    }
-
-    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
-    fn ensure_f0(&mut self) -> bool {
-        if !self.f0_valid {
-            self.system.rhs(self.x, &self.y, &mut self.f0);
-            self.stats.rhs_evals += 1;
-            if !all_finite(&self.f0) {
-                self.stats.nonfinite_rhs += 1;
-                return false;
-            }
-            self.f0_valid = true;
-        }
-        true
-    }
-
-    /// First advance after new/reinit: direction, f(t0, y0), initial step.
-    fn start(&mut self, tout: f64, task: Task) -> Result<(), SolverError> {
-        if self.started {
-            return Ok(());
-        }
-        self.posneg = if tout < self.x { -1.0 } else { 1.0 };
-        if !self.ensure_f0() {
-            return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side at the initial point is not finite".into()));
-        }
-        let mut bound = self.hmax;
-        if task == Task::Normal && tout != self.x {
-            bound = bound.min((tout - self.x).abs());
-        }
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg > 0.0 {
-                bound = bound.min((ts - self.x).abs());
-            }
-        }
-        let h = match (self.fixed_h, self.initial_step) {
-            (Some(h), _) => h,
-            (None, Some(h)) => h.min(bound),
-            (None, None) => self.estimate_initial_step(bound),
-        };
-        self.h = self.posneg * h.max(self.hmin);
-        self.started = true;
-        Ok(())
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁴ (the embedded
     /// estimate's order), measured with the scaled norm of the step-size control.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let d0 = rms(&self.y, &self.scal);
-        let d1 = rms(&self.f0, &self.scal);
+        let d0 = rms(&self.core.y, &self.scal);
+        let d1 = rms(&self.core.f0, &self.scal);
         let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        h0 = h0.min(bound).max(100.0 * UROUND * self.x.abs()).max(f64::MIN_POSITIVE);
+        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
         let mut d2 = None;
         for _ in 0..12 {
-            let th = self.posneg * h0;
+            let th = self.core.posneg * h0;
             for i in 0..self.n {
-                self.work.tmp[i] = self.y[i] + th * self.f0[i];
+                self.work.tmp[i] = self.core.y[i] + th * self.core.f0[i];
             }
-            self.system.rhs(self.x + th, &self.work.tmp, &mut self.work.fnew);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x + th, &self.work.tmp, &mut self.work.fnew);
+            self.core.stats.rhs_evals += 1;
             if all_finite(&self.work.fnew) {
                 for i in 0..self.n {
-                    self.work.tmp[i] = self.work.fnew[i] - self.f0[i];
+                    self.work.tmp[i] = self.work.fnew[i] - self.core.f0[i];
                 }
                 d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
                 break;
             }
-            self.stats.nonfinite_rhs += 1;
+            self.core.stats.nonfinite_rhs += 1;
             h0 *= 0.1;
         }
         let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
@@ -572,23 +456,23 @@ impl<S: OdeSystem> Radau5<S> {
     /// increments √(u·max(1e-5, |y_i|))). False if not finite.
     fn compute_jacobian(&mut self) -> bool {
         let n = self.n;
-        self.stats.jac_evals += 1;
+        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
         if self.system.has_jacobian() {
             w.jac.iter_mut().for_each(|v| *v = 0.0);
             let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.x, &self.y, &mut m);
+            self.system.jacobian(self.core.x, &self.core.y, &mut m);
         } else {
-            w.tmp.copy_from_slice(&self.y);
+            w.tmp.copy_from_slice(&self.core.y);
             for j in 0..n {
                 let ysafe = w.tmp[j];
                 let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
                 w.tmp[j] = ysafe + delt;
                 let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.x, &w.tmp, &mut w.fnew);
-                self.stats.rhs_evals_jacobian += 1;
+                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
+                self.core.stats.rhs_evals_jacobian += 1;
                 for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.f0[i]) / delt;
+                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
                 }
                 w.tmp[j] = ysafe;
             }
@@ -599,7 +483,7 @@ impl<S: OdeSystem> Radau5<S> {
     /// LU factors of γ/h − J and (α + iβ)/h − J. False if either is singular.
     fn decompose(&mut self) -> bool {
         let n = self.n;
-        let h = self.h;
+        let h = self.core.h;
         let fac1 = self.c.u1 / h;
         let (alphn, betan) = (self.c.alph / h, self.c.beta / h);
         let w = &mut self.work;
@@ -613,7 +497,7 @@ impl<S: OdeSystem> Radau5<S> {
             w.e2r[j * n + j] += alphn;
             w.e2i[j * n + j] = betan;
         }
-        self.stats.lin_setups += 1;
+        self.core.stats.lin_setups += 1;
         let ok = lu_real(&mut w.e1, &mut w.ip1, n) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, n);
         self.lu_h = if ok { h } else { f64::NAN };
         ok
@@ -622,18 +506,18 @@ impl<S: OdeSystem> Radau5<S> {
     /// The simplified Newton iteration for the stage increments (RADAU5's loop 40).
     fn newton(&mut self) -> Newton {
         let n = self.n;
-        let h = self.h;
+        let h = self.core.h;
         let c = self.c;
         let fac1 = c.u1 / h;
         let (alphn, betan) = (c.alph / h, c.beta / h);
         let w = &mut self.work;
         // Starting values: zero on the first step, else the previous collocation polynomial.
-        if !self.have_step {
+        if !self.core.have_step {
             for v in [&mut w.z1, &mut w.z2, &mut w.z3, &mut w.f1, &mut w.f2, &mut w.f3] {
                 v.iter_mut().for_each(|x| *x = 0.0);
             }
         } else {
-            let c3q = h / self.hold;
+            let c3q = h / self.core.hold;
             let (c1q, c2q) = (c.c1 * c3q, c.c2 * c3q);
             for i in 0..n {
                 let (ak1, ak2, ak3) = (w.a1[i], w.a2[i], w.a3[i]);
@@ -659,14 +543,14 @@ impl<S: OdeSystem> Radau5<S> {
             // The right-hand side at the three stages.
             let mut finite = true;
             for (cs, z) in [(c.c1, &mut w.z1), (c.c2, &mut w.z2), (1.0, &mut w.z3)] {
-                for ((point, y), z) in w.tmp.iter_mut().zip(&self.y).zip(z.iter()) {
+                for ((point, y), z) in w.tmp.iter_mut().zip(&self.core.y).zip(z.iter()) {
                     *point = y + z;
                 }
-                let t = if cs == 1.0 { self.x + h } else { self.x + cs * h };
+                let t = if cs == 1.0 { self.core.x + h } else { self.core.x + cs * h };
                 self.system.rhs(t, &w.tmp, z);
-                self.stats.rhs_evals += 1;
+                self.core.stats.rhs_evals += 1;
                 if !all_finite(z) {
-                    self.stats.nonfinite_rhs += 1;
+                    self.core.stats.nonfinite_rhs += 1;
                     finite = false;
                     break;
                 }
@@ -688,7 +572,7 @@ impl<S: OdeSystem> Radau5<S> {
             solve_real(&w.e1, &w.ip1, n, &mut w.z1);
             solve_complex(&w.e2r, &w.e2i, &w.ip2, n, &mut w.z2, &mut w.z3);
             newt += 1;
-            self.stats.nonlin_iters += 1;
+            self.core.stats.nonlin_iters += 1;
             let mut sum = 0.0;
             for i in 0..n {
                 let s = self.scal[i];
@@ -737,23 +621,23 @@ impl<S: OdeSystem> Radau5<S> {
     fn estimate_error(&mut self) -> Option<f64> {
         let n = self.n;
         let c = self.c;
-        let h = self.h;
+        let h = self.core.h;
         let (hee1, hee2, hee3) = (c.dd1 / h, c.dd2 / h, c.dd3 / h);
         let w = &mut self.work;
         for i in 0..n {
             w.f2[i] = hee1 * w.z1[i] + hee2 * w.z2[i] + hee3 * w.z3[i];
-            w.tmp[i] = w.f2[i] + self.f0[i];
+            w.tmp[i] = w.f2[i] + self.core.f0[i];
         }
         solve_real(&w.e1, &w.ip1, n, &mut w.tmp);
         let mut err = rms(&w.tmp, &self.scal).max(1e-10);
-        if err >= 1.0 && (!self.have_step || self.reject) {
+        if err >= 1.0 && (!self.core.have_step || self.core.reject) {
             for i in 0..n {
-                w.ynew[i] = self.y[i] + w.tmp[i];
+                w.ynew[i] = self.core.y[i] + w.tmp[i];
             }
-            self.system.rhs(self.x, &w.ynew, &mut w.f1);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x, &w.ynew, &mut w.f1);
+            self.core.stats.rhs_evals += 1;
             if !all_finite(&w.f1) {
-                self.stats.nonfinite_rhs += 1;
+                self.core.stats.nonfinite_rhs += 1;
                 return None;
             }
             for i in 0..n {
@@ -768,16 +652,7 @@ impl<S: OdeSystem> Radau5<S> {
     /// Sets a reduced step size after a failure; an error of `kind` if h is already at
     /// `min_step`.
     fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
-        let mut hnew = hnew;
-        if hnew.abs() < self.hmin {
-            if self.h.abs() <= self.hmin {
-                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
-                return Err(self.error(kind, flag, message));
-            }
-            hnew = self.posneg * self.hmin;
-        }
-        self.h = hnew;
-        self.reject = true;
+        self.core.reduce(hnew, kind, flag, why)?;
         self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
         Ok(())
     }
@@ -787,81 +662,64 @@ impl<S: OdeSystem> Radau5<S> {
     fn step(&mut self) -> Result<bool, SolverError> {
         let (mut conv_fails, mut nonfinite, mut singular, mut rejections) = (0u32, 0u32, 0u32, 0u32);
         let mut attempts = 0u32;
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg <= 0.0 {
-                self.stop_time = None;
-            }
-        }
+        self.core.drop_passed_stop_time();
         loop {
             attempts += 1;
             if attempts > MAX_ATTEMPTS {
-                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.h);
-                return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
+                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
             }
             if let Some(h) = self.fixed_h {
-                if self.h.abs() != h {
-                    self.h = self.posneg * h;
+                if self.core.h.abs() != h {
+                    self.core.h = self.core.posneg * h;
                 }
             }
             // Do not step past the stop time.
-            let planned = self.h;
-            let mut last = false;
-            if let Some(ts) = self.stop_time {
-                if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
-                    self.h = ts - self.x;
-                    last = true;
-                }
-            }
-            // Step underflow (RADAU5: 0.1·|h| ≤ u·|x|).
-            if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
-                let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
-                if self.fail_on_step_underflow || self.x + self.h == self.x {
-                    return Err(self.error(ErrorKind::StepUnderflow, -3, message));
-                }
-                self.stats.step_underflow_warnings += 1;
-            }
+            let planned = self.core.h;
+            let last = self.core.clip_to_stop_time();
+            self.core.check_step_underflow()?;
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {
                 if !self.compute_jacobian() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
+                    return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
                 }
                 self.caljac = true;
                 self.action = Action::Decompose;
             }
-            if self.action == Action::Decompose || self.lu_h != self.h {
+            if self.action == Action::Decompose || self.lu_h != self.core.h {
                 if !self.decompose() {
                     singular += 1;
                     if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
-                        let message = format!("iteration matrix singular {singular} times (h = {:e})", self.h);
-                        return Err(self.error(ErrorKind::LinearSolver, -4, message));
+                        let message = format!("iteration matrix singular {singular} times (h = {:e})", self.core.h);
+                        return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                     }
-                    self.reduce(0.5 * self.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
+                    self.reduce(0.5 * self.core.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
                     continue;
                 }
                 self.action = Action::Reuse;
             }
-            self.stats.step_attempts += 1;
+            self.core.stats.step_attempts += 1;
             let newt = match self.newton() {
                 Newton::Converged(k) => k,
                 Newton::Diverged => {
-                    self.stats.nonlin_conv_fails += 1;
-                    self.stats.step_solve_fails += 1;
+                    self.core.stats.nonlin_conv_fails += 1;
+                    self.core.stats.step_solve_fails += 1;
                     conv_fails += 1;
                     if conv_fails >= self.max_conv_fails || self.fixed_h.is_some() {
-                        let message = format!("Newton failed {conv_fails} times in one step (h = {:e})", self.h);
-                        return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
+                        let message = format!("Newton failed {conv_fails} times in one step (h = {:e})", self.core.h);
+                        return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
                     }
-                    self.reduce(0.5 * self.h, ErrorKind::ConvergenceFailures, -5, "Newton failure")?;
+                    self.reduce(0.5 * self.core.h, ErrorKind::ConvergenceFailures, -5, "Newton failure")?;
                     continue;
                 }
                 Newton::Slow(factor) => {
-                    self.stats.nonlin_conv_fails += 1;
-                    self.stats.step_solve_fails += 1;
-                    self.reduce(factor * self.h, ErrorKind::ConvergenceFailures, -5, "slow Newton convergence")?;
+                    self.core.stats.nonlin_conv_fails += 1;
+                    self.core.stats.step_solve_fails += 1;
+                    self.reduce(factor * self.core.h, ErrorKind::ConvergenceFailures, -5, "slow Newton convergence")?;
                     continue;
                 }
                 Newton::NonFinite => {
-                    self.stats.step_solve_fails += 1;
+                    self.core.stats.step_solve_fails += 1;
                     self.nonfinite_failure(&mut nonfinite)?;
                     continue;
                 }
@@ -873,72 +731,69 @@ impl<S: OdeSystem> Radau5<S> {
             // The new step size.
             let fac = SAFE.min(SAFE * (1 + 2 * self.nit) as f64 / (newt + 2 * self.nit) as f64);
             let mut quot = (err.powf(0.25) / fac).clamp(FACR, FACL);
-            let mut hnew = self.h / quot;
+            let mut hnew = self.core.h / quot;
             if err < 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last { self.stop_time.unwrap_or(self.x + self.h) } else { self.x + self.h };
+                let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
                 let w = &mut self.work;
                 for i in 0..self.n {
-                    w.ynew[i] = self.y[i] + w.z3[i];
+                    w.ynew[i] = self.core.y[i] + w.z3[i];
                 }
                 self.system.rhs(xph, &w.ynew, &mut w.fnew);
-                self.stats.rhs_evals += 1;
+                self.core.stats.rhs_evals += 1;
                 if !all_finite(&w.fnew) {
-                    self.stats.nonfinite_rhs += 1;
+                    self.core.stats.nonfinite_rhs += 1;
                     self.nonfinite_failure(&mut nonfinite)?;
                     continue;
                 }
                 self.accept(xph, err, &mut quot, &mut hnew);
-                let h = self.h;
+                let h = self.core.h;
                 // The next step size (RADAU5 after label 30's acceptance branch).
-                hnew = self.posneg * hnew.abs().min(self.hmax).max(self.hmin);
-                if self.reject {
-                    hnew = self.posneg * hnew.abs().min(h.abs());
+                hnew = self.core.posneg * hnew.abs().min(self.core.hmax).max(self.core.hmin);
+                if self.core.reject {
+                    hnew = self.core.posneg * hnew.abs().min(h.abs());
                 }
-                self.reject = false;
+                self.core.reject = false;
                 if last {
-                    self.stop_time = None;
+                    self.core.stop_time = None;
                     hnew = planned;
                 }
                 if let Some(hf) = self.fixed_h {
-                    hnew = self.posneg * hf;
+                    hnew = self.core.posneg * hf;
                 }
                 let qt = hnew / h;
                 if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
                     self.action = Action::Reuse;
                 } else {
-                    self.h = hnew;
+                    self.core.h = hnew;
                     self.action = if self.theta <= THET { Action::Decompose } else { Action::Jacobian };
                 }
-                self.stats.current_step = self.h;
+                self.core.stats.current_step = self.core.h;
                 return Ok(last);
             }
             // Rejected by the error test.
-            self.stats.err_test_fails += 1;
+            self.core.stats.err_test_fails += 1;
             rejections += 1;
             if rejections >= self.max_err_test_fails {
-                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.h);
-                return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.core.h);
+                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
             }
-            let hnew = if self.have_step { hnew } else { 0.1 * self.h };
+            let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
             self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
         }
     }
 
     /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step.
     fn nonfinite_failure(&mut self, count: &mut u32) -> Result<(), SolverError> {
-        *count += 1;
-        if *count >= MAX_NONFINITE || self.fixed_h.is_some() {
-            let message = format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
-            return Err(self.error(ErrorKind::RhsFailure, -6, message));
-        }
-        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
+        self.core.nonfinite_failure(count, self.fixed_h.is_some())?;
+        self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
+        Ok(())
     }
 
     /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new
     /// state (RADAU5's acceptance branch).
     fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
-        let h = self.h;
+        let h = self.core.h;
         self.naccpt += 1;
         if self.naccpt > 1 {
             let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE).clamp(FACR, FACL);
@@ -947,9 +802,9 @@ impl<S: OdeSystem> Radau5<S> {
         }
         self.hacc = h;
         self.erracc = err.max(1e-2);
-        self.xold = self.x;
-        self.hold = h;
-        self.x = xph;
+        self.core.xold = self.core.x;
+        self.core.hold = h;
+        self.core.x = xph;
         let c = self.c;
         let w = &mut self.work;
         for i in 0..self.n {
@@ -960,195 +815,88 @@ impl<S: OdeSystem> Radau5<S> {
             w.a2[i] = (ak - w.a1[i]) / c.c1m1;
             w.a3[i] = w.a2[i] - acont3;
         }
-        std::mem::swap(&mut self.y, &mut w.ynew);
-        std::mem::swap(&mut self.f0, &mut w.fnew);
-        self.f0_valid = true;
+        std::mem::swap(&mut self.core.y, &mut w.ynew);
+        std::mem::swap(&mut self.core.f0, &mut w.fnew);
+        self.core.f0_valid = true;
         self.update_scal();
-        self.have_step = true;
+        self.core.have_step = true;
         self.caljac = false;
-        if self.stats.steps == 0 {
-            self.stats.initial_step = h;
+        if self.core.stats.steps == 0 {
+            self.core.stats.initial_step = h;
         }
-        self.stats.steps += 1;
-        self.stats.last_step = h;
-    }
-
-    fn invalid(&self, message: String) -> SolverError {
-        SolverError { solver: NAME, kind: ErrorKind::InvalidInput, t: self.t_out, state: self.y_out.clone(), flag: -1, message }
-    }
-
-    fn advance_inner(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        if !tout.is_finite() {
-            return Err(self.invalid(format!("tout = {tout} must be finite")));
-        }
-        if let Some(h) = self.fixed_h {
-            if !(h.is_finite() && h > 0.0) {
-                return Err(self.invalid(format!("fixed step {h} must be finite and > 0")));
-            }
-        }
-        self.start(tout, task)?;
-        if task == Task::OneStep {
-            let stopped = self.step()?;
-            self.t_out = self.x;
-            self.y_out.copy_from_slice(&self.y);
-            let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
-            return Ok(Step { t: self.x, event });
-        }
-        let mut taken = 0u64;
-        let mut stopped = false;
-        loop {
-            if (self.x - tout) * self.posneg >= 0.0 {
-                if tout == self.x {
-                    self.y_out.copy_from_slice(&self.y);
-                } else if self.have_step && (tout - self.xold) * self.posneg >= -self.fuzz() {
-                    interpolate(&self.c, &self.work, &self.y, self.x, self.hold, tout, 0, &mut self.y_out);
-                } else {
-                    let message = format!("tout = {tout:e} is behind the last step (t = {:e})", self.x);
-                    return Err(self.invalid(message));
-                }
-                self.t_out = tout;
-                return Ok(Step { t: tout, event: StepEvent::Reached });
-            }
-            if stopped {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-                return Ok(Step { t: self.x, event: StepEvent::StopTime });
-            }
-            if taken >= self.max_steps {
-                let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", self.max_steps);
-                return Err(self.error(ErrorKind::TooMuchWork, -2, message));
-            }
-            stopped = self.step()?;
-            taken += 1;
-        }
-    }
-
-    fn fuzz(&self) -> f64 {
-        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
+        self.core.stats.steps += 1;
+        self.core.stats.last_step = h;
     }
 
     /// See [`Integrator::advance`]. On an error, [`Radau5::t`] and [`Radau5::state`] are the
     /// last accepted step's end.
     pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        let nonfinite_before = self.stats.nonfinite_rhs;
-        self.advance_inner(tout, task).map_err(|mut e| {
-            if e.kind != ErrorKind::InvalidInput {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-            }
-            // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
-            // point where f turns non-finite end in a step underflow or too much work.
-            let nonfinite = self.stats.nonfinite_rhs - nonfinite_before;
-            if nonfinite > 0 {
-                if e.kind != ErrorKind::InvalidInput {
-                    e.kind = ErrorKind::RhsFailure;
-                }
-                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
-            }
-            e
-        })
+        stepper::advance(self, tout, task)
     }
 
     /// The state at [`Radau5::t`].
     pub fn state(&self) -> &[f64] {
-        &self.y_out
+        &self.core.y_out
     }
 
     /// Time of the last return.
     pub fn t(&self) -> f64 {
-        self.t_out
+        self.core.t_out
     }
 
     /// The k-th derivative (k ≤ 3) of the collocation polynomial at t inside the last step
     /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        if !t.is_finite() || k > 3 {
-            return Err(self.invalid(format!("dense output needs a finite t and k ≤ 3, got t = {t}, k = {k}")));
-        }
-        if !self.have_step {
-            if t != self.x || k > 1 {
-                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", self.x);
-                return Err(self.invalid(message));
-            }
-            if k == 0 {
-                self.work.dense.copy_from_slice(&self.y);
-            } else {
-                if !self.ensure_f0() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
-                }
-                self.work.dense.copy_from_slice(&self.f0);
-            }
-            return Ok(&self.work.dense);
-        }
-        let fuzz = self.fuzz();
-        let (lo, hi) = (self.xold.min(self.x) - fuzz, self.xold.max(self.x) + fuzz);
-        if t < lo || t > hi {
-            let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", self.xold, self.x);
-            return Err(self.invalid(message));
-        }
-        let mut out = std::mem::take(&mut self.work.dense);
-        interpolate(&self.c, &self.work, &self.y, self.x, self.hold, t, k, &mut out);
-        self.work.dense = out;
-        Ok(&self.work.dense)
+        stepper::dense(self, t, k)
     }
 
     /// Restarts at (t0, y0): step-size history, Jacobian and polynomial are dropped; options
     /// and statistics are kept.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        if y0.len() != self.n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.n);
-            return Err(self.invalid(message));
-        }
-        self.x = t0;
-        self.xold = t0;
-        self.y.copy_from_slice(y0);
-        self.t_out = t0;
-        self.y_out.copy_from_slice(y0);
-        self.f0_valid = false;
+        self.core.restart(t0, y0)?;
         self.update_scal();
-        self.started = false;
-        self.have_step = false;
-        self.reject = false;
         self.faccon = 1.0;
         self.theta = THET;
         self.naccpt = 0;
         self.caljac = false;
         self.action = Action::Jacobian;
         self.lu_h = f64::NAN;
-        self.stats.reinits += 1;
         Ok(())
     }
 
     /// Statistics over the integrator's whole life (restarts included). `lin_setups` counts
     /// one per pair of real and complex factorisations.
     pub fn stats(&self) -> Stats {
-        self.stats
+        self.core.stats
     }
 }
 
-impl<S: OdeSystem> Integrator for Radau5<S> {
-    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        Radau5::advance(self, tout, task)
+impl<S: OdeSystem> Stepper for Radau5<S> {
+    const MAX_DENSE_ORDER: u32 = 3;
+    fn core(&self) -> &Core {
+        &self.core
     }
-    fn state(&self) -> &[f64] {
-        Radau5::state(self)
+    fn core_mut(&mut self) -> &mut Core {
+        &mut self.core
     }
-    fn t(&self) -> f64 {
-        Radau5::t(self)
+    fn ensure_f0(&mut self) -> bool {
+        self.core.ensure_f0(&self.system)
     }
-    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        Radau5::dense(self, t, k)
+    fn fixed_h(&self) -> Option<f64> {
+        self.fixed_h
     }
-    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        Radau5::reinit(self, t0, y0)
+    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+        Radau5::estimate_initial_step(self, bound)
     }
-    fn stats(&self) -> Stats {
-        Radau5::stats(self)
+    fn step(&mut self) -> Result<bool, SolverError> {
+        Radau5::step(self)
     }
-    fn name(&self) -> &'static str {
-        NAME
+    fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
+        interpolate(&self.c, &self.work, &self.core.y, self.core.x, self.core.hold, t, k, out);
     }
 }
+
+stepper::integrator_via_stepper!(Radau5);
 
 #[cfg(test)]
 mod tests {

@@ -43,8 +43,9 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_real};
+use super::stepper::{self, all_finite, Core, Stepper};
 use super::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task,
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
@@ -60,8 +61,6 @@ const FAC2: f64 = 1.0 / 6.0;
 const EXPONENT: f64 = 0.2;
 /// Consecutive singular matrices W within one step before giving up.
 const MAX_SINGULAR: u32 = 5;
-/// Non-finite right-hand sides within one step before giving up.
-const MAX_NONFINITE: u32 = 10;
 const DEFAULT_MAX_STEPS: i64 = 500;
 const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 
@@ -129,7 +128,6 @@ struct Work {
     /// Start of the last step and its dense-output coefficients K1, K2, K3 (stage-major).
     yold: Vec<f64>,
     cont: Vec<f64>,
-    dense: Vec<f64>,
 }
 
 impl Work {
@@ -148,7 +146,6 @@ impl Work {
             ip: vec![0; n],
             yold: v(),
             cont: vec![0.0; 3 * n],
-            dense: v(),
         }
     }
 }
@@ -175,32 +172,10 @@ pub struct Rodas5p<S: OdeSystem> {
     rtol: f64,
     atol: Vec<f64>,
     // Options.
-    max_steps: u64,
-    hmin: f64,
-    hmax: f64,
-    initial_step: Option<f64>,
-    stop_time: Option<f64>,
     max_err_test_fails: u32,
-    fail_on_step_underflow: bool,
     fixed_h: Option<f64>,
     autonomous: bool,
     // Integration state.
-    x: f64,
-    y: Vec<f64>,
-    /// f(x, y), valid when `f0_valid`.
-    f0: Vec<f64>,
-    f0_valid: bool,
-    /// Direction, step size and step history set up (after new/reinit: at the first advance).
-    started: bool,
-    posneg: f64,
-    /// Step size to try next (signed).
-    h: f64,
-    /// Last accepted step (signed) and its start.
-    hold: f64,
-    xold: f64,
-    /// An accepted step exists since the last (re)start: the dense output is valid.
-    have_step: bool,
-    reject: bool,
     /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
     naccpt: u64,
     hacc: f64,
@@ -209,22 +184,17 @@ pub struct Rodas5p<S: OdeSystem> {
     jac_current: bool,
     /// Step size the LU factors were computed for (NaN: none valid).
     lu_h: f64,
-    // Returned state.
-    t_out: f64,
-    y_out: Vec<f64>,
+    /// Point, last step, returned state, step-sequence options and statistics.
+    core: Core,
     work: Work,
-    stats: Stats,
 }
 
 impl<S: OdeSystem> std::fmt::Debug for Rodas5p<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Rodas5p").field("n", &self.n).field("t", &self.t_out).field("t_internal", &self.x).finish()
+        f.debug_struct("Rodas5p").field("n", &self.n).field("t", &self.core.t_out).field("t_internal", &self.core.x).finish()
     }
 }
 
-fn all_finite(v: &[f64]) -> bool {
-    v.iter().all(|x| x.is_finite())
-}
 
 /// Evaluates the k-th time derivative of the continuous output of the last step [x − hold, x]
 /// at t into `out`.
@@ -252,27 +222,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let invalid = |message: String| SolverError {
-            solver: NAME,
-            kind: ErrorKind::InvalidInput,
-            t: t0,
-            state: y0.to_vec(),
-            flag: -1,
-            message,
-        };
-        if n == 0 {
-            return Err(invalid("the system has no components".into()));
-        }
-        if y0.len() != n {
-            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
-        }
-        if !t0.is_finite() {
-            return Err(invalid(format!("t0 = {t0} must be finite")));
-        }
-        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
-            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
-        }
-        options.validate(n).map_err(invalid)?;
+        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats { last_order: 5, ..Stats::default() })?;
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![*a; n],
             Tolerance::PerComponent(v) => v.clone(),
@@ -283,35 +233,16 @@ impl<S: OdeSystem> Rodas5p<S> {
             n,
             rtol: options.rtol,
             atol,
-            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
-            hmin: options.min_step.unwrap_or(0.0),
-            hmax: options.max_step.unwrap_or(f64::INFINITY),
-            initial_step: options.initial_step,
-            stop_time: options.stop_time,
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
-            fail_on_step_underflow: options.fail_on_step_underflow,
             fixed_h: None,
             autonomous: false,
-            x: t0,
-            y: y0.to_vec(),
-            f0: vec![0.0; n],
-            f0_valid: false,
-            started: false,
-            posneg: 1.0,
-            h: 0.0,
-            hold: 0.0,
-            xold: t0,
-            have_step: false,
-            reject: false,
             naccpt: 0,
             hacc: 0.0,
             erracc: 0.0,
             jac_current: false,
             lu_h: f64::NAN,
-            t_out: t0,
-            y_out: y0.to_vec(),
+            core,
             work: Work::new(n),
-            stats: Stats { last_order: 5, ..Stats::default() },
         })
     }
 
@@ -336,10 +267,6 @@ impl<S: OdeSystem> Rodas5p<S> {
         &self.system
     }
 
-    fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
-        SolverError { solver: NAME, kind, t: self.x, state: self.y.clone(), flag, message }
-    }
-
     /// Error weights atol + rtol·max(|y|, |other|) into `work.scal`.
     fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, y: &[f64], other: &[f64]) {
         for i in 0..scal.len() {
@@ -348,73 +275,31 @@ impl<S: OdeSystem> Rodas5p<S> {
         }
     }
 
-    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
-    fn ensure_f0(&mut self) -> bool {
-        if !self.f0_valid {
-            self.system.rhs(self.x, &self.y, &mut self.f0);
-            self.stats.rhs_evals += 1;
-            if !all_finite(&self.f0) {
-                self.stats.nonfinite_rhs += 1;
-                return false;
-            }
-            self.f0_valid = true;
-        }
-        true
-    }
-
-    /// First advance after new/reinit: direction, f(t0, y0), initial step.
-    fn start(&mut self, tout: f64, task: Task) -> Result<(), SolverError> {
-        if self.started {
-            return Ok(());
-        }
-        self.posneg = if tout < self.x { -1.0 } else { 1.0 };
-        if !self.ensure_f0() {
-            return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side at the initial point is not finite".into()));
-        }
-        let mut bound = self.hmax;
-        if task == Task::Normal && tout != self.x {
-            bound = bound.min((tout - self.x).abs());
-        }
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg > 0.0 {
-                bound = bound.min((ts - self.x).abs());
-            }
-        }
-        let h = match (self.fixed_h, self.initial_step) {
-            (Some(h), _) => h,
-            (None, Some(h)) => h.min(bound),
-            (None, None) => self.estimate_initial_step(bound),
-        };
-        self.h = self.posneg * h.max(self.hmin);
-        self.started = true;
-        Ok(())
-    }
-
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁵ (the embedded
     /// estimate's order), measured with the weights atol + rtol·|y0|.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.y, &self.y);
-        let d0 = rms(&self.y, &w.scal);
-        let d1 = rms(&self.f0, &w.scal);
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &self.core.y);
+        let d0 = rms(&self.core.y, &w.scal);
+        let d1 = rms(&self.core.f0, &w.scal);
         let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        h0 = h0.min(bound).max(100.0 * UROUND * self.x.abs()).max(f64::MIN_POSITIVE);
+        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
         let mut d2 = None;
         for _ in 0..12 {
-            let th = self.posneg * h0;
+            let th = self.core.posneg * h0;
             for i in 0..self.n {
-                w.tmp[i] = self.y[i] + th * self.f0[i];
+                w.tmp[i] = self.core.y[i] + th * self.core.f0[i];
             }
-            self.system.rhs(self.x + th, &w.tmp, &mut w.fnew);
-            self.stats.rhs_evals += 1;
+            self.system.rhs(self.core.x + th, &w.tmp, &mut w.fnew);
+            self.core.stats.rhs_evals += 1;
             if all_finite(&w.fnew) {
                 for i in 0..self.n {
-                    w.tmp[i] = w.fnew[i] - self.f0[i];
+                    w.tmp[i] = w.fnew[i] - self.core.f0[i];
                 }
                 d2 = Some(rms(&w.tmp, &w.scal) / h0);
                 break;
             }
-            self.stats.nonfinite_rhs += 1;
+            self.core.stats.nonfinite_rhs += 1;
             h0 *= 0.1;
         }
         let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
@@ -429,23 +314,23 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// either is not finite.
     fn compute_jacobian(&mut self) -> bool {
         let n = self.n;
-        self.stats.jac_evals += 1;
+        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
         if self.system.has_jacobian() {
             w.jac.iter_mut().for_each(|v| *v = 0.0);
             let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.x, &self.y, &mut m);
+            self.system.jacobian(self.core.x, &self.core.y, &mut m);
         } else {
-            w.tmp.copy_from_slice(&self.y);
+            w.tmp.copy_from_slice(&self.core.y);
             for j in 0..n {
                 let ysafe = w.tmp[j];
                 let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
                 w.tmp[j] = ysafe + delt;
                 let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.x, &w.tmp, &mut w.fnew);
-                self.stats.rhs_evals_jacobian += 1;
+                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
+                self.core.stats.rhs_evals_jacobian += 1;
                 for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.f0[i]) / delt;
+                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
                 }
                 w.tmp[j] = ysafe;
             }
@@ -456,18 +341,18 @@ impl<S: OdeSystem> Rodas5p<S> {
         if self.autonomous {
             return true;
         }
-        let delt = (UROUND * self.x.abs().max(1e-5)).sqrt();
-        for direction in [self.posneg, -self.posneg] {
-            let xd = self.x + direction * delt;
-            let delt = xd - self.x;
-            self.system.rhs(xd, &self.y, &mut w.fnew);
-            self.stats.rhs_evals_jacobian += 1;
+        let delt = (UROUND * self.core.x.abs().max(1e-5)).sqrt();
+        for direction in [self.core.posneg, -self.core.posneg] {
+            let xd = self.core.x + direction * delt;
+            let delt = xd - self.core.x;
+            self.system.rhs(xd, &self.core.y, &mut w.fnew);
+            self.core.stats.rhs_evals_jacobian += 1;
             if !all_finite(&w.fnew) {
-                self.stats.nonfinite_rhs += 1;
+                self.core.stats.nonfinite_rhs += 1;
                 continue;
             }
             for i in 0..n {
-                w.dfdt[i] = (w.fnew[i] - self.f0[i]) / delt;
+                w.dfdt[i] = (w.fnew[i] - self.core.f0[i]) / delt;
             }
             if all_finite(&w.dfdt) {
                 return true;
@@ -479,7 +364,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// LU factors of I/(hγ) − J. False if singular.
     fn decompose(&mut self) -> bool {
         let n = self.n;
-        let fac = 1.0 / (self.h * GAMMA);
+        let fac = 1.0 / (self.core.h * GAMMA);
         let w = &mut self.work;
         for (e, j) in w.e.iter_mut().zip(&w.jac) {
             *e = -j;
@@ -487,9 +372,9 @@ impl<S: OdeSystem> Rodas5p<S> {
         for j in 0..n {
             w.e[j * n + j] += fac;
         }
-        self.stats.lin_setups += 1;
+        self.core.stats.lin_setups += 1;
         let ok = lu_real(&mut w.e, &mut w.ip, n);
-        self.lu_h = if ok { self.h } else { f64::NAN };
+        self.lu_h = if ok { self.core.h } else { f64::NAN };
         ok
     }
 
@@ -497,25 +382,25 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// if a right-hand side was not finite.
     fn stages(&mut self) -> bool {
         let n = self.n;
-        let (x, h) = (self.x, self.h);
+        let (x, h) = (self.core.x, self.core.h);
         let w = &mut self.work;
         for s in 0..STAGES {
             let (done, rest) = w.k.split_at_mut(s * n);
             let ks = &mut rest[..n];
             if s == 0 {
-                ks.copy_from_slice(&self.f0);
+                ks.copy_from_slice(&self.core.f0);
             } else {
                 for i in 0..n {
-                    let mut v = self.y[i];
+                    let mut v = self.core.y[i];
                     for j in 0..s {
                         v += A[s][j] * done[j * n + i];
                     }
                     w.u[i] = v;
                 }
                 self.system.rhs(x + NODES[s] * h, &w.u, ks);
-                self.stats.rhs_evals += 1;
+                self.core.stats.rhs_evals += 1;
                 if !all_finite(ks) {
-                    self.stats.nonfinite_rhs += 1;
+                    self.core.stats.nonfinite_rhs += 1;
                     return false;
                 }
                 for i in 0..n {
@@ -545,7 +430,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn estimate_error(&mut self) -> f64 {
         let n = self.n;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.y, &w.ynew);
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &w.ynew);
         let err = rms(&w.k[(STAGES - 1) * n..], &w.scal);
         if err.is_finite() {
             err
@@ -554,136 +439,93 @@ impl<S: OdeSystem> Rodas5p<S> {
         }
     }
 
-    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
-    /// `min_step`.
-    fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
-        let mut hnew = hnew;
-        if hnew.abs() < self.hmin {
-            if self.h.abs() <= self.hmin {
-                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
-                return Err(self.error(kind, flag, message));
-            }
-            hnew = self.posneg * self.hmin;
-        }
-        self.h = hnew;
-        self.reject = true;
-        Ok(())
-    }
-
-    /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step.
-    fn nonfinite_failure(&mut self, count: &mut u32) -> Result<(), SolverError> {
-        *count += 1;
-        if *count >= MAX_NONFINITE || self.fixed_h.is_some() {
-            let message = format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
-            return Err(self.error(ErrorKind::RhsFailure, -6, message));
-        }
-        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
-    }
-
     /// One accepted step (with as many attempts as needed). Returns true if it ended at the
     /// stop time.
     fn step(&mut self) -> Result<bool, SolverError> {
         let (mut nonfinite, mut singular, mut rejections) = (0u32, 0u32, 0u32);
-        if let Some(ts) = self.stop_time {
-            if (ts - self.x) * self.posneg <= 0.0 {
-                self.stop_time = None;
-            }
-        }
+        self.core.drop_passed_stop_time();
         loop {
             if let Some(h) = self.fixed_h {
-                if self.h.abs() != h {
-                    self.h = self.posneg * h;
+                if self.core.h.abs() != h {
+                    self.core.h = self.core.posneg * h;
                 }
             }
             // Do not step past the stop time.
-            let planned = self.h;
-            let mut last = false;
-            if let Some(ts) = self.stop_time {
-                if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
-                    self.h = ts - self.x;
-                    last = true;
-                }
-            }
-            // Step underflow (RODAS: 0.1·|h| ≤ u·|x|).
-            if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
-                let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
-                if self.fail_on_step_underflow || self.x + self.h == self.x {
-                    return Err(self.error(ErrorKind::StepUnderflow, -3, message));
-                }
-                self.stats.step_underflow_warnings += 1;
-            }
+            let planned = self.core.h;
+            let last = self.core.clip_to_stop_time();
+            self.core.check_step_underflow()?;
             // Jacobian (once per point) and LU factors (once per step size).
             if !self.jac_current {
                 if !self.compute_jacobian() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the Jacobian or ∂f/∂t is not finite".into()));
+                    return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian or ∂f/∂t is not finite".into()));
                 }
                 self.jac_current = true;
                 self.lu_h = f64::NAN;
             }
-            if self.lu_h != self.h && !self.decompose() {
+            if self.lu_h != self.core.h && !self.decompose() {
                 singular += 1;
                 if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
-                    let message = format!("matrix I/(hγ) − J singular {singular} times (h = {:e})", self.h);
-                    return Err(self.error(ErrorKind::LinearSolver, -4, message));
+                    let message = format!("matrix I/(hγ) − J singular {singular} times (h = {:e})", self.core.h);
+                    return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                 }
-                self.reduce(0.5 * self.h, ErrorKind::LinearSolver, -4, "singular matrix")?;
+                self.core.reduce(0.5 * self.core.h, ErrorKind::LinearSolver, -4, "singular matrix")?;
                 continue;
             }
-            self.stats.step_attempts += 1;
+            self.core.stats.step_attempts += 1;
             if !self.stages() {
-                self.nonfinite_failure(&mut nonfinite)?;
+                self.core.nonfinite_failure(&mut nonfinite, self.fixed_h.is_some())?;
                 continue;
             }
             let err = self.estimate_error();
             // The new step size.
             let mut quot = (err.powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
-            let mut hnew = self.h / quot;
+            let mut hnew = self.core.h / quot;
             if err <= 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last { self.stop_time.unwrap_or(self.x + self.h) } else { self.x + self.h };
+                let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
                 let w = &mut self.work;
                 self.system.rhs(xph, &w.ynew, &mut w.fnew);
-                self.stats.rhs_evals += 1;
+                self.core.stats.rhs_evals += 1;
                 if !all_finite(&w.fnew) {
-                    self.stats.nonfinite_rhs += 1;
-                    self.nonfinite_failure(&mut nonfinite)?;
+                    self.core.stats.nonfinite_rhs += 1;
+                    self.core.nonfinite_failure(&mut nonfinite, self.fixed_h.is_some())?;
                     continue;
                 }
                 self.accept(xph, err, &mut quot, &mut hnew);
-                let h = self.h;
+                let h = self.core.h;
                 // The next step size (RODAS's acceptance branch).
-                hnew = self.posneg * hnew.abs().min(self.hmax).max(self.hmin);
-                if self.reject {
-                    hnew = self.posneg * hnew.abs().min(h.abs());
+                hnew = self.core.posneg * hnew.abs().min(self.core.hmax).max(self.core.hmin);
+                if self.core.reject {
+                    hnew = self.core.posneg * hnew.abs().min(h.abs());
                 }
-                self.reject = false;
+                self.core.reject = false;
                 if last {
-                    self.stop_time = None;
+                    self.core.stop_time = None;
                     hnew = planned;
                 }
                 if let Some(hf) = self.fixed_h {
-                    hnew = self.posneg * hf;
+                    hnew = self.core.posneg * hf;
                 }
-                self.h = hnew;
-                self.stats.current_step = self.h;
+                self.core.h = hnew;
+                self.core.stats.current_step = self.core.h;
                 return Ok(last);
             }
             // Rejected by the error test.
-            self.stats.err_test_fails += 1;
+            self.core.stats.err_test_fails += 1;
             rejections += 1;
             if rejections >= self.max_err_test_fails {
-                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.h);
-                return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.core.h);
+                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
             }
-            let hnew = if self.have_step { hnew } else { 0.1 * self.h };
-            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+            let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
+            self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
         }
     }
 
     /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new state
     /// (RODAS's acceptance branch).
     fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
-        let h = self.h;
+        let h = self.core.h;
         let n = self.n;
         self.naccpt += 1;
         if self.naccpt > 1 {
@@ -693,9 +535,9 @@ impl<S: OdeSystem> Rodas5p<S> {
         }
         self.hacc = h;
         self.erracc = err.max(1e-2);
-        self.xold = self.x;
-        self.hold = h;
-        self.x = xph;
+        self.core.xold = self.core.x;
+        self.core.hold = h;
+        self.core.x = xph;
         let w = &mut self.work;
         for (m, row) in HD.iter().enumerate() {
             for i in 0..n {
@@ -706,191 +548,84 @@ impl<S: OdeSystem> Rodas5p<S> {
                 w.cont[m * n + i] = v;
             }
         }
-        w.yold.copy_from_slice(&self.y);
-        std::mem::swap(&mut self.y, &mut w.ynew);
-        std::mem::swap(&mut self.f0, &mut w.fnew);
-        self.f0_valid = true;
-        self.have_step = true;
+        w.yold.copy_from_slice(&self.core.y);
+        std::mem::swap(&mut self.core.y, &mut w.ynew);
+        std::mem::swap(&mut self.core.f0, &mut w.fnew);
+        self.core.f0_valid = true;
+        self.core.have_step = true;
         self.jac_current = false;
-        if self.stats.steps == 0 {
-            self.stats.initial_step = h;
+        if self.core.stats.steps == 0 {
+            self.core.stats.initial_step = h;
         }
-        self.stats.steps += 1;
-        self.stats.last_step = h;
-    }
-
-    fn invalid(&self, message: String) -> SolverError {
-        SolverError { solver: NAME, kind: ErrorKind::InvalidInput, t: self.t_out, state: self.y_out.clone(), flag: -1, message }
-    }
-
-    fn advance_inner(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        if !tout.is_finite() {
-            return Err(self.invalid(format!("tout = {tout} must be finite")));
-        }
-        if let Some(h) = self.fixed_h {
-            if !(h.is_finite() && h > 0.0) {
-                return Err(self.invalid(format!("fixed step {h} must be finite and > 0")));
-            }
-        }
-        self.start(tout, task)?;
-        if task == Task::OneStep {
-            let stopped = self.step()?;
-            self.t_out = self.x;
-            self.y_out.copy_from_slice(&self.y);
-            let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
-            return Ok(Step { t: self.x, event });
-        }
-        let mut taken = 0u64;
-        let mut stopped = false;
-        loop {
-            if (self.x - tout) * self.posneg >= 0.0 {
-                if tout == self.x {
-                    self.y_out.copy_from_slice(&self.y);
-                } else if self.have_step && (tout - self.xold) * self.posneg >= -self.fuzz() {
-                    interpolate(&self.work, &self.y, self.x, self.hold, tout, 0, &mut self.y_out);
-                } else {
-                    let message = format!("tout = {tout:e} is behind the last step (t = {:e})", self.x);
-                    return Err(self.invalid(message));
-                }
-                self.t_out = tout;
-                return Ok(Step { t: tout, event: StepEvent::Reached });
-            }
-            if stopped {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-                return Ok(Step { t: self.x, event: StepEvent::StopTime });
-            }
-            if taken >= self.max_steps {
-                let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", self.max_steps);
-                return Err(self.error(ErrorKind::TooMuchWork, -2, message));
-            }
-            stopped = self.step()?;
-            taken += 1;
-        }
-    }
-
-    fn fuzz(&self) -> f64 {
-        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
+        self.core.stats.steps += 1;
+        self.core.stats.last_step = h;
     }
 
     /// See [`Integrator::advance`]. On an error, [`Rodas5p::t`] and [`Rodas5p::state`] are the
     /// last accepted step's end.
     pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        let nonfinite_before = self.stats.nonfinite_rhs;
-        self.advance_inner(tout, task).map_err(|mut e| {
-            if e.kind != ErrorKind::InvalidInput {
-                self.t_out = self.x;
-                self.y_out.copy_from_slice(&self.y);
-            }
-            // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
-            // point where f turns non-finite end in a step underflow or too much work.
-            let nonfinite = self.stats.nonfinite_rhs - nonfinite_before;
-            if nonfinite > 0 {
-                if e.kind != ErrorKind::InvalidInput {
-                    e.kind = ErrorKind::RhsFailure;
-                }
-                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
-            }
-            e
-        })
+        stepper::advance(self, tout, task)
     }
 
     /// The state at [`Rodas5p::t`].
     pub fn state(&self) -> &[f64] {
-        &self.y_out
+        &self.core.y_out
     }
 
     /// Time of the last return.
     pub fn t(&self) -> f64 {
-        self.t_out
+        self.core.t_out
     }
 
     /// The k-th derivative (k ≤ 4) of the continuous output at t inside the last step
     /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        if !t.is_finite() || k > 4 {
-            return Err(self.invalid(format!("dense output needs a finite t and k ≤ 4, got t = {t}, k = {k}")));
-        }
-        if !self.have_step {
-            if t != self.x || k > 1 {
-                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", self.x);
-                return Err(self.invalid(message));
-            }
-            if k == 0 {
-                self.work.dense.copy_from_slice(&self.y);
-            } else {
-                if !self.ensure_f0() {
-                    return Err(self.error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
-                }
-                self.work.dense.copy_from_slice(&self.f0);
-            }
-            return Ok(&self.work.dense);
-        }
-        let fuzz = self.fuzz();
-        let (lo, hi) = (self.xold.min(self.x) - fuzz, self.xold.max(self.x) + fuzz);
-        if t < lo || t > hi {
-            let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", self.xold, self.x);
-            return Err(self.invalid(message));
-        }
-        let mut out = std::mem::take(&mut self.work.dense);
-        interpolate(&self.work, &self.y, self.x, self.hold, t, k, &mut out);
-        self.work.dense = out;
-        Ok(&self.work.dense)
+        stepper::dense(self, t, k)
     }
 
     /// Restarts at (t0, y0): step-size history, Jacobian and continuous output are dropped;
     /// options and statistics are kept.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        if y0.len() != self.n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.n);
-            return Err(self.invalid(message));
-        }
-        self.x = t0;
-        self.xold = t0;
-        self.y.copy_from_slice(y0);
-        self.t_out = t0;
-        self.y_out.copy_from_slice(y0);
-        self.f0_valid = false;
-        self.started = false;
-        self.have_step = false;
-        self.reject = false;
+        self.core.restart(t0, y0)?;
         self.naccpt = 0;
         self.jac_current = false;
         self.lu_h = f64::NAN;
-        self.stats.reinits += 1;
         Ok(())
     }
 
     /// Statistics over the integrator's whole life (restarts included). `rhs_evals_jacobian`
     /// includes the finite-difference ∂f/∂t calls; `nonlin_iters` stays 0.
     pub fn stats(&self) -> Stats {
-        self.stats
+        self.core.stats
     }
 }
 
-impl<S: OdeSystem> Integrator for Rodas5p<S> {
-    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        Rodas5p::advance(self, tout, task)
+impl<S: OdeSystem> Stepper for Rodas5p<S> {
+    const MAX_DENSE_ORDER: u32 = 4;
+    fn core(&self) -> &Core {
+        &self.core
     }
-    fn state(&self) -> &[f64] {
-        Rodas5p::state(self)
+    fn core_mut(&mut self) -> &mut Core {
+        &mut self.core
     }
-    fn t(&self) -> f64 {
-        Rodas5p::t(self)
+    fn ensure_f0(&mut self) -> bool {
+        self.core.ensure_f0(&self.system)
     }
-    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        Rodas5p::dense(self, t, k)
+    fn fixed_h(&self) -> Option<f64> {
+        self.fixed_h
     }
-    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        Rodas5p::reinit(self, t0, y0)
+    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+        Rodas5p::estimate_initial_step(self, bound)
     }
-    fn stats(&self) -> Stats {
-        Rodas5p::stats(self)
+    fn step(&mut self) -> Result<bool, SolverError> {
+        Rodas5p::step(self)
     }
-    fn name(&self) -> &'static str {
-        NAME
+    fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
+        interpolate(&self.work, &self.core.y, self.core.x, self.core.hold, t, k, out);
     }
 }
+
+stepper::integrator_via_stepper!(Rodas5p);
 
 #[cfg(test)]
 mod tests {

@@ -1,0 +1,436 @@
+//! The driver shared by the homemade one-step integrators (Radau5, Rodas5P, Extrapolation):
+//! the state every method keeps in the same way ([`Core`]: current point, last step, returned
+//! state, options of the step sequence, statistics) and, on top of a method's "take one step /
+//! interpolate inside the last step" ([`Stepper`]), [`Integrator::advance`] for both tasks,
+//! stop time, `max_steps` per call, dense output and the errors with their t and state.
+//!
+//! [`Integrator::advance`]: super::Integrator::advance
+
+use super::{ErrorKind, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task};
+
+/// Unit roundoff of the step-underflow test (as in RADAU5, RODAS, SEULEX and ODEX).
+const UROUND: f64 = 1e-16;
+/// Consecutive non-finite right-hand sides in one step before giving up.
+const MAX_NONFINITE: u32 = 10;
+
+/// State and options every homemade integrator shares.
+pub(super) struct Core {
+    pub name: &'static str,
+    // Options.
+    pub max_steps: u64,
+    pub hmin: f64,
+    pub hmax: f64,
+    pub initial_step: Option<f64>,
+    pub stop_time: Option<f64>,
+    pub fail_on_step_underflow: bool,
+    // Integration state.
+    pub x: f64,
+    pub y: Vec<f64>,
+    /// f(x, y), valid when `f0_valid`.
+    pub f0: Vec<f64>,
+    pub f0_valid: bool,
+    /// Direction, step size and step history set up (after new/reinit: at the first advance).
+    pub started: bool,
+    pub posneg: f64,
+    /// Step size to try next (signed).
+    pub h: f64,
+    /// Last accepted step (signed) and its start.
+    pub hold: f64,
+    pub xold: f64,
+    /// An accepted step exists since the last (re)start: the dense output is valid.
+    pub have_step: bool,
+    pub reject: bool,
+    // Returned state.
+    pub t_out: f64,
+    pub y_out: Vec<f64>,
+    /// Buffer of [`dense`].
+    pub dense: Vec<f64>,
+    pub stats: Stats,
+}
+
+impl Core {
+    /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0).
+    pub fn new(
+        name: &'static str,
+        n: usize,
+        t0: f64,
+        y0: &[f64],
+        options: &Options,
+        default_max_steps: i64,
+        stats: Stats,
+    ) -> Result<Self, SolverError> {
+        let invalid = |message: String| SolverError {
+            solver: name,
+            kind: ErrorKind::InvalidInput,
+            t: t0,
+            state: y0.to_vec(),
+            flag: -1,
+            message,
+        };
+        if n == 0 {
+            return Err(invalid("the system has no components".into()));
+        }
+        if y0.len() != n {
+            return Err(invalid(format!("y0 has {} components; the system has {n}", y0.len())));
+        }
+        if !t0.is_finite() {
+            return Err(invalid(format!("t0 = {t0} must be finite")));
+        }
+        if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
+            return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
+        }
+        options.validate(n).map_err(invalid)?;
+        Ok(Self {
+            name,
+            max_steps: options.max_steps.unwrap_or(default_max_steps).max(1) as u64,
+            hmin: options.min_step.unwrap_or(0.0),
+            hmax: options.max_step.unwrap_or(f64::INFINITY),
+            initial_step: options.initial_step,
+            stop_time: options.stop_time,
+            fail_on_step_underflow: options.fail_on_step_underflow,
+            x: t0,
+            y: y0.to_vec(),
+            f0: vec![0.0; n],
+            f0_valid: false,
+            started: false,
+            posneg: 1.0,
+            h: 0.0,
+            hold: 0.0,
+            xold: t0,
+            have_step: false,
+            reject: false,
+            t_out: t0,
+            y_out: y0.to_vec(),
+            dense: vec![0.0; n],
+            stats,
+        })
+    }
+
+    /// An error at the internal point (the last accepted step's end).
+    pub fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
+        SolverError { solver: self.name, kind, t: self.x, state: self.y.clone(), flag, message }
+    }
+
+    /// An invalid-input error at the last returned point.
+    pub fn invalid(&self, message: String) -> SolverError {
+        SolverError {
+            solver: self.name,
+            kind: ErrorKind::InvalidInput,
+            t: self.t_out,
+            state: self.y_out.clone(),
+            flag: -1,
+            message,
+        }
+    }
+
+    /// Round-off allowance on times around the last step.
+    pub fn fuzz(&self) -> f64 {
+        100.0 * f64::EPSILON * (self.x.abs() + self.hold.abs())
+    }
+
+    /// Evaluates f(x, y) into `f0` if needed; false if it is not finite.
+    pub fn ensure_f0<S: OdeSystem>(&mut self, system: &S) -> bool {
+        if !self.f0_valid {
+            system.rhs(self.x, &self.y, &mut self.f0);
+            self.stats.rhs_evals += 1;
+            if !all_finite(&self.f0) {
+                self.stats.nonfinite_rhs += 1;
+                return false;
+            }
+            self.f0_valid = true;
+        }
+        true
+    }
+
+    /// At the start of a step: a stop time already reached is disabled (as in SUNDIALS).
+    pub fn drop_passed_stop_time(&mut self) {
+        if let Some(ts) = self.stop_time {
+            if (ts - self.x) * self.posneg <= 0.0 {
+                self.stop_time = None;
+            }
+        }
+    }
+
+    /// Before an attempt: shortens h so as not to step past the stop time; true if the step
+    /// then ends there.
+    pub fn clip_to_stop_time(&mut self) -> bool {
+        if let Some(ts) = self.stop_time {
+            if (self.x + 1.0001 * self.h - ts) * self.posneg >= 0.0 {
+                self.h = ts - self.x;
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Step underflow (RADAU5's test: 0.1·|h| ≤ u·|x|): an error if t + h = t or
+    /// `fail_on_step_underflow`, otherwise a counted warning.
+    pub fn check_step_underflow(&mut self) -> Result<(), SolverError> {
+        if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
+            let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
+            if self.fail_on_step_underflow || self.x + self.h == self.x {
+                return Err(self.error(ErrorKind::StepUnderflow, -3, message));
+            }
+            self.stats.step_underflow_warnings += 1;
+        }
+        Ok(())
+    }
+
+    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
+    /// `min_step`.
+    pub fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
+        let mut hnew = hnew;
+        if hnew.abs() < self.hmin {
+            if self.h.abs() <= self.hmin {
+                let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
+                return Err(self.error(kind, flag, message));
+            }
+            hnew = self.posneg * self.hmin;
+        }
+        self.h = hnew;
+        self.reject = true;
+        Ok(())
+    }
+
+    /// A non-finite right-hand side: halve h, or fail after MAX_NONFINITE in one step (at
+    /// once with a fixed step).
+    pub fn nonfinite_failure(&mut self, count: &mut u32, fixed: bool) -> Result<(), SolverError> {
+        *count += 1;
+        if *count >= MAX_NONFINITE || fixed {
+            let message =
+                format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
+            return Err(self.error(ErrorKind::RhsFailure, -6, message));
+        }
+        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
+    }
+
+    /// The common part of `reinit`: checks (t0, y0) and restarts the point, the returned
+    /// state and the step history; statistics run on.
+    pub fn restart(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+        let n = self.y.len();
+        if y0.len() != n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            let message = format!("reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {y0:?}");
+            return Err(self.invalid(message));
+        }
+        self.x = t0;
+        self.xold = t0;
+        self.y.copy_from_slice(y0);
+        self.t_out = t0;
+        self.y_out.copy_from_slice(y0);
+        self.f0_valid = false;
+        self.started = false;
+        self.have_step = false;
+        self.reject = false;
+        self.stats.reinits += 1;
+        Ok(())
+    }
+}
+
+pub(super) fn all_finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// What a method provides to the shared driver.
+pub(super) trait Stepper {
+    /// Highest derivative [`dense`] gives.
+    const MAX_DENSE_ORDER: u32;
+    fn core(&self) -> &Core;
+    fn core_mut(&mut self) -> &mut Core;
+    /// Evaluates f at the current point into `core.f0` if needed (see [`Core::ensure_f0`]).
+    fn ensure_f0(&mut self) -> bool;
+    /// Testing aid: the constant step size, if any.
+    fn fixed_h(&self) -> Option<f64>;
+    /// Checks the testing aids before a call to `advance` (by default: the fixed step).
+    fn check_fixed(&self) -> Result<(), String> {
+        if let Some(h) = self.fixed_h() {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(format!("fixed step {h} must be finite and > 0"));
+            }
+        }
+        Ok(())
+    }
+    /// Initial step size (unsigned) at most `bound`, with `core.f0` valid.
+    fn estimate_initial_step(&mut self, bound: f64) -> f64;
+    /// One accepted step (with as many attempts as needed); true if it ended at the stop time.
+    fn step(&mut self) -> Result<bool, SolverError>;
+    /// The k-th derivative of the last step's continuous output at t into `out`.
+    fn interpolate(&self, t: f64, k: u32, out: &mut [f64]);
+}
+
+/// First advance after new/reinit: direction, f(t0, y0), initial step.
+fn start<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<(), SolverError> {
+    if m.core().started {
+        return Ok(());
+    }
+    let c = m.core_mut();
+    c.posneg = if tout < c.x { -1.0 } else { 1.0 };
+    if !m.ensure_f0() {
+        let c = m.core();
+        return Err(c.error(
+            ErrorKind::RhsFailure,
+            -6,
+            "the right-hand side at the initial point is not finite".into(),
+        ));
+    }
+    let c = m.core();
+    let mut bound = c.hmax;
+    if task == Task::Normal && tout != c.x {
+        bound = bound.min((tout - c.x).abs());
+    }
+    if let Some(ts) = c.stop_time {
+        if (ts - c.x) * c.posneg > 0.0 {
+            bound = bound.min((ts - c.x).abs());
+        }
+    }
+    let (fixed, initial) = (m.fixed_h(), c.initial_step);
+    let h = match (fixed, initial) {
+        (Some(h), _) => h,
+        (None, Some(h)) => h.min(bound),
+        (None, None) => m.estimate_initial_step(bound),
+    };
+    let c = m.core_mut();
+    c.h = c.posneg * h.max(c.hmin);
+    c.started = true;
+    Ok(())
+}
+
+fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, SolverError> {
+    if !tout.is_finite() {
+        return Err(m.core().invalid(format!("tout = {tout} must be finite")));
+    }
+    m.check_fixed().map_err(|message| m.core().invalid(message))?;
+    start(m, tout, task)?;
+    if task == Task::OneStep {
+        let stopped = m.step()?;
+        let c = m.core_mut();
+        c.t_out = c.x;
+        c.y_out.copy_from_slice(&c.y);
+        let event = if stopped { StepEvent::StopTime } else { StepEvent::Reached };
+        return Ok(Step { t: c.x, event });
+    }
+    let mut taken = 0u64;
+    let mut stopped = false;
+    loop {
+        let c = m.core();
+        if (c.x - tout) * c.posneg >= 0.0 {
+            if tout == c.x {
+                let c = m.core_mut();
+                c.y_out.copy_from_slice(&c.y);
+            } else if c.have_step && (tout - c.xold) * c.posneg >= -c.fuzz() {
+                let mut out = std::mem::take(&mut m.core_mut().y_out);
+                m.interpolate(tout, 0, &mut out);
+                m.core_mut().y_out = out;
+            } else {
+                let message = format!("tout = {tout:e} is behind the last step (t = {:e})", c.x);
+                return Err(c.invalid(message));
+            }
+            m.core_mut().t_out = tout;
+            return Ok(Step { t: tout, event: StepEvent::Reached });
+        }
+        if stopped {
+            let c = m.core_mut();
+            c.t_out = c.x;
+            c.y_out.copy_from_slice(&c.y);
+            return Ok(Step { t: c.x, event: StepEvent::StopTime });
+        }
+        let c = m.core();
+        if taken >= c.max_steps {
+            let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", c.max_steps);
+            return Err(c.error(ErrorKind::TooMuchWork, -2, message));
+        }
+        stopped = m.step()?;
+        taken += 1;
+    }
+}
+
+/// [`Integrator::advance`](super::Integrator::advance) of a method. On an error, the returned
+/// t and state are the last accepted step's end.
+pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, SolverError> {
+    let nonfinite_before = m.core().stats.nonfinite_rhs;
+    advance_inner(m, tout, task).map_err(|mut e| {
+        let c = m.core_mut();
+        if e.kind != ErrorKind::InvalidInput {
+            c.t_out = c.x;
+            c.y_out.copy_from_slice(&c.y);
+        }
+        // Name the root cause, as the SUNDIALS wrapper does: steps shrinking onto the
+        // point where f turns non-finite end in a step underflow or too much work.
+        let nonfinite = c.stats.nonfinite_rhs - nonfinite_before;
+        if nonfinite > 0 {
+            if e.kind != ErrorKind::InvalidInput {
+                e.kind = ErrorKind::RhsFailure;
+            }
+            e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+        }
+        e
+    })
+}
+
+/// [`Integrator::dense`](super::Integrator::dense) of a method: the k-th derivative
+/// (k ≤ `M::MAX_DENSE_ORDER`) of the continuous output at t inside the last step; before the
+/// first step, only t = t0 and k ≤ 1.
+pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], SolverError> {
+    let max = M::MAX_DENSE_ORDER;
+    if !t.is_finite() || k > max {
+        return Err(m.core().invalid(format!("dense output needs a finite t and k ≤ {max}, got t = {t}, k = {k}")));
+    }
+    if !m.core().have_step {
+        let c = m.core();
+        if t != c.x || k > 1 {
+            let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", c.x);
+            return Err(c.invalid(message));
+        }
+        if k == 0 {
+            let c = m.core_mut();
+            c.dense.copy_from_slice(&c.y);
+        } else {
+            if !m.ensure_f0() {
+                return Err(m.core().error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
+            }
+            let c = m.core_mut();
+            c.dense.copy_from_slice(&c.f0);
+        }
+        return Ok(&m.core().dense);
+    }
+    let c = m.core();
+    let fuzz = c.fuzz();
+    let (lo, hi) = (c.xold.min(c.x) - fuzz, c.xold.max(c.x) + fuzz);
+    if t < lo || t > hi {
+        let message = format!("t = {t:e} is outside the last step [{:e}, {:e}]", c.xold, c.x);
+        return Err(c.invalid(message));
+    }
+    let mut out = std::mem::take(&mut m.core_mut().dense);
+    m.interpolate(t, k, &mut out);
+    m.core_mut().dense = out;
+    Ok(&m.core().dense)
+}
+
+/// `impl Integrator` for a method implementing [`Stepper`] (with an inherent `reinit`).
+macro_rules! integrator_via_stepper {
+    ($T:ident) => {
+        impl<S: OdeSystem> Integrator for $T<S> {
+            fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+                stepper::advance(self, tout, task)
+            }
+            fn state(&self) -> &[f64] {
+                &self.core().y_out
+            }
+            fn t(&self) -> f64 {
+                self.core().t_out
+            }
+            fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+                stepper::dense(self, t, k)
+            }
+            fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+                $T::reinit(self, t0, y0)
+            }
+            fn stats(&self) -> Stats {
+                self.core().stats
+            }
+            fn name(&self) -> &'static str {
+                self.core().name
+            }
+        }
+    };
+}
+pub(super) use integrator_via_stepper;
