@@ -7,7 +7,8 @@ STICKSLIP_WITH_VALGRIND=1 bash tools/deps.sh
 status=0
 for test in wrappers sundials_examples; do
     binary=$(cargo test --test "$test" --no-run --message-format=json 2>/dev/null \
-        | grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
+        | grep '"kind":\["test"\]' | grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
+    [ -n "$binary" ] || { echo "valgrind.sh: no test binary for $test" >&2; exit 1; }
     echo "== valgrind memcheck: $test ($binary)"
     valgrind --quiet --leak-check=full --show-leak-kinds=definite,indirect \
         --errors-for-leak-kinds=definite,indirect --error-exitcode=3 \
