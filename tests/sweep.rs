@@ -6,8 +6,9 @@ use std::process::Command;
 
 const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("stickslip-sweep-{}", std::process::id()));
+/// A directory of this test's own (tests run in parallel in one process).
+fn dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("stickslip-sweep-{}-{test}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
 }
@@ -45,7 +46,7 @@ fn sorted_rows(path: &Path) -> Vec<String> {
 
 #[test]
 fn a_killed_and_resumed_sweep_yields_the_uninterrupted_rows() {
-    let d = dir();
+    let d = dir("resume");
     let s = scene(&d);
     let full = d.join("full.jsonl");
     assert!(sweep(&s, &full, &["--threads", "2"]).status.success());
@@ -80,8 +81,7 @@ fn a_killed_and_resumed_sweep_yields_the_uninterrupted_rows() {
 
 #[test]
 fn shards_merge_into_the_full_sweep() {
-    let d = dir().join("shards");
-    std::fs::create_dir_all(&d).unwrap();
+    let d = dir("shards");
     let s = scene(&d);
     let full = d.join("full.jsonl");
     assert!(sweep(&s, &full, &[]).status.success());
@@ -102,12 +102,12 @@ fn shards_merge_into_the_full_sweep() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing"));
+    std::fs::remove_dir_all(&d).ok();
 }
 
 #[test]
 fn bad_sweep_arguments_exit_2() {
-    let d = dir().join("bad");
-    std::fs::create_dir_all(&d).unwrap();
+    let d = dir("bad");
     let s = scene(&d);
     let out = d.join("o.jsonl");
     for args in [["--param", "delta=1:2:3"], ["--param", "epsilon=1:2"], ["--param", "gamma=0:1e3:3:log"], ["--shard", "4/3"]] {
