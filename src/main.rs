@@ -329,6 +329,9 @@ fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(),
         for d in &summary.defects {
             println!("  DEFECT {d}");
         }
+        // A cell passes when it ends in a finite report or a typed error.
+        let failed = summary.panics + summary.nan + summary.inconsistent;
+        println!("stress: {} passed, {} failed", summary.cells - summary.panics - summary.nan, failed);
     }
     if summary.defects.is_empty() {
         Ok(())
