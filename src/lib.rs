@@ -3,8 +3,8 @@
 //!
 //! Data flow: [`scene`] (JSON, validated) → [`model`] (the DRR system) → integrator (the
 //! [`integrate`] contract, implemented over SUNDIALS in [`sundials`]) → [`analysis`] (hopf,
-//! cycle, paper) → [`report`] (JSON). [`engine`] wires them. All `unsafe` code lives in
-//! [`sundials`].
+//! cycle, paper) → [`report`] (JSON). [`engine`] wires them. All FFI lives in [`sundials`];
+//! everywhere else the crate denies it (`deny(unsafe_code)`).
 
 #![deny(unsafe_code)]
 
