@@ -251,6 +251,41 @@ fn compare_command(
     Ok(())
 }
 
+/// A one-line progress report with ETA on stderr, shown only when stderr is a terminal.
+struct Progress {
+    label: &'static str,
+    unit: &'static str,
+    started: std::time::Instant,
+    terminal: bool,
+}
+
+impl Progress {
+    fn new(label: &'static str, unit: &'static str) -> Self {
+        Self { label, unit, started: std::time::Instant::now(), terminal: std::io::stderr().is_terminal() }
+    }
+
+    fn update(&self, done: usize, total: usize) {
+        if self.terminal {
+            let elapsed = self.started.elapsed().as_secs_f64();
+            let eta = elapsed / done as f64 * (total - done) as f64;
+            eprint!("\r{}: {done}/{total} {}, {elapsed:.0} s, ETA {eta:.0} s   ", self.label, self.unit);
+        }
+    }
+
+    /// Ends the progress line; returns the seconds elapsed.
+    fn finish(&self) -> f64 {
+        if self.terminal {
+            eprintln!();
+        }
+        self.started.elapsed().as_secs_f64()
+    }
+}
+
+/// `--threads`, or every core.
+fn worker_threads(threads: Option<usize>) -> usize {
+    threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
 fn sweep_command(
     path: PathBuf,
     specs: Vec<String>,
@@ -265,22 +300,11 @@ fn sweep_command(
     let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;
     sweep::check_base(&base, &axes).map_err(|e| Failure(2, format!("{}: {e}", path.display())))?;
     let shard = shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e))?;
-    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let started = std::time::Instant::now();
-    let terminal = std::io::stderr().is_terminal();
-    let progress = |done: usize, total: usize| {
-        if terminal {
-            let elapsed = started.elapsed().as_secs_f64();
-            let eta = elapsed / done as f64 * (total - done) as f64;
-            eprint!("\rsweep: {done}/{total} points, {elapsed:.0} s, ETA {eta:.0} s   ");
-        }
-    };
-    let ran = sweep::run(&base, &axes, &out, resume, shard, threads, &progress)
+    let progress = Progress::new("sweep", "points");
+    let ran = sweep::run(&base, &axes, &out, resume, shard, worker_threads(threads), &|d, t| progress.update(d, t))
         .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
-    if terminal {
-        eprintln!();
-    }
-    println!("sweep: {ran} points run into {} in {:.1} s", out.display(), started.elapsed().as_secs_f64());
+    let seconds = progress.finish();
+    println!("sweep: {ran} points run into {} in {seconds:.1} s", out.display());
     Ok(())
 }
 
@@ -299,27 +323,15 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
 
 fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
     let cells = stress::grid(quick);
-    let threads = threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let started = std::time::Instant::now();
-    let terminal = std::io::stderr().is_terminal();
-    let progress = |done: usize, total: usize| {
-        if terminal {
-            let elapsed = started.elapsed().as_secs_f64();
-            let eta = elapsed / done as f64 * (total - done) as f64;
-            eprint!("\rstress: {done}/{total} cells, {elapsed:.0} s, ETA {eta:.0} s   ");
-        }
-    };
-    let (_, summary) = stress::run(&cells, threads, &progress);
-    if terminal {
-        eprintln!();
-    }
+    let progress = Progress::new("stress", "cells");
+    let (_, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
+    let seconds = progress.finish();
     if json {
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
     } else {
         println!(
-            "stress: {} cells in {:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent",
+            "stress: {} cells in {seconds:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent",
             summary.cells,
-            started.elapsed().as_secs_f64(),
             summary.ok,
             summary.typed_errors,
             summary.panics,

@@ -1202,13 +1202,8 @@ impl<S: OdeSystem> Extrapolation<S> {
             Mode::Implicit => self.core.f0_valid = false,
         }
         self.update_scal();
-        self.core.have_step = true;
+        self.core.count_accepted(h);
         self.caljac = false;
-        if self.core.stats.steps == 0 {
-            self.core.stats.initial_step = h;
-        }
-        self.core.stats.steps += 1;
-        self.core.stats.last_step = h;
         self.core.stats.last_order = match self.mode {
             Mode::Explicit => 2 * kc as i32,
             Mode::Implicit => kc as i32,
@@ -1442,28 +1437,6 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             *o = (hermite + corr) / scale;
         }
-    }
-
-    /// See [`Integrator::advance`]. On an error, [`Extrapolation::t`] and
-    /// [`Extrapolation::state`] are the last accepted step's end.
-    pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        stepper::advance(self, tout, task)
-    }
-
-    /// The state at [`Extrapolation::t`].
-    pub fn state(&self) -> &[f64] {
-        &self.core.y_out
-    }
-
-    /// Time of the last return.
-    pub fn t(&self) -> f64 {
-        self.core.t_out
-    }
-
-    /// The k-th derivative (k ≤ 3) of the continuous output at t inside the last step
-    /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
-    pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        stepper::dense(self, t, k)
     }
 
     /// Restarts at (t0, y0) with the explicit scheme (unless a scheme is forced): step-size and

@@ -552,35 +552,8 @@ impl<S: OdeSystem> Rodas5p<S> {
         std::mem::swap(&mut self.core.y, &mut w.ynew);
         std::mem::swap(&mut self.core.f0, &mut w.fnew);
         self.core.f0_valid = true;
-        self.core.have_step = true;
+        self.core.count_accepted(h);
         self.jac_current = false;
-        if self.core.stats.steps == 0 {
-            self.core.stats.initial_step = h;
-        }
-        self.core.stats.steps += 1;
-        self.core.stats.last_step = h;
-    }
-
-    /// See [`Integrator::advance`]. On an error, [`Rodas5p::t`] and [`Rodas5p::state`] are the
-    /// last accepted step's end.
-    pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        stepper::advance(self, tout, task)
-    }
-
-    /// The state at [`Rodas5p::t`].
-    pub fn state(&self) -> &[f64] {
-        &self.core.y_out
-    }
-
-    /// Time of the last return.
-    pub fn t(&self) -> f64 {
-        self.core.t_out
-    }
-
-    /// The k-th derivative (k ≤ 4) of the continuous output at t inside the last step
-    /// [t_prev, t_internal]; before the first step, only t = t0 and k ≤ 1.
-    pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        stepper::dense(self, t, k)
     }
 
     /// Restarts at (t0, y0): step-size history, Jacobian and continuous output are dropped;

@@ -49,6 +49,16 @@ pub(super) struct Core {
 }
 
 impl Core {
+    /// Books an accepted step of size `h`.
+    pub(super) fn count_accepted(&mut self, h: f64) {
+        self.have_step = true;
+        if self.stats.steps == 0 {
+            self.stats.initial_step = h;
+        }
+        self.stats.steps += 1;
+        self.stats.last_step = h;
+    }
+
     /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0).
     pub fn new(
         name: &'static str,
@@ -408,18 +418,43 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
 /// `impl Integrator` for a method implementing [`Stepper`] (with an inherent `reinit`).
 macro_rules! integrator_via_stepper {
     ($T:ident) => {
-        impl<S: OdeSystem> Integrator for $T<S> {
-            fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+        impl<S: OdeSystem> $T<S> {
+            /// See [`Integrator::advance`]. On an error, `t()` and `state()` are the last
+            /// accepted step's end.
+            pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
                 stepper::advance(self, tout, task)
             }
-            fn state(&self) -> &[f64] {
+
+            /// The state at `t()`.
+            pub fn state(&self) -> &[f64] {
                 &self.core().y_out
             }
-            fn t(&self) -> f64 {
+
+            /// Time of the last return.
+            pub fn t(&self) -> f64 {
                 self.core().t_out
             }
-            fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+
+            /// The k-th derivative (k ≤ the method's dense order) of the continuous output at
+            /// t inside the last step [t_prev, t_internal]; before the first step, only t = t0
+            /// and k ≤ 1.
+            pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
                 stepper::dense(self, t, k)
+            }
+        }
+
+        impl<S: OdeSystem> Integrator for $T<S> {
+            fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
+                $T::advance(self, tout, task)
+            }
+            fn state(&self) -> &[f64] {
+                $T::state(self)
+            }
+            fn t(&self) -> f64 {
+                $T::t(self)
+            }
+            fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+                $T::dense(self, t, k)
             }
             fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
                 $T::reinit(self, t0, y0)
