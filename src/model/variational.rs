@@ -98,12 +98,12 @@ impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
     fn jacobian(&self, t: f64, z: &[f64], jac: &mut JacobianMatrix<'_>) {
         let y = &z[..N];
         let j = self.jac(t, y);
-        for row in 0..N {
-            for col in 0..N {
+        for (row, r) in j.iter().enumerate() {
+            for (col, &entry) in r.iter().enumerate() {
                 // ∂f/∂y, and ∂(JΦ)/∂Φ: J on each column block.
-                jac.set(row, col, j[row][col]);
+                jac.set(row, col, entry);
                 for block in 0..N {
-                    jac.set(N + block * N + row, N + block * N + col, j[row][col]);
+                    jac.set(N + block * N + row, N + block * N + col, entry);
                 }
             }
         }
