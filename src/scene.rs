@@ -225,6 +225,8 @@ pub struct Analyses {
     pub trajectory_cycles: Option<usize>,
     /// Compare with the paper's quoted values.
     pub paper: bool,
+    /// Matched asymptotics against the numerics (needs "cycle").
+    pub asymptotics: Option<crate::analysis::asymptotics::AsymptoticsOptions>,
 }
 
 /// A validated scene.
@@ -248,7 +250,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, \"asymptotics\", {\"asymptotics\": {...}}";
 
 /// Parses and validates a scene from JSON text. `source_name` names it in errors.
 pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
@@ -480,11 +482,19 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                 }
                 out.trajectory_cycles = Some(t.cycles);
             }
+            "asymptotics" => {
+                let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of("asymptotics")?)
+                    .map_err(|(sub, message)| err(&format!("{field}.asymptotics{sub}"), message))?;
+                out.asymptotics = Some(o);
+            }
             other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
         }
     }
     if out.trajectory_cycles.is_some() && out.cycle.is_none() {
         return Err(err("analyses", "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into()));
+    }
+    if out.asymptotics.is_some() && out.cycle.is_none() {
+        return Err(err("analyses", "\"asymptotics\" works on the limit cycle found by \"cycle\"; add \"cycle\"".into()));
     }
     if out.paper && (out.cycle.is_none() || !out.hopf) {
         return Err(err("analyses", "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into()));

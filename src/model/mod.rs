@@ -1,8 +1,10 @@
 //! Models: ODE systems with their Jacobians.
 
 pub mod drr;
+pub mod fast_slip;
 pub mod friction;
 pub mod robertson;
+pub mod slow_manifold;
 pub mod variational;
 
 pub use drr::{Drr, DrrParams};
