@@ -1,7 +1,9 @@
 //! The variational (tangent) equations of a system: the state y and the fundamental matrix Φ
 //! integrated together,
 //!
-//!     dy/dt = f(y),   dΦ/dt = J(y) Φ,   Φ(t₀) = I,
+//! ```text
+//! dy/dt = f(y),   dΦ/dt = J(y) Φ,   Φ(t₀) = I,
+//! ```
 //!
 //! so that Φ(t) = ∂y(t)/∂y(t₀). Over one period of a cycle Φ is the monodromy matrix (Floquet
 //! multipliers, shooting); along an orbit it gives finite-time Lyapunov exponents.
