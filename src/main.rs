@@ -95,6 +95,9 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Also write the full table of outcomes (per γ and method, per start) as Markdown.
+        #[arg(long, value_name = "FILE.md")]
+        table: Option<PathBuf>,
     },
     /// Print the SUNDIALS version linked at run time.
     Version,
@@ -321,11 +324,15 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     }
 }
 
-fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
+fn stress_command(quick: bool, json: bool, threads: Option<usize>, table: Option<PathBuf>) -> Result<(), Failure> {
     let cells = stress::grid(quick);
     let progress = Progress::new("stress", "cells");
-    let (_, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
+    let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
     let seconds = progress.finish();
+    if let Some(path) = table {
+        let text = format!("{} cells in {seconds:.0} s\n\n{}", cells.len(), stress::table(&cells, &outcomes, &summary));
+        report::write_atomic(&path, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))?;
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
     } else {
@@ -357,7 +364,7 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Run { scene, json, out } => run_command(scene, json, out),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
-        Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
+        Command::Stress { quick, json, threads, table } => stress_command(quick, json, threads, table),
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
