@@ -11,6 +11,7 @@
 pub mod analysis;
 pub mod compare;
 pub mod engine;
+pub mod figure;
 pub mod integrate;
 pub mod model;
 pub mod report;
