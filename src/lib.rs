@@ -15,6 +15,7 @@ pub mod figure;
 pub mod integrate;
 pub mod model;
 pub mod report;
+pub mod reproduce;
 pub mod scene;
 pub mod stress;
 pub mod sweep;

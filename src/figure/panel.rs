@@ -124,12 +124,20 @@ pub struct Note {
     pub anchor: Anchor,
     /// Colour.
     pub colour: String,
+    /// Shift from the data point in px (right, down).
+    pub offset: (f64, f64),
 }
 
 impl Note {
     /// A note in the ink colour.
     pub fn new(x: f64, y: f64, text: impl Into<String>, anchor: Anchor) -> Self {
-        Self { x, y, text: text.into(), anchor, colour: INK.into() }
+        Self { x, y, text: text.into(), anchor, colour: INK.into(), offset: (0.0, 0.0) }
+    }
+
+    /// Shifts the note by (dx, dy) px from its data point (right, down).
+    pub fn offset(mut self, dx: f64, dy: f64) -> Self {
+        self.offset = (dx, dy);
+        self
     }
 
     /// Replaces the colour.
@@ -300,7 +308,7 @@ impl Panel {
         let left = TICK_LEN + 4.0 + y_label_w + 8.0 + LABEL_FONT + 4.0;
         let mut right = 14.0;
         let mut pw = w - left - right;
-        let mut target = ((pw / 90.0) as usize).clamp(2, 8);
+        let mut target = ((pw / 65.0) as usize).clamp(2, 8);
         let x_ticks = loop {
             let t = scale::ticks(self.x.kind, xlo, xhi, target);
             let sx = Scale { kind: self.x.kind, lo: xlo, hi: xhi, px_lo: 0.0, px_hi: pw };
@@ -386,7 +394,7 @@ impl Panel {
             &text::to_svg(&self.y.title()),
         );
         for n in &self.notes {
-            let p = (sx.map(n.x), sy.map(n.y));
+            let p = (sx.map(n.x) + n.offset.0, sy.map(n.y) + n.offset.1);
             let anchor = match n.anchor {
                 Anchor::Start => "start",
                 Anchor::Middle => "middle",

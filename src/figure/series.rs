@@ -90,6 +90,12 @@ impl Style {
         self
     }
 
+    /// Replaces the line width (px).
+    pub fn width(mut self, width: f64) -> Self {
+        self.width = width;
+        self
+    }
+
     /// Adds a marker at each point.
     pub fn marker(mut self, marker: Marker) -> Self {
         self.marker = Some(marker);
