@@ -30,7 +30,7 @@ impl Row {
         Self {
             figure: figure.into(),
             claim: c.claim.clone(),
-            paper: format!("{}", c.paper),
+            paper: short(c.paper),
             ours: format!("{:.4} ({:+.1} %)", c.ours, 100.0 * c.relative_difference),
             verdict: c.verdict.into(),
             note: c.note.clone(),
@@ -99,6 +99,16 @@ pub struct Summary {
     pub figures: Vec<FigureResult>,
     /// The paper's figures not yet reproduced.
     pub pending: Vec<Pending>,
+}
+
+/// A number with at most 6 significant digits, without trailing zeros.
+fn short(x: f64) -> String {
+    if x == x.round() && x.abs() < 1e15 {
+        return format!("{x}");
+    }
+    let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let s = format!("{x:.digits$}");
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
 fn md_cell(s: &str) -> String {
@@ -262,6 +272,14 @@ mod tests {
             assert!(md.contains(p.figure), "{} missing", p.figure);
         }
         assert_eq!(s.failed().len(), 1);
+    }
+
+    #[test]
+    fn paper_values_are_short() {
+        assert_eq!(short(28.0), "28");
+        assert_eq!(short(7.509842836890551), "7.50984");
+        assert_eq!(short(2.5), "2.5");
+        assert_eq!(short(0.000123456789), "0.000123457");
     }
 
     #[test]
