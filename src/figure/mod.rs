@@ -25,7 +25,7 @@ pub mod svg;
 pub mod text;
 
 pub use layout::Figure;
-pub use panel::{Anchor, Axis, LegendPlace, Note, Panel, RefLine};
+pub use panel::{Anchor, Axis, Band, LegendPlace, Note, Panel, RefLine};
 pub use scale::ScaleKind;
 pub use series::{Dash, Marker, Series, Style};
 

@@ -75,6 +75,31 @@ impl Axis {
     }
 }
 
+/// A filled band between two curves lo(x) and hi(x) (e.g. mean ± σ of an ensemble), drawn
+/// under the series.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Band {
+    /// Legend label (markup); empty for none.
+    pub label: String,
+    /// x values.
+    pub x: Vec<f64>,
+    /// Lower edge at each x.
+    pub lo: Vec<f64>,
+    /// Upper edge at each x.
+    pub hi: Vec<f64>,
+    /// Fill colour.
+    pub colour: String,
+    /// Fill opacity (0–1).
+    pub opacity: f64,
+}
+
+impl Band {
+    /// A band of the `i`-th palette colour at 25 % opacity.
+    pub fn new(label: impl Into<String>, x: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>, i: usize) -> Self {
+        Self { label: label.into(), x, lo, hi, colour: super::series::colour(i).into(), opacity: 0.25 }
+    }
+}
+
 /// A horizontal or vertical reference line across the panel (e.g. a threshold, an event time).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefLine {
@@ -177,6 +202,8 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Reference lines, drawn under the series.
     pub lines: Vec<RefLine>,
+    /// Filled bands, drawn under everything else.
+    pub bands: Vec<Band>,
     /// Text notes.
     pub notes: Vec<Note>,
     /// Legend placement.
@@ -203,12 +230,18 @@ impl Rect {
 impl Panel {
     /// An empty panel with a title and its two axes.
     pub fn new(title: impl Into<String>, x: Axis, y: Axis) -> Self {
-        Self { title: title.into(), x, y, series: Vec::new(), lines: Vec::new(), notes: Vec::new(), legend: LegendPlace::Auto, grid: true }
+        Self { title: title.into(), x, y, series: Vec::new(), lines: Vec::new(), bands: Vec::new(), notes: Vec::new(), legend: LegendPlace::Auto, grid: true }
     }
 
     /// Adds a series.
     pub fn series(mut self, s: Series) -> Self {
         self.series.push(s);
+        self
+    }
+
+    /// Adds a filled band.
+    pub fn band(mut self, b: Band) -> Self {
+        self.bands.push(b);
         self
     }
 
@@ -243,7 +276,25 @@ impl Panel {
                 }
             }
         }
-        if self.series.iter().all(|s| s.x.is_empty()) {
+        for b in &self.bands {
+            let series = || text::plain(&b.label);
+            if b.lo.len() != b.x.len() || b.hi.len() != b.x.len() {
+                return Err(FigureError::LengthMismatch { panel: panel(), series: series(), x: b.x.len(), y: b.lo.len().min(b.hi.len()) });
+            }
+            for (index, ((&x, &lo), &hi)) in b.x.iter().zip(&b.lo).zip(&b.hi).enumerate() {
+                for y in [lo, hi] {
+                    if !x.is_finite() || !y.is_finite() {
+                        return Err(FigureError::NonFinite { panel: panel(), series: series(), index, x, y });
+                    }
+                    for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
+                        if a.kind == ScaleKind::Log10 && value <= 0.0 {
+                            return Err(FigureError::NonPositiveOnLog { panel: panel(), series: series(), axis, index, value });
+                        }
+                    }
+                }
+            }
+        }
+        if self.series.iter().all(|s| s.x.is_empty()) && self.bands.iter().all(|b| b.x.is_empty()) {
             return Err(FigureError::Empty { panel: panel() });
         }
         for s in &self.series {
@@ -281,7 +332,8 @@ impl Panel {
             .iter()
             .flat_map(|s| if along_x { s.x.iter() } else { s.y.iter() })
             .copied()
-            .chain(self.lines.iter().filter(|l| l.vertical == along_x).map(|l| l.value));
+            .chain(self.lines.iter().filter(|l| l.vertical == along_x).map(|l| l.value))
+            .chain(self.bands.iter().flat_map(|b| if along_x { b.x.clone() } else { b.lo.iter().chain(&b.hi).copied().collect() }));
         values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
     }
 
@@ -356,6 +408,19 @@ impl Panel {
         // Pixel samples of everything drawn, to place the legend where it hides the least.
         let mut occupied: Vec<(f64, f64)> = Vec::new();
         svg.open("g", &[("clip-path", format!("url(#{id})"))]);
+        for b in &self.bands {
+            let upper = b.x.iter().zip(&b.hi).map(|(&x, &y)| (sx.map(x), sy.map(y)));
+            let lower = b.x.iter().zip(&b.lo).rev().map(|(&x, &y)| (sx.map(x), sy.map(y)));
+            for edge in [upper.clone().collect::<Vec<_>>(), lower.clone().collect()] {
+                sample_runs(&clip_and_thin(&edge, &plot), &mut occupied);
+            }
+            let poly = clip_polygon(&upper.chain(lower).collect::<Vec<_>>(), &Rect { x: plot.x - 2.0, y: plot.y - 2.0, w: plot.w + 4.0, h: plot.h + 4.0 });
+            if poly.len() >= 3 {
+                let mut d: String = poly.iter().enumerate().map(|(i, p)| format!("{}{} {}", if i == 0 { "M" } else { "L" }, px(p.0), px(p.1))).collect();
+                d.push('Z');
+                svg.empty("path", &[("d", d), ("fill", b.colour.clone()), ("fill-opacity", format!("{}", b.opacity.clamp(0.0, 1.0))), ("stroke", "none".into())]);
+            }
+        }
         for l in &self.lines {
             let (a, b) = if l.vertical {
                 let x = sx.map(l.value);
@@ -448,11 +513,12 @@ impl Panel {
     }
 
     fn draw_legend(&self, svg: &mut Svg, plot: &Rect, occupied: &[(f64, f64)]) {
-        let entries: Vec<(&str, &Style)> = self
+        let entries: Vec<(&str, Swatch)> = self
             .series
             .iter()
-            .map(|s| (s.label.as_str(), &s.style))
-            .chain(self.lines.iter().map(|l| (l.label.as_str(), &l.style)))
+            .map(|s| (s.label.as_str(), Swatch::Line(&s.style)))
+            .chain(self.lines.iter().map(|l| (l.label.as_str(), Swatch::Line(&l.style))))
+            .chain(self.bands.iter().map(|b| (b.label.as_str(), Swatch::Fill(&b.colour, b.opacity))))
             .filter(|(l, _)| !l.is_empty())
             .collect();
         if entries.is_empty() || self.legend == LegendPlace::Hidden {
@@ -496,13 +562,21 @@ impl Panel {
         };
         svg.open("g", &[("class", "legend".into())]);
         svg.empty("rect", &[("x", px(x)), ("y", px(y)), ("width", px(lw)), ("height", px(lh)), ("fill", "white".into()), ("fill-opacity", "0.88".into()), ("stroke", "#999999".into()), ("stroke-width", "0.8".into())]);
-        for (i, (label, style)) in entries.iter().enumerate() {
+        for (i, (label, swatch)) in entries.iter().enumerate() {
             let cy = y + 6.0 + line_h * (i as f64 + 0.5);
-            if style.width > 0.0 {
-                draw_path(svg, &[vec![(x + 8.0, cy), (x + 32.0, cy)]], style);
-            }
-            if let Some(m) = style.marker {
-                draw_marker(svg, (x + 20.0, cy), m, style);
+            match swatch {
+                Swatch::Line(style) => {
+                    if style.width > 0.0 {
+                        draw_path(svg, &[vec![(x + 8.0, cy), (x + 32.0, cy)]], style);
+                    }
+                    if let Some(m) = style.marker {
+                        draw_marker(svg, (x + 20.0, cy), m, style);
+                    }
+                }
+                Swatch::Fill(colour, opacity) => svg.empty(
+                    "rect",
+                    &[("x", px(x + 8.0)), ("y", px(cy - 5.0)), ("width", "24".into()), ("height", "10".into()), ("fill", colour.to_string()), ("fill-opacity", format!("{}", opacity.clamp(0.0, 1.0)))],
+                ),
             }
             svg.text_markup(
                 &[("x", px(x + 38.0)), ("y", px(cy + SMALL_FONT * 0.35)), ("font-size", px(SMALL_FONT)), ("fill", INK.into())],
@@ -511,6 +585,40 @@ impl Panel {
         }
         svg.close();
     }
+}
+
+/// What a legend entry shows: a line (and marker) or a filled swatch.
+enum Swatch<'a> {
+    Line(&'a Style),
+    Fill(&'a str, f64),
+}
+
+/// Clips a polygon to `r` (Sutherland–Hodgman): the visible part, edges inside unchanged.
+fn clip_polygon(poly: &[(f64, f64)], r: &Rect) -> Vec<(f64, f64)> {
+    type Edge = (fn(&(f64, f64), &Rect) -> bool, fn((f64, f64), (f64, f64), &Rect) -> (f64, f64));
+    let edges: [Edge; 4] = [
+        (|p, r| p.0 >= r.x, |a, b, r| (r.x, a.1 + (b.1 - a.1) * (r.x - a.0) / (b.0 - a.0))),
+        (|p, r| p.0 <= r.x + r.w, |a, b, r| (r.x + r.w, a.1 + (b.1 - a.1) * (r.x + r.w - a.0) / (b.0 - a.0))),
+        (|p, r| p.1 >= r.y, |a, b, r| (a.0 + (b.0 - a.0) * (r.y - a.1) / (b.1 - a.1), r.y)),
+        (|p, r| p.1 <= r.y + r.h, |a, b, r| (a.0 + (b.0 - a.0) * (r.y + r.h - a.1) / (b.1 - a.1), r.y + r.h)),
+    ];
+    let mut out = poly.to_vec();
+    for (inside, cross) in edges {
+        let input = std::mem::take(&mut out);
+        for (i, &p) in input.iter().enumerate() {
+            let prev = input[(i + input.len() - 1) % input.len()];
+            match (inside(&prev, r), inside(&p, r)) {
+                (true, true) => out.push(p),
+                (true, false) => out.push(cross(prev, p, r)),
+                (false, true) => {
+                    out.push(cross(prev, p, r));
+                    out.push(p);
+                }
+                (false, false) => {}
+            }
+        }
+    }
+    out
 }
 
 /// Whether neighbouring labelled x ticks would print over each other.
@@ -706,6 +814,39 @@ mod tests {
         let e = p(vec![1.0], vec![1.0], Axis::log10("v").dimensionless().range(0.0, 1.0)).validate().unwrap_err();
         assert!(matches!(e, FigureError::BadRange { .. }), "{e}");
         assert!(p(vec![1.0], vec![1.0], Axis::log10("v").dimensionless()).validate().is_ok());
+    }
+
+    #[test]
+    fn polygons_are_clipped_to_the_plot() {
+        let r = rect();
+        // Inside: unchanged.
+        let inside = [(10.0, 10.0), (20.0, 10.0), (20.0, 20.0)];
+        assert_eq!(clip_polygon(&inside, &r), inside.to_vec());
+        // A square sticking out to the right is cut at x = 100, keeping its edges' directions.
+        let out = clip_polygon(&[(90.0, 10.0), (1e9, 10.0), (1e9, 20.0), (90.0, 20.0)], &r);
+        assert!(out.iter().all(|p| p.0 <= 100.0 && p.0 >= 90.0), "{out:?}");
+        assert!(out.contains(&(100.0, 10.0)) && out.contains(&(100.0, 20.0)), "{out:?}");
+        // Entirely outside: nothing.
+        assert!(clip_polygon(&[(200.0, 10.0), (300.0, 10.0), (300.0, 20.0)], &r).is_empty());
+    }
+
+    #[test]
+    fn bands_are_drawn_validated_and_in_the_legend() {
+        let x: Vec<f64> = (0..20).map(f64::from).collect();
+        let mid: Vec<f64> = x.iter().map(|x| x.sin() + 2.0).collect();
+        let p = Panel::new("(a) band", Axis::linear("t").unit("s"), Axis::log10("v").unit("m/s"))
+            .band(Band::new("mean ± σ", x.clone(), mid.iter().map(|m| m - 0.5).collect(), mid.iter().map(|m| m + 0.5).collect(), 0))
+            .series(Series::new("mean", x.clone(), mid.clone(), Style::line(0)));
+        let mut svg = Svg::new(400.0, 300.0, "t");
+        p.render(&mut svg, 0.0, 0.0, 400.0, 300.0, "c0").unwrap();
+        let doc = svg.finish();
+        assert!(doc.contains("fill-opacity=\"0.25\""), "band drawn");
+        assert!(doc.contains("mean ± σ"), "band in the legend");
+        let bad = Panel::new("(b) bad", Axis::linear("t").unit("s"), Axis::log10("v").unit("m/s"))
+            .band(Band::new("σ", x.clone(), vec![0.0; 20], mid.clone(), 0));
+        assert!(matches!(bad.validate(), Err(FigureError::NonPositiveOnLog { .. })));
+        let short = Panel::new("(c) short", Axis::linear("t").unit("s"), Axis::linear("v").unit("m/s")).band(Band::new("σ", x, vec![0.0; 3], mid, 0));
+        assert!(matches!(short.validate(), Err(FigureError::LengthMismatch { .. })));
     }
 
     #[test]
