@@ -131,6 +131,23 @@ struct RawCycleOptions {
     max_steps: Option<u64>,
 }
 
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawShootingOptions {
+    tolerance: Option<f64>,
+    max_iterations: Option<usize>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawContinuation {
+    parameter: String,
+    to: f64,
+    points: usize,
+    #[serde(default)]
+    log: Option<bool>,
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawTrajectory {
@@ -214,6 +231,29 @@ pub struct CycleOptions {
     pub max_steps: Option<u64>,
 }
 
+/// Options of the "shooting" analysis (None = default, see
+/// [`crate::analysis::shooting::ShootingSettings`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ShootingOptions {
+    /// Newton convergence tolerance (relative residual).
+    pub tolerance: Option<f64>,
+    /// Newton iterations at most.
+    pub max_iterations: Option<usize>,
+}
+
+/// The "continuation" analysis: from the scene's value of `parameter` to `to`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContinuationOptions {
+    /// The parameter.
+    pub parameter: crate::analysis::continuation::Parameter,
+    /// Final value.
+    pub to: f64,
+    /// Grid points, both ends included.
+    pub points: usize,
+    /// Grid uniform in log10 (default: true for γ, false otherwise).
+    pub log: bool,
+}
+
 /// Which analyses to run; everything else is neither computed nor stored.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Analyses {
@@ -227,6 +267,12 @@ pub struct Analyses {
     pub paper: bool,
     /// Matched asymptotics against the numerics (needs "cycle").
     pub asymptotics: Option<crate::analysis::asymptotics::AsymptoticsOptions>,
+    /// Local and finite-time Lyapunov exponents along the cycle (needs "cycle").
+    pub lyapunov: Option<crate::analysis::lyapunov::LyapunovOptions>,
+    /// The periodic orbit by shooting (None: not asked).
+    pub shooting: Option<ShootingOptions>,
+    /// Continuation of the orbit in a parameter (None: not asked).
+    pub continuation: Option<ContinuationOptions>,
 }
 
 /// A validated scene.
@@ -250,7 +296,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, \"asymptotics\", {\"asymptotics\": {...}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// Parses and validates a scene from JSON text. `source_name` names it in errors.
 pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
@@ -487,14 +533,65 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                     .map_err(|(sub, message)| err(&format!("{field}.asymptotics{sub}"), message))?;
                 out.asymptotics = Some(o);
             }
+            "lyapunov" => {
+                let o = crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
+                    .map_err(|(sub, message)| err(&format!("{field}.lyapunov{sub}"), message))?;
+                out.lyapunov = Some(o);
+            }
+            "shooting" => {
+                let o: RawShootingOptions = serde_json::from_value(options_of("shooting")?)
+                    .map_err(|e| err(&format!("{field}.shooting"), e.to_string()))?;
+                if let Some(t) = o.tolerance {
+                    if !(t > 0.0 && t <= 0.1) {
+                        return Err(err(&format!("{field}.shooting.tolerance"), format!("{t} must be in (0, 0.1], e.g. 1e-8")));
+                    }
+                }
+                if let Some(n) = o.max_iterations {
+                    if n == 0 || n > 1000 {
+                        return Err(err(&format!("{field}.shooting.max_iterations"), format!("{n} must be between 1 and 1000")));
+                    }
+                }
+                out.shooting = Some(ShootingOptions { tolerance: o.tolerance, max_iterations: o.max_iterations });
+            }
+            "continuation" => {
+                use crate::analysis::continuation::Parameter;
+                let Some(v) = options.clone() else {
+                    return Err(err(&field, "\"continuation\" needs {\"parameter\": \"epsilon\", \"to\": 1.2, \"points\": 51}".into()));
+                };
+                let f = format!("{field}.continuation");
+                let c: RawContinuation = serde_json::from_value(v).map_err(|e| err(&f, e.to_string()))?;
+                let parameter = match c.parameter.as_str() {
+                    "epsilon" => Parameter::Epsilon,
+                    "xi" => Parameter::Xi,
+                    "gamma" => Parameter::Gamma,
+                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\" or \"gamma\""))),
+                };
+                let to = finite(&format!("{f}.to"), c.to, err)?;
+                if parameter != Parameter::Epsilon && to <= 0.0 {
+                    return Err(err(&format!("{f}.to"), format!("{to} must be > 0 for {}", parameter.name())));
+                }
+                if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
+                    return Err(err(&format!("{f}.to"), format!("{to:e} is outside 1e-100 … 1e100")));
+                }
+                if !(2..=100_000).contains(&c.points) {
+                    return Err(err(&format!("{f}.points"), format!("{} must be between 2 and 100000", c.points)));
+                }
+                let log = c.log.unwrap_or(parameter == Parameter::Gamma);
+                if log && parameter == Parameter::Epsilon {
+                    return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
+                }
+                out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
+            }
             other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
         }
     }
     if out.trajectory_cycles.is_some() && out.cycle.is_none() {
         return Err(err("analyses", "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into()));
     }
-    if out.asymptotics.is_some() && out.cycle.is_none() {
-        return Err(err("analyses", "\"asymptotics\" works on the limit cycle found by \"cycle\"; add \"cycle\"".into()));
+    for (asked, name) in [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")] {
+        if asked && out.cycle.is_none() {
+            return Err(err("analyses", format!("\"{name}\" works on the limit cycle found by \"cycle\"; add \"cycle\"")));
+        }
     }
     if out.paper && (out.cycle.is_none() || !out.hopf) {
         return Err(err("analyses", "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into()));

@@ -461,14 +461,8 @@ impl<'a> Tracker<'a> {
         Ok(())
     }
 
-    /// Whether a restart at y is safe: the model's dw/dt there, whose error is the solver's
-    /// error in G (its tolerance on w over ξ) amplified by γ² e^{−w}, is resolved to 1e-3 of
-    /// `rate`, the scale of dw/dt in the current rise.
     fn restart_safe(&self, y: &[f64; 3], rate: f64) -> bool {
-        let p = self.drr.params();
-        let (rtol, atol) = self.settings.w_tolerance;
-        let error_g = (rtol * y[W].abs() + atol) / p.xi;
-        p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
+        restart_safe(self.drr, self.settings.w_tolerance, y, rate)
     }
 
     /// Re-bases time at the step end `at` (a point the integrator computed, never an
@@ -531,6 +525,16 @@ impl<'a> Tracker<'a> {
             Ok(())
         }
     }
+}
+
+/// Whether a restart (time re-base) at y is safe: the model's dw/dt there, whose error is the
+/// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, over ξ) amplified by
+/// γ² e^{−w}, is resolved to 1e-3 of `rate`, the scale of dw/dt in the current rise.
+pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
+    let p = drr.params();
+    let (rtol, atol) = w_tolerance;
+    let error_g = (rtol * y[W].abs() + atol) / p.xi;
+    p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
 }
 
 /// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or

@@ -1,5 +1,6 @@
 //! Analyses of a scene: what `analyses` asks for, and nothing else.
 
+pub mod continuation;
 pub mod cycle;
 pub mod events;
 pub mod hopf;
@@ -8,5 +9,8 @@ pub mod asymptotics;
 pub mod claims;
 pub mod finite;
 pub mod fit;
+pub mod lyapunov;
 pub mod orbit;
 pub mod series;
+pub mod period_map;
+pub mod shooting;
