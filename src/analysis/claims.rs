@@ -70,6 +70,12 @@ impl Claim {
         Self::new(claim, source, 0.0, ours, "agrees if ours < 0".into(), verdict, note)
     }
 
+    /// A lower bound: agrees if ours ≥ reference, disagrees otherwise.
+    pub fn at_least(claim: &str, source: Source, reference: f64, ours: f64, note: String) -> Self {
+        let verdict = if ours >= reference { "agrees" } else { "disagrees" };
+        Self::new(claim, source, reference, ours, "agrees if ours ≥ reference".into(), verdict, note)
+    }
+
     /// Every real number of the claim (for the finiteness check).
     pub fn numbers(&self) -> impl Iterator<Item = f64> + '_ {
         [self.reference, self.ours, self.difference].into_iter().chain(self.relative_difference)
@@ -132,5 +138,7 @@ mod tests {
         let n = Claim::negative("c < 0", Source::Paper, -0.2, String::new());
         assert_eq!((n.verdict, n.relative_difference), ("agrees", None));
         assert_eq!(Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict, "disagrees");
+        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict, "agrees");
+        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict, "disagrees");
     }
 }

@@ -8,7 +8,9 @@
 
 use super::cycle::{CycleReport, CycleStatus};
 
-/// One period of the cycle; samples in time order, s from about −(period − …) to … .
+/// One period of the cycle; samples in time order (non-decreasing: in the slip arrest at
+/// γ ≳ 1e7 steps of 1e-17 fall below the recorded clock's resolution and neighbours can share
+/// a time).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Orbit {
     /// Period of the recorded cycle.
@@ -46,12 +48,14 @@ impl Orbit {
         if argmin <= argmax {
             return Err("the v minimum does not follow the slip in the recorded cycle".into());
         }
-        let t_c = tr.t[argmax] + period;
         // From the v minimum to the end of the cycle, then the start of the cycle (one period
-        // later) up to the v minimum; t = 0 and t = period are the same state.
+        // later) up to the v minimum; t = 0 and t = period are the same state. Times from the
+        // peak are differences of the recorded times (the period is added only to the stick's
+        // part, far from the peak, so the slip keeps the recorded resolution).
+        let t_peak = tr.t[argmax];
         let order: Vec<(usize, f64)> =
-            (argmin..n).map(|i| (i, tr.t[i])).chain((1..=argmin).map(|i| (i, tr.t[i] + period))).collect();
-        let s: Vec<f64> = order.iter().map(|&(_, t)| t - t_c).collect();
+            (argmin..n).map(|i| (i, (tr.t[i] - period) - t_peak)).chain((1..=argmin).map(|i| (i, tr.t[i] - t_peak))).collect();
+        let s: Vec<f64> = order.iter().map(|&(_, s)| s).collect();
         let u: Vec<f64> = order.iter().map(|&(i, _)| tr.u[i]).collect();
         let w: Vec<f64> = order.iter().map(|&(i, _)| tr.v[i].ln()).collect();
         let theta: Vec<f64> = order.iter().map(|&(i, _)| tr.theta[i]).collect();

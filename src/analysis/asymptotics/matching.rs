@@ -117,6 +117,9 @@ pub struct MatchingReport {
     pub before: Option<Branch>,
     /// Branch fitted after the v maximum.
     pub after: Option<Branch>,
+    /// Largest v at which the descent after the v maximum is back on S (null if it never is
+    /// before v = 1): the after-branch exists only if this reaches window_v_min.
+    pub descent_on_manifold_v_max: Option<f64>,
     /// Blow-up predicted from the branch before.
     pub predicted_blow_up: Option<PredictedBlowUp>,
     /// Lines of Fig. 3b: zero acceleration (derived), the paper's printed zero-acceleration
@@ -230,6 +233,12 @@ pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, 
     let end = (orbit.peak..orbit.down).find(|&k| orbit.w[k] < ln_v_min).unwrap_or(orbit.down);
     let mut after_idx: Vec<usize> = (orbit.peak + 1..end).rev().take_while(|&k| on_manifold(k)).collect();
     after_idx.reverse();
+    // The descent's last stretch on S before v = 1 (the v maximum itself is on S too).
+    let descent_on_manifold_v_max = (orbit.peak + 1..orbit.down)
+        .rev()
+        .take_while(|&k| on_manifold(k))
+        .map(|k| orbit.w[k].exp())
+        .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))));
     let before = fit_branch(orbit, params, &before_idx);
     let after = fit_branch(orbit, params, &after_idx);
     let predicted_blow_up = before.as_ref().and_then(|b| {
@@ -288,6 +297,7 @@ pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, 
         window_manifold_tolerance: options.manifold_tolerance,
         before,
         after,
+        descent_on_manifold_v_max,
         predicted_blow_up,
         lines,
         theta_max_point,

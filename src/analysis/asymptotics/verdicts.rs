@@ -100,26 +100,30 @@ fn matching_claims(m: &MatchingReport, t0: f64, out: &mut Vec<Claim>) {
             format!("least-squares c over {} step ends with v in [{:.3e}, {:.3e}] on S", b.points, b.v_range[0], b.v_range[1]),
         ));
     }
+    if m.after.is_none() {
+        out.push(Claim::at_least(
+            "a matching region exists after the catastrophe: the descent is back on S while v ≥ window_v_min",
+            Source::Paper,
+            m.window_v_min,
+            m.descent_on_manifold_v_max.unwrap_or(1.0),
+            format!(
+                "largest v at which the descent is within {} of S in ln v (1 if only below v = 1): the slip arrest brings v down \
+                 off S, so the paper's second matching branch has no data here",
+                m.window_manifold_tolerance
+            ),
+        ));
+    }
     for (branch, which) in [(&m.before, "before"), (&m.after, "after")] {
-        match branch {
-            Some(b) => out.push(Claim::absolute(
+        if let Some(b) = branch {
+            out.push(Claim::absolute(
                 &format!("θ(u) = c e^{{εu}} − K(1+εu) fits the cycle {which} the catastrophe"),
                 Source::Paper,
                 0.0,
                 b.residual_rms,
                 scale,
                 "1 % of the cycle's θ range: indistinguishable in Fig. 3b",
-                format!("RMS residual in θ over {} step ends (max {:.3e}), c = {:.6e}", b.points, b.residual_max, b.c),
-            )),
-            None => out.push(Claim::absolute(
-                &format!("θ(u) = c e^{{εu}} − K(1+εu) fits the cycle {which} the catastrophe"),
-                Source::Paper,
-                0.0,
-                m.theta_range,
-                scale,
-                "1 % of the θ range",
-                format!("NO step end of the cycle {which} the catastrophe has v ≥ {} on S (within {}): no matching region; ours is the θ range", m.window_v_min, m.window_manifold_tolerance),
-            )),
+                format!("RMS residual in θ over {} step ends (max {:.3e}), c = {:.6e}, u in [{:.4}, {:.4}]", b.points, b.residual_max, b.c, b.u_range[0], b.u_range[1]),
+            ));
         }
     }
     if let Some(p) = &m.predicted_blow_up {
