@@ -131,7 +131,9 @@ pub fn matching_theta(xi: f64, epsilon: f64, c: f64, u: f64) -> f64 {
 
 /// Φ(u) = −c e^{εu} + (ξ/ε) u + K: u' = e^{Φ(u)} on the matching curve.
 pub fn phi(xi: f64, epsilon: f64, c: f64, u: f64) -> f64 {
-    -c * (epsilon * u).exp() + xi / epsilon * u + matching_k(xi, epsilon)
+    // c = 0 exactly: no exponential term (0 · e^{εu} would be NaN once e^{εu} overflows).
+    let growth = if c == 0.0 { 0.0 } else { -c * (epsilon * u).exp() };
+    growth + xi / epsilon * u + matching_k(xi, epsilon)
 }
 
 #[cfg(test)]
@@ -178,7 +180,7 @@ mod tests {
         f.rhs(0.0, &[0.0, u, theta], &mut d);
         assert!((d[U] / d[T] - du).abs() < 1e-12 && (d[THETA] / d[T] - dtheta).abs() < 1e-12);
         // The paper's form: v = e^{−(ξu+θ)}, dθ/dt = v [εθ + (1+ε)ξu].
-        let v = (-(0.7 * u + theta) as f64).exp();
+        let v = (-(0.7 * u + theta)).exp();
         assert!((dtheta - v * (0.72 * theta + 1.72 * 0.7 * u)).abs() < 1e-12);
         // Far out on the blow-up, nothing overflows.
         f.rhs(0.0, &[0.0, 50.0, -2000.0], &mut d);
@@ -197,5 +199,7 @@ mod tests {
             // On the curve, ln v = −(ξu + θ) = Φ(u).
             assert!((-(xi * u + theta) - phi(xi, e, c, u)).abs() < 1e-12);
         }
+        // c = 0: no NaN where e^{εu} overflows.
+        assert_eq!(phi(xi, e, 0.0, 2000.0), xi / e * 2000.0 + matching_k(xi, e));
     }
 }

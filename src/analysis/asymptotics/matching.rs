@@ -174,8 +174,10 @@ fn fit_branch(orbit: &Orbit, params: &DrrParams, idx: &[usize]) -> Option<Branch
     })
 }
 
-/// ∫_a^b f by adaptive Simpson to an absolute tolerance.
-fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
+/// ∫_a^b f by adaptive Simpson to an absolute tolerance (or the arithmetic's resolution on
+/// each interval, whichever is larger); None if f is not finite or 1e7 intervals do not
+/// suffice.
+fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> Option<f64> {
     let rule = |a: f64, fa: f64, b: f64, fb: f64| {
         let m = 0.5 * (a + b);
         let fm = f(m);
@@ -183,25 +185,32 @@ fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
     };
     let (fa, fb) = (f(a), f(b));
     let (m, fm, whole) = rule(a, fa, b, fb);
-    let mut stack = vec![(a, fa, b, fb, m, fm, whole, tol, 0u32)];
-    let mut total = 0.0;
-    while let Some((a, fa, b, fb, m, fm, whole, tol, depth)) = stack.pop() {
+    let mut stack = vec![(a, fa, b, fb, m, fm, whole, tol)];
+    let (mut total, mut intervals) = (0.0, 0u32);
+    while let Some((a, fa, b, fb, m, fm, whole, tol)) = stack.pop() {
+        intervals += 1;
         let (lm, flm, left) = rule(a, fa, m, fm);
         let (rm, frm, right) = rule(m, fm, b, fb);
         let delta = left + right - whole;
-        if depth >= 60 || delta.abs() <= 15.0 * tol {
+        if !delta.is_finite() || intervals > 10_000_000 {
+            return None;
+        }
+        // Converged, or at the resolution of the arithmetic (|delta| is then rounding).
+        let rounding = 64.0 * f64::EPSILON * (left.abs() + right.abs());
+        if delta.abs() <= (15.0 * tol).max(rounding) {
             total += left + right + delta / 15.0;
         } else {
-            stack.push((a, fa, m, fm, lm, flm, left, 0.5 * tol, depth + 1));
-            stack.push((m, fm, b, fb, rm, frm, right, 0.5 * tol, depth + 1));
+            stack.push((a, fa, m, fm, lm, flm, left, 0.5 * tol));
+            stack.push((m, fm, b, fb, rm, frm, right, 0.5 * tol));
         }
     }
-    total
+    Some(total)
 }
 
 /// ∫_{u0}^∞ e^{−Φ(u)} du: the time the matching solution u' = e^{Φ(u)} takes from u0 to its
-/// blow-up. None if c > 0 (Φ eventually decreases: no blow-up). For c ≤ 0, Φ increases
-/// monotonically and the integral converges (for c = 0 too: u' = e^{(ξ/ε)u + K}).
+/// blow-up. None if c > 0 (Φ eventually decreases: no blow-up) or the quadrature fails. For
+/// c ≤ 0, Φ increases monotonically and the integral converges (for c = 0 too:
+/// u' = e^{(ξ/ε)u + K}).
 pub fn blow_up_integral(xi: f64, epsilon: f64, c: f64, u0: f64) -> Option<f64> {
     if c > 0.0 {
         return None;
@@ -213,8 +222,8 @@ pub fn blow_up_integral(xi: f64, epsilon: f64, c: f64, u0: f64) -> Option<f64> {
         span *= 2.0;
     }
     // First a coarse estimate (the integrand is at most 1 and decreasing) for the tolerance.
-    let scale = simpson(&f, u0, u0 + span, 1e-6 * span);
-    Some((-p0).exp() * simpson(&f, u0, u0 + span, 1e-14 * scale))
+    let scale = simpson(&f, u0, u0 + span, 1e-6 * span)?;
+    Some((-p0).exp() * simpson(&f, u0, u0 + span, 1e-14 * scale)?)
 }
 
 /// The matching analysis of one cycle. `slow_samples` are the 2D flow's (t − t_c, u, θ, ln v).
