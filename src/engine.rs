@@ -1,5 +1,6 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
+use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::{cycle, hopf, paper};
 use crate::integrate::{ErrorKind, Extrapolation, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
 use crate::model::Drr;
@@ -83,8 +84,21 @@ fn non_finite(what: &str) -> SolverError {
     }
 }
 
-/// Runs a scene. `scene_json` is the scene as given, echoed in the report.
+/// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
+/// "noise" analysis) use every core.
 pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    run_with(scene, scene_json, threads, &|_, _| {})
+}
+
+/// [`run`] with `threads` worker threads for ensembles and `progress(done, total)` called
+/// after each realisation.
+pub fn run_with(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Report, SolverError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
@@ -134,6 +148,18 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
         _ => None,
     };
+    let noise = match &a.noise {
+        Some(options) => {
+            let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
+            let model = NoiseModel::Drr { system: drr, amplitudes };
+            let report = noise::run(&model, &scene.initial, options, threads, progress).map_err(|e| diagnose(&drr, e))?;
+            if !report.is_finite() {
+                return Err(non_finite("noise"));
+            }
+            Some(report)
+        }
+        None => None,
+    };
     let y = scene.initial;
     Ok(Report {
         stickslip_version: env!("CARGO_PKG_VERSION"),
@@ -161,6 +187,7 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         cycle: cycle_report,
         physical,
         paper,
+        noise,
         wall_time_s: started.elapsed().as_secs_f64(),
     })
 }

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
+use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
@@ -28,6 +29,10 @@ enum Command {
         /// Write the JSON report to FILE (atomically).
         #[arg(long, value_name = "FILE")]
         out: Option<PathBuf>,
+        /// Worker threads for ensembles (the "noise" analysis; default: all cores). Results do
+        /// not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -145,7 +150,7 @@ struct Failure(u8, String);
 
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
-fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Result<(), Failure> {
+fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads: Option<usize>) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (
             std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", p.display())))?,
@@ -153,17 +158,36 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
         ),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
-    let scene = scene::parse(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
+    let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let report = engine::run(&scene, echo).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+    let progress = Progress::new("noise", "realisations");
+    let update = |d, t| progress.update(d, t);
+    let threads = worker_threads(threads);
+    let (report_json, summary) = match &scene {
+        scene::AnyScene::Drr(scene) => {
+            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            (report.to_json(), report.summary())
+        }
+        scene::AnyScene::Other(scene) => {
+            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            (report.to_json(), report.summary())
+        }
+    };
+    let ensembles = match &scene {
+        scene::AnyScene::Drr(scene) => scene.analyses.noise.is_some(),
+        scene::AnyScene::Other(_) => true,
+    };
+    if ensembles {
+        progress.finish();
+    }
     if let Some(file) = &out {
-        report::write_atomic(file, &report.to_json())
+        report::write_atomic(file, &report_json)
             .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
     }
     if json {
-        println!("{}", report.to_json());
+        println!("{report_json}");
     } else {
-        print!("{}", report.summary());
+        print!("{summary}");
         if let Some(file) = &out {
             println!("report written to {}", file.display());
         }
@@ -355,7 +379,7 @@ fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(),
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out } => run_command(scene, json, out),
+        Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),

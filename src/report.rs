@@ -3,6 +3,7 @@
 
 use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::hopf::HopfReport;
+use crate::analysis::noise::NoiseReport;
 use crate::analysis::paper::Claim;
 use crate::integrate::Stats;
 use crate::scene::{Dimensional, Method, Units};
@@ -91,6 +92,9 @@ pub struct Report {
     /// The "paper" comparison.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<Vec<Claim>>,
+    /// The "noise" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseReport>,
     /// Wall-clock time of the computation (seconds).
     pub wall_time_s: f64,
 }
@@ -163,6 +167,9 @@ impl Report {
         }
         if let Some(p) = &self.physical {
             s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
+        }
+        if let Some(n) = &self.noise {
+            s += &n.summary();
         }
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";

@@ -18,7 +18,7 @@ fn the_shipped_scenes_are_valid() {
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         let text = std::fs::read_to_string(&path).unwrap();
-        scene::parse(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
+        scene::parse_any(&text, &path.display().to_string()).unwrap_or_else(|e| panic!("{e}"));
         count += 1;
     }
     assert!(count >= 4);

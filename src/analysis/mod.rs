@@ -3,4 +3,5 @@
 pub mod cycle;
 pub mod events;
 pub mod hopf;
+pub mod noise;
 pub mod paper;
