@@ -134,7 +134,12 @@ pub fn run(
                     match outcome {
                         Ok(out) => *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((path.t_event, out, path.stats, path.nodes())),
                         Err(mut e) => {
-                            e.message = format!("realisation {i}: {}", e.message);
+                            let hint = if e.kind == crate::integrate::ErrorKind::ErrorTestFailures {
+                                " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
+                            } else {
+                                ""
+                            };
+                            e.message = format!("realisation {i}: {}{hint}", e.message);
                             failures.lock().unwrap_or_else(|e| e.into_inner()).push((i, e));
                             // Indices are handed out in order, so every index below a failure
                             // is already running or done: the lowest failure is always found.

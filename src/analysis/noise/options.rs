@@ -56,7 +56,7 @@ pub struct NoiseOptions {
     #[serde(default)]
     pub rtol: Option<f64>,
     /// Rodas5P's absolute tolerances per realisation, one per component (default: 1e-3 of the
-    /// component's median linear-response σ, within [1e-14, 1e-6]; 1e-9 without it).
+    /// component's median linear-response σ, within [1e-14, 1e-6]; 1e-6 without it).
     #[serde(default)]
     pub atol: Option<Vec<f64>>,
     /// Compute the linear response (small-noise limit) too (default true).
