@@ -101,6 +101,15 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Collect the correlation-time curves of noise reports (e.g. DRR, saddle-node, van der
+    /// Pol) into one JSON document for one figure.
+    NoiseCurves {
+        /// Output file (JSON).
+        #[arg(long)]
+        out: PathBuf,
+        /// Reports written by `stickslip run SCENE --out REPORT`.
+        reports: Vec<PathBuf>,
+    },
     /// Print the SUNDIALS version linked at run time.
     Version,
 }
@@ -376,6 +385,25 @@ fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(),
     }
 }
 
+fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failure> {
+    if reports.is_empty() {
+        return Err(Failure(2, "give at least one report".into()));
+    }
+    let inputs = reports
+        .iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read {}: {e}", p.display())))?;
+            let value = serde_json::from_str(&text).map_err(|e| Failure(2, format!("{}: {e}", p.display())))?;
+            Ok((p.display().to_string(), value))
+        })
+        .collect::<Result<Vec<_>, Failure>>()?;
+    let curves = noise_report::combine(&inputs).map_err(|e| Failure(2, e))?;
+    let text = serde_json::to_string_pretty(&serde_json::json!({ "curves": curves })).expect("serialisable");
+    report::write_atomic(&out, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    println!("noise-curves: {} curves into {}", curves.len(), out.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
@@ -385,6 +413,7 @@ fn main() -> ExitCode {
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
+        Command::NoiseCurves { out, reports } => noise_curves_command(out, reports),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())

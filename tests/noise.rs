@@ -258,6 +258,27 @@ fn the_cli_runs_a_noise_scene_and_bad_noise_options_name_the_field() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(report["noise"]["correlation_time"].as_array().is_some_and(|a| !a.is_empty()));
+    // noise-curves collects the correlation-time curves of reports; a report without a noise
+    // section is bad input (exit 2).
+    let report_file = dir.join("vdp-report.json");
+    std::fs::write(&report_file, &out.stdout).unwrap();
+    let curves = dir.join("curves.json");
+    let out = std::process::Command::new(exe)
+        .args(["noise-curves", "--out", curves.to_str().unwrap(), report_file.to_str().unwrap(), report_file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let combined: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&curves).unwrap()).unwrap();
+    assert_eq!(combined["curves"].as_array().unwrap().len(), 2);
+    assert_eq!(combined["curves"][0]["model"], "van_der_pol");
+    assert_eq!(combined["curves"][0]["correlation_time"], report["noise"]["correlation_time"]);
+    std::fs::write(dir.join("plain.json"), r#"{"name": "x"}"#).unwrap();
+    let out = std::process::Command::new(exe)
+        .args(["noise-curves", "--out", curves.to_str().unwrap(), dir.join("plain.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no \"noise\" section"));
     let cases = [
         (r#"{"kind": "van_der_pol", "beta": 30}"#, r#"{"amplitudes": [0.1]}"#, "analyses[0].noise.amplitudes", "give 2"),
         (r#"{"kind": "van_der_pol", "beta": 30, "a": 1.5}"#, r#"{"amplitudes": [0.1, 0.1]}"#, "model.a", "< 1"),

@@ -67,7 +67,7 @@ fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = path.value(t, i).ok_or_else(|| {
                 let (a, b) = path.span();
-                format!("time t_ref {s:+e} = {t:e} is outside the realisation's recorded span [{a:e}, {b:e}]")
+                format!("the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span [{a:e}, {b:e}]")
             })?;
         }
         for (o, (_, obs)) in model.observables().iter().enumerate() {

@@ -177,3 +177,41 @@ pub fn run_scene(
         wall_time_s: started.elapsed().as_secs_f64(),
     })
 }
+
+/// One model's correlation-time curve in a combined report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Curve {
+    /// The report's file.
+    pub source: String,
+    /// Scene name.
+    pub name: String,
+    /// "drr", "saddle_node" or "van_der_pol".
+    pub model: String,
+    /// The observable (u for the DRR, x otherwise).
+    pub variable: String,
+    /// "own_event" or "deterministic".
+    pub alignment: String,
+    /// The report's `noise.correlation_time`.
+    pub correlation_time: serde_json::Value,
+}
+
+/// The correlation-time curves of several reports (e.g. DRR, saddle-node, van der Pol) in one
+/// JSON document for one figure. Each input is (file name, report JSON); an error names the
+/// file whose report has no noise section.
+pub fn combine(reports: &[(String, serde_json::Value)]) -> Result<Vec<Curve>, String> {
+    reports
+        .iter()
+        .map(|(source, r)| {
+            let noise = r.get("noise").filter(|n| n.is_object()).ok_or_else(|| format!("{source}: the report has no \"noise\" section"))?;
+            let text = |v: &serde_json::Value| v.as_str().unwrap_or("").to_string();
+            Ok(Curve {
+                source: source.clone(),
+                name: text(&r["name"]),
+                model: text(&noise["model"]),
+                variable: text(&noise["correlation_variable"]),
+                alignment: text(&noise["settings"]["alignment"]),
+                correlation_time: noise["correlation_time"].clone(),
+            })
+        })
+        .collect()
+}
