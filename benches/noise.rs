@@ -10,8 +10,11 @@
 //! before and after (other jobs share the cores), the integrator's work, and checks that both
 //! thread counts gave bit-identical statistics.
 //!
+//! Then it runs the other shipped noise scenes in full (power law, saddle-node, van der Pol;
+//! the tests run them reduced) and prints their times.
+//!
 //! Run: `cargo bench --bench noise` (results in docs/benchmarks.md). `NOISE_BENCH_REALISATIONS`
-//! overrides the 1000 realisations.
+//! overrides the 1000 realisations of the DRR scene.
 
 use std::time::Instant;
 use stickslip::engine;
@@ -69,4 +72,22 @@ fn main() {
     }
     assert_eq!(runs[0], runs[1], "1 and 2 threads must give bit-identical statistics");
     println!("1 and 2 threads: bit-identical statistics");
+    // The other shipped noise scenes in full (the tests run them reduced), 2 threads.
+    for other in ["data/scenes/noise-power-law.json", "data/scenes/noise-saddle-node.json", "data/scenes/noise-van-der-pol.json"] {
+        let text = std::fs::read_to_string(other).expect("the scene");
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let (wall0, cpu0) = (Instant::now(), cpu_seconds());
+        let noise = match scene::parse_any(&text, other).expect("a valid scene") {
+            AnyScene::Drr(s) => engine::run_with(&s, json, 2, &|_, _| {}).expect("the scene runs").noise.expect("a noise section"),
+            AnyScene::Other(s) => stickslip::analysis::noise::report::run_scene(&s, json, 2, &|_, _| {}).expect("the scene runs").noise,
+        };
+        println!(
+            "{other}: {} realisations, {:.2} s wall, {:.2} s CPU, {:.0} nodes per realisation; load average {}",
+            noise.settings.realisations,
+            wall0.elapsed().as_secs_f64(),
+            cpu_seconds() - cpu0,
+            noise.work.nodes_per_realisation,
+            load_average()
+        );
+    }
 }
