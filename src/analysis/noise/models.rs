@@ -205,20 +205,24 @@ impl NoiseModel {
         }
     }
 
-    /// dx/dt = F(t, x) + B(x) η into `out`. For the DRR with ln v friction one exponential
-    /// serves drift and noise (e^{−w} = 1/v, and v − 1 = expm1(w) only where |w| < 1/2, where
-    /// v − 1 would cancel); otherwise F and Bη separately.
+    /// dx/dt = F(t, x) + B(x) η into `out`. For the DRR one exponential serves drift and noise
+    /// (e^{−w} = 1/v, and v − 1 = expm1(w) only where |w| < 1/2, where v − 1 would cancel),
+    /// plus the friction law's own (none for ln v); otherwise F and Bη separately.
     pub fn forced_rhs(&self, t: f64, x: &[f64], eta: &[f64], out: &mut [f64]) {
         match self {
-            NoiseModel::Drr { system, amplitudes } if system.params().friction == Friction::Log => {
+            NoiseModel::Drr { system, amplitudes } => {
                 let p = system.params();
                 let (u, w, theta) = (x[0], x[W], x[2]);
+                let f = match p.friction {
+                    Friction::Log => w,
+                    law => law.eval(w).0,
+                };
                 let v = w.exp();
                 let inv_v = 1.0 / v;
-                let g = u + (theta + w) / p.xi;
+                let g = u + (theta + f) / p.xi;
                 out[0] = (if w.abs() < 0.5 { w.exp_m1() } else { v - 1.0 }) + amplitudes[0] * eta[0];
                 out[W] = inv_v * (amplitudes[1] * eta[W] - p.gamma * p.gamma * g);
-                out[2] = -v * (theta + (1.0 + p.epsilon) * w) + amplitudes[2] * eta[2];
+                out[2] = -v * (theta + (1.0 + p.epsilon) * f) + amplitudes[2] * eta[2];
             }
             _ => {
                 self.rhs(t, x, out);
@@ -276,7 +280,7 @@ mod tests {
 
     #[test]
     fn forced_rhs_is_drift_plus_forcing() {
-        for friction in [Friction::Log, Friction::Power { alpha: 0.15 }] {
+        for friction in [Friction::Log, Friction::Power { alpha: 0.15 }, Friction::Asinh] {
             let m = NoiseModel::Drr {
                 system: Drr::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction }),
                 amplitudes: [0.1, 3e3, 0.2],
