@@ -297,6 +297,12 @@ fn the_cli_runs_a_noise_scene_and_bad_noise_options_name_the_field() {
         assert_eq!(e.field, field, "{e}");
         assert!(e.message.contains(hint), "{e} should mention {hint}");
     }
+    // Below the Hopf threshold there is no event: a typed error, exit 1.
+    let stable = dir.join("stable.json");
+    std::fs::write(&stable, r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.5}, "analyses": [{"noise": {"amplitudes": [0.1, 1, 0.1], "realisations": 2}}]}"#).unwrap();
+    let out = std::process::Command::new(exe).args(["run", stable.to_str().unwrap()]).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("fixed point is stable"), "{}", String::from_utf8_lossy(&out.stderr));
     // Sweeps refuse the noise analysis (its ensembles use every core for one point).
     let base: serde_json::Value = serde_json::from_str(r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72}, "analyses": ["hopf", {"noise": {"amplitudes": [0.1, 1, 0.1]}}]}"#).unwrap();
     let e = stickslip::sweep::check_base(&base, &[stickslip::sweep::parse_axis("gamma=1e2:1e3:2:log").unwrap()]).unwrap_err();

@@ -263,18 +263,25 @@ fn invalid(message: String) -> SolverError {
 }
 
 /// The converged limit cycle of a periodic model: (period, state at an event, events used).
+/// Converged when three successive periods and the event states agree to 1e-8 (relative;
+/// absolute below 1): a decaying oscillation, whose period converges but whose amplitude does
+/// not, never qualifies.
 fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), SolverError> {
     let mut x = initial.to_vec();
     let mut periods: Vec<f64> = Vec::new();
+    let mut states: Vec<Vec<f64>> = Vec::new();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * a.abs().max(b.abs()).max(1.0);
     for events in 1..=2000 {
         let (t, xe, _) = scheme::deterministic_event(model, 0.0, &x, event, 1e7, DET_RTOL, atol)?;
         x = xe;
         if events > 1 {
             periods.push(t);
+            states.push(x.clone());
         }
-        if let [.., a, b, c] = periods[..] {
-            if (b - a).abs() <= 1e-8 * c && (c - b).abs() <= 1e-8 * c {
-                return Ok((c, x, events));
+        if let ([.., a, b, c], [.., sa, sb, sc]) = (&periods[..], &states[..]) {
+            let same_states = sa.iter().zip(sb).zip(sc).all(|((p, q), r)| close(*p, *q) && close(*q, *r));
+            if close(*a, *b) && close(*b, *c) && same_states {
+                return Ok((*c, x, events));
             }
         }
     }
@@ -312,6 +319,11 @@ pub fn run(
             return Err(invalid("the linear validation model has no event to align on; it serves the scheme's tests".into()));
         }
     };
+    if let NoiseModel::Drr { system, .. } = model {
+        if crate::analysis::hopf::analyse(system).max_real_part < 0.0 {
+            return Err(invalid("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on".into()));
+        }
+    }
     let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
         let (period, x_event, events) = limit_cycle(model, initial, event_for_burn_in, &det_atol)?;
         let before = options.start_before_event.unwrap_or(match model {
