@@ -164,7 +164,7 @@ const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (
-            std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", p.display())))?,
+            read_scene_text(p)?,
             p.display().to_string(),
         ),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
@@ -187,8 +187,21 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
     Ok(())
 }
 
+/// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and
+/// reading it whole would only exhaust memory.
+const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+fn read_scene_text(path: &std::path::Path) -> Result<String, Failure> {
+    let cannot = |e: std::io::Error| Failure(2, format!("cannot read scene {}: {e}", path.display()));
+    let size = std::fs::metadata(path).map_err(cannot)?.len();
+    if size > MAX_SCENE_BYTES {
+        return Err(Failure(2, format!("scene {}: the file has {size} bytes; a scene is at most {MAX_SCENE_BYTES} bytes (is this the right file?)", path.display())));
+    }
+    std::fs::read_to_string(path).map_err(cannot)
+}
+
 fn read_scene(path: &std::path::Path) -> Result<scene::Scene, Failure> {
-    let text = std::fs::read_to_string(path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))
 }
 
@@ -310,7 +323,7 @@ fn sweep_command(
     shard: Option<String>,
     threads: Option<usize>,
 ) -> Result<(), Failure> {
-    let text = std::fs::read_to_string(&path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
     let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
     let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;

@@ -300,7 +300,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
     let deserializer = &mut serde_json::Deserializer::from_str(text);
     let raw: RawScene = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let path = e.path().to_string();
-        let field = if path == "." { "(document)".to_string() } else { path };
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
         err(&field, e.into_inner().to_string())
     })?;
     validate(raw, &err)
