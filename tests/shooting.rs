@@ -103,3 +103,28 @@ fn bad_continuation_options_name_the_field() {
         assert!(e.field.contains(field) || (e.field.starts_with("analyses") && e.message.contains(field)), "{analysis}: {e}");
     }
 }
+
+#[test]
+fn period_doubling_is_detected_and_the_doubled_orbit_matches_brute_force() {
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/period-doubling.json")).unwrap();
+    let report = run(&text);
+    let shooting = report.shooting.unwrap();
+    let single = shooting.orbit.unwrap();
+    assert!(!single.stable, "the period-1 orbit has lost stability: {:?}", single.multipliers);
+    let pd = shooting.period_doubling.expect("a multiplier below −1");
+    assert!(pd.multiplier < -1.1, "{}", pd.multiplier);
+    let doubled = pd.doubled.unwrap_or_else(|| panic!("doubled orbit not found: {}", pd.note));
+    assert_eq!(doubled.returns_per_period, 2);
+    assert!(doubled.stable && doubled.trivial_multiplier_error < 1e-6, "{:?}", doubled.multipliers);
+    // Brute force settles on the same period-2 orbit.
+    let cycle = report.cycle.unwrap();
+    assert_eq!(cycle.cycles_per_period, Some(2));
+    let brute = cycle.orbit_period.unwrap();
+    assert!((doubled.period - brute).abs() < 1e-8 * brute, "shooting {} vs brute force {brute}", doubled.period);
+    let (mut a, mut b) = (doubled.return_times.clone(), cycle.orbit.iter().map(|c| c.period).collect::<Vec<_>>());
+    a.sort_by(f64::total_cmp);
+    b.sort_by(f64::total_cmp);
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() < 1e-7 * y, "return times {a:?} vs cycles {b:?}");
+    }
+}
