@@ -4,6 +4,7 @@ use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettin
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::{cycle, hopf, paper};
 use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
+use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{Method, Scene, SolverSpec};
@@ -32,7 +33,16 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
     // rtol 1e-11 (ARKStep).
-    let options = &Options { max_step: Some(max_step), max_err_test_fails: Some(20), ..Options::new(spec.rtol, atol) };
+    // A start far off the slow manifold and far from v = 1 (|ln v| > 30, e.g. v = 1e-30):
+    // dw/dt = −γ² e^{−w} G is astronomically large there, and a solver's own first-step
+    // estimate overshoots w out of the range of exp (v = e^w overflows). Start with a step
+    // that changes w by at most 1e-3.
+    let initial_step = (y0[W].abs() > 30.0).then(|| {
+        let mut f = vec![0.0; system.dim()];
+        system.rhs(0.0, y0, &mut f);
+        1e-3 / f[W].abs().max(1e-300)
+    }).filter(|h| h.is_finite() && *h > 0.0);
+    let options = &Options { max_step: Some(max_step), max_err_test_fails: Some(20), initial_step, ..Options::new(spec.rtol, atol) };
     // Deduce implicit stage derivatives: evaluating f_I at converged stages re-amplifies the
     // Newton residual by γ² in ARKStep's error estimate, which makes it fail at γ ≥ 1e3.
     let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
