@@ -177,3 +177,16 @@ fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
         assert!((period - 31.8375089404).abs() < 1e-7 * period, "{method}: {period}");
     }
 }
+
+#[test]
+fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
+    // From v = 1e-30 the run passes close to the unstable fixed point (ε − ε_c = 0.02) and
+    // spirals out over ~250 turns of period 7.51 whose ln v range grows ~8 % per turn; the
+    // period alone settles at once. The attractor is the relaxation cycle (reference 23.1513298).
+    let report = run(
+        r#"{"name": "spiral", "model": {"gamma": 1e4, "xi": 0.7, "epsilon": 0.72}, "initial": {"u": 0, "v": 1e-30, "theta": 0},
+            "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#,
+    );
+    let period = report.cycle.unwrap().values.expect("converges to the relaxation cycle").period;
+    assert!((period - 23.151329844).abs() < 1e-7 * period, "{period}");
+}
