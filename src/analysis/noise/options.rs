@@ -63,7 +63,7 @@ pub struct NoiseOptions {
     #[serde(default)]
     pub linear_response: Option<bool>,
     /// Times before the event at which Γ(t, t − t') is reported as a curve (default: DRR
-    /// [2.3, 1, 30/γ], the paper's Fig. 3b; others the window's ends and its geometric middle).
+    /// [2.3, 1, 30/γ], the paper's Fig. 6b; others the window's ends and its geometric middle).
     #[serde(default)]
     pub correlation_curves_at: Option<Vec<f64>>,
     /// Saddle-node only: the escape is the downward crossing of x = event_level < 0
