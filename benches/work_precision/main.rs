@@ -228,7 +228,8 @@ fn run_ours(name: &str, method: Method, gamma: f64, rtol: f64, start: &Start, ar
     row
 }
 
-fn relative(x: &Measured, r: &Measured) -> Errors {
+/// The relative errors of `x` against `r`.
+pub fn relative(x: &Measured, r: &Measured) -> Errors {
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
     Errors { period: rel(x.period, r.period), t0: rel(x.t0, r.t0), ln_v_max: rel(x.ln_v_max, r.ln_v_max) }
 }
