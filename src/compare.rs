@@ -82,6 +82,8 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
     for &method in methods {
         let mut s = scene.clone();
         s.solver = SolverSpec { method, table: None, explicit_table: None, ..scene.solver.clone() };
+        // The noise analysis does not depend on the method (its realisations use Rodas5P).
+        s.analyses.noise = None;
         match engine::run(&s, serde_json::Value::Null) {
             Ok(r) => {
                 let status = r.cycle.as_ref().map_or("no cycle analysis".into(), |c| format!("{:?}", c.status));
@@ -272,6 +274,7 @@ pub fn against_report(scene: &Scene, user: &serde_json::Value, tolerance: f64) -
     s.solver.table = None;
     s.solver.explicit_table = None;
     s.analyses.cycle.get_or_insert_with(Default::default);
+    s.analyses.noise = None;
     let ours = engine::run(&s, serde_json::Value::Null)?;
     let rows = QUANTITIES
         .iter()

@@ -1,9 +1,11 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
+use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper};
 use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Stats, Tolerance};
+use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{CycleOptions, Method, Scene, SolverSpec};
@@ -32,7 +34,16 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
     // rtol 1e-11 (ARKStep).
-    let options = &Options { max_step: Some(max_step), max_err_test_fails: Some(20), ..Options::new(spec.rtol, atol) };
+    // A start far off the slow manifold and far from v = 1 (|ln v| > 30, e.g. v = 1e-30):
+    // dw/dt = −γ² e^{−w} G is astronomically large there, and a solver's own first-step
+    // estimate overshoots w out of the range of exp (v = e^w overflows). Start with a step
+    // that changes w by at most 1e-3.
+    let initial_step = (y0[W].abs() > 30.0).then(|| {
+        let mut f = vec![0.0; system.dim()];
+        system.rhs(0.0, y0, &mut f);
+        1e-3 / f[W].abs().max(1e-300)
+    }).filter(|h| h.is_finite() && *h > 0.0);
+    let options = &Options { max_step: Some(max_step), max_err_test_fails: Some(20), initial_step, ..Options::new(spec.rtol, atol) };
     // Deduce implicit stage derivatives: evaluating f_I at converged stages re-amplifies the
     // Newton residual by γ² in ARKStep's error estimate, which makes it fail at γ ≥ 1e3.
     let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
@@ -120,8 +131,21 @@ pub fn cycle_with(
     Ok((report, integ.name().to_string(), tables, integ.stats()))
 }
 
-/// Runs a scene. `scene_json` is the scene as given, echoed in the report.
+/// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
+/// "noise" analysis) use every core.
 pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    run_with(scene, scene_json, threads, &|_, _| {})
+}
+
+/// [`run`] with `threads` worker threads for ensembles and `progress(done, total)` called
+/// after each realisation.
+pub fn run_with(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Report, SolverError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
@@ -216,6 +240,18 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
         _ => None,
     };
+    let noise = match &a.noise {
+        Some(options) => {
+            let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
+            let model = NoiseModel::Drr { system: drr, amplitudes };
+            let report = noise::run(&model, &scene.initial, options, threads, progress).map_err(|e| diagnose(&drr, e))?;
+            if !report.is_finite() {
+                return Err(non_finite("noise"));
+            }
+            Some(report)
+        }
+        None => None,
+    };
     let y = scene.initial;
     Ok(Report {
         stickslip_version: env!("CARGO_PKG_VERSION"),
@@ -247,6 +283,7 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         paper,
         shooting: shooting_report,
         continuation: continuation_report,
+        noise,
         wall_time_s: started.elapsed().as_secs_f64(),
     })
 }

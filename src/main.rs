@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
+use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::model::robertson::{self, ExampleRun};
 use stickslip::sundials;
@@ -28,6 +29,10 @@ enum Command {
         /// Write the JSON report to FILE (atomically).
         #[arg(long, value_name = "FILE")]
         out: Option<PathBuf>,
+        /// Worker threads for ensembles (the "noise" analysis; default: all cores). Results do
+        /// not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -112,6 +117,15 @@ enum Command {
         #[arg(long)]
         reduced: bool,
     },
+    /// Collect the correlation-time curves of noise reports (e.g. DRR, saddle-node, van der
+    /// Pol) into one JSON document for one figure.
+    NoiseCurves {
+        /// Output file (JSON).
+        #[arg(long)]
+        out: PathBuf,
+        /// Reports written by `stickslip run SCENE --out REPORT`.
+        reports: Vec<PathBuf>,
+    },
     /// Print the SUNDIALS version linked at run time.
     Version,
 }
@@ -161,25 +175,44 @@ struct Failure(u8, String);
 
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
-fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Result<(), Failure> {
+fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads: Option<usize>) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (
-            std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", p.display())))?,
+            read_scene_text(p)?,
             p.display().to_string(),
         ),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
-    let scene = scene::parse(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
+    let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let report = engine::run(&scene, echo).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+    let progress = Progress::new("noise", "realisations");
+    let update = |d, t| progress.update(d, t);
+    let threads = worker_threads(threads);
+    let (report_json, summary) = match &scene {
+        scene::AnyScene::Drr(scene) => {
+            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            (report.to_json(), report.summary())
+        }
+        scene::AnyScene::Other(scene) => {
+            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            (report.to_json(), report.summary())
+        }
+    };
+    let ensembles = match &scene {
+        scene::AnyScene::Drr(scene) => scene.analyses.noise.is_some(),
+        scene::AnyScene::Other(_) => true,
+    };
+    if ensembles {
+        progress.finish();
+    }
     if let Some(file) = &out {
-        report::write_atomic(file, &report.to_json())
+        report::write_atomic(file, &report_json)
             .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
     }
     if json {
-        println!("{}", report.to_json());
+        println!("{report_json}");
     } else {
-        print!("{}", report.summary());
+        print!("{summary}");
         if let Some(file) = &out {
             println!("report written to {}", file.display());
         }
@@ -187,8 +220,21 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
     Ok(())
 }
 
+/// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and
+/// reading it whole would only exhaust memory.
+const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+fn read_scene_text(path: &std::path::Path) -> Result<String, Failure> {
+    let cannot = |e: std::io::Error| Failure(2, format!("cannot read scene {}: {e}", path.display()));
+    let size = std::fs::metadata(path).map_err(cannot)?.len();
+    if size > MAX_SCENE_BYTES {
+        return Err(Failure(2, format!("scene {}: the file has {size} bytes; a scene is at most {MAX_SCENE_BYTES} bytes (is this the right file?)", path.display())));
+    }
+    std::fs::read_to_string(path).map_err(cannot)
+}
+
 fn read_scene(path: &std::path::Path) -> Result<scene::Scene, Failure> {
-    let text = std::fs::read_to_string(path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))
 }
 
@@ -310,7 +356,7 @@ fn sweep_command(
     shard: Option<String>,
     threads: Option<usize>,
 ) -> Result<(), Failure> {
-    let text = std::fs::read_to_string(&path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
     let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
     let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;
@@ -425,16 +471,36 @@ fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Res
     }
 }
 
+fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failure> {
+    if reports.is_empty() {
+        return Err(Failure(2, "give at least one report".into()));
+    }
+    let inputs = reports
+        .iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read {}: {e}", p.display())))?;
+            let value = serde_json::from_str(&text).map_err(|e| Failure(2, format!("{}: {e}", p.display())))?;
+            Ok((p.display().to_string(), value))
+        })
+        .collect::<Result<Vec<_>, Failure>>()?;
+    let curves = noise_report::combine(&inputs).map_err(|e| Failure(2, e))?;
+    let text = serde_json::to_string_pretty(&serde_json::json!({ "curves": curves })).expect("serialisable");
+    report::write_atomic(&out, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    println!("noise-curves: {} curves into {}", curves.len(), out.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out } => run_command(scene, json, out),
+        Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Stress { quick, json, threads, table } => stress_command(quick, json, threads, table),
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
         Command::Reproduce { out, threads, reduced } => reproduce_command(out, threads, reduced),
+        Command::NoiseCurves { out, reports } => noise_curves_command(out, reports),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())

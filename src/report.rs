@@ -6,6 +6,7 @@ use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::hopf::HopfReport;
+use crate::analysis::noise::NoiseReport;
 use crate::analysis::paper::Claim;
 use crate::integrate::Stats;
 use crate::scene::{Dimensional, Method, Units};
@@ -106,6 +107,9 @@ pub struct Report {
     /// The "continuation" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub continuation: Option<ContinuationReport>,
+    /// The "noise" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseReport>,
     /// Wall-clock time of the computation (seconds).
     pub wall_time_s: f64,
 }
@@ -231,6 +235,9 @@ impl Report {
             if let Some(d) = c.period_per_decade.first() {
                 s += &format!("  period per decade of γ: {:.4} (fit over log10 γ = {} … {})\n", d.slope, d.log10_gamma_from, d.log10_gamma_to);
             }
+        }
+        if let Some(n) = &self.noise {
+            s += &n.summary();
         }
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";

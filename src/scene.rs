@@ -2,7 +2,8 @@
 //! path); validation rejects values outside the model's domain (naming the field and what
 //! would be valid). The schema is documented in docs/scenes.md.
 
-use crate::model::{Drr, DrrParams, Friction};
+use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
+use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, VanDerPolParams};
 use serde::{Deserialize, Serialize};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
@@ -42,6 +43,23 @@ struct RawModel {
     dimensional: Option<Dimensional>,
     #[serde(default)]
     friction: Option<RawFriction>,
+    /// "drr" (default), "saddle_node" or "van_der_pol".
+    #[serde(default)]
+    kind: Option<String>,
+    /// Saddle-node: μ0, r and the start x0.
+    #[serde(default)]
+    mu0: Option<f64>,
+    #[serde(default)]
+    r: Option<f64>,
+    #[serde(default)]
+    x0: Option<f64>,
+    /// Van der Pol: β, a and the start (x0, y0).
+    #[serde(default)]
+    beta: Option<f64>,
+    #[serde(default)]
+    a: Option<f64>,
+    #[serde(default)]
+    y0: Option<f64>,
 }
 
 /// Dimensional parameters (any consistent units): γ = (D_c/v0)·√(k/M), ξ = k·D_c/A,
@@ -273,6 +291,8 @@ pub struct Analyses {
     pub shooting: Option<ShootingOptions>,
     /// Continuation of the orbit in a parameter (None: not asked).
     pub continuation: Option<ContinuationOptions>,
+    /// Response to noise: ensembles and linear response (None: not asked).
+    pub noise: Option<NoiseOptions>,
 }
 
 /// A validated scene.
@@ -296,17 +316,148 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
+
+/// A model other than the DRR: only the "noise" analysis runs on it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum OtherModel {
+    /// dx/dt = μ0 − r t − x², starting at x0 when t = 0.
+    SaddleNode {
+        /// μ0 and r.
+        params: SaddleNodeParams,
+        /// x at t = 0.
+        x0: f64,
+    },
+    /// dy/dt = x + a, dx/dt = β²(x − x³/3 − y), starting at (x0, y0).
+    VanDerPol {
+        /// β and a.
+        params: VanDerPolParams,
+        /// (x, y) at the start of the deterministic orbit.
+        initial: [f64; 2],
+    },
+}
+
+/// A validated scene of a model other than the DRR.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OtherScene {
+    /// Scene name.
+    pub name: String,
+    /// Free text.
+    pub description: Option<String>,
+    /// The model.
+    pub model: OtherModel,
+    /// The noise analysis's options.
+    pub noise: NoiseOptions,
+}
+
+/// Any validated scene: the DRR (every analysis) or another model (noise only).
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyScene {
+    /// A DRR scene.
+    Drr(Box<Scene>),
+    /// A saddle-node or van der Pol scene.
+    Other(Box<OtherScene>),
+}
+
+/// Parses and validates a scene of any model kind (`"model": {"kind": ...}`).
+pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> {
+    let err = |field: &str, message: String| SceneError { source_name: source_name.into(), field: field.into(), message };
+    let raw = parse_raw(text, &err)?;
+    match raw.model.kind.as_deref() {
+        None | Some("drr") => validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s))),
+        Some(_) => validate_other(raw, &err).map(|s| AnyScene::Other(Box::new(s))),
+    }
+}
+
+fn parse_raw(text: &str, err: &impl Fn(&str, String) -> SceneError) -> Result<RawScene, SceneError> {
+    let deserializer = &mut serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
+        err(&field, e.into_inner().to_string())
+    })
+}
+
+/// Rejects the keys of `model` that the kind does not take.
+fn only_model_keys(m: &RawModel, kind: &str, allowed: &[&str], err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+    let given = [
+        ("gamma", m.gamma.is_some()),
+        ("xi", m.xi.is_some()),
+        ("epsilon", m.epsilon.is_some()),
+        ("dimensional", m.dimensional.is_some()),
+        ("friction", m.friction.is_some()),
+        ("mu0", m.mu0.is_some()),
+        ("r", m.r.is_some()),
+        ("x0", m.x0.is_some()),
+        ("beta", m.beta.is_some()),
+        ("a", m.a.is_some()),
+        ("y0", m.y0.is_some()),
+    ];
+    for (name, present) in given {
+        if present && !allowed.contains(&name) {
+            return Err(err(&format!("model.{name}"), format!("the {kind} model takes no \"{name}\"; its keys are {}", allowed.join(", "))));
+        }
+    }
+    Ok(())
+}
+
+fn validate_other(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<OtherScene, SceneError> {
+    if raw.name.trim().is_empty() {
+        return Err(err("name", "must not be empty".into()));
+    }
+    let m = &raw.model;
+    let kind = m.kind.as_deref().unwrap_or("drr");
+    let model = match kind {
+        "saddle_node" => {
+            only_model_keys(m, kind, &["mu0", "r", "x0"], err)?;
+            let mu0 = positive("model.mu0", m.mu0.ok_or_else(|| err("model.mu0", "missing: μ at t = 0, > 0, e.g. 1".into()))?, "μ(0), e.g. 1", err)?;
+            let r = positive("model.r", m.r.ok_or_else(|| err("model.r", "missing: the tilting rate r > 0 of μ = μ0 − r t, e.g. 0.01".into()))?, "e.g. 0.01", err)?;
+            let x0 = positive("model.x0", m.x0.unwrap_or(mu0.sqrt()), "the start on the stable branch x = √μ0 (default)", err)?;
+            OtherModel::SaddleNode { params: SaddleNodeParams { mu0, r }, x0 }
+        }
+        "van_der_pol" => {
+            only_model_keys(m, kind, &["beta", "a", "x0", "y0"], err)?;
+            let beta = positive("model.beta", m.beta.ok_or_else(|| err("model.beta", "missing: β > 0 (β² is the fast rate), e.g. 30".into()))?, "e.g. 30", err)?;
+            let a = finite("model.a", m.a.unwrap_or(0.0), err)?;
+            if a.abs() >= 1.0 {
+                return Err(err("model.a", format!("{a}: |a| must be < 1 for a relaxation oscillation (the fixed point x = −a on the unstable middle branch)")));
+            }
+            let x0 = finite("model.x0", m.x0.unwrap_or(2.0), err)?;
+            let y0 = finite("model.y0", m.y0.unwrap_or(-2.0 / 3.0), err)?;
+            OtherModel::VanDerPol { params: VanDerPolParams { beta, a }, initial: [x0, y0] }
+        }
+        other => return Err(err("model.kind", format!("unknown kind \"{other}\"; use \"drr\" (default), \"saddle_node\" or \"van_der_pol\""))),
+    };
+    for (field, present) in [("initial", raw.initial.is_some()), ("units", raw.units.is_some()), ("solver", raw.solver.is_some())] {
+        if present {
+            return Err(err(field, format!("the {kind} model takes no \"{field}\" (its start is model.x0{}; the noise analysis sets its own solver)", if kind == "van_der_pol" { "/y0" } else { "" })));
+        }
+    }
+    let dim = if kind == "saddle_node" { 1 } else { 2 };
+    let analyses = analyses(&raw.analyses, (kind, dim, None), err)?;
+    if analyses.hopf
+        || analyses.cycle.is_some()
+        || analyses.paper
+        || analyses.trajectory_cycles.is_some()
+        || analyses.shooting.is_some()
+        || analyses.continuation.is_some()
+        || analyses.asymptotics.is_some()
+        || analyses.lyapunov.is_some()
+    {
+        return Err(err("analyses", format!("the {kind} model runs only the \"noise\" analysis (hopf, cycle, paper, trajectory, shooting, continuation, asymptotics and lyapunov need the DRR model)")));
+    }
+    let noise = analyses.noise.ok_or_else(|| err("analyses", format!("the {kind} model runs only the \"noise\" analysis; add {{\"noise\": {{\"amplitudes\": [...]}}}}")))?;
+    Ok(OtherScene { name: raw.name, description: raw.description, model, noise })
+}
 
 /// Parses and validates a scene from JSON text. `source_name` names it in errors.
 pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
     let err = |field: &str, message: String| SceneError { source_name: source_name.into(), field: field.into(), message };
-    let deserializer = &mut serde_json::Deserializer::from_str(text);
-    let raw: RawScene = serde_path_to_error::deserialize(deserializer).map_err(|e| {
-        let path = e.path().to_string();
-        let field = if path == "." { "(document)".to_string() } else { path };
-        err(&field, e.into_inner().to_string())
-    })?;
+    let raw = parse_raw(text, &err)?;
+    if let Some(kind) = raw.model.kind.as_deref().filter(|k| *k != "drr") {
+        return Err(err("model.kind", format!("\"{kind}\": this command needs a DRR scene; `stickslip run` runs {kind} scenes (noise analysis)")));
+    }
     validate(raw, &err)
 }
 
@@ -324,6 +475,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         return Err(err("name", "must not be empty".into()));
     }
     let m = &raw.model;
+    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction"], err)?;
     let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
         (Some(d), None, None, None) => {
             for (name, v) in [("k", d.k), ("mass", d.mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
@@ -373,7 +525,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
 
     let initial = initial_state(&drr, raw.initial.as_ref(), err)?;
     let solver = solver_spec(raw.solver.as_ref(), err)?;
-    let analyses = analyses(&raw.analyses, err)?;
+    let analyses = analyses(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
     Ok(Scene { name: raw.name, description: raw.description, params, dimensional: m.dimensional, units, initial, solver, analyses })
 }
 
@@ -462,7 +614,8 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
     Ok(SolverSpec { method, rtol, atol, table, explicit_table })
 }
 
-fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> Result<Analyses, SceneError> {
+/// `model`: (kind, dimension, γ² for the DRR), for the noise options.
+fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl Fn(&str, String) -> SceneError) -> Result<Analyses, SceneError> {
     let mut out = Analyses::default();
     if raw.is_empty() {
         return Err(err("analyses", format!("is empty; ask for at least one of {ANALYSIS_NAMES}")));
@@ -581,6 +734,19 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                     return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
                 }
                 out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
+            }
+            "noise" => {
+                let Some(v) = options.clone() else {
+                    return Err(err(&field, "\"noise\" needs its amplitudes: {\"noise\": {\"amplitudes\": [...]}} (docs/noise.md)".into()));
+                };
+                let o: NoiseOptions = serde_path_to_error::deserialize(v).map_err(|e| {
+                    let path = e.path().to_string();
+                    let sub = if path == "." { String::new() } else { format!(".{path}") };
+                    err(&format!("{field}.noise{sub}"), e.into_inner().to_string())
+                })?;
+                let (kind, dim, gamma2) = model;
+                noise_options::validate(&o, dim, kind, gamma2).map_err(|(f, m)| err(&format!("{field}.noise.{f}"), m))?;
+                out.noise = Some(o);
             }
             other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
         }

@@ -127,6 +127,10 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), String>
     if axes.iter().any(|a| a.name == "alpha") && base["model"]["friction"].get("power").is_none() {
         return Err("--param alpha needs a scene with \"friction\": {\"power\": {\"alpha\": ...}}".into());
     }
+    let analyses = base["analyses"].as_array().map(Vec::as_slice).unwrap_or_default();
+    if analyses.iter().any(|a| a.get("noise").is_some()) {
+        return Err("sweeps do not run the \"noise\" analysis (its ensembles use every core for one point); remove it, or run `stickslip run` per parameter set".into());
+    }
     Ok(())
 }
 

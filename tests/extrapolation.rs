@@ -153,9 +153,16 @@ fn the_error_decreases_consistently_with_the_tolerance() {
             }
             errors.push(err);
         }
-        // Strictly decreasing, within 500 × rtol (measured ≤ 133 and ≤ 291), and about
-        // proportional to rtol over the whole range (measured slopes 1.05 and 0.89).
-        assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
+        // Decreasing (strictly for the explicit scheme; over every two decades for the linearly
+        // implicit one with the default sequence 2, 3, 4, …, whose error rises from 4e-7 to 2e-6
+        // between rtol 1e-7 and 1e-8 — the harmonic 1, 2, 3, … decreased strictly, at 2–20×
+        // the error for 1e-7 … 1e-10), within 500 × rtol (measured ≤ 133 and ≤ 182), and about
+        // proportional to rtol over the whole range (measured slopes 1.05 and 1.01).
+        if stiff.is_none() {
+            assert!(errors.windows(2).all(|w| w[1] < w[0]), "{errors:?}");
+        } else {
+            assert!(errors.windows(3).all(|w| w[2] < w[0]), "{errors:?}");
+        }
         assert!(errors.iter().zip(rtols).all(|(e, r)| e / r < 500.0), "{errors:?}");
         let n = errors.len() - 1;
         let slope = (errors[0] / errors[n]).log10() / (rtols[0] / rtols[n]).log10();
@@ -173,7 +180,8 @@ fn van_der_pol_eps_1e6_against_the_test_set_and_cvode() {
     let theirs = cvode.state().to_vec();
     let c = cvode.stats();
     println!("CVODE    {}: {} steps, {} RHS, {} LU", sci(&theirs), c.steps, c.rhs_evals, c.lin_setups);
-    // The default (harmonic) sequence and Mathematica's 2, 3, 4, ….
+    // SEULEX's harmonic sequence 1, 2, 3, … and the default (Mathematica's) 2, 3, 4, …: measured
+    // 3452 and 249 steps, 86 735 and 16 759 RHS, 24 741 and 2 069 LU.
     for first in [1usize, 2] {
         let mut solver =
             Extrapolation::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap().implicit_sequence(first);
@@ -237,8 +245,18 @@ fn stiffness_switching_goes_both_ways() {
         );
         assert!(solver.switches() >= 2 && solver.switches() == segments.len() as u64 - 1);
         assert!(!segments[0].0 && !solver.is_stiff(), "explicit at both ends: {segments:?}");
-        // The linearly implicit scheme covers the peak of the pulse (λ ≥ 1e4 on [3.5, 6.5]).
-        assert!(segments.windows(2).any(|w| w[0].0 && w[0].1 < 3.5 && w[1].1 > 6.5), "{segments:?}");
+        // The linearly implicit scheme covers the peak of the pulse (λ ≥ 1e4 on [3.5, 6.5]):
+        // the explicit one runs there for less than 1e-2 in all. (Measured: at rtol 1e-10, one
+        // explicit excursion of 8e-4 from t = 6.316, λ = 1.8e4, at a step the accuracy keeps
+        // within the explicit stability bound; none at 1e-6 and 1e-8.)
+        let explicit_in_pulse: f64 = segments
+            .iter()
+            .zip(segments.iter().skip(1).map(|s| s.1).chain([10.0]))
+            .filter(|(s, _)| !s.0)
+            .map(|(s, end)| (end.min(6.5) - s.1.max(3.5)).max(0.0))
+            .sum();
+        assert!(explicit_in_pulse < 1e-2, "explicit for {explicit_in_pulse} in [3.5, 6.5]: {segments:?}");
+        assert!(segments.iter().any(|s| s.0 && s.1 < 3.5), "{segments:?}");
         assert!(err < 100.0 * rtol, "error {err:e}");
         assert!(s.steps < 1000, "{} steps", s.steps);
     }
@@ -315,9 +333,13 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
                 if stiff { "linearly implicit (SEULEX dense output)" } else { "midpoint (ODEX dense output)" },
                 solver.stats().steps
             );
-            // Measured: inside ≤ 16 × tol (ends ≤ 1.3): the interpolants are as accurate as the
-            // steps, as Radau5's (6.4, 12.8) and unlike a cubic Hermite on these long steps.
-            assert!(inside < 40.0 && inside < 30.0 * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
+            // Measured, inside steps (ends ≤ 1.3): ODEX's interpolant 5.6 and 8.5 × tol; SEULEX's
+            // 24 and 58 × tol with the default sequence 2, 3, 4, … (7 and 16 × tol with the
+            // harmonic 1, 2, 3, …, on its 10–15 steps against 11–14): the interpolants stay within
+            // two orders of the steps' accuracy (Radau5's: 6.4, 12.8), unlike a cubic Hermite on
+            // these long steps.
+            let bound = if stiff { 100.0 } else { 40.0 };
+            assert!(inside < bound && inside < bound * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
             assert!(fd_mismatch < 1e-5, "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}");
             if !stiff {
                 // ODEX's interpolant has f at the step ends as its slope.
@@ -373,7 +395,7 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
         assert_eq!(s.reinits, peaks.len() as u64);
         assert_eq!(peaks.len(), cvode_peaks.len());
         assert!(!peaks.is_empty() && ours.switches() > 0);
-        // Measured: 306 and 403 steps (CVODE: 6520 and 12457).
+        // Measured: 288 and 375 steps (CVODE: 6520 and 12457).
         assert!(steps < 2000, "{steps} steps");
         if rtol <= 1e-10 {
             // Measured: the peaks agree with CVODE's within 3e-8 (CVODE's second peak moves
@@ -539,20 +561,21 @@ fn failures_are_typed_errors_with_time_and_state() {
     assert_eq!(solver.stats().steps, 10);
     assert!(e.t > 0.0 && e.t < 1000.0);
 
-    // A singular iteration matrix: y' = λy with λ = 1/h exactly and the first row (one
-    // linearly implicit Euler step, I/h − λ = 0) at a fixed step: no escape.
+    // A singular iteration matrix: y' = λy with λ = 2/h exactly and the first row (two
+    // linearly implicit Euler steps of h/2 with the default sequence 2, 3, 4, …: I/(h/2) − λ = 0)
+    // at a fixed step: no escape.
     let h = 0.5;
     let mut solver =
-        Extrapolation::new(Linear(1.0 / h), 0.0, &[1.0], &options).unwrap().force_scheme(true).fixed_step(h, 1);
+        Extrapolation::new(Linear(2.0 / h), 0.0, &[1.0], &options).unwrap().force_scheme(true).fixed_step(h, 1);
     let e = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::LinearSolver, "{e}");
     // Adaptive steps escape the same singularity by halving h.
     let mut adaptive =
-        Extrapolation::new(Linear(1.0 / h), 0.0, &[1.0], &Options { initial_step: Some(h), ..options.clone() })
+        Extrapolation::new(Linear(2.0 / h), 0.0, &[1.0], &Options { initial_step: Some(h), ..options.clone() })
             .unwrap()
             .force_scheme(true);
     adaptive.advance(0.1, Task::Normal).unwrap();
-    assert!((adaptive.state()[0] - 0.2f64.exp()).abs() < 1e-7);
+    assert!((adaptive.state()[0] - 0.4f64.exp()).abs() < 1e-7);
 
     // Time too large for the steps the problem needs: t + h = t.
     let mut solver = Extrapolation::new(Linear(-1.0), 1e20, &[1.0], &options).unwrap();

@@ -30,6 +30,11 @@
  *                                 and prints each run's nanoseconds on its own line
  *   earthquake_cvode check [N]    one run; prints every cycle (steps, period, ...) and the
  *                                 CVODE counters summed over restarts
+ *   earthquake_cvode wp GAMMA RTOL ATOL MAX_STEP U0 W0 THETA0 N RUNS BUDGET_S
+ *                                 the work-precision benchmark (benches/work_precision): the
+ *                                 same engine at another γ, tolerance and start, with the
+ *                                 engine's max step; prints one JSON line (see
+ *                                 work_precision() below)
  * Exit status 1 if a SUNDIALS call fails or a "t + h = t" warning occurs (the wrapper fails
  * then too), 64 on bad usage.
  */
@@ -53,14 +58,19 @@
 #define U 0
 #define W 1
 #define TH 2
-#define GAMMA 1.0e8
 #define XI 0.8
 #define EPS 1.0
-#define RTOL 1.0e-10
-#define ATOL 1.0e-12
-#define U0 1.0
 #define V0 0.45
-#define THETA0 0.0
+/* The earthquake scene's γ, tolerances and start; the work-precision mode ("wp") sets them
+ * from its arguments. */
+static double GAMMA = 1.0e8;
+static double RTOL = 1.0e-10;
+static double ATOL = 1.0e-12;
+static double U0 = 1.0;
+static double THETA0 = 0.0;
+static int w0_given = 0; /* 0: w0 = log(V0) computed at run time; 1: W0 */
+static double W0;
+static double MAX_STEP = 0.0; /* 0: CVODE's default (no bound) */
 /* CycleSettings::defaults(1e-10) */
 #define MAX_TIME 1.0e6
 #define MAX_STEPS 20000000L
@@ -69,7 +79,7 @@
 #define WARMUP 1
 #define EACH_WARMUP 3
 
-static const double GAMMA2 = GAMMA * GAMMA;
+static double GAMMA2 = 1.0e8 * 1.0e8; /* GAMMA * GAMMA, reset by "wp" */
 
 /* ------------------------------------------------------------------ model (drr.rs) */
 
@@ -122,10 +132,14 @@ static int jac(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void *user_dat
 /* The wrapper records messages and counts "t + h = t" warnings (and then fails the call). */
 static long step_underflows;
 
+/* The last message CVODE reported (for the failure reason of the "wp" mode). */
+static char last_message[512];
+
 static void err_handler(int error_code, const char *module, const char *function, char *msg,
                         void *data) {
-  (void)error_code; (void)module; (void)function; (void)data;
+  (void)error_code; (void)module; (void)data;
   if (msg && strstr(msg, "t + h = t")) step_underflows++;
+  if (msg) snprintf(last_message, sizeof last_message, "%s: %s", function, msg);
 }
 
 /* ------------------------------------------------------------------ engine (cycle.rs) */
@@ -574,6 +588,10 @@ typedef struct {
 
 static volatile double v0_in = V0; /* keeps log(0.45) a runtime glibc call, as in Rust */
 
+/* Why the last run failed, and whether to keep quiet about it (the "wp" mode reports it). */
+static char failure_reason[1024];
+static int quiet_failures = 0;
+
 /* One run: create, integrate through n_cycles closed cycles, read counters, free. */
 static int run_once(int n_cycles, Result *out) {
   SUNContext ctx = NULL;
@@ -586,13 +604,14 @@ static int run_once(int n_cycles, Result *out) {
   static const double fixed[NEQ] = {EPS * 0.0 / XI, 0.0, -(1.0 + EPS) * 0.0};
 
   memset(&tr, 0, sizeof tr);
+  last_message[0] = '\0';
   if (SUNContext_Create(NULL, &ctx) != 0) return 1;
   tr.y = N_VNew_Serial(NEQ, ctx);
   tr.scratch = N_VNew_Serial(NEQ, ctx);
   atol = N_VNew_Serial(NEQ, ctx);
   if (!tr.y || !tr.scratch || !atol) goto done;
   NV_Ith_S(tr.y, U) = U0;
-  NV_Ith_S(tr.y, W) = log(v0_in);
+  NV_Ith_S(tr.y, W) = w0_given ? W0 : log(v0_in);
   NV_Ith_S(tr.y, TH) = THETA0;
   N_VScale(1.0, tr.y, tr.scratch);
   for (i = 0; i < NEQ; i++) NV_Ith_S(atol, i) = ATOL;
@@ -602,6 +621,11 @@ static int run_once(int n_cycles, Result *out) {
   if (CVodeInit(tr.mem, rhs, 0.0, tr.y) != CV_SUCCESS) goto done;
   if (CVodeSetErrHandlerFn(tr.mem, err_handler, NULL) != CV_SUCCESS) goto done;
   if (CVodeSetMaxHnilWarns(tr.mem, INT_MAX) != CV_SUCCESS) goto done;
+  /* engine::integrator: at most 20 error-test failures per step, steps of at most 1/8 of the
+   * linear period (given in the "wp" mode; the earthquake bench's identity checks show it
+   * never binds in the other modes). */
+  if (CVodeSetMaxErrTestFails(tr.mem, 20) != CV_SUCCESS) goto done;
+  if (MAX_STEP > 0.0 && CVodeSetMaxStep(tr.mem, MAX_STEP) != CV_SUCCESS) goto done;
   if (CVodeSVtolerances(tr.mem, RTOL, atol) != CV_SUCCESS) goto done;
   A = SUNDenseMatrix(NEQ, NEQ, ctx);
   if (!A) goto done;
@@ -651,7 +675,12 @@ static int run_once(int n_cycles, Result *out) {
   status = 0;
 
 done:
-  if (status && tr.failure) fprintf(stderr, "earthquake_cvode: %s\n", tr.failure);
+  if (status) {
+    snprintf(failure_reason, sizeof failure_reason, "%s%s%s at t = %.17g",
+             tr.failure ? tr.failure : "setup failed", last_message[0] ? " — " : "", last_message,
+             tr.elapsed + tr.tcur);
+    if (!quiet_failures) fprintf(stderr, "earthquake_cvode: %s\n", failure_reason);
+  }
   if (tr.mem) CVodeFree(&tr.mem);
   if (LS) SUNLinSolFree(LS);
   if (A) SUNMatDestroy(A);
@@ -688,9 +717,108 @@ static int parse_cycles(const char *s) {
   return (int)n;
 }
 
+/* A number argument of the "wp" mode; exits 64 if it is not one. */
+static double number(const char *s) {
+  char *end;
+  double x = strtod(s, &end);
+  if (end == s || *end != '\0' || !isfinite(x)) {
+    fprintf(stderr, "earthquake_cvode: \"%s\" is not a finite number\n", s);
+    exit(64);
+  }
+  return x;
+}
+
+/* Prints s as a JSON string (it holds no control characters). */
+static void json_string(const char *s) {
+  putchar('"');
+  for (; *s; s++) {
+    if (*s == '"' || *s == '\\') putchar('\\');
+    putchar(*s);
+  }
+  putchar('"');
+}
+
+/* earthquake_cvode wp GAMMA RTOL ATOL MAX_STEP U0 W0 THETA0 N RUNS BUDGET_S: the work-precision
+ * benchmark (benches/work_precision): one untimed warm-up run, then up to RUNS timed runs of N
+ * cycles from (U0, W0, THETA0), stopping once the timed runs add up to BUDGET_S seconds (a
+ * warm-up longer than that is the only, timed, run). Prints one JSON line: the means over the
+ * N cycles of the period, t0 and ln v_max, the minimum time per cycle, the counters of one
+ * run, or the failure with its reason. */
+static int work_precision(char **argv) {
+  long runs, done = 0, k;
+  int n_cycles;
+  double budget, spent = 0.0, best = INFINITY, period = 0.0, t0 = 0.0, ln_v_max = 0.0;
+  long long start;
+  const Counters *c = &result.counters;
+  GAMMA = number(argv[2]);
+  GAMMA2 = GAMMA * GAMMA;
+  RTOL = number(argv[3]);
+  ATOL = number(argv[4]);
+  MAX_STEP = number(argv[5]);
+  U0 = number(argv[6]);
+  W0 = number(argv[7]);
+  w0_given = 1;
+  THETA0 = number(argv[8]);
+  n_cycles = parse_cycles(argv[9]);
+  runs = strtol(argv[10], NULL, 10);
+  budget = number(argv[11]);
+  if (runs < 1) return 64;
+  quiet_failures = 1;
+  printf("{\"method\":\"c-cvode-bdf\",\"gamma\":%.17g,\"rtol\":%.17g,\"atol\":%.17g,", GAMMA,
+         RTOL, ATOL);
+  start = now_ns();
+  if (run_once(n_cycles, &result) != 0) {
+    printf("\"ok\":false,\"error\":");
+    json_string(failure_reason);
+    printf("}\n");
+    return 0;
+  }
+  spent = (double)(now_ns() - start) * 1e-9;
+  if (spent > budget) {
+    best = spent;
+    done = 1;
+  } else {
+    spent = 0.0;
+    while (done < runs && spent < budget) {
+      double t;
+      start = now_ns();
+      if (run_once(n_cycles, &result) != 0) {
+        printf("\"ok\":false,\"error\":");
+        json_string(failure_reason);
+        printf("}\n");
+        return 0;
+      }
+      t = (double)(now_ns() - start) * 1e-9;
+      spent += t;
+      best = fmin(best, t);
+      done++;
+    }
+  }
+  for (k = 0; k < result.ncycles; k++) {
+    period += result.cycles[k].period;
+    t0 += result.cycles[k].t0;
+    ln_v_max += result.cycles[k].ln_v_max;
+  }
+  printf("\"ok\":true,\"cycles\":%d,\"period\":%.17g,\"t0\":%.17g,\"ln_v_max\":%.17g,"
+         "\"time_per_cycle_s\":%.9g,\"runs\":%ld,\"steps\":%ld,\"rhs\":%ld,\"jac\":%ld,"
+         "\"lu\":%ld,\"rejected\":%ld}\n",
+         result.ncycles, period / result.ncycles, t0 / result.ncycles, ln_v_max / result.ncycles,
+         best / n_cycles, done, c->nst, c->nfe + c->nfeLS, c->nje, c->nsetups,
+         c->netf + c->nsolvefails);
+  return 0;
+}
+
 int main(int argc, char **argv) {
   long r, i;
   int n_cycles = 5;
+  if (argc >= 2 && strcmp(argv[1], "wp") == 0) {
+    if (argc != 12) {
+      fprintf(stderr, "usage: %s wp GAMMA RTOL ATOL MAX_STEP U0 W0 THETA0 N RUNS BUDGET_S\n",
+              argv[0]);
+      return 64;
+    }
+    return work_precision(argv);
+  }
   if (argc >= 2 && strcmp(argv[1], "check") == 0) {
     int k;
     const Counters *c = &result.counters;

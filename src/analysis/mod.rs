@@ -4,6 +4,7 @@ pub mod continuation;
 pub mod cycle;
 pub mod events;
 pub mod hopf;
+pub mod noise;
 pub mod paper;
 pub mod asymptotics;
 pub mod claims;

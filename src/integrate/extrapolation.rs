@@ -4,14 +4,17 @@
 //!
 //! Stiff scheme: the linearly implicit Euler extrapolation of Deuflhard, after Hairer & Wanner,
 //! "Solving ODEs II", IV.9, and their code SEULEX (1995):
-//! - step-number sequence n_j = 1, 2, 3, … (harmonic; [`Extrapolation::implicit_sequence`] sets
-//!   n_j = 2, 3, 4, …, Mathematica's choice); row j takes n_j steps of h_j = H/n_j,
+//! - step-number sequence n_j = 2, 3, 4, … (Mathematica's choice; SEULEX's NSEQU = 4;
+//!   [`Extrapolation::implicit_sequence`] sets the harmonic 1, 2, 3, …, SEULEX's default);
+//!   row j takes n_j steps of h_j = H/n_j,
 //!   (I − h_j J) Δ_i = h_j f(x + (i+1) h_j, y_i) (SEULEX's form for non-autonomous f), J the
 //!   Jacobian at the step start; Aitken–Neville extrapolation in h (T_{j,k} has order k);
 //! - the error estimate ‖T_{j,j} − T_{j,j−1}‖ and SEULEX's order and step-size control: work per
 //!   unit step W_j = A_j/H_j (A_j counts f-calls and solves, LU decompositions, the Jacobian),
 //!   the convergence monitor in columns k−1, k, k+1, FAC1..4 = 0.1, 4, 0.7, 0.9, SAFE1/2 = 0.6,
-//!   0.93, at most 12 columns;
+//!   0.93, at most 12 columns, and only as many as keep the extrapolation's roundoff below rtol
+//!   (Λ_k·u ≤ rtol, Λ_k the sum of the moduli of the Aitken–Neville weights; an addition to
+//!   SEULEX: beyond it the error estimate is roundoff and the step size collapses);
 //! - Jacobian reuse: a new Jacobian only when the last stability-check ratio θ exceeded
 //!   THET = min(1e-4, rtol), or after a rejection;
 //! - the stability check (rows 1–2, after their first step: θ = ‖(I − h_jJ)⁻¹(h_j f(y_1) −
@@ -73,7 +76,8 @@
 //! step (at x + 2h_j instead of x + h_j, saving one f-call); non-finite right-hand sides stop the
 //! row and halve H, ten of them in one step are an error; the step underflow test is
 //! "0.1·|h| ≤ u·|t|" as in RADAU5. The linearly implicit tableau amplifies roundoff (about 1e5
-//! at 12 columns of the harmonic sequence): its accuracy levels off near 1e-11 relative.
+//! at 11 columns of the harmonic sequence, 4e5 with 2, 3, 4, …): its accuracy levels off near
+//! 1e-11 relative.
 //!
 //! Error flags ([`SolverError::flag`]): −1 invalid input, −2 too many steps, −3 step size too
 //! small, −4 matrix repeatedly singular, −5 repeated row failures (stability checks), −6
@@ -110,11 +114,17 @@ const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_MAX_ROW_FAILS: u32 = 50;
 /// Failed attempts of any kind in one step before giving up (a guard).
 const MAX_ATTEMPTS: u32 = 500;
-/// First element of the linearly implicit scheme's step-number sequence n_j = first + j − 1
-/// (harmonic). Measured: 2, 3, 4, … (Mathematica's LinearlyImplicitEuler, `.implicit_sequence(2)`)
-/// takes 15× fewer steps on van der Pol (ε = 1e-6), the n₁ = 1 row damping stiff components
-/// weakly; on the DRR model both are alike. Not the default yet: the tests are tuned to 1.
-const DEFAULT_FIRST: usize = 1;
+/// First element of the linearly implicit scheme's step-number sequence n_j = first + j − 1:
+/// 2, 3, 4, … (Mathematica's LinearlyImplicitEuler). Measured against the harmonic 1, 2, 3, …
+/// (`.implicit_sequence(1)`): on van der Pol (ε = 1e-6, t ∈ [0, 2]) 1.5–22× fewer steps and
+/// 1–5× less time at rtol = atol = 1e-3 … 1e-12 for equal or smaller errors (the n₁ = 1 row
+/// damps stiff components weakly); on the DRR model (ξ = 0.8, ε = 1, γ = 1e1 … 1e8, rtol 1e-3
+/// … 1e-12, three settled cycles) period errors of the same size, −5 … +20 % right-hand sides
+/// and −20 … +10 % factorisations, and no wrong cycle (the harmonic sequence, at rtol 1e-12
+/// and γ = 1e3, let the explicit scheme take one step in a stick that put that cycle's period
+/// off by 8e-4). Costs: on non-stiff problems forced onto the linearly implicit scheme its
+/// dense output is 3–4× less accurate (tests/extrapolation.rs).
+const DEFAULT_FIRST: usize = 2;
 /// SEULEX's dense-output parameter λ.
 const DENSE_LAMBDA: usize = 1;
 /// ODEX's MUDIF: the dense output's degree is 2k_c + 4 − MUDIF.
@@ -155,10 +165,30 @@ fn offsets(nj: &[f64]) -> Vec<usize> {
     off
 }
 
+/// The number of columns (at least 4, at most `km`) whose extrapolation amplifies roundoff
+/// by less than rtol/u: Λ_k·u ≤ rtol, with Λ_k = Σ_i |c_i| the sum of the Aitken–Neville
+/// weights of T_{k,k} in h_j = H/n_j (Λ_k = 3, 9, 28, …, 1.3e5 at k = 11 for the harmonic
+/// sequence; 5, 19, 68, …, 4.1e5 for 2, 3, 4, …). Beyond it the error estimate is roundoff,
+/// and SEULEX's control, asking for ever smaller steps, ends in a step underflow (measured
+/// with 2, 3, 4, … at rtol 1e-12 on the DRR model at γ = 1e3 and 1e8).
+fn roundoff_columns(nj: &[f64], km: usize, rtol: f64) -> usize {
+    let amplification = |k: usize| -> f64 {
+        (1..=k)
+            .map(|i| (1..=k).filter(|&l| l != i).map(|l| (1.0 / nj[l]) / (1.0 / nj[l] - 1.0 / nj[i])).product::<f64>().abs())
+            .sum()
+    };
+    let mut k = km.min(4);
+    while k < km && amplification(k + 1) * UROUND <= rtol {
+        k += 1;
+    }
+    k
+}
+
 impl Control {
     /// SEULEX with the sequence n_j = first + j − 1 (first = 1: the harmonic sequence, its
-    /// NSEQU = 3; first = 2: its NSEQU = 4).
-    fn seulex(km: usize, first: usize) -> Self {
+    /// NSEQU = 3; first = 2: its NSEQU = 4), arrays for `km` columns, and the columns in use
+    /// limited to those whose roundoff stays below `rtol` (see [`roundoff_columns`]).
+    fn seulex(km: usize, first: usize, rtol: f64) -> Self {
         let nj: Vec<f64> = (0..=km).map(|j| if j == 0 { 0.0 } else { (first + j - 1) as f64 }).collect();
         let mut a = vec![0.0; km + 1];
         a[1] = WK_JAC + nj[1] * WK_ROW + WK_DEC;
@@ -166,6 +196,7 @@ impl Control {
             a[j] = a[j - 1] + (nj[j] - 1.0) * WK_ROW + WK_DEC;
         }
         let off = offsets(&nj);
+        let km = roundoff_columns(&nj, km, rtol);
         Self { km, nj, off, a, fac1: 0.1, fac2: 4.0, fac3: 0.7, fac4: 0.9, safe1: 0.6, safe2: 0.93, safe3: 0.5 }
     }
 
@@ -428,7 +459,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             None => (KM_IMPLICIT, KM_EXPLICIT),
         };
-        let imp = Control::seulex(km_imp, DEFAULT_FIRST);
+        let imp = Control::seulex(km_imp, DEFAULT_FIRST, options.rtol);
         let exp = Control::odex(km_exp);
         let work = Work::new(
             n,
@@ -508,12 +539,13 @@ impl<S: OdeSystem> Extrapolation<S> {
     }
 
     /// Sets the linearly implicit scheme's step-number sequence to n_j = first + j − 1 (first ≥ 1):
-    /// 1 gives the harmonic sequence 1, 2, 3, … (the default), 2 the sequence 2, 3, 4, … that
-    /// Mathematica's "LinearlyImplicitEuler" uses. Call before the first `advance`.
+    /// 1 gives the harmonic sequence 1, 2, 3, … (SEULEX's default), 2 the sequence 2, 3, 4, … that
+    /// Mathematica's "LinearlyImplicitEuler" uses (the default here). Call before the first
+    /// `advance`.
     pub fn implicit_sequence(mut self, first: usize) -> Self {
         let first = first.max(1);
-        let km = self.imp.km;
-        self.imp = Control::seulex(km, first);
+        let km = self.imp.nj.len() - 1;
+        self.imp = Control::seulex(km, first, self.rtol);
         let need = self.imp.off[km + 1];
         let n = self.n;
         self.work.incr.resize_with(need, || vec![0.0; n]);
@@ -1364,6 +1396,9 @@ impl<S: OdeSystem> Extrapolation<S> {
                             self.core.reduce(factor * self.core.h, ErrorKind::ConvergenceFailures, -5, "stability check")?;
                         }
                     }
+                    // An explicit attempt that overflowed is unstable too (measured: a stiff start
+                    // at γ = 1e3, rtol 1e-4, blew up in all ten halvings of H before any
+                    // stability check could stop a row).
                     self.stiffness_test(h_used, failure == Failure::Unstable);
                 }
             }
@@ -1475,8 +1510,9 @@ impl<S: OdeSystem> Stepper for Extrapolation<S> {
     }
     fn check_fixed(&self) -> Result<(), String> {
         if let Some((h, k)) = self.fixed {
-            if !(h.is_finite() && h > 0.0) || k == 0 || k > self.control().km {
-                return Err(format!("fixed step {h} must be finite and > 0, column {k} in 1..={}", self.control().km));
+            let km = self.control().nj.len() - 1;
+            if !(h.is_finite() && h > 0.0) || k == 0 || k > km {
+                return Err(format!("fixed step {h} must be finite and > 0, column {k} in 1..={km}"));
             }
         }
         Ok(())

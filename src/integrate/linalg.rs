@@ -47,23 +47,27 @@ pub(super) fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     true
 }
 
-/// Solves with the factors of [`lu_real`], in place.
+/// Solves with the factors of [`lu_real`], in place. (Column slices instead of indices: the
+/// same operations in the same order, without bounds checks in the inner loops.)
 pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
-    for k in 0..n {
+    let (a, ip, b) = (&a[..n * n], &ip[..n], &mut b[..n]);
+    for (k, col) in a.chunks_exact(n).enumerate() {
         let p = ip[k];
         if p != k {
             b.swap(k, p);
         }
-        let t = b[k];
-        for i in k + 1..n {
-            b[i] += a[k * n + i] * t;
+        let (head, tail) = b.split_at_mut(k + 1);
+        let t = head[k];
+        for (bi, &aik) in tail.iter_mut().zip(&col[k + 1..]) {
+            *bi += aik * t;
         }
     }
-    for k in (0..n).rev() {
-        b[k] /= a[k * n + k];
-        let t = -b[k];
-        for i in 0..k {
-            b[i] += a[k * n + i] * t;
+    for (k, col) in a.chunks_exact(n).enumerate().rev() {
+        let (head, tail) = b.split_at_mut(k);
+        tail[0] /= col[k];
+        let t = -tail[0];
+        for (bi, &aik) in head.iter_mut().zip(&col[..k]) {
+            *bi += aik * t;
         }
     }
 }

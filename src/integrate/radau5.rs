@@ -311,30 +311,32 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
     true
 }
 
-/// Solves with the factors of [`lu_complex`], in place on (br, bi).
+/// Solves with the factors of [`lu_complex`], in place on (br, bi). (Column slices instead of
+/// indices: the same operations in the same order, without bounds checks in the inner loops.)
 fn solve_complex(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64], bi: &mut [f64]) {
-    for k in 0..n {
+    let (ar, ai, ip, br, bi) = (&ar[..n * n], &ai[..n * n], &ip[..n], &mut br[..n], &mut bi[..n]);
+    for (k, (cr, ci)) in ar.chunks_exact(n).zip(ai.chunks_exact(n)).enumerate() {
         let p = ip[k];
         if p != k {
             br.swap(k, p);
             bi.swap(k, p);
         }
-        let (tr, ti) = (br[k], bi[k]);
-        for i in k + 1..n {
-            let (mr, mi) = (ar[k * n + i], ai[k * n + i]);
-            br[i] += mr * tr - mi * ti;
-            bi[i] += mr * ti + mi * tr;
+        let ((hr, tr_), (hi, ti_)) = (br.split_at_mut(k + 1), bi.split_at_mut(k + 1));
+        let (tr, ti) = (hr[k], hi[k]);
+        for (((xr, xi), &mr), &mi) in tr_.iter_mut().zip(ti_.iter_mut()).zip(&cr[k + 1..]).zip(&ci[k + 1..]) {
+            *xr += mr * tr - mi * ti;
+            *xi += mr * ti + mi * tr;
         }
     }
-    for k in (0..n).rev() {
-        let (qr, qi) = cdiv(br[k], bi[k], ar[k * n + k], ai[k * n + k]);
-        br[k] = qr;
-        bi[k] = qi;
+    for (k, (cr, ci)) in ar.chunks_exact(n).zip(ai.chunks_exact(n)).enumerate().rev() {
+        let ((hr, tr_), (hi, ti_)) = (br.split_at_mut(k), bi.split_at_mut(k));
+        let (qr, qi) = cdiv(tr_[0], ti_[0], cr[k], ci[k]);
+        tr_[0] = qr;
+        ti_[0] = qi;
         let (tr, ti) = (-qr, -qi);
-        for i in 0..k {
-            let (mr, mi) = (ar[k * n + i], ai[k * n + i]);
-            br[i] += mr * tr - mi * ti;
-            bi[i] += mr * ti + mi * tr;
+        for (((xr, xi), &mr), &mi) in hr.iter_mut().zip(hi.iter_mut()).zip(&cr[..k]).zip(&ci[..k]) {
+            *xr += mr * tr - mi * ti;
+            *xi += mr * ti + mi * tr;
         }
     }
 }

@@ -425,6 +425,14 @@ macro_rules! integrator_via_stepper {
                 stepper::advance(self, tout, task)
             }
 
+            /// Sets (Some) or clears (None) the time the integrator must not step past, as
+            /// [`Options::stop_time`](super::Options::stop_time) does at construction; a step
+            /// that ends there returns [`StepEvent::StopTime`](super::StepEvent::StopTime).
+            /// Lets a caller integrate piecewise-smooth forcing node by node without restarts.
+            pub fn set_stop_time(&mut self, t: Option<f64>) {
+                self.core_mut().stop_time = t;
+            }
+
             /// The state at `t()`.
             pub fn state(&self) -> &[f64] {
                 &self.core().y_out

@@ -1,6 +1,6 @@
 //! The runs behind the figures: the paper's scenes (data/scenes/) with small changes, run in
-//! parallel, and the period curves (one function, [`period_curve`], to be swapped for
-//! shooting/continuation when it lands).
+//! parallel, and the period curves ([`period_curve`]: shooting and continuation, with the
+//! brute-force cycle analysis where continuation does not reach).
 
 use super::{Context, ReproduceError};
 use crate::analysis::cycle::TrajectoryCycle;
@@ -119,11 +119,31 @@ pub struct CurvePoint {
 /// The period of the limit cycle of `base` as `param` (gamma, xi, epsilon or alpha) takes
 /// `values`, one point per value, in order.
 ///
-/// Today: the brute-force cycle analysis (integration to the converged limit cycle) at each
-/// point independently, in parallel. This is the one place to swap for shooting and
-/// continuation (issue #4): the figures only read the returned points.
+/// For ε, ξ and γ on a uniform grid (linear, or log10 for γ): shooting and continuation
+/// (`analysis::continuation`, Radau5 at the scene's tolerances) from the end where the
+/// relaxation cycle is robust (the largest ε or ξ, the smallest γ), for γ up to 1e8 (beyond,
+/// Newton's steps shrink and the continuation is slower than brute force: docs/shooting.md).
+/// The points it does not reach fall back to the brute-force cycle analysis, run per point in
+/// parallel — as does any other parameter.
 pub fn period_curve(ctx: &Context, base: &Value, param: &str, values: &[f64]) -> Vec<CurvePoint> {
-    parallel(ctx, values, |&value| {
+    let mut points: Vec<Option<CurvePoint>> = vec![None; values.len()];
+    if matches!(param, "epsilon" | "xi" | "gamma") && values.len() >= 2 {
+        let reverse = param != "gamma";
+        let grid: &[f64] = if reverse { values } else { &values[..values.iter().take_while(|&&g| g <= 1e8 * (1.0 + 1e-12)).count()] };
+        let (from, to) = if reverse { (grid[grid.len() - 1], grid[0]) } else { (grid[0], grid[grid.len() - 1]) };
+        let mut scene = variant(base, &format!("{param}-continuation"), &[(param, from)], false, 0);
+        scene["solver"]["method"] = json!("radau5");
+        scene["analyses"] = json!([{ "continuation": { "parameter": param, "to": to, "points": grid.len().max(2) } }]);
+        if let Ok(report) = run_scene(&scene) {
+            for p in report.continuation.iter().flat_map(|c| &c.points) {
+                if let Some(i) = values.iter().position(|v| (p.value - v).abs() <= 1e-9 * v.abs()) {
+                    points[i] = Some(CurvePoint { value: values[i], outcome: PointOutcome::Periodic { period: p.orbit.period } });
+                }
+            }
+        }
+    }
+    let missing: Vec<f64> = values.iter().zip(&points).filter(|(_, p)| p.is_none()).map(|(v, _)| *v).collect();
+    let mut brute = parallel(ctx, &missing, |&value| {
         let mut scene = variant(base, &format!("{param}={value}"), &[(param, value)], false, 0);
         scene["analyses"] = json!(["cycle"]);
         let outcome = match run_scene(&scene) {
@@ -132,6 +152,8 @@ pub fn period_curve(ctx: &Context, base: &Value, param: &str, values: &[f64]) ->
         };
         CurvePoint { value, outcome }
     })
+    .into_iter();
+    points.into_iter().map(|p| p.or_else(|| brute.next()).expect("every missing point was run")).collect()
 }
 
 fn outcome(report: &Report) -> PointOutcome {

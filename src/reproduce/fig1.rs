@@ -71,7 +71,7 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
 fn curve_panel(title: &str, x: Axis, periodic: &[(f64, f64)], period_n: &[(f64, f64)]) -> Panel {
     let (xs, ys): (Vec<f64>, Vec<f64>) = periodic.iter().copied().unzip();
     let mut p = Panel::new(title, x, Axis::linear("period τ").unit("D_{c}/v_{0}"))
-        .series(Series::new("limit cycle (brute-force integration)", xs, ys, Style::line(0).marker(Marker::Circle)).width(1.2));
+        .series(Series::new("limit cycle (shooting and continuation)", xs, ys, Style::line(0).marker(Marker::Circle)).width(1.2));
     if !period_n.is_empty() {
         let (xs, ys): (Vec<f64>, Vec<f64>) = period_n.iter().copied().unzip();
         p = p.series(Series::new("cycles of a period-n orbit", xs, ys, Style::markers(1, Marker::Triangle)));
@@ -130,14 +130,14 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         .panel(c)
         .caption(format!(
             "(a) The converged limit cycle for γ = 10^{{3}}, ξ = 0.7, ε = 0.72 (two periods; t = 0 at an upward crossing of v = 1): period {:.4}, t_{{0}} = {:.4}, v_{{max}} = {:.1}. \
-             (b, c) Period of the limit cycle from brute-force integration to convergence at each point ({} and {} points; rtol {:e}, {}).",
+             (b, c) Period of the periodic orbit by shooting and continuation (Radau5; beyond γ = 10^{{8}} the brute-force cycle analysis, {}), {} and {} points at rtol {:e}.",
             values.period,
             values.t0,
             values.v_max,
+            report.solver.method.name(),
             eps.len(),
             gam.len(),
-            report.solver.rtol,
-            report.solver.method.name()
+            report.solver.rtol
         ))
         .caption(UNITS);
     out.files.push(ctx.write_figure("fig1.svg", &fig)?);
@@ -157,7 +157,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
             "increases",
             format!("increases at {increasing} of {} steps, {:.3} → {:.3}", eps_ok.len() - 1, eps_ok[0].1, eps_ok[eps_ok.len() - 1].1),
             increasing == eps_ok.len() - 1,
-            format!("brute-force periods at ε = {:.3} … {:.3}", eps_ok[0].0, eps_ok[eps_ok.len() - 1].0),
+            format!("periods by continuation at ε = {:.3} … {:.3}", eps_ok[0].0, eps_ok[eps_ok.len() - 1].0),
         ));
     }
     let lower: Vec<(f64, f64)> = eps_ok.iter().copied().filter(|p| (0.9..=1.05).contains(&p.0)).collect();

@@ -12,7 +12,11 @@ pub mod cases;
 pub mod fig1;
 pub mod fig2;
 pub mod fig4;
+pub mod fig6;
+pub mod fig7;
 pub mod fig8;
+pub mod fig9;
+pub mod noise_cases;
 pub mod summary;
 
 use crate::figure::FigureError;
@@ -125,11 +129,14 @@ pub struct Entry {
 }
 
 /// The figures made today, in the paper's order.
-pub const FIGURES: [Entry; 4] = [
+pub const FIGURES: [Entry; 7] = [
     Entry { id: "fig1", what: "Fig. 1: the limit cycle at γ = 10³, ξ = 0.7, ε = 0.72 (a); its period against ε (b) and against log₁₀ γ (c)", make: fig1::make },
     Entry { id: "fig2", what: "Fig. 2: the slip in fast units T = γ(t − t_c), V = v/γ, for several γ", make: fig2::make },
     Entry { id: "fig4", what: "Fig. 4: the trajectory leaving and landing on the slow manifold ξu + θ + ln v = 0", make: fig4::make },
+    Entry { id: "fig6", what: "Fig. 6: response to noise: σ_v against v before the event; correlation functions Γ_u(t, t − t′)", make: fig6::make },
+    Entry { id: "fig7", what: "Fig. 7: correlation time before the event: saddle-node (slowing-down), stick-slip (speed-up), van der Pol", make: fig7::make },
     Entry { id: "fig8", what: "Fig. 8: power-law friction g_α(v) = (v^α − 1)/α against ln v", make: fig8::make },
+    Entry { id: "fig9", what: "Fig. 9: correlation time before the event with power-law friction (α = 0.15, γ = 10³, ε = 0.78, ξ = 0.7)", make: fig9::make },
 ];
 
 /// A figure of the paper not reproduced yet, and what it waits for.
@@ -144,7 +151,7 @@ pub struct Pending {
 }
 
 /// The paper's figures still to come (listed in the summary as "not yet reproduced").
-pub const PENDING: [Pending; 5] = [
+pub const PENDING: [Pending; 2] = [
     Pending {
         figure: "Fig. 3",
         what: "v/γ of the 2D (slow-manifold) and 3D flows; the (u, θ) plane with the matching curves, the zero-acceleration line and the adiabatic limit",
@@ -154,21 +161,6 @@ pub const PENDING: [Pending; 5] = [
         figure: "Fig. 5",
         what: "Lyapunov exponents (Jacobian eigenvalues) along the cycle: real parts, imaginary parts, onset before t_c",
         waiting_for: "the \"lyapunov\" analysis (issue #5)",
-    },
-    Pending {
-        figure: "Fig. 6",
-        what: "response to noise: σ_v against v before the event; correlation functions Γ_u(t, t − t′)",
-        waiting_for: "the \"noise\" analysis (issue #8)",
-    },
-    Pending {
-        figure: "Fig. 7",
-        what: "correlation time before the event: stick-slip (speed-up) against the saddle-node model (slowing-down) and van der Pol",
-        waiting_for: "the \"noise\" analysis (issue #8)",
-    },
-    Pending {
-        figure: "Fig. 9",
-        what: "correlation time before the event with power-law friction (α = 0.15, γ = 10³, ε = 0.78, ξ = 0.7)",
-        waiting_for: "the \"noise\" analysis (issue #8)",
     },
 ];
 

@@ -1,0 +1,167 @@
+//! Ensembles of realisations in parallel over cores (std::thread::scope, one Rodas5P per
+//! realisation). Realisation i draws from the random stream (seed, i) and writes only its own
+//! slot; reductions run afterwards in index order. Results are therefore bit-identical for any
+//! number of threads.
+
+use super::models::{EventKind, NoiseModel};
+use super::rng::Rng;
+use super::scheme::{self, Path, SchemeSettings, Start};
+use crate::integrate::{OdeSystem, SolverError, Stats};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// One realisation's results: event time, samples, solver statistics, noise nodes.
+type Slot = Mutex<Option<(f64, Vec<f64>, Stats, usize)>>;
+
+/// What each realisation records: its observables at given times relative to its own event
+/// (or at fixed times), after the run.
+#[derive(Debug, Clone)]
+pub struct Sampling<'a> {
+    /// Grid s_k; realisation r is read at t_ref(r) + s_k.
+    pub s: &'a [f64],
+    /// None: t_ref = the realisation's own event; Some(t): the fixed time t.
+    pub fixed_reference: Option<f64>,
+}
+
+/// An ensemble's raw results.
+#[derive(Debug, Clone, Default)]
+pub struct EnsembleData {
+    /// Number of realisations.
+    pub realisations: usize,
+    /// Event time of each realisation.
+    pub event_times: Vec<f64>,
+    /// Observables at the grid, realisation-major: [r][observable][k].
+    pub samples: Vec<f64>,
+    /// Rodas5P's statistics summed over realisations.
+    pub stats: Stats,
+    /// Noise nodes summed over realisations.
+    pub nodes: u64,
+}
+
+/// The fixed inputs of an ensemble.
+#[derive(Debug, Clone)]
+pub struct EnsembleSpec<'a> {
+    /// The model with its amplitudes.
+    pub model: &'a NoiseModel,
+    /// Common deterministic start.
+    pub start: &'a Start,
+    /// The scheme.
+    pub scheme: &'a SchemeSettings,
+    /// The event (None: run to `record_until`).
+    pub event: Option<EventKind>,
+    /// Record at least until this time (for fixed-time sampling).
+    pub record_until: f64,
+    /// Give up on a realisation without an event at this time.
+    pub t_max: f64,
+    /// Seed of the random streams.
+    pub seed: u64,
+}
+
+/// Reads realisation `path`'s observables at the sampling times into `out` ([observable][k]).
+fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), String> {
+    let reference = sampling.fixed_reference.unwrap_or(path.t_event);
+    let k_n = sampling.s.len();
+    let mut x = vec![0.0; model.dim()];
+    for (k, s) in sampling.s.iter().enumerate() {
+        let t = reference + s;
+        for (i, xi) in x.iter_mut().enumerate() {
+            *xi = path.value(t, i).ok_or_else(|| {
+                let (a, b) = path.span();
+                format!("the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span [{a:e}, {b:e}]")
+            })?;
+        }
+        for (o, (_, obs)) in model.observables().iter().enumerate() {
+            out[o * k_n + k] = obs.value(&x);
+        }
+    }
+    Ok(())
+}
+
+/// Runs `count` realisations on `threads` threads; `progress(done, total)` after each. On
+/// failures, the error of the lowest failing index (the same whatever the scheduling), with the
+/// index in its message.
+pub fn run(
+    spec: &EnsembleSpec<'_>,
+    sampling: &Sampling<'_>,
+    count: usize,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<EnsembleData, SolverError> {
+    let per = spec.model.observables().len() * sampling.s.len();
+    let slots: Vec<Slot> = (0..count).map(|_| Mutex::new(None)).collect();
+    let failures: Mutex<Vec<(usize, SolverError)>> = Mutex::new(Vec::new());
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        for _ in 0..threads.max(1) {
+            scope.spawn(|| {
+                let mut path = Path::default();
+                loop {
+                    if stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= count {
+                        break;
+                    }
+                    let mut rng = Rng::for_realisation(spec.seed, i as u64);
+                    let outcome = scheme::realisation(
+                        spec.model,
+                        spec.start,
+                        spec.scheme,
+                        spec.event,
+                        spec.record_until,
+                        spec.t_max,
+                        &mut rng,
+                        &mut path,
+                    )
+                    .and_then(|()| {
+                        let mut out = vec![0.0; per];
+                        sample(spec.model, &path, sampling, &mut out).map_err(|message| SolverError {
+                            solver: "stickslip noise",
+                            kind: crate::integrate::ErrorKind::Other,
+                            t: path.t_event,
+                            state: vec![],
+                            flag: 0,
+                            message: format!(
+                                "{message}: the event moved too far from the deterministic one \
+                                 (lower the amplitudes or raise start_before_event)"
+                            ),
+                        })?;
+                        Ok(out)
+                    });
+                    match outcome {
+                        Ok(out) => *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((path.t_event, out, path.stats, path.nodes())),
+                        Err(mut e) => {
+                            let hint = if e.kind == crate::integrate::ErrorKind::ErrorTestFailures {
+                                " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
+                            } else {
+                                ""
+                            };
+                            e.message = format!("realisation {i}: {}{hint}", e.message);
+                            failures.lock().unwrap_or_else(|e| e.into_inner()).push((i, e));
+                            // Indices are handed out in order, so every index below a failure
+                            // is already running or done: the lowest failure is always found.
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    progress(done.fetch_add(1, Ordering::Relaxed) + 1, count);
+                }
+            });
+        }
+    });
+    let mut failures = failures.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, e)) = failures.drain(..).min_by_key(|(i, _)| *i) {
+        return Err(e);
+    }
+    let mut data = EnsembleData { realisations: count, samples: Vec::with_capacity(count * per), ..Default::default() };
+    for slot in slots {
+        let (t, out, stats, nodes) = slot.into_inner().unwrap_or_else(|e| e.into_inner()).expect("every realisation ran");
+        data.event_times.push(t);
+        data.nodes += nodes as u64;
+        data.samples.extend_from_slice(&out);
+        data.stats.accumulate(&stats);
+    }
+    Ok(data)
+}

@@ -1,0 +1,635 @@
+//! The "noise" analysis: the response of a relaxation oscillation to weak coloured noise, from
+//! ensembles of realisations and from the linear (small-noise) response, aligned on the event.
+//!
+//! Pipeline ([`run`]):
+//! 1. the deterministic orbit (Rodas5P, rtol 1e-10): for periodic models (DRR, van der Pol) the
+//!    converged limit cycle, the start `start_before_event` before an event, the deterministic
+//!    event time t_c and (DRR) t0, the time from v = 1 to t_c; for the saddle-node the passage
+//!    from t = 0;
+//! 2. `realisations` runs of the random ODE from that start ([`scheme`], [`ensemble`]), each
+//!    with its own exactly sampled OU noises ([`ou`], [`rng`]) and its own event time t_c,i;
+//! 3. statistics on a grid of times s = t − t_c before the event ([`statistics`]), aligned on
+//!    each realisation's own event (default) or on the deterministic one: means, σ_x(t),
+//!    Γ_x(t, t − t'), the correlation time of the first observable (u for the DRR, x
+//!    otherwise) as the half-height width of Γ in t' (and of the correlation coefficient), and
+//!    for the DRR the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1;
+//! 4. the same quantities from the linear response ([`linear_response`]), and where ensemble
+//!    and linear response agree within the sampling error.
+
+pub mod ensemble;
+pub mod linear_response;
+pub mod models;
+pub mod options;
+pub mod ou;
+pub mod report;
+pub mod rng;
+pub mod scheme;
+pub mod statistics;
+
+use crate::integrate::{ErrorKind, OdeSystem, SolverError};
+use models::{EventKind, NoiseModel};
+use options::{Alignment, NoiseOptions};
+use scheme::{SchemeSettings, Start};
+use serde::Serialize;
+use statistics::{Moments, Width};
+
+/// How the scheme works, in one paragraph (echoed in reports).
+pub const SCHEME: &str = "Each realisation is a random ODE dx/dt = F(t,x) + B(x)η(t): the OU noises η (unit \
+variance, correlation time τ) are sampled exactly at nodes h = τ/steps_per_correlation_time apart and joined by the C1 \
+cubic (Catmull-Rom) spline; on each interval the smooth ODE is integrated by Rodas5P (Rosenbrock, order 5, L-stable: \
+the deterministic part is linearly implicit) with error control, stopping at every node. Deterministic error: order 5 \
+(rtol/atol). Noise discretisation (the OU bridge replaced by the spline): weak order 2 in h/τ for responses slower or \
+much faster than h, first order for responses on the time scale h (at most 0.5 % of a variance at h = τ/10). Ordinary \
+calculus (coloured noise): the noise on v enters ln v as η_v f_v/v.";
+
+/// Deterministic tolerances (orbit, events, start).
+const DET_RTOL: f64 = 1e-10;
+/// Relative tolerance of the linear response (Radau5).
+const LR_RTOL: f64 = 1e-6;
+/// The grid starts this fraction of `start_before_event` after the start (room for events
+/// earlier than the deterministic one).
+const GRID_MARGIN: f64 = 0.05;
+
+/// The settings as used (defaults resolved).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Settings {
+    /// Noise amplitudes, one per component.
+    pub amplitudes: Vec<f64>,
+    /// OU correlation time τ.
+    pub correlation_time: f64,
+    /// Node spacing h = τ/steps_per_correlation_time.
+    pub noise_step: f64,
+    /// τ/h.
+    pub steps_per_correlation_time: f64,
+    /// Number of realisations.
+    pub realisations: usize,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Start of the realisations before the deterministic event.
+    pub start_before_event: f64,
+    /// [from, to] times before the event of the reported correlation times.
+    pub window: [f64; 2],
+    /// "own_event" or "deterministic".
+    pub alignment: Alignment,
+    /// Equally spaced grid points (plus a fifth as many log-spaced towards the event).
+    pub grid_points: usize,
+    /// Times in the window at which correlation times are reported.
+    pub report_points: usize,
+    /// Rodas5P's tolerances per realisation.
+    pub rtol: f64,
+    /// Absolute tolerances per component.
+    pub atol: Vec<f64>,
+    /// Whether the linear response was computed.
+    pub linear_response: bool,
+    /// Γ curves reported at these times before the event.
+    pub correlation_curves_at: Vec<f64>,
+    /// The event, in words.
+    pub event: String,
+}
+
+/// The deterministic orbit the realisations start from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Deterministic {
+    /// Period of the limit cycle (periodic models).
+    pub period: Option<f64>,
+    /// Events computed to converge the limit cycle.
+    pub burn_in_events: usize,
+    /// DRR: time from the upward crossing of v = 1 to t_c.
+    pub t0: Option<f64>,
+    /// Start time of the realisations (model time; 0 for autonomous models).
+    pub start_time: f64,
+    /// Start state (components as named in `components`).
+    pub start_state: Vec<f64>,
+    /// Names of the state components.
+    pub components: Vec<&'static str>,
+    /// The deterministic event time t_c (model time).
+    pub event_time: f64,
+    /// State at t_c.
+    pub event_state: Vec<f64>,
+    /// The event time of a realisation with zero amplitudes (the scheme's deterministic error).
+    pub event_time_without_noise: f64,
+    /// event_time_without_noise − event_time.
+    pub scheme_event_time_error: f64,
+}
+
+/// The realisations' event times.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Events {
+    /// Mean of t_c,i − t_c.
+    pub mean_shift: f64,
+    /// Standard deviation of t_c,i.
+    pub std: f64,
+    /// The linear response's standard deviation of the event time.
+    pub std_linear_response: Option<f64>,
+}
+
+/// Mean and σ of one observable on the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Series {
+    /// Observable name (u, v, theta; x, y).
+    pub name: &'static str,
+    /// Ensemble mean.
+    pub mean: Vec<f64>,
+    /// The deterministic orbit's value (the linear response's mean).
+    pub deterministic: Vec<f64>,
+    /// Ensemble standard deviation σ_x(t) = √Γ_x(t, t).
+    pub sigma: Vec<f64>,
+    /// Linear-response standard deviation.
+    pub sigma_linear_response: Option<Vec<f64>>,
+}
+
+/// The correlation time at one time before the event.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CorrelationPoint {
+    /// t_c − t.
+    pub t_before_event: f64,
+    /// Half-height width in t' of the ensemble's Γ(t, t − t') (null: beyond the grid).
+    pub tau: Option<f64>,
+    /// The same from the linear response.
+    pub tau_linear_response: Option<f64>,
+    /// Half-height width of the ensemble's correlation coefficient Γ(t,t−t')/(σ(t)σ(t−t')).
+    pub tau_coefficient: Option<f64>,
+    /// The same from the linear response.
+    pub tau_coefficient_linear_response: Option<f64>,
+}
+
+/// Γ(t, t − t') against t' at one time t.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CorrelationCurve {
+    /// t_c − t.
+    pub t_before_event: f64,
+    /// Lags t' (ascending from 0).
+    pub lag: Vec<f64>,
+    /// Ensemble Γ(t, t − t').
+    pub gamma: Vec<f64>,
+    /// Linear-response Γ(t, t − t').
+    pub gamma_linear_response: Option<Vec<f64>>,
+}
+
+/// DRR: growth of σ_v against v over (t_f − t0, t_f).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Growth {
+    /// t_c − t_f (0.1).
+    pub t_f_before_event: f64,
+    /// The interval's length t0.
+    pub interval: f64,
+    /// mean v(t_f)/mean v(t_f − t0) (ensemble).
+    pub v_growth: f64,
+    /// σ_v(t_f)/σ_v(t_f − t0) (ensemble).
+    pub sigma_v_growth: f64,
+    /// sigma_v_growth / v_growth.
+    pub ratio: f64,
+    /// log10(ratio): the paper reports about 3.
+    pub log10_ratio: f64,
+    /// The same three from the linear response.
+    pub v_growth_linear_response: Option<f64>,
+    /// σ_v growth from the linear response.
+    pub sigma_v_growth_linear_response: Option<f64>,
+    /// Their ratio.
+    pub ratio_linear_response: Option<f64>,
+}
+
+/// Agreement of ensemble and linear response for one observable over the window.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Agreement {
+    /// Observable.
+    pub name: &'static str,
+    /// Relative standard error of an ensemble σ, 1/√(2(R−1)).
+    pub sigma_standard_error: f64,
+    /// Largest |σ_ensemble/σ_linear − 1| over the window.
+    pub sigma_max_relative_difference: f64,
+    /// Window times (before the event) where σ differs by more than 4 standard errors.
+    pub sigma_disagree_at: Vec<f64>,
+    /// Median |τ_ensemble/τ_linear − 1| over the window (where both exist).
+    pub tau_median_relative_difference: Option<f64>,
+    /// Largest |τ_ensemble/τ_linear − 1| over the window.
+    pub tau_max_relative_difference: Option<f64>,
+}
+
+/// Work done by the realisations.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Work {
+    /// Rodas5P steps over all realisations.
+    pub steps: u64,
+    /// Step attempts.
+    pub step_attempts: u64,
+    /// Right-hand-side evaluations (including ∂f/∂t differences).
+    pub rhs_evals: u64,
+    /// Jacobian evaluations.
+    pub jac_evals: u64,
+    /// Noise nodes per realisation (mean).
+    pub nodes_per_realisation: f64,
+    /// Linear response: steps of the orbit (Rodas5P), covariance and adjoints (Radau5).
+    pub linear_response_steps: Option<u64>,
+    /// Wall-clock time of the ensemble (seconds).
+    pub ensemble_wall_time_s: f64,
+}
+
+/// The "noise" section of a report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct NoiseReport {
+    /// "drr", "saddle_node" or "van_der_pol".
+    pub model: &'static str,
+    /// Settings as used.
+    pub settings: Settings,
+    /// The scheme, in words.
+    pub scheme: &'static str,
+    /// The deterministic orbit.
+    pub deterministic: Deterministic,
+    /// The realisations' event times.
+    pub events: Events,
+    /// Grid times before the event, t_c − t (descending: from the start towards the event).
+    pub t_before_event: Vec<f64>,
+    /// Mean and σ per observable on the grid.
+    pub series: Vec<Series>,
+    /// The observable whose correlation time is `correlation_time`.
+    pub correlation_variable: &'static str,
+    /// Correlation time of `correlation_variable` at the grid times inside the window.
+    pub correlation_time: Vec<CorrelationPoint>,
+    /// Correlation times of every observable (same definition).
+    pub correlation_time_by_variable: Vec<(String, Vec<CorrelationPoint>)>,
+    /// Γ of `correlation_variable` against the lag at `correlation_curves_at`.
+    pub correlation_functions: Vec<CorrelationCurve>,
+    /// DRR: growth of σ_v against v.
+    pub growth: Option<Growth>,
+    /// Ensemble against linear response, per observable.
+    pub agreement: Vec<Agreement>,
+    /// Work done.
+    pub work: Work,
+}
+
+fn invalid(message: String) -> SolverError {
+    SolverError { solver: "stickslip noise", kind: ErrorKind::InvalidInput, t: 0.0, state: vec![], flag: 0, message }
+}
+
+/// The converged limit cycle of a periodic model: (period, state at an event, events used).
+/// Converged when three successive periods and the event states agree to 1e-8 (relative;
+/// absolute below 1): a decaying oscillation, whose period converges but whose amplitude does
+/// not, never qualifies.
+fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), SolverError> {
+    let mut x = initial.to_vec();
+    let mut periods: Vec<f64> = Vec::new();
+    let mut states: Vec<Vec<f64>> = Vec::new();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * a.abs().max(b.abs()).max(1.0);
+    for events in 1..=2000 {
+        let (t, xe, _) = scheme::deterministic_event(model, 0.0, &x, event, 1e7, DET_RTOL, atol)?;
+        x = xe;
+        if events > 1 {
+            periods.push(t);
+            states.push(x.clone());
+        }
+        if let ([.., a, b, c], [.., sa, sb, sc]) = (&periods[..], &states[..]) {
+            let same_states = sa.iter().zip(sb).zip(sc).all(|((p, q), r)| close(*p, *q) && close(*q, *r));
+            if close(*a, *b) && close(*b, *c) && same_states {
+                return Ok((*c, x, events));
+            }
+        }
+    }
+    Err(SolverError {
+        solver: "stickslip noise",
+        kind: ErrorKind::Other,
+        t: 0.0,
+        state: x,
+        flag: 0,
+        message: format!("the deterministic orbit did not settle on a limit cycle in 2000 events (last periods {:?})", &periods[periods.len().saturating_sub(3)..]),
+    })
+}
+
+/// Runs the noise analysis on `model` (with its amplitudes) from the deterministic initial
+/// state `initial` (the orbit converges from there; saddle-node: x at t = 0), on `threads`
+/// threads; `progress(done, total)` after each realisation.
+pub fn run(
+    model: &NoiseModel,
+    initial: &[f64],
+    options: &NoiseOptions,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<NoiseReport, SolverError> {
+    let n = model.dim();
+    let det_atol = vec![1e-12; n];
+    // 1. The deterministic orbit.
+    let (event_for_burn_in, periodic) = match model {
+        NoiseModel::Drr { .. } => (EventKind::Maximum { component: 1, arm: 0.0, drop: std::f64::consts::LN_2 }, true),
+        NoiseModel::VanDerPol { .. } => (EventKind::CrossDown { component: 0, level: 0.0, arm: 1.0 }, true),
+        NoiseModel::SaddleNode { .. } => {
+            let level = options.event_level.unwrap_or(-1.0);
+            (EventKind::CrossDown { component: 0, level, arm: 0.0 }, false)
+        }
+        NoiseModel::Linear { .. } => {
+            return Err(invalid("the linear validation model has no event to align on; it serves the scheme's tests".into()));
+        }
+    };
+    if let NoiseModel::Drr { system, .. } = model {
+        if crate::analysis::hopf::analyse(system).max_real_part < 0.0 {
+            return Err(invalid("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on".into()));
+        }
+    }
+    let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
+        let (period, x_event, events) = limit_cycle(model, initial, event_for_burn_in, &det_atol)?;
+        let before = options.start_before_event.unwrap_or(match model {
+            NoiseModel::Drr { .. } => (0.8 * period).min(6.0),
+            _ => 0.45 * period,
+        });
+        if before >= period {
+            return Err(invalid(format!("start_before_event = {before} must be shorter than the period {period}")));
+        }
+        let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, &det_atol)?;
+        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, &det_atol)?;
+        (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
+    } else {
+        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, &det_atol)?;
+        let before = options.start_before_event.unwrap_or(tc);
+        if before > tc {
+            return Err(invalid(format!("start_before_event = {before} exceeds the time {tc} from t = 0 to the escape")));
+        }
+        let x_start = scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, &det_atol)?;
+        (None, 0, before, Start { t: tc - before, x: x_start }, tc, xc)
+    };
+    let t0 = match model {
+        NoiseModel::Drr { .. } => {
+            let up = EventKind::CrossUp { component: 1, level: 0.0, arm: 0.0 };
+            scheme::deterministic_event(model, start.t, &start.x, up, t_event_det, DET_RTOL, &det_atol)
+                .ok()
+                .map(|(t, _, _)| t_event_det - t)
+        }
+        _ => None,
+    };
+    // 2. Resolved settings.
+    let tau = options.correlation_time.unwrap_or(match model {
+        NoiseModel::Drr { system, .. } => 2.5 / system.params().gamma,
+        NoiseModel::SaddleNode { system, .. } => 0.05 / system.params().mu0.sqrt(),
+        NoiseModel::VanDerPol { system, .. } => 2.5 / (system.params().beta * system.params().beta),
+        NoiseModel::Linear { rate, .. } => 0.1 / rate,
+    });
+    let steps_per_tau = options.steps_per_correlation_time.unwrap_or(10.0);
+    let h = tau / steps_per_tau;
+    let window = options.window.unwrap_or(match model {
+        NoiseModel::Drr { system, .. } => [3.0, 30.0 / system.params().gamma],
+        _ => [0.9 * before, 0.01 * before],
+    });
+    let far = (1.0 - GRID_MARGIN) * before;
+    if window[0] > far {
+        return Err(invalid(format!("window starts {} before the event, before the grid's first time {far} (raise start_before_event)", window[0])));
+    }
+    let curves_at = options.correlation_curves_at.clone().unwrap_or(match model {
+        NoiseModel::Drr { system, .. } => vec![2.3, 1.0, 30.0 / system.params().gamma],
+        _ => vec![window[0], (window[0] * window[1]).sqrt(), window[1]],
+    });
+    if let Some(t) = curves_at.iter().find(|t| **t > far) {
+        return Err(invalid(format!("correlation_curves_at: {t} is before the grid's first time {far} before the event")));
+    }
+    let alignment = options.alignment.unwrap_or(Alignment::OwnEvent);
+    let grid_points = options.grid_points.unwrap_or(1000);
+    let report_count = options.report_points.unwrap_or(60);
+    let report_times: Vec<f64> = (0..report_count)
+        .map(|i| {
+            let f = if report_count > 1 { i as f64 / (report_count - 1) as f64 } else { 0.0 };
+            (window[0].ln() + f * (window[1].ln() - window[0].ln())).exp()
+        })
+        .collect();
+    let rtol = options.rtol.unwrap_or(1e-6);
+    let realisations = options.realisations.unwrap_or(1000);
+    let seed = options.seed.unwrap_or(1);
+    let want_linear = options.linear_response.unwrap_or(true);
+    let growth_points = match (model, t0) {
+        (NoiseModel::Drr { .. }, Some(t0)) if 0.1 + t0 <= far => vec![-0.1, -(0.1 + t0)],
+        _ => vec![],
+    };
+    let mut extra: Vec<f64> = report_times.iter().map(|t| -t).collect();
+    extra.extend(curves_at.iter().map(|t| -t));
+    extra.extend(&growth_points);
+    let s = statistics::grid(far, window[1] / 3.0, grid_points, grid_points / 5, &extra);
+    let k_n = s.len();
+    let event = match (model, event_for_burn_in) {
+        // Armed at half of ln v_max: noise wiggles of ln v on the stick never count.
+        (NoiseModel::Drr { .. }, EventKind::Maximum { component, drop, .. }) => {
+            EventKind::Maximum { component, arm: 0.5 * x_event_det[component], drop }
+        }
+        (_, e) => e,
+    };
+    let event_words = match event {
+        EventKind::Maximum { .. } => "the maximum of v (slip peak)".to_string(),
+        EventKind::CrossDown { level, .. } if periodic => format!("the downward crossing of x = {level} (jump off the fold x = 1)"),
+        EventKind::CrossDown { level, .. } => format!("the downward crossing of x = {level} (escape)"),
+        EventKind::CrossUp { level, .. } => format!("the upward crossing of level {level}"),
+    };
+    // The linear response (before the ensemble: it sets the default absolute tolerances).
+    let times: Vec<f64> = s.iter().map(|v| t_event_det + v).collect();
+    let linear = if want_linear {
+        Some(linear_response::compute(model, start.t, &start.x, &times, event, tau, LR_RTOL, &det_atol)?)
+    } else {
+        None
+    };
+    // Default atol: 1e-3 of each component's typical (median) linear-response σ, within
+    // [1e-14, 1e-6]; 1e-6 without the linear response. (Much tighter values can be out of
+    // reach: a stiff component driven by the noise lags its quasi-static value by ~ḟ/λ, and
+    // Rosenbrock methods get that lag right only to a fraction of it, whatever the step.)
+    let atol = options.atol.clone().unwrap_or_else(|| match &linear {
+        Some(l) => (0..n)
+            .map(|i| {
+                let mut sig: Vec<f64> = l.covariance.iter().map(|c| c[i * l.big + i].max(0.0).sqrt()).collect();
+                sig.sort_by(|a, b| a.total_cmp(b));
+                (1e-3 * sig[sig.len() / 2]).clamp(1e-14, 1e-6)
+            })
+            .collect(),
+        None => vec![1e-6; n],
+    });
+    let scheme_settings = SchemeSettings { h, tau, rtol, atol: atol.clone() };
+    // The scheme's deterministic error: one realisation with zero amplitudes.
+    let quiet = model.scaled(0.0);
+    let t_max = start.t + 2.0 * before + 10.0 * tau;
+    let mut path = scheme::Path::default();
+    let mut rng = rng::Rng::for_realisation(seed, u64::MAX);
+    scheme::realisation(&quiet, &start, &scheme_settings, Some(event), start.t, t_max, &mut rng, &mut path)?;
+    let event_time_without_noise = path.t_event;
+
+    // 3. The ensemble.
+    let record_until = match alignment {
+        Alignment::OwnEvent => start.t,
+        Alignment::Deterministic => t_event_det + h,
+    };
+    let spec = ensemble::EnsembleSpec { model, start: &start, scheme: &scheme_settings, event: Some(event), record_until, t_max, seed };
+    let fixed_reference = (alignment == Alignment::Deterministic).then_some(t_event_det);
+    let sampling = ensemble::Sampling { s: &s, fixed_reference };
+    let started = std::time::Instant::now();
+    let data = ensemble::run(&spec, &sampling, realisations, threads, progress)?;
+    let ensemble_wall_time_s = started.elapsed().as_secs_f64();
+
+    // 4. Statistics.
+    let orbit = scheme::deterministic_states(model, start.t, &start.x, &times, DET_RTOL, &det_atol)?;
+    let observables = model.observables();
+    let stride = observables.len() * k_n;
+    let report_rows: Vec<usize> = report_times.iter().map(|t| statistics::nearest(&s, -t)).collect();
+    let curve_rows: Vec<usize> = curves_at.iter().map(|t| statistics::nearest(&s, -t)).collect();
+    let mut rows: Vec<usize> = report_rows.iter().chain(&curve_rows).copied().collect();
+    rows.sort_unstable();
+    rows.dedup();
+    let own = alignment == Alignment::OwnEvent;
+    let mut linear_steps = linear.as_ref().map_or(0, |l| l.steps);
+    let mut series = Vec::new();
+    let mut by_variable = Vec::new();
+    let mut agreement = Vec::new();
+    let mut curves = Vec::new();
+    for (o, (name, obs)) in observables.iter().enumerate() {
+        let m = Moments::from_samples(&data.samples, realisations, stride, o * k_n, k_n, &rows);
+        let deterministic: Vec<f64> = orbit.iter().map(|x| obs.value(x)).collect();
+        // The linear response of the observable: δo = o'(x̄) δx_i.
+        let lin = linear.as_ref().map(|l| {
+            let grads: Vec<Vec<f64>> = l
+                .orbit
+                .iter()
+                .map(|x| {
+                    let mut g = vec![0.0; l.big];
+                    obs.gradient(x, &mut g[..n]);
+                    g
+                })
+                .collect();
+            let var = l.variances(&grads, own);
+            let rows = rows
+                .iter()
+                .map(|&j| {
+                    let (row, steps) = l.row(&grads, own, j)?;
+                    linear_steps += steps;
+                    Ok((j, row))
+                })
+                .collect::<Result<Vec<(usize, Vec<f64>)>, SolverError>>()?;
+            Ok::<Moments, SolverError>(Moments { mean: deterministic.clone(), var, rows })
+        });
+        let lin = lin.transpose()?;
+        let row_of = |m: &Moments, j: usize| -> Vec<f64> {
+            m.rows.iter().find(|(r, _)| *r == j).map(|(_, row)| row.clone()).expect("a requested row")
+        };
+        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, &s, j, width);
+        let sigma = m.sigma();
+        let sigma_lin = lin.as_ref().map(|l| l.sigma());
+        let points: Vec<CorrelationPoint> = report_rows
+            .iter()
+            .map(|&j| CorrelationPoint {
+                t_before_event: -s[j],
+                tau: tau_of(&m, j, Width::HalfHeight),
+                tau_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::HalfHeight)),
+                tau_coefficient: tau_of(&m, j, Width::Coefficient),
+                tau_coefficient_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::Coefficient)),
+            })
+            .collect();
+        if let Some(sl) = &sigma_lin {
+            let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
+            let mut max_rel = 0.0f64;
+            let mut disagree = Vec::new();
+            for &j in &report_rows {
+                if sl[j] > 0.0 {
+                    let rel = sigma[j] / sl[j] - 1.0;
+                    max_rel = max_rel.max(rel.abs());
+                    if rel.abs() > 4.0 * se {
+                        disagree.push(-s[j]);
+                    }
+                }
+            }
+            let mut rels: Vec<f64> = points
+                .iter()
+                .filter_map(|p| match (p.tau, p.tau_linear_response) {
+                    (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
+                    _ => None,
+                })
+                .collect();
+            rels.sort_by(|a, b| a.total_cmp(b));
+            agreement.push(Agreement {
+                name,
+                sigma_standard_error: se,
+                sigma_max_relative_difference: max_rel,
+                sigma_disagree_at: disagree,
+                tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
+                tau_max_relative_difference: rels.last().copied(),
+            });
+        }
+        if o == 0 {
+            for &j in &curve_rows {
+                let lag: Vec<f64> = (0..=j).rev().map(|k| s[j] - s[k]).collect();
+                let gamma: Vec<f64> = row_of(&m, j).into_iter().rev().collect();
+                let gamma_linear_response = lin.as_ref().map(|l| row_of(l, j).into_iter().rev().collect());
+                curves.push(CorrelationCurve { t_before_event: -s[j], lag, gamma, gamma_linear_response });
+            }
+        }
+        by_variable.push((name.to_string(), points));
+        series.push(Series { name, mean: m.mean.clone(), deterministic, sigma, sigma_linear_response: sigma_lin });
+    }
+    let correlation_functions = curves;
+    let growth = match (model, t0) {
+        (NoiseModel::Drr { .. }, Some(t0)) if !growth_points.is_empty() => {
+            let (jf, j0) = (statistics::nearest(&s, -0.1), statistics::nearest(&s, -(0.1 + t0)));
+            let v = &series[1];
+            let v_growth = v.mean[jf] / v.mean[j0];
+            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
+            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
+            Some(Growth {
+                t_f_before_event: 0.1,
+                interval: t0,
+                v_growth,
+                sigma_v_growth,
+                ratio: sigma_v_growth / v_growth,
+                log10_ratio: (sigma_v_growth / v_growth).log10(),
+                v_growth_linear_response: lin.map(|l| l.0),
+                sigma_v_growth_linear_response: lin.map(|l| l.1),
+                ratio_linear_response: lin.map(|l| l.1 / l.0),
+            })
+        }
+        _ => None,
+    };
+    let r_n = realisations as f64;
+    let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event_det).collect();
+    let mean_shift = shifts.iter().sum::<f64>() / r_n;
+    let std = (shifts.iter().map(|d| (d - mean_shift).powi(2)).sum::<f64>() / (r_n - 1.0)).sqrt();
+    let report = NoiseReport {
+        model: model.kind(),
+        settings: Settings {
+            amplitudes: model.amplitudes(),
+            correlation_time: tau,
+            noise_step: h,
+            steps_per_correlation_time: steps_per_tau,
+            realisations,
+            seed,
+            start_before_event: before,
+            window,
+            alignment,
+            grid_points,
+            report_points: report_count,
+            rtol,
+            atol,
+            linear_response: want_linear,
+            correlation_curves_at: curves_at,
+            event: event_words,
+        },
+        scheme: SCHEME,
+        deterministic: Deterministic {
+            period,
+            burn_in_events,
+            t0,
+            start_time: start.t,
+            start_state: start.x.clone(),
+            components: model.component_names().to_vec(),
+            event_time: t_event_det,
+            event_state: x_event_det,
+            event_time_without_noise,
+            scheme_event_time_error: event_time_without_noise - t_event_det,
+        },
+        events: Events { mean_shift, std, std_linear_response: linear.as_ref().map(|l| l.event_time_std) },
+        t_before_event: s.iter().map(|v| -v).collect(),
+        series,
+        correlation_variable: observables[0].0,
+        correlation_time: by_variable[0].1.clone(),
+        correlation_time_by_variable: by_variable,
+        correlation_functions,
+        growth,
+        agreement,
+        work: Work {
+            steps: data.stats.steps,
+            step_attempts: data.stats.step_attempts,
+            rhs_evals: data.stats.rhs_evals + data.stats.rhs_evals_jacobian,
+            jac_evals: data.stats.jac_evals,
+            nodes_per_realisation: data.nodes as f64 / r_n,
+            linear_response_steps: linear.as_ref().map(|_| linear_steps),
+            ensemble_wall_time_s,
+        },
+    };
+    Ok(report)
+}

@@ -1,0 +1,217 @@
+//! The noise section's checks and summary, and the report of a saddle-node or van der Pol
+//! scene (which runs the noise analysis alone).
+
+use super::models::NoiseModel;
+use super::NoiseReport;
+use crate::integrate::SolverError;
+use crate::model::{SaddleNode, VanDerPol};
+use crate::scene::{OtherModel, OtherScene};
+use serde::Serialize;
+
+impl NoiseReport {
+    /// Every number of the section (to check that none is NaN or infinite).
+    pub fn numbers(&self) -> Vec<f64> {
+        let st = &self.settings;
+        let mut n: Vec<f64> = st.amplitudes.clone();
+        n.extend([st.correlation_time, st.noise_step, st.steps_per_correlation_time, st.start_before_event, st.rtol]);
+        n.extend(st.window);
+        n.extend(&st.atol);
+        n.extend(&st.correlation_curves_at);
+        let d = &self.deterministic;
+        n.extend(d.period.iter().chain(&d.t0));
+        n.extend([d.start_time, d.event_time, d.event_time_without_noise, d.scheme_event_time_error]);
+        n.extend(d.start_state.iter().chain(&d.event_state));
+        let e = &self.events;
+        n.extend([e.mean_shift, e.std]);
+        n.extend(e.std_linear_response);
+        n.extend(&self.t_before_event);
+        for s in &self.series {
+            n.extend(s.mean.iter().chain(&s.deterministic).chain(&s.sigma));
+            n.extend(s.sigma_linear_response.iter().flatten());
+        }
+        for (_, points) in &self.correlation_time_by_variable {
+            for p in points {
+                n.push(p.t_before_event);
+                n.extend([p.tau, p.tau_linear_response, p.tau_coefficient, p.tau_coefficient_linear_response].into_iter().flatten());
+            }
+        }
+        for c in &self.correlation_functions {
+            n.push(c.t_before_event);
+            n.extend(c.lag.iter().chain(&c.gamma).chain(c.gamma_linear_response.iter().flatten()));
+        }
+        if let Some(g) = &self.growth {
+            n.extend([g.t_f_before_event, g.interval, g.v_growth, g.sigma_v_growth, g.ratio, g.log10_ratio]);
+            n.extend([g.v_growth_linear_response, g.sigma_v_growth_linear_response, g.ratio_linear_response].into_iter().flatten());
+        }
+        for a in &self.agreement {
+            n.extend([a.sigma_standard_error, a.sigma_max_relative_difference]);
+            n.extend(a.sigma_disagree_at.iter().chain(&a.tau_median_relative_difference).chain(&a.tau_max_relative_difference));
+        }
+        n.extend([self.work.nodes_per_realisation, self.work.ensemble_wall_time_s]);
+        n
+    }
+
+    /// Whether every number is finite.
+    pub fn is_finite(&self) -> bool {
+        self.numbers().iter().all(|v| v.is_finite())
+    }
+
+    /// A readable summary for the terminal.
+    pub fn summary(&self) -> String {
+        let st = &self.settings;
+        let mut s = format!(
+            "noise ({}): {} realisations, amplitudes {:?}, τ = {:.4e}, h = τ/{}, aligned on {}\n",
+            self.model,
+            st.realisations,
+            st.amplitudes,
+            st.correlation_time,
+            st.steps_per_correlation_time,
+            match st.alignment {
+                super::options::Alignment::OwnEvent => "each realisation's own event",
+                super::options::Alignment::Deterministic => "the deterministic event",
+            }
+        );
+        s += &format!(
+            "  event ({}): t_c = {:.9}, realisations' t_c − t_c: mean {:+.3e}, std {:.3e} (linear response {})\n",
+            st.event,
+            self.deterministic.event_time,
+            self.events.mean_shift,
+            self.events.std,
+            self.events.std_linear_response.map_or("-".into(), |v| format!("{v:.3e}"))
+        );
+        let f = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{v:8.4}"));
+        s += &format!("  correlation time of {} (half-height width of Γ; ensemble / linear response):\n", self.correlation_variable);
+        let step = (self.correlation_time.len() / 8).max(1);
+        for p in self.correlation_time.iter().step_by(step) {
+            s += &format!("    t_c − t = {:9.4}: τ = {} / {}\n", p.t_before_event, f(p.tau), f(p.tau_linear_response));
+        }
+        if let Some(g) = &self.growth {
+            s += &format!(
+                "  growth over (t_f − t0, t_f), t_f = t_c − {}: v ×{:.3}, σ_v ×{:.3} (ratio {:.3}, log10 {:+.2}; linear response σ_v ×{})\n",
+                g.t_f_before_event,
+                g.v_growth,
+                g.sigma_v_growth,
+                g.ratio,
+                g.log10_ratio,
+                g.sigma_v_growth_linear_response.map_or("-".into(), |v| format!("{v:.3}"))
+            );
+        }
+        for a in &self.agreement {
+            s += &format!(
+                "  {}: σ ensemble vs linear response: max |rel. diff| {:.3} (standard error {:.3}), beyond 4 s.e. at {} of the reported times\n",
+                a.name,
+                a.sigma_max_relative_difference,
+                a.sigma_standard_error,
+                a.sigma_disagree_at.len()
+            );
+        }
+        s
+    }
+}
+
+/// The report of a saddle-node or van der Pol scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelReport {
+    /// stickslip version.
+    pub stickslip_version: &'static str,
+    /// Scene name.
+    pub name: String,
+    /// The scene as given.
+    pub scene: serde_json::Value,
+    /// The model and its start.
+    pub model: OtherModel,
+    /// The noise analysis.
+    pub noise: NoiseReport,
+    /// Wall-clock time of the computation (seconds).
+    pub wall_time_s: f64,
+}
+
+impl ModelReport {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+
+    /// A readable summary for the terminal.
+    pub fn summary(&self) -> String {
+        let model = match &self.model {
+            OtherModel::SaddleNode { params, x0 } => format!("saddle-node, μ0 = {}, r = {}, x(0) = {x0}", params.mu0, params.r),
+            OtherModel::VanDerPol { params, initial } => format!("van der Pol, β = {}, a = {}, start {initial:?}", params.beta, params.a),
+        };
+        format!("scene {}: {model}; {:.3} s\n{}", self.name, self.wall_time_s, self.noise.summary())
+    }
+}
+
+/// Runs a saddle-node or van der Pol scene (the noise analysis) on `threads` threads.
+pub fn run_scene(
+    scene: &OtherScene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelReport, SolverError> {
+    let started = std::time::Instant::now();
+    let a = &scene.noise.amplitudes;
+    let (model, initial) = match &scene.model {
+        OtherModel::SaddleNode { params, x0 } => (NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] }, vec![*x0]),
+        OtherModel::VanDerPol { params, initial } => {
+            (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
+        }
+    };
+    let noise = super::run(&model, &initial, &scene.noise, threads, progress)?;
+    if !noise.is_finite() {
+        return Err(SolverError {
+            solver: "stickslip",
+            kind: crate::integrate::ErrorKind::Other,
+            t: 0.0,
+            state: vec![],
+            flag: 0,
+            message: "the noise section contains a non-finite number; refusing to report it".into(),
+        });
+    }
+    Ok(ModelReport {
+        stickslip_version: env!("CARGO_PKG_VERSION"),
+        name: scene.name.clone(),
+        scene: scene_json,
+        model: scene.model.clone(),
+        noise,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// One model's correlation-time curve in a combined report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Curve {
+    /// The report's file.
+    pub source: String,
+    /// Scene name.
+    pub name: String,
+    /// "drr", "saddle_node" or "van_der_pol".
+    pub model: String,
+    /// The observable (u for the DRR, x otherwise).
+    pub variable: String,
+    /// "own_event" or "deterministic".
+    pub alignment: String,
+    /// The report's `noise.correlation_time`.
+    pub correlation_time: serde_json::Value,
+}
+
+/// The correlation-time curves of several reports (e.g. DRR, saddle-node, van der Pol) in one
+/// JSON document for one figure. Each input is (file name, report JSON); an error names the
+/// file whose report has no noise section.
+pub fn combine(reports: &[(String, serde_json::Value)]) -> Result<Vec<Curve>, String> {
+    reports
+        .iter()
+        .map(|(source, r)| {
+            let noise = r.get("noise").filter(|n| n.is_object()).ok_or_else(|| format!("{source}: the report has no \"noise\" section"))?;
+            let text = |v: &serde_json::Value| v.as_str().unwrap_or("").to_string();
+            Ok(Curve {
+                source: source.clone(),
+                name: text(&r["name"]),
+                model: text(&noise["model"]),
+                variable: text(&noise["correlation_variable"]),
+                alignment: text(&noise["settings"]["alignment"]),
+                correlation_time: noise["correlation_time"].clone(),
+            })
+        })
+        .collect()
+}
