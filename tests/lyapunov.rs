@@ -4,7 +4,7 @@
 
 use stickslip::analysis::events;
 use stickslip::analysis::orbit::Orbit;
-use stickslip::integrate::{Integrator, Options, Radau5, Task, Tolerance};
+use stickslip::integrate::{Options, Radau5, Task, Tolerance};
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::report::Report;
 use stickslip::{engine, scene};

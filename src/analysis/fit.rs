@@ -32,7 +32,7 @@ pub fn least_squares(model: &str, x: &[f64], y: &[f64], basis: &[&dyn Fn(f64) ->
     }
     let svd = a.clone().svd(true, true);
     let (s_max, s_min) = (svd.singular_values.max(), svd.singular_values.min());
-    if !(s_min > 1e-12 * s_max) {
+    if s_min.is_nan() || s_min <= 1e-12 * s_max {
         return None;
     }
     let c = svd.solve(&b, 0.0).ok()?;
@@ -68,7 +68,7 @@ pub struct PowerLimit {
 /// the residual over (0.05, 10] (grid, then golden section). None with fewer than 4 points
 /// or if the best p lies on the boundary of the search (no power-law approach).
 pub fn power_limit(model: &str, x: &[f64], y: &[f64]) -> Option<PowerLimit> {
-    if x.len() < 4 || x.iter().any(|&v| !(v > 0.0)) {
+    if x.len() < 4 || x.iter().any(|&v| v.is_nan() || v <= 0.0) {
         return None;
     }
     let at = |p: f64| least_squares(model, x, y, &[&|_| 1.0, &|v: f64| v.powf(-p)]);

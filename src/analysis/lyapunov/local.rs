@@ -147,7 +147,7 @@ mod tests {
         // The paper's log-law form: B = ½ v (1 − A + ξ), A = θ + (1+ε)(1 + ln v), C = ξ v².
         let y = [0.39, (20.1f64).ln(), -3.28];
         let l = at(&params(1e3, Friction::Log), &y);
-        let v = 20.1;
+        let v: f64 = 20.1;
         let a = -3.28 + 1.72 * (1.0 + v.ln());
         let b = 0.5 * v * (1.0 - a + 0.7);
         assert!((l.quasi_discriminant - (b * b - 0.7 * v * v)).abs() < 1e-9 * (b * b));

@@ -188,8 +188,7 @@ pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &LyapunovOpt
     let max_rel = locals[..=orbit.up].iter().map(rel).fold(0.0, f64::max);
 
     let mut check = MatrixCheck { samples: 0, unresolvable: 0, max_difference: None };
-    for k in 0..orbit.len() {
-        let l = &locals[k];
+    for (k, l) in locals.iter().enumerate() {
         let slow_scale = 1.0 + l.slow_re[0].abs().max(l.slow_re[1].abs()).max(l.slow_im);
         let (fast, slow, amax) = local::matrix_eigenvalues(p, &orbit.state(k));
         if 1e-16 * amax > 1e-10 * slow_scale || l.fast.abs() < 10.0 * slow_scale {
