@@ -1,7 +1,9 @@
 //! The fast (slip) system of the paper's eq. UV: with v = γV, t = t_c + T/γ,
 //! u = U + c_u ln γ, θ = Θ + c_θ ln γ and the −1 of du/dt neglected,
 //!
-//!     U' = V,   V' = −[U + (Θ + ln V)/ξ],   Θ' = −V [Θ + (1+ε) ln V],
+//! ```text
+//! U' = V,   V' = −[U + (Θ + ln V)/ξ],   Θ' = −V [Θ + (1+ε) ln V],
+//! ```
 //!
 //! free of γ when c_θ = −(1+ε) and c_u = ε/ξ (the paper's eq. cut). Only for f = ln v: other
 //! friction laws do not turn ln γ into a shift. Integrated in (U, W = ln V, Θ) like the 3D

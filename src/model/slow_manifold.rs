@@ -3,7 +3,9 @@
 //! Setting the coefficient of γ² to zero gives S: ξu + θ + f(v) = 0, i.e. v = v_S(u, θ) with
 //! f(v_S) = −(ξu + θ) (v_S = e^{−(ξu+θ)} for f = ln v). On S the 3D flow reduces to
 //!
-//!     du/dt = v_S − 1,   dθ/dt = v_S [εθ + (1+ε) ξ u],
+//! ```text
+//! du/dt = v_S − 1,   dθ/dt = v_S [εθ + (1+ε) ξ u],
+//! ```
 //!
 //! free of γ (the θ equation is −v(θ + (1+ε) f(v)) with f(v) = −(ξu + θ), for every friction
 //! law). For f = ln v it blows up in finite time (v_S → ∞ at t_c) when the matching constant
