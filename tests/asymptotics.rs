@@ -134,6 +134,7 @@ fn bad_options_name_the_field() {
         (r#"["hopf", "asymptotics"]"#, "analyses", "add \"cycle\""),
         (r#"["cycle", {"asymptotics": {"gammas": []}}]"#, "analyses[1].asymptotics.gammas", "1 to 100"),
         (r#"["cycle", {"asymptotics": {"gammas": [0.5]}}]"#, "analyses[1].asymptotics.gammas", "[1, 1e100]"),
+        (r#"["cycle", {"asymptotics": {"gammas": [1e3, 1e4, 1e3]}}]"#, "analyses[1].asymptotics.gammas", "distinct"),
         (r#"["cycle", {"asymptotics": {"matching_v_min": 1}}]"#, "analyses[1].asymptotics.matching_v_min", "> 1"),
         (r#"["cycle", {"asymptotics": {"gamma": [1e3]}}]"#, "analyses[1].asymptotics", "unknown field"),
         (r#"["lyapunov"]"#, "analyses", "add \"cycle\""),

@@ -120,10 +120,11 @@ pub struct MatchingReport {
     /// Largest v at which the descent after the v maximum is back on S (null if it never is
     /// before v = 1): the after-branch exists only if this reaches window_v_min.
     pub descent_on_manifold_v_max: Option<f64>,
-    /// Blow-up predicted from the branch before.
+    /// Blow-up predicted from the branch before (f = ln v only: Φ is ln v on the curve).
     pub predicted_blow_up: Option<PredictedBlowUp>,
-    /// Lines of Fig. 3b: zero acceleration (derived), the paper's printed zero-acceleration
-    /// line, the line of θ extrema on S, and the adiabatic limit θ = −ξu − ln γ.
+    /// Lines of Fig. 3b: zero acceleration (derived; the same for every friction law), the
+    /// paper's printed zero-acceleration line, the line of θ extrema on S, and the adiabatic
+    /// limit v = γ on S, θ = −ξu − f(γ).
     pub lines: Vec<Line>,
     /// The cycle's θ maximum (u, θ).
     pub theta_max_point: [f64; 2],
@@ -250,7 +251,9 @@ pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, 
         .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))));
     let before = fit_branch(orbit, params, &before_idx);
     let after = fit_branch(orbit, params, &after_idx);
-    let predicted_blow_up = before.as_ref().and_then(|b| {
+    // Φ(u) = ln v on the matching curve holds for f = ln v only.
+    let log_law = params.friction == crate::model::Friction::Log;
+    let predicted_blow_up = before.as_ref().filter(|_| log_law).and_then(|b| {
         let first = before_idx[0];
         blow_up_integral(xi, e, b.c, orbit.u[first]).map(|integral| PredictedBlowUp {
             from_time_before_tc: -orbit.s[first],
@@ -263,7 +266,7 @@ pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, 
         Line { equation: "zero acceleration on S (derived, v ≫ 1): εθ = −(1+ε)ξu − ξ".into(), intercept: -xi / e, slope: -(1.0 + e) * xi / e },
         Line { equation: "zero acceleration as printed in the paper (eq. acc0): εθ = (1+ε)u − ξ".into(), intercept: -xi / e, slope: (1.0 + e) / e },
         Line { equation: "θ extremal on S: εθ = −(1+ε)ξu".into(), intercept: 0.0, slope: -(1.0 + e) * xi / e },
-        Line { equation: "adiabatic limit (eq. limitadiab): θ = −ξu − ln γ".into(), intercept: -gamma.ln(), slope: -xi },
+        Line { equation: "adiabatic limit (eq. limitadiab): v = γ on S, θ = −ξu − f(γ) (= −ξu − ln γ for f = ln v)".into(), intercept: -params.friction.eval(gamma.ln()).0, slope: -xi },
     ];
     let n = orbit.len();
     let imax = (0..n).fold(0, |b, i| if orbit.theta[i] > orbit.theta[b] { i } else { b });

@@ -102,6 +102,11 @@ impl AsymptoticsOptions {
         if let Some(g) = o.gammas.iter().find(|g| !(g.is_finite() && (1.0..=1e100).contains(*g))) {
             return bad("gammas", format!("{g} is not a γ in [1, 1e100]"));
         }
+        let mut sorted = o.gammas.clone();
+        sorted.sort_by(f64::total_cmp);
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return bad("gammas", format!("{} appears twice; give distinct values", w[0]));
+        }
         if !(o.fit_min_gamma.is_finite() && o.fit_min_gamma > 0.0) {
             return bad("fit_min_gamma", format!("{} must be a finite γ > 0, e.g. 1e4", o.fit_min_gamma));
         }
