@@ -1,8 +1,11 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
+use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
+use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::{cycle, hopf, paper};
-use crate::integrate::{ErrorKind, Extrapolation, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
-use crate::model::Drr;
+use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
+use crate::model::drr::W;
+use crate::model::{Drr, Variational};
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{Method, Scene, SolverSpec};
 use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
@@ -10,18 +13,36 @@ use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
 pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+    integrator_for(drr, &drr, spec, y0, Tolerance::PerComponent(spec.atol.to_vec()))
+}
+
+/// Builds the scene's integrator on any system derived from `drr` (e.g. its variational
+/// equations), starting at (0, y0) with absolute tolerances `atol`. Also returns the Butcher
+/// tables used (ARKStep).
+pub fn integrator_for<S: ImexSystem + 'static>(
+    system: S,
+    drr: &Drr,
+    spec: &SolverSpec,
+    y0: &[f64],
+    atol: Tolerance,
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // Steps of at most 1/8 of the linear period 2π/ω_c: longer steps let BDF damp the
     // growing oscillation near an unstable fixed point (its stability region reaches into the
     // right half-plane), and a start within 1e-10 of it then never grows.
-    let max_step = hopf::analyse(&drr).period_c / 8.0;
+    let max_step = hopf::analyse(drr).period_c / 8.0;
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
     // rtol 1e-11 (ARKStep).
-    let options = &Options {
-        max_step: Some(max_step),
-        max_err_test_fails: Some(20),
-        ..Options::new(spec.rtol, Tolerance::PerComponent(spec.atol.to_vec()))
-    };
+    // A start far off the slow manifold and far from v = 1 (|ln v| > 30, e.g. v = 1e-30):
+    // dw/dt = −γ² e^{−w} G is astronomically large there, and a solver's own first-step
+    // estimate overshoots w out of the range of exp (v = e^w overflows). Start with a step
+    // that changes w by at most 1e-3.
+    let initial_step = (y0[W].abs() > 30.0).then(|| {
+        let mut f = vec![0.0; system.dim()];
+        system.rhs(0.0, y0, &mut f);
+        1e-3 / f[W].abs().max(1e-300)
+    }).filter(|h| h.is_finite() && *h > 0.0);
+    let options = &Options { max_step: Some(max_step), max_err_test_fails: Some(20), initial_step, ..Options::new(spec.rtol, atol) };
     // Deduce implicit stage derivatives: evaluating f_I at converged stages re-amplifies the
     // Newton residual by γ² in ARKStep's error estimate, which makes it fail at γ ≥ 1e3.
     let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
@@ -29,26 +50,26 @@ pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn
     let erk = || spec.table.as_deref().and_then(ErkTable::from_name).unwrap_or_default();
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
     Ok(match spec.method {
-        Method::CvodeBdf => (Box::new(Solver::cvode(drr, cvode(CvodeMethod::Bdf), 0.0, y0, options)?), vec![]),
-        Method::CvodeAdams => (Box::new(Solver::cvode(drr, cvode(CvodeMethod::Adams), 0.0, y0, options)?), vec![]),
+        Method::CvodeBdf => (Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), 0.0, y0, options)?), vec![]),
+        Method::CvodeAdams => (Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), 0.0, y0, options)?), vec![]),
         Method::ArkodeDirk => {
             let t = dirk();
-            (Box::new(Solver::arkstep(drr, ArkMethod::Dirk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
+            (Box::new(Solver::arkstep(system, ArkMethod::Dirk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
         }
         Method::ArkodeErk => {
             let t = erk();
-            (Box::new(Solver::arkstep(drr, ArkMethod::Erk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
+            (Box::new(Solver::arkstep(system, ArkMethod::Erk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
         }
-        Method::Radau5 => (Box::new(Radau5::new(drr, 0.0, y0, options)?), vec![]),
+        Method::Radau5 => (Box::new(Radau5::new(system, 0.0, y0, options)?), vec![]),
         // The DRR system is autonomous: no ∂f/∂t evaluations.
-        Method::Rodas5p => (Box::new(Rodas5p::new(drr, 0.0, y0, options)?.autonomous()), vec![]),
-        Method::Extrapolation => (Box::new(Extrapolation::new(drr, 0.0, y0, options)?), vec![]),
+        Method::Rodas5p => (Box::new(Rodas5p::new(system, 0.0, y0, options)?.autonomous()), vec![]),
+        Method::Extrapolation => (Box::new(Extrapolation::new(system, 0.0, y0, options)?), vec![]),
         Method::ArkodeImex => {
             let (default_i, default_e) = sundials::default_imex_tables();
             let implicit = spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or(default_i);
             let paired = spec.table.as_deref().and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
             let explicit = spec.explicit_table.as_deref().and_then(ErkTable::from_name).or(paired).unwrap_or(default_e);
-            let solver = Solver::arkstep_imex(drr, implicit, explicit, ark, 0.0, y0, options)?;
+            let solver = Solver::arkstep_imex(system, implicit, explicit, ark, 0.0, y0, options)?;
             (Box::new(solver), vec![implicit.name().into(), explicit.name().into()])
         }
     })
@@ -108,10 +129,44 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         }
         None => None,
     };
-    let (cycle_report, integrator_name, tables, stats) = match cycle_run {
+    let (cycle_report, mut integrator_name, mut tables, mut stats) = match cycle_run {
         Some((r, name, tables, stats)) => (Some(r), name, tables, stats),
         None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
     };
+    let (shooting_report, continuation_report) = if a.shooting.is_some() || a.continuation.is_some() {
+        let defaults = ShootingSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
+        let o = a.shooting.clone().unwrap_or_default();
+        let settings = ShootingSettings {
+            tolerance: o.tolerance.unwrap_or(defaults.tolerance),
+            max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
+            ..defaults
+        };
+        let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial)?;
+        let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(|e| diagnose(&drr, e))?;
+        if cycle_report.is_none() {
+            (integrator_name, tables) = (integ.name().to_string(), shooting_tables);
+        }
+        stats.accumulate(&integ.stats());
+        let curve = a.continuation.as_ref().map(|c| {
+            let cs = ContinuationSettings { parameter: c.parameter, to: c.to, points: c.points, log: c.log, shooting: settings };
+            match &report.orbit {
+                Some(orbit) => {
+                    let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
+                    continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
+                }
+                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.clone().unwrap_or_default()),
+            }
+        });
+        (a.shooting.is_some().then_some(report), curve)
+    } else {
+        (None, None)
+    };
+    if shooting_report.as_ref().is_some_and(|r| !r.is_finite()) {
+        return Err(non_finite("shooting"));
+    }
+    if continuation_report.as_ref().is_some_and(|r| !r.is_finite()) {
+        return Err(non_finite("continuation"));
+    }
     if linear.as_ref().is_some_and(|h| !h.is_finite()) {
         return Err(non_finite("hopf"));
     }
@@ -161,6 +216,22 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Solve
         cycle: cycle_report,
         physical,
         paper,
+        shooting: shooting_report,
+        continuation: continuation_report,
         wall_time_s: started.elapsed().as_secs_f64(),
     })
+}
+
+/// The scene's integrator on the DRR variational equations (state and fundamental matrix Φ),
+/// starting at (0, y0) with Φ = I. Φ's entries get the absolute tolerance rtol (they are
+/// O(1) where they matter; the components that decay on the slow manifold need no more).
+pub fn variational_integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<Box<dyn Integrator>, SolverError> {
+    Ok(variational_integrator_with_tables(drr, spec, y0)?.0)
+}
+
+fn variational_integrator_with_tables(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+    let mut atol = spec.atol.to_vec();
+    atol.extend([spec.rtol; 9]);
+    let z0 = Variational::<Drr, 3>::initial(y0);
+    integrator_for(Variational::<Drr, 3>::new(drr), &drr, spec, &z0, Tolerance::PerComponent(atol))
 }

@@ -11,9 +11,11 @@
 pub mod analysis;
 pub mod compare;
 pub mod engine;
+pub mod figure;
 pub mod integrate;
 pub mod model;
 pub mod report;
+pub mod reproduce;
 pub mod scene;
 pub mod stress;
 pub mod sweep;

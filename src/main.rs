@@ -95,6 +95,22 @@ enum Command {
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
+        /// Also write the full table of outcomes (per γ and method, per start) as Markdown.
+        #[arg(long, value_name = "FILE.md")]
+        table: Option<PathBuf>,
+    },
+    /// Remake the paper's figures (SVG), their JSON reports and a summary of its claims
+    /// against ours (summary.md, summary.html) in DIR.
+    Reproduce {
+        /// Output directory (created if needed).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Fewer points per curve (a quick check; the tests use it).
+        #[arg(long)]
+        reduced: bool,
     },
     /// Print the SUNDIALS version linked at run time.
     Version,
@@ -148,7 +164,7 @@ const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (
-            std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", p.display())))?,
+            read_scene_text(p)?,
             p.display().to_string(),
         ),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
@@ -171,8 +187,21 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>) -> Resul
     Ok(())
 }
 
+/// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and
+/// reading it whole would only exhaust memory.
+const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+fn read_scene_text(path: &std::path::Path) -> Result<String, Failure> {
+    let cannot = |e: std::io::Error| Failure(2, format!("cannot read scene {}: {e}", path.display()));
+    let size = std::fs::metadata(path).map_err(cannot)?.len();
+    if size > MAX_SCENE_BYTES {
+        return Err(Failure(2, format!("scene {}: the file has {size} bytes; a scene is at most {MAX_SCENE_BYTES} bytes (is this the right file?)", path.display())));
+    }
+    std::fs::read_to_string(path).map_err(cannot)
+}
+
 fn read_scene(path: &std::path::Path) -> Result<scene::Scene, Failure> {
-    let text = std::fs::read_to_string(path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))
 }
 
@@ -294,7 +323,7 @@ fn sweep_command(
     shard: Option<String>,
     threads: Option<usize>,
 ) -> Result<(), Failure> {
-    let text = std::fs::read_to_string(&path).map_err(|e| Failure(2, format!("cannot read scene {}: {e}", path.display())))?;
+    let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
     let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
     let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;
@@ -321,11 +350,15 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     }
 }
 
-fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(), Failure> {
+fn stress_command(quick: bool, json: bool, threads: Option<usize>, table: Option<PathBuf>) -> Result<(), Failure> {
     let cells = stress::grid(quick);
     let progress = Progress::new("stress", "cells");
-    let (_, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
+    let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
     let seconds = progress.finish();
+    if let Some(path) = table {
+        let text = format!("{} cells in {seconds:.0} s\n\n{}", cells.len(), stress::table(&cells, &outcomes, &summary));
+        report::write_atomic(&path, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))?;
+    }
     if json {
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
     } else {
@@ -352,15 +385,69 @@ fn stress_command(quick: bool, json: bool, threads: Option<usize>) -> Result<(),
     }
 }
 
+/// Reproduce's progress on stderr: a line per figure, and a run counter on a terminal.
+struct ReproduceProgress {
+    started: std::time::Instant,
+    terminal: bool,
+}
+
+impl stickslip::reproduce::Progress for ReproduceProgress {
+    fn stage(&self, index: usize, total: usize, what: &str) {
+        if self.terminal {
+            eprint!("\r\x1b[K");
+        }
+        eprintln!("reproduce [{index}/{total}] {:.0} s: {what}", self.started.elapsed().as_secs_f64());
+    }
+
+    fn points(&self, done: usize, total: usize) {
+        if self.terminal {
+            eprint!("\r  {done}/{total} runs   ");
+            if done == total {
+                eprint!("\r\x1b[K");
+            }
+        }
+    }
+}
+
+fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Result<(), Failure> {
+    let progress = ReproduceProgress { started: std::time::Instant::now(), terminal: std::io::stderr().is_terminal() };
+    let summary = stickslip::reproduce::run(&out, worker_threads(threads), reduced, &progress).map_err(|e| Failure(1, e.to_string()))?;
+    for f in &summary.figures {
+        match &f.error {
+            None => println!("{:<5} {:>5.1} s  {}", f.id, f.seconds, f.output.files.join(", ")),
+            Some(e) => println!("{:<5} FAILED: {e}", f.id),
+        }
+    }
+    let rows: Vec<_> = summary.rows().collect();
+    let count = |v: &str| rows.iter().filter(|r| r.verdict == v).count();
+    println!(
+        "claims: {} agree, {} roughly, {} disagree, {} hold, {} do not hold; not yet reproduced: {}",
+        count("agrees"),
+        count("roughly"),
+        count("disagrees"),
+        count("holds"),
+        count("does not hold"),
+        summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ")
+    );
+    println!("summary: {} and summary.html ({:.1} s)", out.join("summary.md").display(), summary.wall_time_s);
+    let failed = summary.failed();
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(Failure(1, format!("{} figure(s) failed: {}", failed.len(), failed.iter().map(|f| f.id.as_str()).collect::<Vec<_>>().join(", "))))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Run { scene, json, out } => run_command(scene, json, out),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
-        Command::Stress { quick, json, threads } => stress_command(quick, json, threads),
+        Command::Stress { quick, json, threads, table } => stress_command(quick, json, threads, table),
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
+        Command::Reproduce { out, threads, reduced } => reproduce_command(out, threads, reduced),
         Command::Version => {
             println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
             Ok(())

@@ -1,7 +1,9 @@
 //! Reports: the JSON a scene produces (schema in docs/reports.md), its atomic writing and the
 //! CLI summary.
 
+use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleReport, CycleStatus};
+use crate::analysis::shooting::ShootingReport;
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::paper::Claim;
 use crate::integrate::Stats;
@@ -91,6 +93,12 @@ pub struct Report {
     /// The "paper" comparison.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<Vec<Claim>>,
+    /// The "shooting" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shooting: Option<ShootingReport>,
+    /// The "continuation" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continuation: Option<ContinuationReport>,
     /// Wall-clock time of the computation (seconds).
     pub wall_time_s: f64,
 }
@@ -163,6 +171,53 @@ impl Report {
         }
         if let Some(p) = &self.physical {
             s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
+        }
+        if let Some(r) = &self.shooting {
+            match &r.orbit {
+                Some(o) => {
+                    s += &format!(
+                        "shooting: converged in {} iterations (residual {:.1e}); period {:.10}, t0 {:.10}, ln v_max {:.9}\n",
+                        o.newton_iterations, o.residual, o.period, o.t0, o.ln_v_max
+                    );
+                    s += &format!("  section point (u, v, θ) = ({:.10}, 1, {:.10})\n", o.section_point[0], o.section_point[2]);
+                    let mu: Vec<String> = o.nontrivial().iter().map(|m| if m.im == 0.0 { format!("{:.6e}", m.re) } else { format!("{:.6e}{:+.6e}i", m.re, m.im) }).collect();
+                    s += &format!(
+                        "  Floquet multipliers: trivial 1{:+.1e}, others {} ({})\n",
+                        o.multipliers[0].re - 1.0,
+                        mu.join(", "),
+                        if o.stable { "stable" } else { "unstable" }
+                    );
+                }
+                None => s += &format!("shooting: NOT converged: {}\n", r.failure.as_deref().unwrap_or("?")),
+            }
+            if let Some(pd) = &r.period_doubling {
+                s += &format!("  period doubling: multiplier {:.6}; {}\n", pd.multiplier, match &pd.doubled {
+                    Some(d) => format!("doubled orbit of period {:.10} ({})", d.period, pd.note),
+                    None => format!("doubled orbit not found ({})", pd.note),
+                });
+            }
+        }
+        if let Some(c) = &self.continuation {
+            s += &format!(
+                "continuation in {} from {} to {}: {} points{}\n",
+                c.parameter.name(),
+                c.from,
+                c.to,
+                c.points.len(),
+                if c.completed { String::new() } else { String::from(" (stopped)") }
+            );
+            if let (Some(first), Some(last)) = (c.points.first(), c.points.last()) {
+                s += &format!("  period {:.8} at {} … {:.8} at {}\n", first.orbit.period, first.value, last.orbit.period, last.value);
+            }
+            if let Some(stop) = &c.stopped {
+                s += &format!("  stopped after {} (failed at {}): {}\n", stop.last_value, stop.failed_at, stop.reason);
+            }
+            for f in &c.flips {
+                s += &format!("  period doubling between {} and {}\n", f.from, f.to);
+            }
+            if let Some(d) = c.period_per_decade.first() {
+                s += &format!("  period per decade of γ: {:.4} (fit over log10 γ = {} … {})\n", d.slope, d.log10_gamma_from, d.log10_gamma_to);
+            }
         }
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";

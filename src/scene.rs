@@ -131,6 +131,23 @@ struct RawCycleOptions {
     max_steps: Option<u64>,
 }
 
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawShootingOptions {
+    tolerance: Option<f64>,
+    max_iterations: Option<usize>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawContinuation {
+    parameter: String,
+    to: f64,
+    points: usize,
+    #[serde(default)]
+    log: Option<bool>,
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawTrajectory {
@@ -214,6 +231,29 @@ pub struct CycleOptions {
     pub max_steps: Option<u64>,
 }
 
+/// Options of the "shooting" analysis (None = default, see
+/// [`crate::analysis::shooting::ShootingSettings`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ShootingOptions {
+    /// Newton convergence tolerance (relative residual).
+    pub tolerance: Option<f64>,
+    /// Newton iterations at most.
+    pub max_iterations: Option<usize>,
+}
+
+/// The "continuation" analysis: from the scene's value of `parameter` to `to`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContinuationOptions {
+    /// The parameter.
+    pub parameter: crate::analysis::continuation::Parameter,
+    /// Final value.
+    pub to: f64,
+    /// Grid points, both ends included.
+    pub points: usize,
+    /// Grid uniform in log10 (default: true for γ, false otherwise).
+    pub log: bool,
+}
+
 /// Which analyses to run; everything else is neither computed nor stored.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Analyses {
@@ -225,6 +265,10 @@ pub struct Analyses {
     pub trajectory_cycles: Option<usize>,
     /// Compare with the paper's quoted values.
     pub paper: bool,
+    /// The periodic orbit by shooting (None: not asked).
+    pub shooting: Option<ShootingOptions>,
+    /// Continuation of the orbit in a parameter (None: not asked).
+    pub continuation: Option<ContinuationOptions>,
 }
 
 /// A validated scene.
@@ -248,7 +292,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}";
 
 /// Parses and validates a scene from JSON text. `source_name` names it in errors.
 pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
@@ -256,7 +300,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
     let deserializer = &mut serde_json::Deserializer::from_str(text);
     let raw: RawScene = serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let path = e.path().to_string();
-        let field = if path == "." { "(document)".to_string() } else { path };
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
         err(&field, e.into_inner().to_string())
     })?;
     validate(raw, &err)
@@ -479,6 +523,50 @@ fn analyses(raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> R
                     return Err(err(&format!("{field}.trajectory.cycles"), format!("{} must be between 1 and 10000", t.cycles)));
                 }
                 out.trajectory_cycles = Some(t.cycles);
+            }
+            "shooting" => {
+                let o: RawShootingOptions = serde_json::from_value(options_of("shooting")?)
+                    .map_err(|e| err(&format!("{field}.shooting"), e.to_string()))?;
+                if let Some(t) = o.tolerance {
+                    if !(t > 0.0 && t <= 0.1) {
+                        return Err(err(&format!("{field}.shooting.tolerance"), format!("{t} must be in (0, 0.1], e.g. 1e-8")));
+                    }
+                }
+                if let Some(n) = o.max_iterations {
+                    if n == 0 || n > 1000 {
+                        return Err(err(&format!("{field}.shooting.max_iterations"), format!("{n} must be between 1 and 1000")));
+                    }
+                }
+                out.shooting = Some(ShootingOptions { tolerance: o.tolerance, max_iterations: o.max_iterations });
+            }
+            "continuation" => {
+                use crate::analysis::continuation::Parameter;
+                let Some(v) = options.clone() else {
+                    return Err(err(&field, "\"continuation\" needs {\"parameter\": \"epsilon\", \"to\": 1.2, \"points\": 51}".into()));
+                };
+                let f = format!("{field}.continuation");
+                let c: RawContinuation = serde_json::from_value(v).map_err(|e| err(&f, e.to_string()))?;
+                let parameter = match c.parameter.as_str() {
+                    "epsilon" => Parameter::Epsilon,
+                    "xi" => Parameter::Xi,
+                    "gamma" => Parameter::Gamma,
+                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\" or \"gamma\""))),
+                };
+                let to = finite(&format!("{f}.to"), c.to, err)?;
+                if parameter != Parameter::Epsilon && to <= 0.0 {
+                    return Err(err(&format!("{f}.to"), format!("{to} must be > 0 for {}", parameter.name())));
+                }
+                if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
+                    return Err(err(&format!("{f}.to"), format!("{to:e} is outside 1e-100 … 1e100")));
+                }
+                if !(2..=100_000).contains(&c.points) {
+                    return Err(err(&format!("{f}.points"), format!("{} must be between 2 and 100000", c.points)));
+                }
+                let log = c.log.unwrap_or(parameter == Parameter::Gamma);
+                if log && parameter == Parameter::Epsilon {
+                    return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
+                }
+                out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
             }
             other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
         }

@@ -201,3 +201,44 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
     }
     s
 }
+
+/// The full table as Markdown: outcomes per γ and method (ok cells by cycle status, typed
+/// errors by kind), then per start, then the summary.
+pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String {
+    let label = |o: &Outcome| match o {
+        Outcome::Ok { status, .. } => format!("ok:{}", serde_json::to_value(status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()),
+        Outcome::Error { kind, .. } => kind.clone(),
+        Outcome::Panic { .. } => "PANIC".into(),
+    };
+    let mut columns: Vec<String> = outcomes.iter().map(label).collect();
+    columns.sort();
+    columns.dedup();
+    let mut rows: BTreeMap<(u64, usize), BTreeMap<String, usize>> = BTreeMap::new();
+    let method_index = |m: Method| Method::ALL.iter().position(|(_, x)| *x == m).unwrap_or(0);
+    for (cell, outcome) in cells.iter().zip(outcomes) {
+        *rows.entry((cell.gamma.to_bits(), method_index(cell.method))).or_default().entry(label(outcome)).or_default() += 1;
+    }
+    let mut out = format!("| γ | method | {} |\n|---|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
+    let mut keys: Vec<&(u64, usize)> = rows.keys().collect();
+    keys.sort_by(|a, b| f64::from_bits(a.0).total_cmp(&f64::from_bits(b.0)).then(a.1.cmp(&b.1)));
+    for key in keys {
+        let counts = &rows[key];
+        let cells: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
+        out += &format!("| {:e} | {} | {} |\n", f64::from_bits(key.0), Method::ALL[key.1].0, cells.join(" | "));
+    }
+    let mut by_start: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    for (cell, outcome) in cells.iter().zip(outcomes) {
+        let start = cell.start.map_or("on the slow manifold (v = 0.5)".to_string(), |[u, v, t]| format!("u = {u:e}, v = {v:e}, θ = {t:e}"));
+        *by_start.entry(start).or_default().entry(label(outcome)).or_default() += 1;
+    }
+    out += &format!("\n| start | {} |\n|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
+    for (start, counts) in by_start {
+        let cells: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
+        out += &format!("| {start} | {} |\n", cells.join(" | "));
+    }
+    out += &format!(
+        "\nCells {}, ok {}, typed errors {:?}, panics {}, non-finite {}, inconsistent {}.\n",
+        summary.cells, summary.ok, summary.typed_errors, summary.panics, summary.nan, summary.inconsistent
+    );
+    out
+}

@@ -79,7 +79,7 @@ pub struct Row {
     pub index: usize,
     /// The swept parameters.
     pub params: BTreeMap<String, f64>,
-    /// The requested report sections (hopf, cycle, paper, physical), or null on error.
+    /// The requested report sections (hopf, cycle, paper, physical, shooting, continuation), or null on error.
     pub report: Option<serde_json::Value>,
     /// The error that ended the point, if any (exit-code-1 cases of `stickslip run`).
     pub error: Option<String>,
@@ -140,7 +140,7 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");
-            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical"]
+            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical", "shooting", "continuation"]
                 .iter()
                 .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
                 .collect();

@@ -162,3 +162,31 @@ fn asinh_friction_has_a_cycle_above_its_own_threshold() {
     assert!((h.epsilon_c - 0.7 * 2f64.sqrt()).abs() < 1e-5 && h.above_threshold);
     assert_eq!(r.cycle.unwrap().status, CycleStatus::Periodic);
 }
+
+#[test]
+fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
+    // dw/dt = −γ² e^{−w} G ≈ 1e42 at the start: the engine's first step keeps the change of
+    // w = ln v to 1e-3 (a solver's own estimate overflowed v = e^w). Reference period
+    // 31.8375089404 (data/reference/drr_cycles.json, γ = 1e4, ξ = 0.8, ε = 1).
+    for method in ["cvode-bdf", "radau5", "rodas5p", "extrapolation", "arkode-dirk"] {
+        let report = run(&format!(
+            r#"{{"name": "far", "model": {{"gamma": 1e4, "xi": 0.8, "epsilon": 1}}, "initial": {{"u": 0, "v": 1e-30, "theta": 0}},
+                "solver": {{"method": "{method}", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#
+        ));
+        let period = report.cycle.unwrap().values.unwrap_or_else(|| panic!("{method}: no periodic cycle")).period;
+        assert!((period - 31.8375089404).abs() < 1e-7 * period, "{method}: {period}");
+    }
+}
+
+#[test]
+fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
+    // From v = 1e-30 the run passes close to the unstable fixed point (ε − ε_c = 0.02) and
+    // spirals out over ~250 turns of period 7.51 whose ln v range grows ~8 % per turn; the
+    // period alone settles at once. The attractor is the relaxation cycle (reference 23.1513298).
+    let report = run(
+        r#"{"name": "spiral", "model": {"gamma": 1e4, "xi": 0.7, "epsilon": 0.72}, "initial": {"u": 0, "v": 1e-30, "theta": 0},
+            "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#,
+    );
+    let period = report.cycle.unwrap().values.expect("converges to the relaxation cycle").period;
+    assert!((period - 23.151329844).abs() < 1e-7 * period, "{period}");
+}

@@ -61,6 +61,10 @@ fn unknown_keys_and_wrong_types_name_the_path() {
     assert!(scene::parse(&scene_with(r#"{"gamma": NaN, "xi": 0.7, "epsilon": 1}"#, ""), "t").is_err());
     let e = error_of(&scene_with(r#"{"gamma": 1e999, "xi": 0.7, "epsilon": 1}"#, ""));
     assert!(e.message.contains("out of range") || e.message.contains("finite"), "{e}");
+    // An empty key at the top level (found by cargo-fuzz): the error still names a field.
+    let e = error_of(r#"{"": 1, "name": "t"}"#);
+    assert_eq!(e.field, "(document)", "{e}");
+    assert!(e.message.contains("unknown field"), "{e}");
 }
 
 #[test]
@@ -102,6 +106,18 @@ fn cli_exit_codes_and_nothing_written_on_bad_input() {
     let malformed = dir.join("malformed.json");
     std::fs::write(&malformed, "{\"name\": ").unwrap();
     assert_eq!(Command::new(exe).args(["run", malformed.to_str().unwrap()]).output().unwrap().status.code(), Some(2));
+    // Deep nesting (serde_json's recursion limit) and a huge file: exit 2 with a message, no panic.
+    let deep = dir.join("deep.json");
+    std::fs::write(&deep, format!("{{\"name\": \"t\", \"analyses\": {}{}}}", "[".repeat(100_000), "]".repeat(100_000))).unwrap();
+    let run = Command::new(exe).args(["run", deep.to_str().unwrap()]).output().unwrap();
+    assert_eq!(run.status.code(), Some(2), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("recursion limit"));
+    let huge = dir.join("huge.json");
+    std::fs::write(&huge, " ".repeat(17 << 20)).unwrap();
+    let run = Command::new(exe).args(["run", huge.to_str().unwrap()]).output().unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("at most"), "{}", String::from_utf8_lossy(&run.stderr));
+    std::fs::remove_file(&huge).unwrap();
 
     // A computation that fails: a non-stiff method on a stiff case with a small step budget.
     let stiff = dir.join("stiff.json");

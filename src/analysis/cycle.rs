@@ -24,8 +24,8 @@
 //! restart per cycle), so none is made unless needed. None happens inside the arrest layer.
 //!
 //! Convergence rule: the orbit is periodic (period 1) when, for `settle` consecutive pairs of
-//! cycles, the period and ln v_max change by less than `tolerance` (relative; absolute for
-//! ln v_max below 1); the first cycle, from the start, is never used. If instead cycle k matches cycle k−n (n = 2..4) for `settle`
+//! cycles, the period, ln v_max and the ln v range change by less than `tolerance` (relative;
+//! absolute for ln v_max below 1); the first cycle, from the start, is never used. If instead cycle k matches cycle k−n (n = 2..4) for `settle`
 //! consecutive cycles, the orbit has period n and its n distinct cycles are reported. At a
 //! linearly stable fixed point, a cycle whose w range falls below 1e-9 (or shrinks steadily)
 //! means the oscillation died out.
@@ -461,14 +461,8 @@ impl<'a> Tracker<'a> {
         Ok(())
     }
 
-    /// Whether a restart at y is safe: the model's dw/dt there, whose error is the solver's
-    /// error in G (its tolerance on w over ξ) amplified by γ² e^{−w}, is resolved to 1e-3 of
-    /// `rate`, the scale of dw/dt in the current rise.
     fn restart_safe(&self, y: &[f64; 3], rate: f64) -> bool {
-        let p = self.drr.params();
-        let (rtol, atol) = self.settings.w_tolerance;
-        let error_g = (rtol * y[W].abs() + atol) / p.xi;
-        p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
+        restart_safe(self.drr, self.settings.w_tolerance, y, rate)
     }
 
     /// Re-bases time at the step end `at` (a point the integrator computed, never an
@@ -533,12 +527,29 @@ impl<'a> Tracker<'a> {
     }
 }
 
+/// Whether a restart (time re-base) at y is safe: the model's dw/dt there, whose error is the
+/// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, over ξ) amplified by
+/// γ² e^{−w}, is resolved to 1e-3 of `rate`, the scale of dw/dt in the current rise.
+pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
+    let p = drr.params();
+    let (rtol, atol) = w_tolerance;
+    let error_g = (rtol * y[W].abs() + atol) / p.xi;
+    p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
+}
+
 /// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or
-/// absolute below 1). t0 is not compared: it locates a flat maximum (w'' ~ γ²), fixed only
-/// to ~√(error/γ²), e.g. 1e-7 at γ = 10 while the period is fixed to 1e-11.
+/// absolute below 1; the ln v range relative). t0 is not compared: it locates a flat maximum
+/// (w'' ~ γ²), fixed only to ~√(error/γ²), e.g. 1e-7 at γ = 10 while the period is fixed to
+/// 1e-11.
 fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
+    let range = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
     (a.period - b.period).abs() <= tolerance * a.period.abs()
         && (a.ln_v_max - b.ln_v_max).abs() <= tolerance * a.ln_v_max.abs().max(1.0)
+        // The ln v range relative to itself: a small oscillation growing slowly away from an
+        // unstable fixed point keeps its period and an ln v_max near 0 (found: γ = 1e4,
+        // ε = 0.72 from v = 1e-30 settled on "period 7.51, ln v_max 4.5e-8", growing ~8 % per
+        // turn, while the attractor is the relaxation cycle of period 23.15).
+        && (range(a) - range(b)).abs() <= tolerance * range(a)
 }
 
 /// n if the last cycles form a period-n orbit (n = 1..4) under the convergence rule. The
@@ -715,7 +726,7 @@ pub fn analyse(
         cycles_computed: closed.len(),
         time_integrated,
         convergence_rule: format!(
-            "periodic when period and ln v_max agree within {:e} (relative) over {} consecutive cycle \
+            "periodic when period, ln v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
              pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \
              max(1e-9, 1e3 (rtol + atol)); fixed point, only when \
              linearly stable, when the w range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks \

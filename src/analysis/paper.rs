@@ -26,7 +26,8 @@ pub struct Claim {
     pub note: String,
 }
 
-fn claim(claim: &str, paper: f64, ours: f64, note: String) -> Claim {
+/// A claim with its verdict: "agrees" within 5 %, "roughly" within 20 %, else "disagrees".
+pub fn claim(claim: &str, paper: f64, ours: f64, note: String) -> Claim {
     let relative_difference = (ours - paper) / paper;
     let verdict = match relative_difference.abs() {
         d if d <= 0.05 => "agrees",

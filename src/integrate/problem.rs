@@ -21,6 +21,16 @@ pub trait OdeSystem {
     /// Writes ∂f/∂y at (t, y) into `jac` (which arrives zeroed). Called only when
     /// [`OdeSystem::has_jacobian`] returns true.
     fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut JacobianMatrix<'_>) {}
+
+    /// Whether [`OdeSystem::jacobian_derivative`] is implemented (used by variational
+    /// equations; central differences of the Jacobian otherwise).
+    fn has_jacobian_derivative(&self) -> bool {
+        false
+    }
+
+    /// Writes ∂J/∂y_k at (t, y) into `out` (which arrives zeroed), J = ∂f/∂y. Called only
+    /// when [`OdeSystem::has_jacobian_derivative`] returns true.
+    fn jacobian_derivative(&self, _t: f64, _y: &[f64], _k: usize, _out: &mut JacobianMatrix<'_>) {}
 }
 
 /// A system split as f = f_E + f_I for implicit–explicit (IMEX) methods: f_E is integrated

@@ -123,6 +123,36 @@ impl OdeSystem for Drr {
         jac.set(THETA, W, -v * (y[THETA] + (1.0 + p.epsilon) * f) - v * (1.0 + p.epsilon) * vfp);
         jac.set(THETA, THETA, -v);
     }
+
+    fn has_jacobian_derivative(&self) -> bool {
+        true
+    }
+
+    fn jacobian_derivative(&self, _t: f64, y: &[f64], k: usize, out: &mut JacobianMatrix<'_>) {
+        let p = &self.params;
+        let w = y[W];
+        let v = w.exp();
+        let (f, vfp) = p.friction.eval(w);
+        let h = p.friction.d_vfprime_dw(w);
+        let g = y[U] + (y[THETA] + f) / p.xi;
+        let a = self.gamma2 * (-w).exp();
+        let c = 1.0 + p.epsilon;
+        match k {
+            U => out.set(W, W, a),
+            THETA => {
+                out.set(W, W, a / p.xi);
+                out.set(THETA, W, -v);
+            }
+            _ => {
+                out.set(U, W, v);
+                out.set(W, U, a);
+                out.set(W, W, -a * g + 2.0 * a * vfp / p.xi - a * h / p.xi);
+                out.set(W, THETA, a / p.xi);
+                out.set(THETA, W, -v * (y[THETA] + c * f) - 2.0 * c * v * vfp - c * v * h);
+                out.set(THETA, THETA, -v);
+            }
+        }
+    }
 }
 
 /// IMEX split: the plate drive (the −1 of du/dt = v − 1) explicit; the friction and inertia
@@ -181,6 +211,30 @@ mod tests {
                         let fd = (fp[row] - fm[row]) / (2.0 * h);
                         let exact = jac.get(row, col);
                         assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} y={y:?} ({row},{col}): {exact} vs {fd}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn jacobian_derivative_matches_central_differences_of_the_jacobian() {
+        for friction in laws() {
+            let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction });
+            for y in [[0.3, -0.4, 0.2], [-1.0, 2.5, 0.7], [2.0, -3.0, -1.0]] {
+                for k in 0..3 {
+                    let mut exact = [0.0; 9];
+                    drr.jacobian_derivative(0.0, &y, k, &mut JacobianMatrix::new(&mut exact, 3));
+                    let h = 1e-6 * (1.0 + y[k].abs());
+                    let (mut yp, mut ym) = (y, y);
+                    yp[k] += h;
+                    ym[k] -= h;
+                    let (mut jp, mut jm) = ([0.0; 9], [0.0; 9]);
+                    drr.jacobian(0.0, &yp, &mut JacobianMatrix::new(&mut jp, 3));
+                    drr.jacobian(0.0, &ym, &mut JacobianMatrix::new(&mut jm, 3));
+                    for i in 0..9 {
+                        let fd = (jp[i] - jm[i]) / (2.0 * h);
+                        assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{friction:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
                     }
                 }
             }

@@ -1,0 +1,260 @@
+//! The Poincaré map of the DRR flow on the section w = ln v = 0 (upward crossings of v = 1),
+//! with its linearisation: the state and the fundamental matrix Φ are integrated together
+//! ([`Variational`]) from a point of the section to the next upward crossing, where Φ is the
+//! monodromy matrix of the orbit through that point when it is periodic.
+//!
+//! Intermediate sections. Along the slip, dy/dt reaches ~γ (u, θ) and ~γ² (w, in the arrest),
+//! and the fundamental matrix at fixed time, Φ = f τᵀ + Ψ (τ: how the start shifts the timing),
+//! grows with f: the O(1) part Ψ that survives the slip is lost to cancellation (at γ = 1e8 the
+//! trivial multiplier came out as 0.98 with Radau5 and 29 with CVODE at rtol 1e-10). So the
+//! return is cut at the crossings of w = ½ ln γ (up and down) and of w = 0 (down): at each cut
+//! the segment's Φ is projected onto the section (which removes the timing part) and Φ
+//! restarts from I. The Jacobian of the map is the product of the segments' section
+//! Jacobians; the fixed-time monodromy is the product of the segments' Φ. A cut happens only
+//! where a restart is safe (as for the re-base below).
+//!
+//! Events are located on the integrator's interpolant, as in the cycle analysis: crossings
+//! of w = 0 on the state, the v maximum where dw/dt of the interpolant changes sign. Time
+//! is re-based once, after the v maximum at the first step end where the model's dw/dt is
+//! resolved (the cycle analysis' criterion), so that the slip arrest runs at local t ~ 1e-8 where
+//! its tiny steps are representable (see the cycle analysis). Restarting keeps Φ: it is part of
+//! the state.
+
+use super::cycle::restart_safe;
+use super::events;
+use crate::integrate::{ErrorKind, Integrator, SolverError, Task};
+use crate::model::drr::{Drr, THETA, U, W};
+use crate::model::Variational;
+
+/// The `tout` of every one-step call, past any time a map reaches.
+const HORIZON: f64 = 1e6;
+
+/// The flow from one point of the section to its next upward crossing of v = 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Return {
+    /// Start (u, w, θ).
+    pub start: [f64; 3],
+    /// Return time.
+    pub period: f64,
+    /// The state at the return (u, w = 0, θ).
+    pub end: [f64; 3],
+    /// dy/dt at the return, from the integrator's interpolant (the model's dw/dt is noise on
+    /// the slow manifold at large γ).
+    pub velocity: [f64; 3],
+    /// ∂end/∂start along the flow (rows: component of the end state, columns: of the start),
+    /// at fixed time; the monodromy matrix when the orbit is periodic. The product of the
+    /// segments' fundamental matrices (see the module docs).
+    pub fundamental: [[f64; 3]; 3],
+    /// The linearised map from the start's section coordinates (u, θ) to the end's: the
+    /// product of the segments' section Jacobians.
+    pub section_jacobian: [[f64; 2]; 2],
+    /// Time from the start to the v maximum.
+    pub t_peak: f64,
+    /// State at the v maximum.
+    pub peak: [f64; 3],
+    /// Minimum of ln v on the way.
+    pub ln_v_min: f64,
+    /// Integrator steps taken.
+    pub steps: u64,
+}
+
+/// Limits of one return.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// The integrator's (rtol, atol) on w, to judge where a restart is safe.
+    pub w_tolerance: (f64, f64),
+    /// Give up after this much time without a return.
+    pub max_time: f64,
+    /// Give up after this many steps without a return.
+    pub max_steps: u64,
+}
+
+/// One sample of the integration: local time, state, and the interpolant's derivative.
+#[derive(Debug, Clone, Copy)]
+struct Sample {
+    t: f64,
+    y: [f64; 3],
+    d: [f64; 3],
+}
+
+fn first3(z: &[f64]) -> [f64; 3] {
+    [z[0], z[1], z[2]]
+}
+
+/// Integrates `integ` (a [`Variational`] DRR integrator, 12 components) from `start` until the
+/// next upward crossing of w = 0. With `on_section`, `start` lies on the section and the
+/// crossing must follow a downward one (a full turn); otherwise the first upward crossing
+/// ends the flow (used to reach the section from an arbitrary start).
+pub fn flow_to_section(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    start: [f64; 3],
+    on_section: bool,
+    limits: &Limits,
+) -> Result<Return, SolverError> {
+    integ.reinit(0.0, &Variational::<Drr, 3>::initial(&start))?;
+    let failure = |integ: &dyn Integrator, elapsed: f64, kind, message: String| SolverError {
+        solver: integ.name(),
+        kind,
+        t: elapsed + integ.t(),
+        state: integ.state()[..3].to_vec(),
+        flag: 0,
+        message,
+    };
+    let mut d0 = [0.0; 3];
+    crate::integrate::OdeSystem::rhs(drr, 0.0, &start, &mut d0);
+    let mut prev = Sample { t: 0.0, y: start, d: d0 };
+    let (mut elapsed, mut steps) = (0.0, 0u64);
+    // Sub-threshold noise at the start (w = 0 exactly, G ≠ 0 at large γ) must not count as a
+    // turn: the return needs a v maximum above the noise floor, then a downward crossing.
+    let floor = 1e-9f64.max(1e3 * (limits.w_tolerance.0 + limits.w_tolerance.1));
+    let mut down_seen = !on_section;
+    let mut peak: Option<(f64, [f64; 3])> = None;
+    let mut rebase_pending = false;
+    let mut rise_rate: f64 = 0.0;
+    let mut ln_v_min = start[W];
+    let cut_level = 0.5 * drr.params().gamma.ln();
+    let mut fundamental = IDENTITY3;
+    let mut section_jacobian = [[1.0, 0.0], [0.0, 1.0]];
+    // Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.
+    let mut cuts = 0u8;
+    loop {
+        let with_context = |mut e: SolverError| {
+            e.t += elapsed;
+            e.state.truncate(3);
+            e
+        };
+        let step = integ.advance(prev.t + HORIZON, Task::OneStep).map_err(with_context)?;
+        steps += 1;
+        let y = first3(integ.state());
+        let d = first3(integ.dense(step.t, 1).map_err(with_context)?);
+        let next = Sample { t: step.t, y, d };
+        if integ.state().iter().chain(&d).any(|v| !v.is_finite()) {
+            return Err(failure(integ, elapsed, ErrorKind::RhsFailure, "the state, Φ or dy/dt became non-finite".into()));
+        }
+        rise_rate = rise_rate.max(d[W].abs());
+        ln_v_min = ln_v_min.min(y[W]);
+        let span = (prev.t, next.t);
+        if prev.d[W] > 0.0 && next.d[W] <= 0.0 {
+            let t = events::refine(integ, span, 1, W, 0.0).map_err(with_context)?;
+            let yp = first3(integ.dense(t, 0).map_err(with_context)?);
+            if yp[W] > floor && peak.is_none_or(|(_, p)| yp[W] > p[W]) {
+                peak = Some((elapsed + t, yp));
+                rebase_pending = true;
+            }
+        }
+        if prev.d[W] < 0.0 && next.d[W] >= 0.0 {
+            let t = events::refine(integ, span, 1, W, 0.0).map_err(with_context)?;
+            ln_v_min = ln_v_min.min(integ.dense(t, 0).map_err(with_context)?[W]);
+        }
+        if peak.is_some() && prev.y[W] >= 0.0 && next.y[W] < 0.0 {
+            down_seen = true;
+        } else if down_seen && prev.y[W] < 0.0 && next.y[W] >= 0.0 {
+            let t = events::refine(integ, span, 0, W, 0.0).map_err(with_context)?;
+            let z = integ.dense(t, 0).map_err(with_context)?.to_vec();
+            let velocity = first3(integ.dense(t, 1).map_err(with_context)?);
+            let phi = Variational::<Drr, 3>::matrix(&z);
+            let (t_peak, peak) = peak.unwrap_or((elapsed + t, first3(&z)));
+            return Ok(Return {
+                start,
+                period: elapsed + t,
+                end: first3(&z),
+                velocity,
+                fundamental: mul3(&phi, &fundamental),
+                section_jacobian: mul2(&section_map(&phi, &velocity), &section_jacobian),
+                t_peak,
+                peak,
+                ln_v_min,
+                steps,
+            });
+        }
+        if elapsed + next.t > limits.max_time || steps > limits.max_steps {
+            let message = format!(
+                "no return to the section v = 1 within t = {:e} and {} steps (the orbit may have decayed to the fixed point)",
+                limits.max_time, limits.max_steps
+            );
+            return Err(failure(integ, elapsed, ErrorKind::TooMuchWork, message));
+        }
+        // A cut: the first crossing in this step of w = ½ ln γ (either way) or of w = 0
+        // downward (the latter only once a v maximum has been seen).
+        let crosses = |level: f64, up: bool, down: bool| {
+            (up && prev.y[W] < level && next.y[W] >= level) || (down && prev.y[W] >= level && next.y[W] < level)
+        };
+        // Each cut once per return, in order (a restart on the level must not cut again).
+        let hit = if cut_level > 0.0 && cuts == 0 && crosses(cut_level, true, false) {
+            Some((cut_level, 1))
+        } else if cut_level > 0.0 && cuts == 1 && crosses(cut_level, false, true) {
+            Some((cut_level, 2))
+        } else if peak.is_some() && cuts < 3 && crosses(0.0, false, true) {
+            Some((0.0, 3))
+        } else {
+            None
+        };
+        let cut = match hit {
+            Some((level, count)) => {
+                cuts = count;
+                let t = events::refine(integ, span, 0, W, level).map_err(with_context)?;
+                let z = integ.dense(t, 0).map_err(with_context)?.to_vec();
+                let velocity = first3(integ.dense(t, 1).map_err(with_context)?);
+                let y = first3(&z);
+                restart_safe(drr, limits.w_tolerance, &y, velocity[W].abs().max(rise_rate)).then_some((t, z, velocity))
+            }
+            None => None,
+        };
+        if let Some((t, z, velocity)) = cut {
+            let phi = Variational::<Drr, 3>::matrix(&z);
+            fundamental = mul3(&phi, &fundamental);
+            section_jacobian = mul2(&section_map(&phi, &velocity), &section_jacobian);
+            let y = first3(&z);
+            integ.reinit(0.0, &Variational::<Drr, 3>::initial(&y)).map_err(with_context)?;
+            elapsed += t;
+            rebase_pending = false;
+            prev = Sample { t: 0.0, y, d: velocity };
+        } else if rebase_pending && next.y[W] > 0.0 && restart_safe(drr, limits.w_tolerance, &y, rise_rate) {
+            rebase_pending = false;
+            let z = integ.state().to_vec();
+            integ.reinit(0.0, &z).map_err(with_context)?;
+            elapsed += next.t;
+            prev = Sample { t: 0.0, ..next };
+        } else {
+            prev = next;
+        }
+    }
+}
+
+const IDENTITY3: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// The linearised map between two sections w = const, in section coordinates (u, θ), from
+/// the fixed-time fundamental matrix Φ of the segment and the velocity f at its end:
+/// [Φ − f (e_wᵀ Φ)/f_w] restricted to rows and columns u, θ (the crossing time varies with
+/// the start; its derivative is the w row of Φ over the crossing speed).
+fn section_map(phi: &[[f64; 3]; 3], f: &[f64; 3]) -> [[f64; 2]; 2] {
+    let idx = [U, THETA];
+    let mut dp = [[0.0; 2]; 2];
+    for (i, &row) in idx.iter().enumerate() {
+        for (j, &col) in idx.iter().enumerate() {
+            dp[i][j] = phi[row][col] - f[row] * phi[W][col] / f[W];
+        }
+    }
+    dp
+}
+
+fn mul2(a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    let mut c = [[0.0; 2]; 2];
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            *entry = a[i][0] * b[0][j] + a[i][1] * b[1][j];
+        }
+    }
+    c
+}
+
+fn mul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            *entry = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
