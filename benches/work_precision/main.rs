@@ -17,7 +17,7 @@
 //! default 2), `--limit S` (time limit of one peer process, default 900), `--no-peers`,
 //! `--no-write` (print, write nothing), `--reanalyse` (tables and diagrams again from the
 //! committed results.json, no measurement), `--wrapper` (the same after measuring the wrapper
-//! against plain C anew). Without `--bench`, or with `--test` (`cargo test --benches`,
+//! against plain C anew, into docs/work-precision/wrapper.json). Without `--bench`, or with `--test` (`cargo test --benches`,
 //! `cargo bench -- --test`), it runs one small cell of our side as a smoke test and writes
 //! nothing.
 //!
@@ -35,7 +35,6 @@ mod common;
 mod peers;
 mod protocol;
 mod report;
-mod svg;
 
 use protocol::{Counts, Measured, Start};
 use serde::{Deserialize, Serialize};
@@ -398,17 +397,21 @@ fn main() {
                     Err(e) => eprintln!("  wrapper/C rtol {rtol:.0e}: not measured ({e})"),
                 }
             }
-            results.machine["wrapper_measured"] = serde_json::json!({
+            let measured = serde_json::json!({
                 "command": "cargo bench --bench work_precision -- --wrapper",
                 "commit": report::machine()["stickslip_commit"],
                 "date_utc": report::machine()["date_utc"],
                 "load_average_end": report::load_average(),
             });
+            if args.write {
+                report::write_wrapper(&results.wrapper, measured.clone()).unwrap_or_else(|e| panic!("writing wrapper.json: {e}"));
+            }
+            results.machine["wrapper_measured"] = measured;
         }
         let analysis = report::analyse(&results);
         eprintln!("{}", analysis.summary);
         if args.write {
-            report::write(&results, &analysis).unwrap_or_else(|e| panic!("writing the results: {e}"));
+            report::write(&results, &analysis, false).unwrap_or_else(|e| panic!("writing the results: {e}"));
         }
         return;
     }
@@ -490,6 +493,6 @@ fn main() {
     let analysis = report::analyse(&results);
     eprintln!("{}", analysis.summary);
     if args.write {
-        report::write(&results, &analysis).unwrap_or_else(|e| panic!("writing the results: {e}"));
+        report::write(&results, &analysis, true).unwrap_or_else(|e| panic!("writing the results: {e}"));
     }
 }
