@@ -3,12 +3,12 @@
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting::{self, ShootingSettings};
-use crate::analysis::{cycle, hopf, paper};
-use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Tolerance};
+use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper};
+use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::report::{ModelSection, Physical, Report, SolverSection};
-use crate::scene::{Method, Scene, SolverSpec};
+use crate::scene::{CycleOptions, Method, Scene, SolverSpec};
 use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
@@ -105,6 +105,32 @@ fn non_finite(what: &str) -> SolverError {
     }
 }
 
+/// Runs the "cycle" analysis with the scene's solver, start and cycle options on `drr`'s
+/// parameters (which may differ from the scene's, e.g. in a γ scan), keeping the trajectory of
+/// the last `trajectory_cycles` cycles. `stable` is the Hopf verdict on the fixed point.
+/// Returns the report, the integrator's name, its Butcher tables and statistics.
+pub fn cycle_with(
+    scene: &Scene,
+    drr: &Drr,
+    o: &CycleOptions,
+    trajectory_cycles: usize,
+    stable: bool,
+) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), SolverError> {
+    let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
+    let settings = cycle::CycleSettings {
+        tolerance: o.tolerance.unwrap_or(defaults.tolerance),
+        settle: o.settle.unwrap_or(defaults.settle),
+        max_cycles: o.max_cycles.unwrap_or(defaults.max_cycles),
+        max_time: o.max_time.unwrap_or(defaults.max_time),
+        max_steps: o.max_steps.unwrap_or(defaults.max_steps),
+        trajectory_cycles,
+        ..defaults
+    };
+    let (mut integ, tables) = integrator(*drr, &scene.solver, &scene.initial)?;
+    let report = cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
+    Ok((report, integ.name().to_string(), tables, integ.stats()))
+}
+
 /// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
 /// "noise" analysis) use every core.
 pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
@@ -126,24 +152,15 @@ pub fn run_with(
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
     let cycle_run = match &a.cycle {
         Some(o) => {
-            let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
-            let settings = cycle::CycleSettings {
-                tolerance: o.tolerance.unwrap_or(defaults.tolerance),
-                settle: o.settle.unwrap_or(defaults.settle),
-                max_cycles: o.max_cycles.unwrap_or(defaults.max_cycles),
-                max_time: o.max_time.unwrap_or(defaults.max_time),
-                max_steps: o.max_steps.unwrap_or(defaults.max_steps),
-                trajectory_cycles: a.trajectory_cycles.unwrap_or(0),
-                ..defaults
-            };
+            // The asymptotic and Lyapunov analyses work on one recorded cycle.
+            let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
+            let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
             let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
-            let (mut integ, tables) = integrator(drr, &scene.solver, &scene.initial)?;
-            let report = cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| diagnose(&drr, e))?;
-            Some((report, integ.name().to_string(), tables, integ.stats()))
+            Some(cycle_with(scene, &drr, o, keep, stable)?)
         }
         None => None,
     };
-    let (cycle_report, mut integrator_name, mut tables, mut stats) = match cycle_run {
+    let (mut cycle_report, mut integrator_name, mut tables, mut stats) = match cycle_run {
         Some((r, name, tables, stats)) => (Some(r), name, tables, stats),
         None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
     };
@@ -186,6 +203,26 @@ pub fn run_with(
     }
     if cycle_report.as_ref().is_some_and(|c| !c.is_finite()) {
         return Err(non_finite("cycle"));
+    }
+    let asymptotics = match &a.asymptotics {
+        Some(o) => Some(asymptotics::analyse(scene, cycle_report.as_ref(), o)?),
+        None => None,
+    };
+    if let Some(path) = asymptotics.as_ref().and_then(|r| finite::first_non_finite(r, "asymptotics")) {
+        return Err(non_finite(&path));
+    }
+    let lyapunov = match &a.lyapunov {
+        Some(o) => Some(lyapunov::analyse(scene, cycle_report.as_ref(), o)?),
+        None => None,
+    };
+    if let Some(path) = lyapunov.as_ref().and_then(|r| finite::first_non_finite(r, "lyapunov")) {
+        return Err(non_finite(&path));
+    }
+    // The trajectory recorded only for the analyses above is not reported.
+    if a.trajectory_cycles.is_none() {
+        if let Some(c) = &mut cycle_report {
+            c.trajectory.clear();
+        }
     }
     let values = cycle_report.as_ref().and_then(|c| c.values);
     let physical = scene.units.as_ref().zip(values).map(|(u, v)| Physical {
@@ -240,6 +277,8 @@ pub fn run_with(
         units: scene.units.clone(),
         hopf: linear.filter(|_| a.hopf),
         cycle: cycle_report,
+        asymptotics,
+        lyapunov,
         physical,
         paper,
         shooting: shooting_report,

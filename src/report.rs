@@ -1,6 +1,7 @@
 //! Reports: the JSON a scene produces (schema in docs/reports.md), its atomic writing and the
 //! CLI summary.
 
+use crate::analysis::asymptotics::AsymptoticsReport;
 use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::shooting::ShootingReport;
@@ -88,6 +89,12 @@ pub struct Report {
     /// The "cycle" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cycle: Option<CycleReport>,
+    /// The "asymptotics" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub asymptotics: Option<AsymptoticsReport>,
+    /// The "lyapunov" analysis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lyapunov: Option<crate::analysis::lyapunov::LyapunovReport>,
     /// Cycle durations in physical units (with `units` and a periodic cycle).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub physical: Option<Physical>,
@@ -175,6 +182,12 @@ impl Report {
         }
         if let Some(p) = &self.physical {
             s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
+        }
+        if let Some(a) = &self.asymptotics {
+            s += &crate::analysis::asymptotics::summary(a);
+        }
+        if let Some(l) = &self.lyapunov {
+            s += &crate::analysis::lyapunov::summary(l);
         }
         if let Some(r) = &self.shooting {
             match &r.orbit {

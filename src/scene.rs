@@ -283,6 +283,10 @@ pub struct Analyses {
     pub trajectory_cycles: Option<usize>,
     /// Compare with the paper's quoted values.
     pub paper: bool,
+    /// Matched asymptotics against the numerics (needs "cycle").
+    pub asymptotics: Option<crate::analysis::asymptotics::AsymptoticsOptions>,
+    /// Local and finite-time Lyapunov exponents along the cycle (needs "cycle").
+    pub lyapunov: Option<crate::analysis::lyapunov::LyapunovOptions>,
     /// The periodic orbit by shooting (None: not asked).
     pub shooting: Option<ShootingOptions>,
     /// Continuation of the orbit in a parameter (None: not asked).
@@ -312,7 +316,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -438,8 +442,10 @@ fn validate_other(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> R
         || analyses.trajectory_cycles.is_some()
         || analyses.shooting.is_some()
         || analyses.continuation.is_some()
+        || analyses.asymptotics.is_some()
+        || analyses.lyapunov.is_some()
     {
-        return Err(err("analyses", format!("the {kind} model runs only the \"noise\" analysis (hopf, cycle, paper, trajectory, shooting and continuation need the DRR model)")));
+        return Err(err("analyses", format!("the {kind} model runs only the \"noise\" analysis (hopf, cycle, paper, trajectory, shooting, continuation, asymptotics and lyapunov need the DRR model)")));
     }
     let noise = analyses.noise.ok_or_else(|| err("analyses", format!("the {kind} model runs only the \"noise\" analysis; add {{\"noise\": {{\"amplitudes\": [...]}}}}")))?;
     Ok(OtherScene { name: raw.name, description: raw.description, model, noise })
@@ -675,6 +681,16 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 }
                 out.trajectory_cycles = Some(t.cycles);
             }
+            "asymptotics" => {
+                let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of("asymptotics")?)
+                    .map_err(|(sub, message)| err(&format!("{field}.asymptotics{sub}"), message))?;
+                out.asymptotics = Some(o);
+            }
+            "lyapunov" => {
+                let o = crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
+                    .map_err(|(sub, message)| err(&format!("{field}.lyapunov{sub}"), message))?;
+                out.lyapunov = Some(o);
+            }
             "shooting" => {
                 let o: RawShootingOptions = serde_json::from_value(options_of("shooting")?)
                     .map_err(|e| err(&format!("{field}.shooting"), e.to_string()))?;
@@ -737,6 +753,11 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
     }
     if out.trajectory_cycles.is_some() && out.cycle.is_none() {
         return Err(err("analyses", "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into()));
+    }
+    for (asked, name) in [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")] {
+        if asked && out.cycle.is_none() {
+            return Err(err("analyses", format!("\"{name}\" works on the limit cycle found by \"cycle\"; add \"cycle\"")));
+        }
     }
     if out.paper && (out.cycle.is_none() || !out.hopf) {
         return Err(err("analyses", "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into()));

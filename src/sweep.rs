@@ -144,7 +144,7 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");
-            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical", "shooting", "continuation"]
+            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical", "shooting", "continuation", "asymptotics", "lyapunov"]
                 .iter()
                 .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
                 .collect();

@@ -1,8 +1,10 @@
 //! Models: ODE systems with their Jacobians.
 
 pub mod drr;
+pub mod fast_slip;
 pub mod friction;
 pub mod robertson;
+pub mod slow_manifold;
 pub mod saddle_node;
 pub mod van_der_pol;
 pub mod variational;

@@ -1,0 +1,107 @@
+//! The γ scan of the asymptotic analysis: the scene's brute-force cycle (same solver, ξ, ε,
+//! friction and cycle options) at each γ of the list. Each run starts at the scene's (u, θ)
+//! with v on the slow manifold S (when the friction law has such a v): an off-manifold start
+//! creates an initial layer of width ~1/γ² that CVODE cannot start through at γ ≳ 1e9
+//! (measured: the earthquake scene's start (1, 0.45, 0) fails at t = 0 for γ = 1e9 … 1e12),
+//! while the limit cycle does not depend on the start. A failed or non-periodic point is kept
+//! as a row with its status and is left out of the fits.
+
+use crate::analysis::cycle::{CycleStatus, CycleValues};
+use crate::analysis::hopf;
+use crate::engine;
+use crate::model::{Drr, DrrParams};
+use crate::scene::Scene;
+use serde::Serialize;
+
+/// The cycle quantities the asymptotic fits use (dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ScanValues {
+    /// Period.
+    pub period: f64,
+    /// t0: upward crossing of v = 1 to the v maximum.
+    pub t0: f64,
+    /// Slip half-width × γ (null if v never fell below half its maximum).
+    pub half_width_times_gamma: Option<f64>,
+    /// ln v_max.
+    pub ln_v_max: f64,
+    /// u at the v maximum.
+    pub u_at_v_max: f64,
+    /// θ at the v maximum.
+    pub theta_at_v_max: f64,
+    /// Minimum of u.
+    pub u_min: f64,
+    /// Maximum of u.
+    pub u_max: f64,
+    /// Minimum of θ.
+    pub theta_min: f64,
+    /// Maximum of θ.
+    pub theta_max: f64,
+}
+
+impl ScanValues {
+    fn of(c: &CycleValues, gamma: f64) -> Self {
+        ScanValues {
+            period: c.period,
+            t0: c.t0,
+            half_width_times_gamma: c.slip_half_width.map(|w| w * gamma),
+            ln_v_max: c.ln_v_max,
+            u_at_v_max: c.u_at_v_max,
+            theta_at_v_max: c.theta_at_v_max,
+            u_min: c.u_min,
+            u_max: c.u_max,
+            theta_min: c.theta_min,
+            theta_max: c.theta_max,
+        }
+    }
+}
+
+/// One γ of the scan.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScanRow {
+    /// γ.
+    pub gamma: f64,
+    /// "periodic", "period_n", "fixed_point", "not_converged" or "failed".
+    pub status: String,
+    /// The typed error of a failed run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// The cycle, when periodic.
+    #[serde(flatten)]
+    pub values: Option<ScanValues>,
+}
+
+/// The start of every scan run: the scene's (u, θ) with v on S if possible, else the scene's
+/// start.
+pub fn start(scene: &Scene) -> [f64; 3] {
+    let [u, w, theta] = scene.initial;
+    let drr = Drr::new(scene.params);
+    [u, drr.manifold_w(u, theta).unwrap_or(w), theta]
+}
+
+/// Runs the scene's cycle at each γ, from [`start`].
+pub fn run(scene: &Scene, gammas: &[f64]) -> Vec<ScanRow> {
+    let options = scene.analyses.cycle.clone().unwrap_or_default();
+    let scene = &Scene { initial: start(scene), ..scene.clone() };
+    gammas
+        .iter()
+        .map(|&gamma| {
+            let drr = Drr::new(DrrParams { gamma, ..scene.params });
+            let stable = hopf::analyse(&drr).max_real_part < 0.0;
+            match engine::cycle_with(scene, &drr, &options, 0, stable) {
+                Ok((report, ..)) => {
+                    let status = serde_json::to_value(report.status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
+                    let values = report.values.filter(|_| report.status == CycleStatus::Periodic).map(|c| ScanValues::of(&c, gamma));
+                    ScanRow { gamma, status, error: None, values }
+                }
+                Err(e) => ScanRow { gamma, status: "failed".into(), error: Some(e.to_string()), values: None },
+            }
+        })
+        .collect()
+}
+
+/// The periodic rows with γ ≥ `min_gamma`, in increasing γ.
+pub fn usable(rows: &[ScanRow], min_gamma: f64) -> Vec<(f64, ScanValues)> {
+    let mut v: Vec<(f64, ScanValues)> = rows.iter().filter(|r| r.gamma >= min_gamma).filter_map(|r| r.values.map(|x| (r.gamma, x))).collect();
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    v
+}

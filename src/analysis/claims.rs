@@ -1,0 +1,144 @@
+//! Claims set beside our numbers: {claim, reference (the paper's value or a prediction), ours,
+//! difference, verdict}, with the criterion stated in the claim itself. Used by the
+//! "asymptotics" and "lyapunov" analyses. Nothing is tuned to a reference: a criterion is fixed
+//! by what the claim says (e.g. "about", "→", "γ-independent"), never by our result.
+
+use serde::Serialize;
+
+/// Where a claim's reference value comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Source {
+    /// A number quoted (or a formula printed) in the paper.
+    Paper,
+    /// A prediction of the asymptotic theory (the paper's or the singular-limit picture of
+    /// issue 5), not a number the paper quotes.
+    Prediction,
+    /// A consistency check between two independent computations of ours.
+    Check,
+}
+
+/// One claim and our value for it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Claim {
+    /// The claim, in words.
+    pub claim: String,
+    /// Where the reference comes from.
+    pub source: Source,
+    /// The reference value (the paper's number or the predicted one).
+    pub reference: f64,
+    /// Ours.
+    pub ours: f64,
+    /// ours − reference.
+    pub difference: f64,
+    /// (ours − reference)/|reference|; null when the reference is 0.
+    pub relative_difference: Option<f64>,
+    /// The rule behind the verdict, in words.
+    pub criterion: String,
+    /// "agrees", "roughly" or "disagrees".
+    pub verdict: &'static str,
+    /// What our number is and how it was obtained (finite-γ corrections, caveats).
+    pub note: String,
+}
+
+impl Claim {
+    fn new(claim: &str, source: Source, reference: f64, ours: f64, criterion: String, verdict: &'static str, note: String) -> Self {
+        let difference = ours - reference;
+        let relative_difference = (reference != 0.0).then(|| difference / reference.abs());
+        Claim { claim: claim.into(), source, reference, ours, difference, relative_difference, criterion, verdict, note }
+    }
+
+    /// Agrees within `tol` relative, roughly within 4·`tol`, disagrees otherwise.
+    pub fn relative(claim: &str, source: Source, reference: f64, ours: f64, tol: f64, note: String) -> Self {
+        let d = ((ours - reference) / reference).abs();
+        let verdict = grade(d, tol);
+        let criterion = format!("agrees if |ours − reference| ≤ {} % of |reference|, roughly if ≤ {} %", pct(tol), pct(4.0 * tol));
+        Self::new(claim, source, reference, ours, criterion, verdict, note)
+    }
+
+    /// Agrees within `tol` absolute, roughly within 4·`tol`, disagrees otherwise. `why` says
+    /// where the tolerance comes from.
+    pub fn absolute(claim: &str, source: Source, reference: f64, ours: f64, tol: f64, why: &str, note: String) -> Self {
+        let verdict = grade((ours - reference).abs(), tol);
+        let criterion = format!("agrees if |ours − reference| ≤ {tol:.3e} ({why}), roughly if ≤ {:.3e}", 4.0 * tol);
+        Self::new(claim, source, reference, ours, criterion, verdict, note)
+    }
+
+    /// A sign claim: agrees if ours < 0 (reference 0), disagrees otherwise.
+    pub fn negative(claim: &str, source: Source, ours: f64, note: String) -> Self {
+        let verdict = if ours < 0.0 { "agrees" } else { "disagrees" };
+        Self::new(claim, source, 0.0, ours, "agrees if ours < 0".into(), verdict, note)
+    }
+
+    /// A lower bound: agrees if ours ≥ reference, disagrees otherwise.
+    pub fn at_least(claim: &str, source: Source, reference: f64, ours: f64, note: String) -> Self {
+        let verdict = if ours >= reference { "agrees" } else { "disagrees" };
+        Self::new(claim, source, reference, ours, "agrees if ours ≥ reference".into(), verdict, note)
+    }
+
+    /// Every real number of the claim (for the finiteness check).
+    pub fn numbers(&self) -> impl Iterator<Item = f64> + '_ {
+        [self.reference, self.ours, self.difference].into_iter().chain(self.relative_difference)
+    }
+}
+
+fn grade(deviation: f64, tol: f64) -> &'static str {
+    if deviation <= tol {
+        "agrees"
+    } else if deviation <= 4.0 * tol {
+        "roughly"
+    } else {
+        "disagrees"
+    }
+}
+
+fn pct(x: f64) -> String {
+    let p = 100.0 * x;
+    if p >= 1.0 { format!("{p:.0}") } else { format!("{p}") }
+}
+
+/// One line per claim for the CLI summary.
+pub fn summary_lines(claims: &[Claim]) -> String {
+    claims
+        .iter()
+        .map(|c| {
+            let rel = c.relative_difference.map_or(String::new(), |r| format!(", {:+.1} %", 100.0 * r));
+            format!(
+                "  {:<9} {} — {} {}, ours {} (Δ {:+.3e}{rel})\n",
+                c.verdict,
+                c.claim,
+                match c.source {
+                    Source::Paper => "paper",
+                    Source::Prediction => "predicted",
+                    Source::Check => "reference",
+                },
+                short(c.reference),
+                short(c.ours),
+                c.difference
+            )
+        })
+        .collect()
+}
+
+fn short(x: f64) -> String {
+    if x != 0.0 && (x.abs() >= 1e5 || x.abs() < 1e-3) { format!("{x:.4e}") } else { format!("{x:.5}") }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn verdicts_follow_the_stated_tolerance() {
+        assert_eq!(Claim::relative("x", Source::Paper, 2.5, 2.55, 0.05, String::new()).verdict, "agrees");
+        assert_eq!(Claim::relative("x", Source::Paper, 2.5, 2.106, 0.05, String::new()).verdict, "roughly");
+        assert_eq!(Claim::relative("x", Source::Paper, 28.0, 56.4, 0.05, String::new()).verdict, "disagrees");
+        assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.3, 0.1, "test", String::new()).verdict, "roughly");
+        assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.5, 0.1, "test", String::new()).verdict, "disagrees");
+        let n = Claim::negative("c < 0", Source::Paper, -0.2, String::new());
+        assert_eq!((n.verdict, n.relative_difference), ("agrees", None));
+        assert_eq!(Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict, "disagrees");
+        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict, "agrees");
+        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict, "disagrees");
+    }
+}
