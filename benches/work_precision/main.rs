@@ -15,8 +15,11 @@
 //! Options: `--gammas LIST`, `--rtols LIST`, `--only METHODS` (names as in the tables),
 //! `--runs N` (timed runs per cell, default 5), `--budget S` (seconds of timed runs per cell,
 //! default 2), `--limit S` (time limit of one peer process, default 900), `--no-peers`,
-//! `--no-write` (print, write nothing). Without `--bench` (e.g. `cargo test --benches`) it
-//! runs one small cell of our side as a smoke test and writes nothing.
+//! `--no-write` (print, write nothing), `--reanalyse` (tables and diagrams again from the
+//! committed results.json, no measurement), `--wrapper` (the same after measuring the wrapper
+//! against plain C anew, into docs/work-precision/wrapper.json). Without `--bench`, or with `--test` (`cargo test --benches`,
+//! `cargo bench -- --test`), it runs one small cell of our side as a smoke test and writes
+//! nothing.
 //!
 //! What is measured (protocol.rs): every method starts from the same state on the settled
 //! cycle, 2 % of a period before an upward crossing of v = 1, and integrates through 3 cycles;
@@ -32,7 +35,6 @@ mod common;
 mod peers;
 mod protocol;
 mod report;
-mod svg;
 
 use protocol::{Counts, Measured, Start};
 use serde::{Deserialize, Serialize};
@@ -125,6 +127,53 @@ pub struct Reference {
     pub drr_cycles_table: Option<Errors>,
 }
 
+/// The wrapper against plain C at one tolerance: cvode-bdf through the library and the C
+/// replica of the engine, minimum time per cycle of each over alternating rounds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WrapperRow {
+    /// γ.
+    pub gamma: f64,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Library: minimum seconds per cycle.
+    pub library_s: f64,
+    /// Plain C: minimum seconds per cycle.
+    pub c_s: f64,
+    /// library_s / c_s.
+    pub ratio: f64,
+    /// Alternating rounds, and timed runs per side in each.
+    pub rounds: usize,
+    pub runs_per_round: usize,
+}
+
+/// Rounds and runs per round of the wrapper-against-C measurement.
+const WRAPPER_ROUNDS: usize = 40;
+const WRAPPER_RUNS: usize = 5;
+/// (WRAPPER_ROUNDS, WRAPPER_RUNS) for the report.
+pub const WRAPPER_ROUNDS_DOC: (usize, usize) = (WRAPPER_ROUNDS, WRAPPER_RUNS);
+
+/// The wrapper against plain C at (γ, rtol): WRAPPER_ROUNDS alternating rounds, each a process
+/// of the C program and one of this benchmark in `--cell` mode, both doing one warm-up and
+/// WRAPPER_RUNS timed runs, so that both sides see the same machine load and the same process
+/// life cycle; the minimum of each side over all rounds.
+fn wrapper_vs_c(c: &std::path::Path, gamma: f64, rtol: f64, start: &Start, limit_s: u64) -> Result<WrapperRow, String> {
+    let (mut lib, mut cmin) = (f64::INFINITY, f64::INFINITY);
+    let me = std::env::current_exe().map_err(|e| format!("this benchmark's path: {e}"))?;
+    for _ in 0..WRAPPER_ROUNDS {
+        cmin = cmin.min(peers::c_min_time(c, gamma, rtol, start, WRAPPER_RUNS, limit_s)?);
+        let out = std::process::Command::new(&me)
+            .arg("--cell")
+            .args([gamma, rtol, start.y0[0], start.y0[1], start.y0[2]].map(|x| x.to_string()))
+            .arg(WRAPPER_RUNS.to_string())
+            .output()
+            .map_err(|e| format!("{}: {e}", me.display()))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        let t: f64 = text.trim().parse().map_err(|_| format!("--cell printed {text:?}: {}", String::from_utf8_lossy(&out.stderr)))?;
+        lib = lib.min(t);
+    }
+    Ok(WrapperRow { gamma, rtol, library_s: lib, c_s: cmin, ratio: lib / cmin, rounds: WRAPPER_ROUNDS, runs_per_round: WRAPPER_RUNS })
+}
+
 /// Our methods at γ: the stiff ones everywhere, the explicit ones only at γ = 1e1.
 pub fn our_methods(gamma: f64) -> Vec<(&'static str, Method)> {
     Method::ALL
@@ -146,6 +195,10 @@ pub struct Args {
     peers: bool,
     write: bool,
     smoke: bool,
+    reanalyse: bool,
+    wrapper_only: bool,
+    /// `--cell GAMMA RTOL U0 W0 THETA0 RUNS`: (γ, rtol, start, runs).
+    cell: Option<(f64, f64, [f64; 3], usize)>,
 }
 
 fn list(s: &str) -> Vec<f64> {
@@ -163,7 +216,11 @@ fn parse_args() -> Args {
         limit_s: 900,
         peers: true,
         write: true,
-        smoke: !argv.iter().any(|a| a == "--bench"),
+        // As criterion does: a real measurement only under `cargo bench` without `--test`.
+        smoke: !common::benchmarking(),
+        reanalyse: false,
+        wrapper_only: false,
+        cell: None,
     };
     let mut it = argv.iter();
     while let Some(flag) = it.next() {
@@ -182,6 +239,18 @@ fn parse_args() -> Args {
             "--limit" => a.limit_s = value().parse().expect("--limit S"),
             "--no-peers" => a.peers = false,
             "--no-write" => a.write = false,
+            "--reanalyse" => a.reanalyse = true,
+            "--cell" => {
+                let mut num = || value().parse::<f64>().expect("--cell GAMMA RTOL U0 W0 THETA0 RUNS");
+                let (gamma, rtol) = (num(), num());
+                let y0 = [num(), num(), num()];
+                a.cell = Some((gamma, rtol, y0, num() as usize));
+                a.smoke = false;
+            }
+            "--wrapper" => {
+                a.reanalyse = true;
+                a.wrapper_only = true;
+            }
             // cargo's own flags (`--bench`, criterion-style filters) are ignored.
             _ => {}
         }
@@ -288,6 +357,64 @@ fn main() {
         eprintln!("work_precision smoke test: radau5 at γ = 1e3, rtol 1e-6 ran ({:?})", row.measured);
         return;
     }
+    if let Some(cell) = &args.cell {
+        // One side of the wrapper-against-C measurement, in its own process (see wrapper_vs_c):
+        // cvode-bdf at (γ, rtol) from the given start; prints the minimum seconds per cycle of
+        // `runs` timed runs after one warm-up.
+        let (gamma, rtol, y0, runs) = (cell.0, cell.1, cell.2, cell.3);
+        let start = Start { y0, period: f64::NAN };
+        let mut best = f64::INFINITY;
+        for k in 0..=runs {
+            let (_, _, t) = protocol::run_ours(Method::CvodeBdf, gamma, rtol, &start).unwrap_or_else(|e| panic!("{e}"));
+            if k > 0 {
+                best = best.min(t.as_secs_f64() / protocol::CYCLES as f64);
+            }
+        }
+        println!("{best:e}");
+        return;
+    }
+    if args.reanalyse {
+        // Tables, targets and diagrams again from the committed results; with --wrapper, the
+        // wrapper-against-C measurement at γ = 1e8 is taken anew first.
+        let mut results = report::read().unwrap_or_else(|e| panic!("{e}"));
+        if args.wrapper_only {
+            let c = common::compile_c("earthquake_cvode", &["-O3", "-ffp-contract=off"], common::CVODE_DENSE_LIBS);
+            // The start again (deterministic) rather than read back: serde_json's float parsing
+            // is not exact to the last bit, and CVODE's loose-tolerance runs depend on it.
+            let stored = results.references.iter().find(|r| r.gamma == 1e8).expect("γ = 1e8 in the results");
+            let start = protocol::settle(1e8).unwrap_or_else(|e| panic!("{e}"));
+            let close = start.y0.iter().zip(&stored.start.y0).all(|(a, b)| (a - b).abs() <= 1e-15 * a.abs().max(1.0));
+            assert!(close, "the start {:?} is not the stored {:?}: measure the whole grid again", start.y0, stored.start.y0);
+            let mut rtols: Vec<f64> = results.rows.iter().filter(|w| w.gamma == 1e8 && w.method == "cvode-bdf").map(|w| w.rtol).collect();
+            rtols.dedup();
+            results.wrapper.clear();
+            for rtol in rtols {
+                match wrapper_vs_c(&c, 1e8, rtol, &start, args.limit_s) {
+                    Ok(w) => {
+                        eprintln!("  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}", w.library_s * 1e3, w.c_s * 1e3, w.ratio);
+                        results.wrapper.push(w);
+                    }
+                    Err(e) => eprintln!("  wrapper/C rtol {rtol:.0e}: not measured ({e})"),
+                }
+            }
+            let measured = serde_json::json!({
+                "command": "cargo bench --bench work_precision -- --wrapper",
+                "commit": report::machine()["stickslip_commit"],
+                "date_utc": report::machine()["date_utc"],
+                "load_average_end": report::load_average(),
+            });
+            if args.write {
+                report::write_wrapper(&results.wrapper, measured.clone()).unwrap_or_else(|e| panic!("writing wrapper.json: {e}"));
+            }
+            results.machine["wrapper_measured"] = measured;
+        }
+        let analysis = report::analyse(&results);
+        eprintln!("{}", analysis.summary);
+        if args.write {
+            report::write(&results, &analysis, false).unwrap_or_else(|e| panic!("writing the results: {e}"));
+        }
+        return;
+    }
     let started = Instant::now();
     let mut machine = report::machine();
     let mut programs = Vec::new();
@@ -312,6 +439,7 @@ fn main() {
     }
     let mut references = Vec::new();
     let mut rows = Vec::new();
+    let mut wrapper = Vec::new();
     for &gamma in &args.gammas {
         let r = reference(gamma).unwrap_or_else(|e| panic!("γ = {gamma:e}: {e}"));
         eprintln!(
@@ -338,15 +466,33 @@ fn main() {
                 }
             }
         }
+        // The wrapper against plain C (the target is stated at γ = 1e8).
+        let c_binary = programs.iter().find_map(|p| if let peers::Program::C(b) = p { Some(b.clone()) } else { None });
+        if let (Some(c), true) = (c_binary, gamma == 1e8 && args.wants("cvode-bdf")) {
+            for &rtol in &args.rtols {
+                match wrapper_vs_c(&c, gamma, rtol, &r.start, args.limit_s) {
+                    Ok(w) => {
+                        eprintln!("  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}", w.library_s * 1e3, w.c_s * 1e3, w.ratio);
+                        wrapper.push(w);
+                    }
+                    Err(e) => eprintln!("  wrapper/C rtol {rtol:.0e}: not measured ({e})"),
+                }
+            }
+        }
         references.push(r);
     }
     machine["load_average_end"] = serde_json::json!(report::load_average());
     machine["wall_time_s"] = serde_json::json!(started.elapsed().as_secs_f64());
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let results = report::Results { machine, command, runs: args.runs, budget_s: args.budget_s, references, rows };
+    let extra: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let command = if extra.is_empty() {
+        "cargo bench --bench work_precision".to_string()
+    } else {
+        format!("cargo bench --bench work_precision -- {}", extra.join(" "))
+    };
+    let results = report::Results { machine, command, runs: args.runs, budget_s: args.budget_s, references, rows, wrapper };
     let analysis = report::analyse(&results);
     eprintln!("{}", analysis.summary);
     if args.write {
-        report::write(&results, &analysis).unwrap_or_else(|e| panic!("writing the results: {e}"));
+        report::write(&results, &analysis, true).unwrap_or_else(|e| panic!("writing the results: {e}"));
     }
 }

@@ -168,6 +168,14 @@ fn command(program: &Program, setting: &str, gamma: f64, rtol: f64, start: &Star
     }
 }
 
+/// The plain-C program's minimum time per cycle over `runs` timed runs (after its warm-up) of
+/// one grid cell, with no time budget (the wrapper-against-C measurement).
+pub fn c_min_time(binary: &Path, gamma: f64, rtol: f64, start: &Start, runs: usize, limit_s: u64) -> Result<f64, String> {
+    let program = Program::C(binary.to_path_buf());
+    let line = json_line(command(&program, "default", gamma, rtol, start, runs, 1e9), limit_s)?;
+    line["time_per_cycle_s"].as_f64().ok_or_else(|| line["error"].as_str().unwrap_or("no time").to_string())
+}
+
 /// One grid cell of a peer: its defaults, and if they fail, its tuned setting (both rows are
 /// kept). The C program has only the engine's settings.
 pub fn run(program: &Program, gamma: f64, rtol: f64, start: &Start, runs: usize, budget_s: f64, limit_s: u64) -> Vec<Row> {
