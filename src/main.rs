@@ -460,7 +460,7 @@ fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Res
         count("disagrees"),
         count("holds"),
         count("does not hold"),
-        summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ")
+        if summary.pending.is_empty() { "none".to_string() } else { summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ") }
     );
     println!("summary: {} and summary.html ({:.1} s)", out.join("summary.md").display(), summary.wall_time_s);
     let failed = summary.failed();

@@ -25,7 +25,7 @@ fn reduced_reproduce_writes_well_formed_figures_reports_and_summary() {
     }
 
     // Panels per figure: each has its own clip path.
-    let panels = [("fig1", 6), ("fig2", 4), ("fig4", 2), ("fig6", 2), ("fig7", 3), ("fig8", 4), ("fig9", 1)];
+    let panels = [("fig1", 6), ("fig2", 4), ("fig3", 3), ("fig4", 2), ("fig5", 3), ("fig6", 2), ("fig7", 3), ("fig8", 4), ("fig9", 1)];
     assert_eq!(panels.len(), FIGURES.len());
     for (id, n) in panels {
         let svg = std::fs::read_to_string(out.join(format!("{id}.svg"))).unwrap();

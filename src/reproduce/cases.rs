@@ -13,6 +13,9 @@ use std::sync::Mutex;
 
 /// data/scenes/fig1.json: γ = 1e3, ξ = 0.7, ε = 0.72.
 pub const FIG1: &str = include_str!("../../data/scenes/fig1.json");
+/// data/scenes/fig1-asymptotics.json: the Fig. 1 case with the "asymptotics" and "lyapunov"
+/// analyses (Figs. 3 and 5).
+pub const FIG1_ASYMPTOTICS: &str = include_str!("../../data/scenes/fig1-asymptotics.json");
 /// data/scenes/earthquake.json: γ = 1e8, ξ = 0.8, ε = 1.
 pub const EARTHQUAKE: &str = include_str!("../../data/scenes/earthquake.json");
 /// data/scenes/power-law.json: α = 0.31, γ = 10, ξ = 0.7, ε = 1.

@@ -11,7 +11,9 @@
 pub mod cases;
 pub mod fig1;
 pub mod fig2;
+pub mod fig3;
 pub mod fig4;
+pub mod fig5;
 pub mod fig6;
 pub mod fig7;
 pub mod fig8;
@@ -129,10 +131,12 @@ pub struct Entry {
 }
 
 /// The figures made today, in the paper's order.
-pub const FIGURES: [Entry; 7] = [
+pub const FIGURES: [Entry; 9] = [
     Entry { id: "fig1", what: "Fig. 1: the limit cycle at γ = 10³, ξ = 0.7, ε = 0.72 (a); its period against ε (b) and against log₁₀ γ (c)", make: fig1::make },
     Entry { id: "fig2", what: "Fig. 2: the slip in fast units T = γ(t − t_c), V = v/γ, for several γ", make: fig2::make },
+    Entry { id: "fig3", what: "Fig. 3: v/γ of the 2D flow on the slow manifold and of the 3D flow near t_c (a, b); the (u, θ) plane with the cycle, the 2D flow, the matching curves, the zero-acceleration lines and the adiabatic limit (c)", make: fig3::make },
     Entry { id: "fig4", what: "Fig. 4: the trajectory leaving and landing on the slow manifold ξu + θ + ln v = 0", make: fig4::make },
+    Entry { id: "fig5", what: "Fig. 5: the Jacobian's eigenvalues (the paper's Lyapunov exponents) along the stick: the fast one (a), real (b) and imaginary (c) parts of the slow pair, with the quasi-static formula", make: fig5::make },
     Entry { id: "fig6", what: "Fig. 6: response to noise: σ_v against v before the event; correlation functions Γ_u(t, t − t′)", make: fig6::make },
     Entry { id: "fig7", what: "Fig. 7: correlation time before the event: saddle-node (slowing-down), stick-slip (speed-up), van der Pol", make: fig7::make },
     Entry { id: "fig8", what: "Fig. 8: power-law friction g_α(v) = (v^α − 1)/α against ln v", make: fig8::make },
@@ -151,18 +155,7 @@ pub struct Pending {
 }
 
 /// The paper's figures still to come (listed in the summary as "not yet reproduced").
-pub const PENDING: [Pending; 2] = [
-    Pending {
-        figure: "Fig. 3",
-        what: "v/γ of the 2D (slow-manifold) and 3D flows; the (u, θ) plane with the matching curves, the zero-acceleration line and the adiabatic limit",
-        waiting_for: "the \"asymptotics\" analysis (issue #5)",
-    },
-    Pending {
-        figure: "Fig. 5",
-        what: "Lyapunov exponents (Jacobian eigenvalues) along the cycle: real parts, imaginary parts, onset before t_c",
-        waiting_for: "the \"lyapunov\" analysis (issue #5)",
-    },
-];
+pub const PENDING: [Pending; 0] = [];
 
 /// Runs every figure into `out` (created if needed), then writes `summary.json`,
 /// `summary.md` and `summary.html`. A figure that fails is reported in the summary (and in

@@ -37,6 +37,27 @@ impl Row {
         }
     }
 
+    /// A row from a claim of the "asymptotics" or "lyapunov" analyses
+    /// ([`crate::analysis::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
+    /// and criterion (in the note).
+    pub fn from_analysis(figure: &str, c: &crate::analysis::claims::Claim) -> Self {
+        use crate::analysis::claims::Source;
+        let source = match c.source {
+            Source::Paper => "",
+            Source::Prediction => " (predicted)",
+            Source::Check => " (check)",
+        };
+        let rel = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+        Self {
+            figure: figure.into(),
+            claim: c.claim.clone(),
+            paper: format!("{}{source}", short_or_sci(c.reference)),
+            ours: format!("{}{rel}", short_or_sci(c.ours)),
+            verdict: c.verdict.into(),
+            note: format!("{} Criterion: {}.", c.note, c.criterion),
+        }
+    }
+
     /// A numerical claim, judged as [`paper::claim`] judges.
     pub fn numeric(figure: &str, claim: &str, paper_value: f64, ours: f64, note: String) -> Self {
         Self::from_claim(figure, &paper::claim(claim, paper_value, ours, note))
@@ -111,6 +132,11 @@ fn short(x: f64) -> String {
     if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
 }
 
+/// [`short`], or 4 significant digits in scientific notation for |x| < 1e-3 or ≥ 1e6.
+fn short_or_sci(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) { format!("{x:.3e}") } else { short(x) }
+}
+
 fn md_cell(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
@@ -180,6 +206,9 @@ impl Summary {
             s += &notes.concat();
         }
         s += "\n## Not yet reproduced\n\n";
+        if self.pending.is_empty() {
+            s += "- none: every figure of the paper is remade\n";
+        }
         for p in &self.pending {
             s += &format!("- {}: {} (waits for {})\n", p.figure, p.what, p.waiting_for);
         }
@@ -234,6 +263,9 @@ impl Summary {
             }
         }
         s += "<h2>Not yet reproduced</h2>\n<ul>\n";
+        if self.pending.is_empty() {
+            s += "<li>none: every figure of the paper is remade</li>\n";
+        }
         for p in &self.pending {
             s += &format!("<li>{}: {} (waits for {})</li>\n", escape(p.figure), escape(p.what), escape(p.waiting_for));
         }

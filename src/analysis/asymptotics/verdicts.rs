@@ -11,6 +11,19 @@ use crate::analysis::claims::{Claim, Source};
 use crate::analysis::fit::least_squares;
 use crate::model::{DrrParams, Friction};
 
+/// The claims about the stick and the matching (the paper's Fig. 3): the first of
+/// [`claims`], empty without a cycle.
+pub fn stick_claims(i: &Inputs) -> Vec<Claim> {
+    let mut out = Vec::new();
+    if let Some(m) = i.manifold {
+        manifold_claims(m, i, &mut out);
+        if let Some(mt) = i.matching {
+            matching_claims(mt, m.t0_3d, &mut out);
+        }
+    }
+    out
+}
+
 /// What the claims are judged on.
 pub struct Inputs<'a> {
     /// Model parameters of the scene.
@@ -299,13 +312,7 @@ fn singular_claims(sl: &SingularLimitReport, i: &Inputs, out: &mut Vec<Claim>) {
 
 /// Every claim of the asymptotic analysis.
 pub fn claims(i: &Inputs) -> Vec<Claim> {
-    let mut out = Vec::new();
-    if let Some(m) = i.manifold {
-        manifold_claims(m, i, &mut out);
-        if let Some(mt) = i.matching {
-            matching_claims(mt, m.t0_3d, &mut out);
-        }
-    }
+    let mut out = stick_claims(i);
     // The shifts by multiples of ln γ and the singular-limit picture are derived for
     // f = ln v; for other friction laws the scan's data are reported without verdicts.
     if i.params.friction == Friction::Log {
