@@ -25,6 +25,7 @@ use super::events;
 use crate::integrate::{ErrorKind, Integrator, SolverError, Task};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::Variational;
+use nalgebra::{Matrix2, Matrix3};
 
 /// The `tout` of every one-step call, past any time a map reaches.
 const HORIZON: f64 = 1e6;
@@ -44,10 +45,10 @@ pub struct Return {
     /// ∂end/∂start along the flow (rows: component of the end state, columns: of the start),
     /// at fixed time; the monodromy matrix when the orbit is periodic. The product of the
     /// segments' fundamental matrices (see the module docs).
-    pub fundamental: [[f64; 3]; 3],
+    pub fundamental: Matrix3<f64>,
     /// The linearised map from the start's section coordinates (u, θ) to the end's: the
     /// product of the segments' section Jacobians.
-    pub section_jacobian: [[f64; 2]; 2],
+    pub section_jacobian: Matrix2<f64>,
     /// Time from the start to the v maximum.
     pub t_peak: f64,
     /// State at the v maximum.
@@ -114,8 +115,8 @@ pub fn flow_to_section(
     let mut rise_rate: f64 = 0.0;
     let mut ln_v_min = start[W];
     let cut_level = 0.5 * drr.params().gamma.ln();
-    let mut fundamental = IDENTITY3;
-    let mut section_jacobian = [[1.0, 0.0], [0.0, 1.0]];
+    let mut fundamental = Matrix3::identity();
+    let mut section_jacobian = Matrix2::identity();
     // Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.
     let mut cuts = 0u8;
     loop {
@@ -153,15 +154,15 @@ pub fn flow_to_section(
             let t = events::refine(integ, span, 0, W, 0.0).map_err(with_context)?;
             let z = integ.dense(t, 0).map_err(with_context)?.to_vec();
             let velocity = first3(integ.dense(t, 1).map_err(with_context)?);
-            let phi = Variational::<Drr, 3>::matrix(&z);
+            let phi = fundamental_of(&z);
             let (t_peak, peak) = peak.unwrap_or((elapsed + t, first3(&z)));
             return Ok(Return {
                 start,
                 period: elapsed + t,
                 end: first3(&z),
                 velocity,
-                fundamental: mul3(&phi, &fundamental),
-                section_jacobian: mul2(&section_map(&phi, &velocity), &section_jacobian),
+                fundamental: phi * fundamental,
+                section_jacobian: section_map(&phi, &velocity) * section_jacobian,
                 t_peak,
                 peak,
                 ln_v_min,
@@ -202,9 +203,9 @@ pub fn flow_to_section(
             None => None,
         };
         if let Some((t, z, velocity)) = cut {
-            let phi = Variational::<Drr, 3>::matrix(&z);
-            fundamental = mul3(&phi, &fundamental);
-            section_jacobian = mul2(&section_map(&phi, &velocity), &section_jacobian);
+            let phi = fundamental_of(&z);
+            fundamental = phi * fundamental;
+            section_jacobian = section_map(&phi, &velocity) * section_jacobian;
             let y = first3(&z);
             integ.reinit(0.0, &Variational::<Drr, 3>::initial(&y)).map_err(with_context)?;
             elapsed += t;
@@ -222,39 +223,17 @@ pub fn flow_to_section(
     }
 }
 
-const IDENTITY3: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+/// Φ from an augmented state of the variational equations.
+fn fundamental_of(z: &[f64]) -> Matrix3<f64> {
+    let phi = Variational::<Drr, 3>::matrix(z);
+    Matrix3::from_fn(|r, c| phi[r][c])
+}
 
 /// The linearised map between two sections w = const, in section coordinates (u, θ), from
 /// the fixed-time fundamental matrix Φ of the segment and the velocity f at its end:
 /// [Φ − f (e_wᵀ Φ)/f_w] restricted to rows and columns u, θ (the crossing time varies with
 /// the start; its derivative is the w row of Φ over the crossing speed).
-fn section_map(phi: &[[f64; 3]; 3], f: &[f64; 3]) -> [[f64; 2]; 2] {
+fn section_map(phi: &Matrix3<f64>, f: &[f64; 3]) -> Matrix2<f64> {
     let idx = [U, THETA];
-    let mut dp = [[0.0; 2]; 2];
-    for (i, &row) in idx.iter().enumerate() {
-        for (j, &col) in idx.iter().enumerate() {
-            dp[i][j] = phi[row][col] - f[row] * phi[W][col] / f[W];
-        }
-    }
-    dp
-}
-
-fn mul2(a: &[[f64; 2]; 2], b: &[[f64; 2]; 2]) -> [[f64; 2]; 2] {
-    let mut c = [[0.0; 2]; 2];
-    for (i, row) in c.iter_mut().enumerate() {
-        for (j, entry) in row.iter_mut().enumerate() {
-            *entry = a[i][0] * b[0][j] + a[i][1] * b[1][j];
-        }
-    }
-    c
-}
-
-fn mul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let mut c = [[0.0; 3]; 3];
-    for (i, row) in c.iter_mut().enumerate() {
-        for (j, entry) in row.iter_mut().enumerate() {
-            *entry = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    c
+    Matrix2::from_fn(|i, j| phi[(idx[i], idx[j])] - f[idx[i]] * phi[(W, idx[j])] / f[W])
 }

@@ -215,12 +215,9 @@ fn returns(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], count: usize, lim
     Ok(out)
 }
 
-fn mat2(m: [[f64; 2]; 2]) -> Matrix2<f64> {
-    Matrix2::new(m[0][0], m[0][1], m[1][0], m[1][1])
-}
-
-fn mat3(m: &[[f64; 3]; 3]) -> Matrix3<f64> {
-    Matrix3::from_fn(|r, c| m[r][c])
+/// The linearised Poincaré map over the returns: the product of their section Jacobians.
+fn map_jacobian(rs: &[Return]) -> Matrix2<f64> {
+    rs.iter().fold(Matrix2::identity(), |acc, r| r.section_jacobian * acc)
 }
 
 /// The eigenvalue of the fixed-time monodromy matrix closest to 1 (the trivial multiplier).
@@ -240,8 +237,8 @@ fn section_multipliers(dp: &Matrix2<f64>) -> Vec<Multiplier> {
 }
 
 fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> Orbit {
-    let monodromy = rs.iter().fold(Matrix3::identity(), |acc, r| mat3(&r.fundamental) * acc);
-    let dp = rs.iter().fold(Matrix2::identity(), |acc, r| mat2(r.section_jacobian) * acc);
+    let monodromy = rs.iter().fold(Matrix3::identity(), |acc, r| r.fundamental * acc);
+    let dp = map_jacobian(rs);
     let trivial = trivial_multiplier(&monodromy);
     let trivial_multiplier_error = (trivial.re - 1.0).hypot(trivial.im);
     let mut mu = section_multipliers(&dp);
@@ -313,7 +310,7 @@ pub fn newton(
             let why = format!("Newton did not converge in {} iterations (residual {res:.3e})", settings.max_iterations);
             return Ok(Newton { orbit: Err(why), iterations });
         }
-        let dp = rs.iter().fold(Matrix2::identity(), |acc, ret| mat2(ret.section_jacobian) * acc);
+        let dp = map_jacobian(&rs);
         let Some(delta) = (dp - Matrix2::identity()).lu().solve(&nalgebra::Vector2::new(-r[0], -r[1])) else {
             let why = "the linearised Poincaré map has a multiplier 1 (DP − I is singular): a bifurcation point".to_string();
             return Ok(Newton { orbit: Err(why), iterations });
@@ -356,7 +353,7 @@ pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits
 
 /// The flip eigenvector of the linearised Poincaré map (for a real multiplier μ < −1).
 fn flip_direction(rs: &[Return], mu: f64) -> [f64; 2] {
-    let dp = mat2(rs[0].section_jacobian);
+    let dp = rs[0].section_jacobian;
     // (DP − μI) e = 0: e ⟂ the first row (or the second, whichever is larger).
     let a = dp - Matrix2::identity() * mu;
     let (p, q) = if a.row(0).norm() >= a.row(1).norm() { (a[(0, 0)], a[(0, 1)]) } else { (a[(1, 0)], a[(1, 1)]) };

@@ -18,6 +18,8 @@ pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{Options, Tolerance};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
+#[cfg(test)]
+pub(crate) use problem::jacobian_against_differences;
 pub use radau5::Radau5;
 pub use rodas5p::Rodas5p;
 pub use stats::Stats;

@@ -122,3 +122,27 @@ impl std::fmt::Debug for Roots {
         f.debug_struct("Roots").field("count", &self.count).field("directions", &self.directions).finish()
     }
 }
+
+/// Test support: the system's analytic Jacobian beside central differences of its right-hand
+/// side at y, with step `step(y_col)` per column, as (row, col, analytic, difference).
+#[cfg(test)]
+pub(crate) fn jacobian_against_differences(system: &impl OdeSystem, y: &[f64], step: impl Fn(f64) -> f64) -> Vec<(usize, usize, f64, f64)> {
+    let n = system.dim();
+    let mut storage = vec![0.0; n * n];
+    let mut jac = JacobianMatrix::new(&mut storage, n);
+    system.jacobian(0.0, y, &mut jac);
+    let mut out = Vec::with_capacity(n * n);
+    for col in 0..n {
+        let h = step(y[col]);
+        let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+        yp[col] += h;
+        ym[col] -= h;
+        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+        system.rhs(0.0, &yp, &mut fp);
+        system.rhs(0.0, &ym, &mut fm);
+        for row in 0..n {
+            out.push((row, col, jac.get(row, col), (fp[row] - fm[row]) / (2.0 * h)));
+        }
+    }
+    out
+}

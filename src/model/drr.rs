@@ -186,6 +186,7 @@ impl ImexSystem for Drr {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::jacobian_against_differences;
 
     fn laws() -> [Friction; 3] {
         [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }]
@@ -196,22 +197,8 @@ mod tests {
         for friction in laws() {
             let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction });
             for y in [[0.3, -0.4, 0.2], [-1.0, 2.5, 0.7], [2.0, -3.0, -1.0]] {
-                let mut storage = [0.0; 9];
-                let mut jac = JacobianMatrix::new(&mut storage, 3);
-                drr.jacobian(0.0, &y, &mut jac);
-                for col in 0..3 {
-                    let h = 1e-6 * (1.0 + y[col].abs());
-                    let (mut yp, mut ym) = (y, y);
-                    yp[col] += h;
-                    ym[col] -= h;
-                    let (mut fp, mut fm) = ([0.0; 3], [0.0; 3]);
-                    drr.rhs(0.0, &yp, &mut fp);
-                    drr.rhs(0.0, &ym, &mut fm);
-                    for row in 0..3 {
-                        let fd = (fp[row] - fm[row]) / (2.0 * h);
-                        let exact = jac.get(row, col);
-                        assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} y={y:?} ({row},{col}): {exact} vs {fd}");
-                    }
+                for (row, col, exact, fd) in jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs())) {
+                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} y={y:?} ({row},{col}): {exact} vs {fd}");
                 }
             }
         }

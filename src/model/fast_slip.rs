@@ -78,6 +78,7 @@ impl OdeSystem for FastSlip {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::jacobian_against_differences;
     use crate::model::Drr;
 
     fn params(gamma: f64) -> DrrParams {
@@ -108,21 +109,8 @@ mod tests {
     fn jacobian_matches_central_differences() {
         let fast = FastSlip::new(&params(1.0)).unwrap();
         let z = [0.4, 1.3, -2.0];
-        let mut storage = [0.0; 9];
-        let mut jac = JacobianMatrix::new(&mut storage, 3);
-        fast.jacobian(0.0, &z, &mut jac);
-        for col in 0..3 {
-            let h = 1e-6;
-            let (mut zp, mut zm) = (z, z);
-            zp[col] += h;
-            zm[col] -= h;
-            let (mut fp, mut fm) = ([0.0; 3], [0.0; 3]);
-            fast.rhs(0.0, &zp, &mut fp);
-            fast.rhs(0.0, &zm, &mut fm);
-            for row in 0..3 {
-                let fd = (fp[row] - fm[row]) / (2.0 * h);
-                assert!((fd - jac.get(row, col)).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
-            }
+        for (row, col, exact, fd) in jacobian_against_differences(&fast, &z, |_| 1e-6) {
+            assert!((fd - exact).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
         }
     }
 }

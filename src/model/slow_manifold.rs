@@ -141,6 +141,7 @@ pub fn phi(xi: f64, epsilon: f64, c: f64, u: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::jacobian_against_differences;
     use crate::model::Friction;
 
     fn flow(friction: Friction) -> SlowFlow {
@@ -152,22 +153,8 @@ mod tests {
         for friction in [Friction::Log, Friction::Power { alpha: 0.15 }, Friction::Asinh] {
             let f = flow(friction);
             for y in [[0.0, 0.3, -1.2], [1.0, -1.0, 0.4], [2.0, 2.0, -4.5]] {
-                let mut storage = [0.0; 9];
-                let mut jac = JacobianMatrix::new(&mut storage, 3);
-                f.jacobian(0.0, &y, &mut jac);
-                for col in 0..3 {
-                    let h = 1e-6 * (1.0 + y[col].abs());
-                    let (mut yp, mut ym) = (y, y);
-                    yp[col] += h;
-                    ym[col] -= h;
-                    let (mut fp, mut fm) = ([0.0; 3], [0.0; 3]);
-                    f.rhs(0.0, &yp, &mut fp);
-                    f.rhs(0.0, &ym, &mut fm);
-                    for row in 0..3 {
-                        let fd = (fp[row] - fm[row]) / (2.0 * h);
-                        let exact = jac.get(row, col);
-                        assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} {y:?} ({row},{col}): {exact} vs {fd}");
-                    }
+                for (row, col, exact, fd) in jacobian_against_differences(&f, &y, |x| 1e-6 * (1.0 + x.abs())) {
+                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} {y:?} ({row},{col}): {exact} vs {fd}");
                 }
             }
         }

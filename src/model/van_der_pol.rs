@@ -69,25 +69,14 @@ impl OdeSystem for VanDerPol {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::jacobian_against_differences;
 
     #[test]
     fn jacobian_matches_central_differences() {
         let m = VanDerPol::new(VanDerPolParams { beta: 3.0, a: 0.4 });
         for z in [[1.5, 0.2], [-0.7, 0.6], [2.1, -0.66]] {
-            let mut storage = [0.0; 4];
-            let mut jac = JacobianMatrix::new(&mut storage, 2);
-            m.jacobian(0.0, &z, &mut jac);
-            for col in 0..2 {
-                let (mut zp, mut zm) = (z, z);
-                zp[col] += 1e-6;
-                zm[col] -= 1e-6;
-                let (mut fp, mut fm) = ([0.0; 2], [0.0; 2]);
-                m.rhs(0.0, &zp, &mut fp);
-                m.rhs(0.0, &zm, &mut fm);
-                for row in 0..2 {
-                    let fd = (fp[row] - fm[row]) / 2e-6;
-                    assert!((fd - jac.get(row, col)).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
-                }
+            for (row, col, exact, fd) in jacobian_against_differences(&m, &z, |_| 1e-6) {
+                assert!((fd - exact).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
             }
         }
     }

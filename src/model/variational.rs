@@ -66,17 +66,15 @@ impl<S: OdeSystem, const N: usize> Variational<S, N> {
     }
 
     fn jac(&self, t: f64, y: &[f64]) -> [[f64; N]; N] {
-        // Column-major storage: columns[col][row].
         let mut columns = [[0.0; N]; N];
         self.system.jacobian(t, y, &mut JacobianMatrix::new(columns.as_flattened_mut(), N));
-        let mut j = [[0.0; N]; N];
-        for (row, r) in j.iter_mut().enumerate() {
-            for (col, entry) in r.iter_mut().enumerate() {
-                *entry = columns[col][row];
-            }
-        }
-        j
+        transpose(columns)
     }
+}
+
+/// Rows from column-major storage (columns[col][row]), as JacobianMatrix fills it.
+fn transpose<const N: usize>(columns: [[f64; N]; N]) -> [[f64; N]; N] {
+    std::array::from_fn(|row| std::array::from_fn(|col| columns[col][row]))
 }
 
 impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
@@ -118,13 +116,7 @@ impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
             let dj = if self.system.has_jacobian_derivative() {
                 let mut columns = [[0.0; N]; N];
                 self.system.jacobian_derivative(t, y, k, &mut JacobianMatrix::new(columns.as_flattened_mut(), N));
-                let mut dj = [[0.0; N]; N];
-                for (row, r) in dj.iter_mut().enumerate() {
-                    for (col, entry) in r.iter_mut().enumerate() {
-                        *entry = columns[col][row];
-                    }
-                }
-                dj
+                transpose(columns)
             } else {
                 let h = 1e-5 * (1.0 + y[k].abs());
                 yk[k] = y[k] + h;
@@ -181,33 +173,19 @@ impl<S: ImexSystem, const N: usize> ImexSystem for Variational<S, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::jacobian_against_differences;
     use crate::model::{Drr, DrrParams, Friction};
 
     #[test]
     fn augmented_jacobian_matches_central_differences() {
         let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction: Friction::Log });
         let var = Variational::<_, 3>::new(drr);
-        let n = var.dim();
         let mut z = Variational::<Drr, 3>::initial(&[0.3, -0.4, 0.2]);
         for (i, v) in z.iter_mut().enumerate().skip(3) {
             *v += 0.1 * (i as f64).sin();
         }
-        let mut storage = vec![0.0; n * n];
-        let mut jac = JacobianMatrix::new(&mut storage, n);
-        var.jacobian(0.0, &z, &mut jac);
-        for col in 0..n {
-            let h = 1e-6 * (1.0 + z[col].abs());
-            let (mut zp, mut zm) = (z.clone(), z.clone());
-            zp[col] += h;
-            zm[col] -= h;
-            let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-            var.rhs(0.0, &zp, &mut fp);
-            var.rhs(0.0, &zm, &mut fm);
-            for row in 0..n {
-                let fd = (fp[row] - fm[row]) / (2.0 * h);
-                let exact = jac.get(row, col);
-                assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "({row},{col}): {exact} vs {fd}");
-            }
+        for (row, col, exact, fd) in jacobian_against_differences(&var, &z, |x| 1e-6 * (1.0 + x.abs())) {
+            assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "({row},{col}): {exact} vs {fd}");
         }
     }
 }
