@@ -188,10 +188,6 @@ fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationS
     }
 }
 
-fn flip_real(orbit: &Orbit) -> Option<f64> {
-    orbit.nontrivial().iter().find(|m| m.im.abs() <= 1e-9 * m.modulus.max(1e-300) && m.re < 0.0).map(|m| m.re)
-}
-
 /// Runs the continuation from `start`, the orbit at the scene's parameters `base`.
 pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: &ContinuationSettings) -> ContinuationReport {
     let par = settings.parameter;
@@ -233,7 +229,7 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: 
                 Ok(orbit) => {
                     substeps += 1;
                     let quick = orbit.newton_iterations <= 3;
-                    if let (Some(a), Some(b)) = (flip_real(&last), flip_real(&orbit)) {
+                    if let (Some(a), Some(b)) = (last.negative_real_multiplier(), orbit.negative_real_multiplier()) {
                         // Both near −1 (multipliers ~0 at large γ are noise, not a flip).
                         if (a + 1.0).signum() != (b + 1.0).signum() && a.abs().min(b.abs()) > 0.5 {
                             flips.push(Flip { from: from_coordinate(current.0), to: value });

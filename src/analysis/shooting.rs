@@ -118,6 +118,11 @@ impl Orbit {
     pub fn nontrivial(&self) -> &[Multiplier] {
         &self.multipliers[1..]
     }
+
+    /// The largest non-trivial multiplier that is real and negative (the one that can flip).
+    pub fn negative_real_multiplier(&self) -> Option<f64> {
+        self.nontrivial().iter().find(|m| m.im.abs() <= 1e-9 * m.modulus && m.re < 0.0).map(|m| m.re)
+    }
 }
 
 /// One Newton iteration.
@@ -386,7 +391,7 @@ pub fn analyse(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], settings: &S
 
 /// The flip multiplier of an orbit, if a non-trivial real one is below −1.
 pub fn flip_multiplier(orbit: &Orbit) -> Option<f64> {
-    orbit.nontrivial().iter().find(|m| m.im.abs() <= 1e-9 * m.modulus && m.re < -1.0).map(|m| m.re)
+    orbit.negative_real_multiplier().filter(|&mu| mu < -1.0)
 }
 
 fn period_doubling(
