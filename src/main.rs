@@ -396,20 +396,30 @@ fn stress_command(quick: bool, json: bool, threads: Option<usize>, table: Option
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
     } else {
         println!(
-            "stress: {} cells in {seconds:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent",
+            "stress: {} cells in {seconds:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent; \
+             physical region {} of {} converged",
             summary.cells,
             summary.ok,
             summary.typed_errors,
             summary.panics,
             summary.nan,
-            summary.inconsistent
+            summary.inconsistent,
+            summary.physical_ok,
+            summary.physical
         );
+        for (reason, (n, errors)) in &summary.limits {
+            println!("  expected limit ({n} cells, {errors} typed errors): {reason}");
+        }
         for d in &summary.defects {
             println!("  DEFECT {d}");
         }
-        // A cell passes when it ends in a finite report or a typed error.
-        let failed = summary.panics + summary.nan + summary.inconsistent;
-        println!("stress: {} passed, {} failed", summary.cells - summary.panics - summary.nan, failed);
+        // A physical cell passes only with a converged cycle, a below-threshold one only
+        // without a cycle or error, any other cell with a finite report or a typed error.
+        let failed = summary.panics + summary.nan + summary.physical_failures + summary.decay_failures;
+        println!("stress: {} passed, {} failed", summary.cells - failed, failed);
+        if summary.inconsistent > 0 {
+            println!("stress: {} parameter points where methods disagree on the period", summary.inconsistent);
+        }
     }
     if summary.defects.is_empty() {
         Ok(())

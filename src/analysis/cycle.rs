@@ -31,7 +31,7 @@
 //! means the oscillation died out.
 
 use super::events::{self, Knot};
-use crate::integrate::{ErrorKind, Integrator, OdeSystem, SolverError, Task};
+use crate::integrate::{Clock, ErrorKind, Integrator, OdeSystem, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use serde::Serialize;
 
@@ -204,9 +204,6 @@ impl TrajectoryCycle {
     }
 }
 
-/// The `tout` of every one-step call, past any time a segment reaches.
-const HORIZON: f64 = 1e6;
-
 /// One step end: local time, state and the interpolant's derivative.
 #[derive(Debug, Clone, Copy)]
 struct Sample {
@@ -218,8 +215,8 @@ struct Sample {
 /// The cycle being accumulated, in the frame "time since its upward crossing of v = 1".
 #[derive(Debug, Clone)]
 struct OpenCycle {
-    /// Time since the upward crossing at local t = 0 of the current integration segment.
-    origin: f64,
+    /// Global time of its upward crossing of v = 1.
+    up: Time,
     u_start: f64,
     peak: Option<(f64, [f64; 3])>,
     half_rise: Option<f64>,
@@ -245,7 +242,7 @@ enum Event {
 
 /// The brute-force cycle finder.
 struct Tracker<'a> {
-    integ: &'a mut dyn Integrator,
+    clock: Clock<'a>,
     drr: &'a Drr,
     settings: &'a CycleSettings,
     prev: Sample,
@@ -254,8 +251,6 @@ struct Tracker<'a> {
     trajectories: Vec<TrajectoryCycle>,
     /// Step ends of w since its last minimum (local times of the current segment).
     rise: Vec<Knot>,
-    /// Time integrated in completed segments.
-    elapsed: f64,
     /// The clock is too coarse for the coming slip: re-base once off the manifold.
     rebase_in_rise: bool,
     /// Largest |dw/dt| since the last minimum of w.
@@ -273,17 +268,17 @@ fn first_sample(drr: &Drr, t: f64, y: [f64; 3]) -> Sample {
 impl<'a> Tracker<'a> {
     fn failure(&self, kind: ErrorKind, message: String) -> SolverError {
         SolverError {
-            solver: self.integ.name(),
+            solver: self.clock.name(),
             kind,
-            t: self.integ.t(),
-            state: self.integ.state().to_vec(),
+            t: self.clock.now().to_f64(),
+            state: self.clock.state().to_vec(),
             flag: 0,
             message,
         }
     }
 
     fn state_at(&mut self, t: f64) -> Result<[f64; 3], SolverError> {
-        let y = self.integ.dense(t, 0)?;
+        let y = self.clock.integrator().dense(t, 0)?;
         Ok([y[0], y[1], y[2]])
     }
 
@@ -292,27 +287,27 @@ impl<'a> Tracker<'a> {
         let (p, span) = (self.prev, (self.prev.t, next.t));
         let mut found = Vec::new();
         if p.y[W] < 0.0 && next.y[W] >= 0.0 {
-            found.push((events::refine(self.integ, span, 0, W, 0.0)?, Event::Up));
+            found.push((events::refine(self.clock.integrator(), span, 0, W, 0.0)?, Event::Up));
         }
         if p.y[W] >= 0.0 && next.y[W] < 0.0 {
-            found.push((events::refine(self.integ, span, 0, W, 0.0)?, Event::Down));
+            found.push((events::refine(self.clock.integrator(), span, 0, W, 0.0)?, Event::Down));
         }
         if p.d[W] > 0.0 && next.d[W] <= 0.0 {
-            found.push((events::refine(self.integ, span, 1, W, 0.0)?, Event::MaxW));
+            found.push((events::refine(self.clock.integrator(), span, 1, W, 0.0)?, Event::MaxW));
         }
         if p.d[W] < 0.0 && next.d[W] >= 0.0 {
-            found.push((events::refine(self.integ, span, 1, W, 0.0)?, Event::MinW));
+            found.push((events::refine(self.clock.integrator(), span, 1, W, 0.0)?, Event::MinW));
         }
         for i in [U, THETA] {
             if (p.d[i] > 0.0) != (next.d[i] > 0.0) {
-                found.push((events::refine(self.integ, span, 1, i, 0.0)?, Event::Extremum(i)));
+                found.push((events::refine(self.clock.integrator(), span, 1, i, 0.0)?, Event::Extremum(i)));
             }
         }
         if let Some(c) = &self.open {
             if let (Some(_), None) = (c.peak, c.half_fall) {
                 let level = c.w_max - std::f64::consts::LN_2;
                 if p.y[W] >= level && next.y[W] < level {
-                    found.push((events::refine(self.integ, span, 0, W, level)?, Event::HalfFall));
+                    found.push((events::refine(self.clock.integrator(), span, 0, W, level)?, Event::HalfFall));
                 }
             }
         }
@@ -332,7 +327,7 @@ impl<'a> Tracker<'a> {
     fn record(&mut self, t_local: f64, y: &[f64; 3]) {
         if let Some(c) = &mut self.open {
             if let Some(tr) = &mut c.trajectory {
-                tr.push(c.origin + t_local, y);
+                tr.push(self.clock.global(t_local).since(c.up), y);
             }
         }
     }
@@ -346,11 +341,11 @@ impl<'a> Tracker<'a> {
         match event {
             Event::Up => {
                 if let Some(c) = self.open.take() {
-                    let period = c.origin + t;
+                    let period = self.clock.global(t).since(c.up);
                     self.close(c, period);
                 }
                 let mut c = OpenCycle {
-                    origin: -t,
+                    up: self.clock.global(t),
                     u_start: y[U],
                     peak: None,
                     half_rise: None,
@@ -372,7 +367,7 @@ impl<'a> Tracker<'a> {
             Event::Down => {
                 if let Some(c) = &mut self.open {
                     if c.down.is_none() {
-                        c.down = Some((c.origin + t, y[U]));
+                        c.down = Some((self.clock.global(t).since(c.up), y[U]));
                     }
                 }
             }
@@ -393,18 +388,18 @@ impl<'a> Tracker<'a> {
                 if y[W] <= 0.0 || c.peak.is_some_and(|(_, p)| y[W] <= p[W]) {
                     return Ok(false);
                 }
-                c.peak = Some((c.origin + t, y));
+                c.peak = Some((self.clock.global(t).since(c.up), y));
                 let level = y[W] - std::f64::consts::LN_2;
                 let mut knots: Vec<Knot> = self.rise.iter().copied().filter(|k| k.t < t).collect();
                 knots.push(Knot { t, x: y[W], dx: 0.0 });
-                c.half_rise = events::last_upward_crossing(&knots, level).map(|tr| c.origin + tr);
+                c.half_rise = events::last_upward_crossing(&knots, level).map(|tr| self.clock.global(tr).since(c.up));
                 c.half_fall = None;
                 self.rebase_in_rise = false;
                 return Ok(true);
             }
             Event::HalfFall => {
                 if let Some(c) = &mut self.open {
-                    c.half_fall = Some(c.origin + t);
+                    c.half_fall = Some(self.clock.global(t).since(c.up));
                 }
             }
             Event::Extremum(_) => {}
@@ -451,11 +446,13 @@ impl<'a> Tracker<'a> {
     fn half_fall_in_peak_step(&mut self, next: &Sample) -> Result<(), SolverError> {
         let Some(c) = &self.open else { return Ok(()) };
         let (Some((t_peak, y_peak)), None) = (c.peak, c.half_fall) else { return Ok(()) };
-        let (t_local, level) = (t_peak - c.origin, y_peak[W] - std::f64::consts::LN_2);
+        let (up, level) = (c.up, y_peak[W] - std::f64::consts::LN_2);
+        let t_local = t_peak - self.clock.global(0.0).since(up);
         if next.y[W] < level && t_local < next.t {
-            let t = events::refine(self.integ, (t_local, next.t), 0, W, level)?;
+            let t = events::refine(self.clock.integrator(), (t_local, next.t), 0, W, level)?;
+            let half_fall = self.clock.global(t).since(up);
             if let Some(c) = &mut self.open {
-                c.half_fall = Some(c.origin + t);
+                c.half_fall = Some(half_fall);
             }
         }
         Ok(())
@@ -465,31 +462,34 @@ impl<'a> Tracker<'a> {
         restart_safe(self.drr, self.settings.w_tolerance, y, rate)
     }
 
-    /// Re-bases time at the step end `at` (a point the integrator computed, never an
+    /// Re-bases time at the current step end (a point the integrator computed, never an
     /// interpolated one: on the slow manifold an interpolation error δ in G would start an
-    /// artificial layer with dw/dt ~ γ²δ). Times of the open cycle and of the rise buffer move
-    /// into the new frame.
-    fn restart(&mut self, at: Sample) -> Result<(), SolverError> {
-        self.integ.reinit(0.0, &at.y)?;
-        self.elapsed += at.t;
-        if let Some(c) = &mut self.open {
-            c.origin += at.t;
-        }
-        for knot in &mut self.rise {
-            knot.t -= at.t;
-        }
-        self.prev = Sample { t: 0.0, ..at };
+    /// artificial layer with dw/dt ~ γ²δ).
+    fn restart(&mut self) -> Result<(), SolverError> {
+        let shift = self.clock.rebase()?;
+        self.shifted(shift);
         Ok(())
     }
 
+    /// The clock's origin moved to the current point, `shift` later: local times of the rise
+    /// buffer and of the last sample move into the new frame.
+    fn shifted(&mut self, shift: f64) {
+        for knot in &mut self.rise {
+            knot.t -= shift;
+        }
+        self.prev.t -= shift;
+    }
+
     fn step(&mut self) -> Result<(), SolverError> {
-        // CVODE sizes its first step after a restart from |tout − t|: a fixed horizon keeps
-        // the integration independent of the stopping rules (max_time).
-        let step = self.integ.advance(self.prev.t + HORIZON, Task::OneStep)?;
+        let step = self.clock.step()?;
+        if step.start != self.prev.t {
+            // The clock re-based before this step (its last step fell below its threshold).
+            self.shifted(self.prev.t - step.start);
+        }
         self.steps += 1;
-        let y = self.integ.state();
+        let y = self.clock.state();
         let y = [y[0], y[1], y[2]];
-        let d = self.integ.dense(step.t, 1)?;
+        let d = self.clock.integrator().dense(step.t, 1)?;
         let next = Sample { t: step.t, y, d: [d[0], d[1], d[2]] };
         if y.iter().chain(&next.d).any(|v| !v.is_finite()) {
             return Err(self.failure(ErrorKind::RhsFailure, "the state or its derivative became non-finite".into()));
@@ -518,12 +518,11 @@ impl<'a> Tracker<'a> {
                 self.rise.push(Knot { t: next.t, x: y[W], dx: next.d[W] });
             }
         }
+        self.prev = next;
         if rebase {
-            self.restart(next)
-        } else {
-            self.prev = next;
-            Ok(())
+            self.restart()?;
         }
+        Ok(())
     }
 }
 
@@ -642,8 +641,9 @@ pub fn analyse(
 ) -> Result<CycleReport, SolverError> {
     let y = integ.state();
     let start = first_sample(drr, integ.t(), [y[0], y[1], y[2]]);
+    let t_start = Time::new(integ.t());
     let mut tracker = Tracker {
-        integ,
+        clock: Clock::new(integ, t_start),
         drr,
         settings,
         prev: start,
@@ -651,7 +651,6 @@ pub fn analyse(
         closed: Vec::new(),
         trajectories: Vec::new(),
         rise: Vec::new(),
-        elapsed: 0.0,
         rebase_in_rise: false,
         rise_rate: 0.0,
         steps: 0,
@@ -659,17 +658,14 @@ pub fn analyse(
     let fixed = drr.fixed_point();
     let mut seen = 0;
     let outcome = loop {
-        if let Err(mut e) = tracker.step() {
-            e.t += tracker.elapsed;
-            return Err(e);
+        if let Err(e) = tracker.step() {
+            return Err(tracker.clock.at_global(e));
         }
         if tracker.steps > settings.max_steps {
             let message = format!("{} steps without settling on a cycle (cycle.max_steps)", settings.max_steps);
-            let mut e = tracker.failure(ErrorKind::TooMuchWork, message);
-            e.t += tracker.elapsed;
-            return Err(e);
+            return Err(tracker.failure(ErrorKind::TooMuchWork, message));
         }
-        let time = tracker.elapsed + tracker.integ.t();
+        let time = tracker.clock.now().since(t_start);
         if tracker.closed.len() > seen {
             seen = tracker.closed.len();
             if decaying(&tracker.closed, settings, linearly_stable) {
@@ -684,7 +680,7 @@ pub fn analyse(
         }
         let out_of_time = time >= settings.max_time;
         if linearly_stable && (out_of_time || tracker.steps.is_multiple_of(256)) {
-            let y = tracker.integ.state();
+            let y = tracker.clock.state();
             let near = (0..3).all(|i| (y[i] - fixed[i]).abs() < 1e-10 * (1.0 + fixed[i].abs()));
             if near {
                 break CycleStatus::FixedPoint;
@@ -694,7 +690,7 @@ pub fn analyse(
             break CycleStatus::NotConverged;
         }
     };
-    let time_integrated = tracker.elapsed + tracker.integ.t();
+    let time_integrated = tracker.clock.now().since(t_start);
     let closed = tracker.closed;
     let n = periodicity(&closed, settings).filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
     let (values, spread, orbit, used) = match (outcome, n) {

@@ -22,13 +22,10 @@
 
 use super::cycle::restart_safe;
 use super::events;
-use crate::integrate::{ErrorKind, Integrator, SolverError, Task};
+use crate::integrate::{Clock, ErrorKind, Integrator, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::Variational;
 use nalgebra::{Matrix2, Matrix3};
-
-/// The `tout` of every one-step call, past any time a map reaches.
-const HORIZON: f64 = 1e6;
 
 /// The flow from one point of the section to its next upward crossing of v = 1.
 #[derive(Debug, Clone, PartialEq)]
@@ -94,18 +91,26 @@ pub fn flow_to_section(
     limits: &Limits,
 ) -> Result<Return, SolverError> {
     integ.reinit(0.0, &Variational::<Drr, 3>::initial(&start))?;
-    let failure = |integ: &dyn Integrator, elapsed: f64, kind, message: String| SolverError {
-        solver: integ.name(),
+    // Global time 0 at the start; the clock re-bases when its steps outrun it.
+    let mut clock = Clock::new(integ, Time::new(0.0));
+    let failure = |clock: &Clock, kind, message: String| SolverError {
+        solver: clock.name(),
         kind,
-        t: elapsed + integ.t(),
-        state: integ.state()[..3].to_vec(),
+        t: clock.now().to_f64(),
+        state: clock.state()[..3].to_vec(),
         flag: 0,
         message,
+    };
+    // A failure of the integrator: the global time, the state without Φ.
+    let with_context = |clock: &Clock, e: SolverError| {
+        let mut e = clock.at_global(e);
+        e.state.truncate(3);
+        e
     };
     let mut d0 = [0.0; 3];
     crate::integrate::OdeSystem::rhs(drr, 0.0, &start, &mut d0);
     let mut prev = Sample { t: 0.0, y: start, d: d0 };
-    let (mut elapsed, mut steps) = (0.0, 0u64);
+    let mut steps = 0u64;
     // Sub-threshold noise at the start (w = 0 exactly, G ≠ 0 at large γ) must not count as a
     // turn: the return needs a v maximum above the noise floor, then a downward crossing.
     let floor = 1e-9f64.max(1e3 * (limits.w_tolerance.0 + limits.w_tolerance.1));
@@ -120,45 +125,41 @@ pub fn flow_to_section(
     // Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.
     let mut cuts = 0u8;
     loop {
-        let with_context = |mut e: SolverError| {
-            e.t += elapsed;
-            e.state.truncate(3);
-            e
-        };
-        let step = integ.advance(prev.t + HORIZON, Task::OneStep).map_err(with_context)?;
+        let step = clock.step().map_err(|e| with_context(&clock, e))?;
+        prev.t = step.start;
         steps += 1;
-        let y = first3(integ.state());
-        let d = first3(integ.dense(step.t, 1).map_err(with_context)?);
+        let y = first3(clock.state());
+        let d = first3(&clock.integrator().dense(step.t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
         let next = Sample { t: step.t, y, d };
-        if integ.state().iter().chain(&d).any(|v| !v.is_finite()) {
-            return Err(failure(integ, elapsed, ErrorKind::RhsFailure, "the state, Φ or dy/dt became non-finite".into()));
+        if clock.state().iter().chain(&d).any(|v| !v.is_finite()) {
+            return Err(failure(&clock, ErrorKind::RhsFailure, "the state, Φ or dy/dt became non-finite".into()));
         }
         rise_rate = rise_rate.max(d[W].abs());
         ln_v_min = ln_v_min.min(y[W]);
         let span = (prev.t, next.t);
         if prev.d[W] > 0.0 && next.d[W] <= 0.0 {
-            let t = events::refine(integ, span, 1, W, 0.0).map_err(with_context)?;
-            let yp = first3(integ.dense(t, 0).map_err(with_context)?);
+            let t = events::refine(clock.integrator(), span, 1, W, 0.0).map_err(|e| with_context(&clock, e))?;
+            let yp = first3(&clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
             if yp[W] > floor && peak.is_none_or(|(_, p)| yp[W] > p[W]) {
-                peak = Some((elapsed + t, yp));
+                peak = Some((clock.global(t).to_f64(), yp));
                 rebase_pending = true;
             }
         }
         if prev.d[W] < 0.0 && next.d[W] >= 0.0 {
-            let t = events::refine(integ, span, 1, W, 0.0).map_err(with_context)?;
-            ln_v_min = ln_v_min.min(integ.dense(t, 0).map_err(with_context)?[W]);
+            let t = events::refine(clock.integrator(), span, 1, W, 0.0).map_err(|e| with_context(&clock, e))?;
+            ln_v_min = ln_v_min.min(clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?[W]);
         }
         if peak.is_some() && prev.y[W] >= 0.0 && next.y[W] < 0.0 {
             down_seen = true;
         } else if down_seen && prev.y[W] < 0.0 && next.y[W] >= 0.0 {
-            let t = events::refine(integ, span, 0, W, 0.0).map_err(with_context)?;
-            let z = integ.dense(t, 0).map_err(with_context)?.to_vec();
-            let velocity = first3(integ.dense(t, 1).map_err(with_context)?);
+            let t = events::refine(clock.integrator(), span, 0, W, 0.0).map_err(|e| with_context(&clock, e))?;
+            let z = clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?;
+            let velocity = first3(&clock.integrator().dense(t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
             let phi = fundamental_of(&z);
-            let (t_peak, peak) = peak.unwrap_or((elapsed + t, first3(&z)));
+            let (t_peak, peak) = peak.unwrap_or((clock.global(t).to_f64(), first3(&z)));
             return Ok(Return {
                 start,
-                period: elapsed + t,
+                period: clock.global(t).to_f64(),
                 end: first3(&z),
                 velocity,
                 fundamental: phi * fundamental,
@@ -169,12 +170,12 @@ pub fn flow_to_section(
                 steps,
             });
         }
-        if elapsed + next.t > limits.max_time || steps > limits.max_steps {
+        if clock.global(next.t).to_f64() > limits.max_time || steps > limits.max_steps {
             let message = format!(
                 "no return to the section v = 1 within t = {:e} and {} steps (the orbit may have decayed to the fixed point)",
                 limits.max_time, limits.max_steps
             );
-            return Err(failure(integ, elapsed, ErrorKind::TooMuchWork, message));
+            return Err(failure(&clock, ErrorKind::TooMuchWork, message));
         }
         // A cut: the first crossing in this step of w = ½ ln γ (either way) or of w = 0
         // downward (the latter only once a v maximum has been seen).
@@ -194,9 +195,9 @@ pub fn flow_to_section(
         let cut = match hit {
             Some((level, count)) => {
                 cuts = count;
-                let t = events::refine(integ, span, 0, W, level).map_err(with_context)?;
-                let z = integ.dense(t, 0).map_err(with_context)?.to_vec();
-                let velocity = first3(integ.dense(t, 1).map_err(with_context)?);
+                let t = events::refine(clock.integrator(), span, 0, W, level).map_err(|e| with_context(&clock, e))?;
+                let z = clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?;
+                let velocity = first3(&clock.integrator().dense(t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
                 let y = first3(&z);
                 restart_safe(drr, limits.w_tolerance, &y, velocity[W].abs().max(rise_rate)).then_some((t, z, velocity))
             }
@@ -207,15 +208,13 @@ pub fn flow_to_section(
             fundamental = phi * fundamental;
             section_jacobian = section_map(&phi, &velocity) * section_jacobian;
             let y = first3(&z);
-            integ.reinit(0.0, &Variational::<Drr, 3>::initial(&y)).map_err(with_context)?;
-            elapsed += t;
+            let at = clock.global(t);
+            clock.reinit(at, &Variational::<Drr, 3>::initial(&y)).map_err(|e| with_context(&clock, e))?;
             rebase_pending = false;
             prev = Sample { t: 0.0, y, d: velocity };
         } else if rebase_pending && next.y[W] > 0.0 && restart_safe(drr, limits.w_tolerance, &y, rise_rate) {
             rebase_pending = false;
-            let z = integ.state().to_vec();
-            integ.reinit(0.0, &z).map_err(with_context)?;
-            elapsed += next.t;
+            clock.rebase().map_err(|e| with_context(&clock, e))?;
             prev = Sample { t: 0.0, ..next };
         } else {
             prev = next;

@@ -17,6 +17,22 @@ pub trait Integrator {
     fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError>;
     /// Restarts at (t0, y0).
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError>;
+    /// Moves the time origin to the last returned point: afterwards `t()` is 0 and the state
+    /// is unchanged. Methods that can keep their step size and history do (an exact time shift
+    /// for an autonomous system); by default the integrator restarts at (0, state), with
+    /// `first_step` as its first step if given (where the step in progress is known to be
+    /// right, e.g. deep inside a layer, and a fresh estimate from f is not). The dense output
+    /// of the last step is no longer available. Used by [`super::Clock`].
+    fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
+        let _ = first_step;
+        let y = self.state().to_vec();
+        self.reinit(0.0, &y)
+    }
+    /// Whether [`Integrator::rebase`] restarts the method (true by default) rather than
+    /// shifting its clock exactly.
+    fn rebase_restarts(&self) -> bool {
+        true
+    }
     /// Statistics over the integrator's life.
     fn stats(&self) -> Stats;
     /// Short name of the integrator family.

@@ -2,6 +2,7 @@
 //! homemade methods later): what a problem provides, which options a solver takes, the
 //! statistics it reports and the typed errors it returns.
 
+mod clock;
 mod error;
 mod extrapolation;
 mod integrator;
@@ -13,6 +14,7 @@ mod rodas5p;
 mod stats;
 mod stepper;
 
+pub use clock::{Clock, ClockStep, Time};
 pub use error::{ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;

@@ -236,6 +236,20 @@ impl Core {
     }
 }
 
+impl Core {
+    /// Moves the time origin to the last returned point, keeping the step size, the step
+    /// history and the method's own state: every time (internal point, last step start, stop
+    /// time) shifts by t_out, so the dense output of the last step stays valid in the new
+    /// frame. Exact for an autonomous system (after a one-step return, x = t_out becomes 0).
+    pub fn shift_origin(&mut self) {
+        let shift = self.t_out;
+        self.x -= shift;
+        self.xold -= shift;
+        self.t_out = 0.0;
+        self.stop_time = self.stop_time.map(|t| t - shift);
+    }
+}
+
 pub(super) fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -466,6 +480,13 @@ macro_rules! integrator_via_stepper {
             }
             fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
                 $T::reinit(self, t0, y0)
+            }
+            fn rebase(&mut self, _first_step: Option<f64>) -> Result<(), SolverError> {
+                self.core_mut().shift_origin();
+                Ok(())
+            }
+            fn rebase_restarts(&self) -> bool {
+                false
             }
             fn stats(&self) -> Stats {
                 self.core().stats

@@ -69,6 +69,10 @@ pub struct Solver<S> {
     shared: NonNull<Shared<S>>,
     t: f64,
     fail_on_step_underflow: bool,
+    /// The initial step of the options (0: SUNDIALS estimates it), restored by `reinit` after
+    /// a `rebase` started with the step in progress.
+    initial_step: f64,
+    rebased: bool,
     counters_before_reinit: Stats,
     reinits: u64,
     ctx: Context,
@@ -137,6 +141,8 @@ impl<S> Solver<S> {
             shared,
             t: t0,
             fail_on_step_underflow: options.fail_on_step_underflow,
+            initial_step: options.initial_step.unwrap_or(0.0),
+            rebased: false,
             counters_before_reinit: Stats::default(),
             reinits: 0,
             ctx,
@@ -404,6 +410,25 @@ impl<S> Solver<S> {
         }
         self.t = t0;
         self.reinits += 1;
+        if self.rebased {
+            self.rebased = false;
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
+            self.check(unsafe { (self.api.set_init_step)(self.mem.as_ptr(), self.initial_step) })?;
+        }
+        Ok(())
+    }
+
+    /// Moves the time origin to the last returned point (see [`Integrator::rebase`]): SUNDIALS
+    /// has no time shift, so the solver restarts at (0, state) (CVODE's BDF at order 1), with
+    /// `first_step` as its first step when given, else with its own estimate.
+    pub fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
+        let y = self.state().to_vec();
+        self.reinit(0.0, &y)?;
+        if let Some(h) = first_step.filter(|h| h.is_finite() && *h > 0.0) {
+            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
+            self.check(unsafe { (self.api.set_init_step)(self.mem.as_ptr(), h) })?;
+            self.rebased = true;
+        }
         Ok(())
     }
 
@@ -453,6 +478,9 @@ impl<S> Integrator for Solver<S> {
     }
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         Solver::reinit(self, t0, y0)
+    }
+    fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
+        Solver::rebase(self, first_step)
     }
     fn stats(&self) -> Stats {
         Solver::stats(self)

@@ -37,7 +37,7 @@ use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::engine;
-use crate::integrate::{ErrorKind, Integrator, SolverError, Task};
+use crate::integrate::{Clock, ErrorKind, SolverError, Time};
 use crate::model::drr::{Drr, W};
 use crate::model::Variational;
 use crate::scene::{Method, Scene, SolverSpec};
@@ -159,13 +159,14 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
     crate::integrate::OdeSystem::rhs(&drr, 0.0, &start, &mut d0);
     let (_, first) = reorthonormalise(&Variational::<Drr, 3>::initial(&start), &d0, 1.0);
     integ.reinit(0.0, &first)?;
+    let mut clock = Clock::new(integ.as_mut(), Time::new(0.0));
     let norm3 = |f: &[f64; 3]| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     let mut f_norm = norm3(&d0);
     let mut prev = Sample { t: 0.0, y: start, d: d0 };
     let (mut steps, mut cuts) = (0u64, 0usize);
     let mut per_period = Vec::new();
-    // Per period: time and logs so far; the state at its start; ∫ f'(v) dt.
-    let (mut elapsed, mut logs, mut quad) = (0.0, [0.0; 2], 0.0);
+    // Per period: its start on the global clock, logs so far; the state at its start; ∫ f'(v) dt.
+    let (mut period_t0, mut logs, mut quad) = (Time::new(0.0), [0.0; 2], 0.0);
     let mut period_start = start;
     let mut down_seen = false;
     // 0: before the descent cut, 1: before the post-arrest cut, 2: stick and rise.
@@ -177,31 +178,32 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
         let (_, vfp) = p.friction.eval(w);
         vfp * (-w).exp()
     };
-    let failure = |integ: &dyn Integrator, kind, message: String| SolverError {
-        solver: integ.name(),
+    let failure = |clock: &Clock, kind, message: String| SolverError {
+        solver: clock.name(),
         kind,
-        t: integ.t(),
-        state: integ.state()[..3].to_vec(),
+        t: clock.now().to_f64(),
+        state: clock.state()[..3].to_vec(),
         flag: 0,
         message,
     };
     while per_period.len() < periods {
-        let step = integ.advance(prev.t + 1e6, Task::OneStep)?;
+        let step = clock.step().map_err(|e| clock.at_global(e))?;
+        prev.t = step.start;
         steps += 1;
-        let z = integ.state().to_vec();
+        let z = clock.state().to_vec();
         let y = first3(&z);
-        let d = first3(integ.dense(step.t, 1)?);
+        let d = first3(clock.integrator().dense(step.t, 1)?);
         if z.iter().chain(&d).any(|x| !x.is_finite()) {
-            return Err(failure(integ.as_ref(), ErrorKind::RhsFailure, "the state, the tangent frame or dy/dt became non-finite".into()));
+            return Err(failure(&clock, ErrorKind::RhsFailure, "the state, the tangent frame or dy/dt became non-finite".into()));
         }
         if steps > 20_000_000 {
-            return Err(failure(integ.as_ref(), ErrorKind::TooMuchWork, "2e7 steps without completing the FTLE periods".into()));
+            return Err(failure(&clock, ErrorKind::TooMuchWork, "2e7 steps without completing the FTLE periods".into()));
         }
-        let mid = integ.dense(0.5 * (prev.t + step.t), 0)?[W];
+        let mid = clock.integrator().dense(0.5 * (prev.t + step.t), 0)?[W];
         quad += (step.t - prev.t) / 6.0 * (fprime(prev.y[W]) + 4.0 * fprime(mid) + fprime(y[W]));
         let (now, _) = reorthonormalise(&z, &d, f_norm);
         if per_period.len() + 1 == periods {
-            series.push((elapsed + step.t, [logs[0] + now[0], logs[1] + now[1]]));
+            series.push((clock.global(step.t).since(period_t0), [logs[0] + now[0], logs[1] + now[1]]));
         }
         if prev.y[W] >= 0.0 && y[W] < 0.0 {
             down_seen = true;
@@ -213,7 +215,7 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
         // The period ends at the v maximum after a downward crossing of v = 1 (refined on the
         // interpolant); the other cuts are made at step ends.
         let cut = if down_seen && prev.d[W] > 0.0 && d[W] <= 0.0 && y[W] > floor {
-            Some((events::refine(integ.as_mut(), (prev.t, step.t), 1, W, 0.0)?, true))
+            Some((events::refine(clock.integrator(), (prev.t, step.t), 1, W, 0.0)?, true))
         } else if (stage == 0 && y[W] <= descent_level && safe) || (stage == 1 && down_seen && safe) {
             stage += 1;
             Some((step.t, false))
@@ -226,12 +228,12 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
             prev = Sample { t: step.t, y, d };
             continue;
         };
-        let zc = integ.dense(t, 0)?.to_vec();
-        let vc = first3(integ.dense(t, 1)?);
+        let zc = clock.integrator().dense(t, 0)?.to_vec();
+        let vc = first3(clock.integrator().dense(t, 1)?);
         let yc = first3(&zc);
         if t < step.t {
             // Simpson's sum ran to the step end: take back the part after t.
-            let tail = integ.dense(0.5 * (t + step.t), 0)?[W];
+            let tail = clock.integrator().dense(0.5 * (t + step.t), 0)?[W];
             quad -= (step.t - t) / 6.0 * (fprime(yc[W]) + 4.0 * fprime(tail) + fprime(y[W]));
         }
         let (l, restart) = reorthonormalise(&zc, &vc, f_norm);
@@ -239,7 +241,8 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
         logs[0] += l[0];
         logs[1] += l[1];
         cuts += 1;
-        elapsed += t;
+        let at = clock.global(t);
+        let elapsed = at.since(period_t0);
         if per_period.len() + 1 == periods {
             series.pop();
             series.push((elapsed, logs));
@@ -249,9 +252,9 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
             let trace_integral = -dw - du - elapsed - p.gamma * p.gamma / p.xi * quad;
             per_period.push(PeriodLogs { time: elapsed, ln_r: logs, trace_integral });
             total_time += elapsed;
-            (elapsed, logs, quad, period_start, down_seen, stage) = (0.0, [0.0; 2], 0.0, yc, false, first_stage(yc[W]));
+            (period_t0, logs, quad, period_start, down_seen, stage) = (at, [0.0; 2], 0.0, yc, false, first_stage(yc[W]));
         }
-        integ.reinit(0.0, &restart)?;
+        clock.reinit(at, &restart)?;
         prev = Sample { t: 0.0, y: yc, d: vc };
     }
     let sum = |f: &dyn Fn(&PeriodLogs) -> f64| per_period.iter().map(f).sum::<f64>();
