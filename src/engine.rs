@@ -263,6 +263,8 @@ pub fn run_with(
             xi: scene.params.xi,
             epsilon: scene.params.epsilon,
             friction: scene.params.friction.label(),
+            state_law: scene.params.state_law.name(),
+            radiation_damping: scene.params.eta,
             dimensional: scene.dimensional,
             initial: [y[0], y[1].exp(), y[2]],
         },
