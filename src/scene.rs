@@ -329,7 +329,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -800,10 +800,14 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                     "epsilon" => Parameter::Epsilon,
                     "xi" => Parameter::Xi,
                     "gamma" => Parameter::Gamma,
-                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\" or \"gamma\""))),
+                    "radiation_damping" => Parameter::Eta,
+                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\", \"gamma\" or \"radiation_damping\""))),
                 };
                 let to = finite(&format!("{f}.to"), c.to, err)?;
-                if parameter != Parameter::Epsilon && to <= 0.0 {
+                if parameter == Parameter::Eta && to < 0.0 {
+                    return Err(err(&format!("{f}.to"), format!("{to} must be ≥ 0 for radiation_damping")));
+                }
+                if !matches!(parameter, Parameter::Epsilon | Parameter::Eta) && to <= 0.0 {
                     return Err(err(&format!("{f}.to"), format!("{to} must be > 0 for {}", parameter.name())));
                 }
                 if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
@@ -815,6 +819,9 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 let log = c.log.unwrap_or(parameter == Parameter::Gamma);
                 if log && parameter == Parameter::Epsilon {
                     return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
+                }
+                if log && parameter == Parameter::Eta {
+                    return Err(err(&format!("{f}.log"), "η can be 0: continue it on a linear grid (\"log\": false)".into()));
                 }
                 out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
             }

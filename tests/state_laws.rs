@@ -153,3 +153,23 @@ fn radiation_damping_from_the_shear_modulus_and_wave_speed() {
     let plain = scene::parse(r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 1}, "analyses": ["hopf"]}"#, "test").unwrap();
     assert_eq!((plain.params.state_law, plain.params.eta), (StateLaw::Slip, 0.0));
 }
+
+#[test]
+fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
+    let scene = |eta: f64, analyses: &str| {
+        format!(
+            r#"{{"name": "t", "model": {{"gamma": 1e3, "xi": 0.8, "epsilon": 1.0, "state_law": "ageing", "radiation_damping": {eta}}},
+                 "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": {analyses}}}"#
+        )
+    };
+    let curve = run(&scene(0.0, r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.0005, "points": 2}}]"#));
+    let c = curve.continuation.as_ref().unwrap();
+    assert!(c.completed, "{c:?}");
+    let end = c.points.last().unwrap();
+    assert_eq!(end.value, 0.0005);
+    let direct = run(&scene(0.0005, r#"["shooting"]"#));
+    let (a, b) = (end.orbit.period, direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period);
+    assert!((a - b).abs() < 1e-7 * b, "continued {a} vs direct {b}");
+    // η v_max = O(1) at γ = 1e3 (v_max ≈ 8e3): the period drops from 26.99 to 19.41.
+    assert!(b < 0.8 * c.points[0].orbit.period, "{b} vs {}", c.points[0].orbit.period);
+}
