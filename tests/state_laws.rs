@@ -45,8 +45,11 @@ fn ageing_earthquake_cycle_agrees_across_independent_integrators() {
     assert!(spread(&periods) < 1e-7, "{periods:?}");
     let r = &reports[0];
     assert_eq!((r.model.state_law, r.model.radiation_damping), ("ageing", 0.0));
-    // The ageing law's period differs from the slip law's 56.41 (data/reference/drr_cycles.json).
-    assert!((periods[0] - 56.41).abs() > 1.0, "{periods:?}");
+    // The rtol 1e-11 reference (data/reference/drr_cycles_ageing.json, radau5 and ARKStep DIRK,
+    // from another start): 49.0072514158; the slip law's is 56.41.
+    for p in &periods {
+        assert!((p - 49.0072514158).abs() < 2e-7 * p, "{periods:?}");
+    }
 }
 
 #[test]
