@@ -78,12 +78,13 @@ pub fn integrator_for<S: ImexSystem + 'static>(
 
 /// Adds the likely physical cause to a failure: v falling to 0 in finite time. With
 /// dv/dt = −γ² G and G > 0 at v → 0, e^w decreases linearly to 0 and w = ln v → −∞: the block
-/// stops. The log law makes this a true singularity of the model; with the regularised asinh
-/// law the block would go on and reverse, which the ln v formulation cannot follow.
+/// stops. That needs a friction law bounded below (no point of the slow manifold at this
+/// (u, θ)): with the regularised asinh law the block would go on and reverse, which the ln v
+/// formulation cannot follow. Under f = ln v, G → −∞ as v → 0 and v cannot reach 0.
 fn diagnose(drr: &Drr, mut error: SolverError) -> SolverError {
     if let [u, w, theta] = error.state[..] {
         let g = drr.manifold_offset(&[u, w, theta]);
-        if w < -10.0 && g > 0.0 {
+        if w < -10.0 && g > 0.0 && drr.manifold_w(u, theta).is_none() {
             error.message.push_str(&format!(
                 " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0): the block stops, \
                  which the integration in ln v cannot pass]",
@@ -263,6 +264,8 @@ pub fn run_with(
             xi: scene.params.xi,
             epsilon: scene.params.epsilon,
             friction: scene.params.friction.label(),
+            state_law: scene.params.state_law.name(),
+            radiation_damping: scene.params.eta,
             dimensional: scene.dimensional,
             initial: [y[0], y[1].exp(), y[2]],
         },

@@ -25,6 +25,10 @@ pub struct ModelSection {
     pub epsilon: f64,
     /// The friction law, e.g. "log" or "power(alpha=0.31)".
     pub friction: String,
+    /// The state law: "slip", "ageing" or "prz".
+    pub state_law: &'static str,
+    /// Radiation damping η (dimensionless; 0: none).
+    pub radiation_damping: f64,
     /// The dimensional input, when the scene gave one.
     pub dimensional: Option<Dimensional>,
     /// Initial state (u, v, θ).
@@ -125,8 +129,14 @@ impl Report {
         let mut s = String::new();
         let m = &self.model;
         s += &format!(
-            "scene {}: γ = {:e}, ξ = {}, ε = {}, friction {}\n",
-            self.name, m.gamma, m.xi, m.epsilon, m.friction
+            "scene {}: γ = {:e}, ξ = {}, ε = {}, friction {}, {} law{}\n",
+            self.name,
+            m.gamma,
+            m.xi,
+            m.epsilon,
+            m.friction,
+            m.state_law,
+            if m.radiation_damping > 0.0 { format!(", radiation damping η = {:e}", m.radiation_damping) } else { String::new() }
         );
         s += &format!(
             "solver {} ({}), rtol {:e}, SUNDIALS {}; {} steps, {} RHS, {} Jacobians, {:.3} s\n",

@@ -3,7 +3,7 @@
 //! would be valid). The schema is documented in docs/scenes.md.
 
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
-use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, VanDerPolParams};
+use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
 use serde::{Deserialize, Serialize};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
@@ -43,6 +43,12 @@ struct RawModel {
     dimensional: Option<Dimensional>,
     #[serde(default)]
     friction: Option<RawFriction>,
+    /// "slip" (default), "ageing" or "prz".
+    #[serde(default)]
+    state_law: Option<String>,
+    /// Radiation damping η (dimensionless, ≥ 0).
+    #[serde(default)]
+    radiation_damping: Option<f64>,
     /// "drr" (default), "saddle_node" or "van_der_pol".
     #[serde(default)]
     kind: Option<String>,
@@ -62,8 +68,9 @@ struct RawModel {
     y0: Option<f64>,
 }
 
-/// Dimensional parameters (any consistent units): γ = (D_c/v0)·√(k/M), ξ = k·D_c/A,
-/// ε = (B−A)/A.
+/// Dimensional parameters (any consistent units, per unit area of the interface):
+/// γ = (D_c/v0)·√(k/M), ξ = k·D_c/A, ε = (B−A)/A, and the radiation damping
+/// η = G·v0/(2·c_s·A) when the shear modulus G and shear-wave speed c_s are given.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dimensional {
@@ -79,6 +86,12 @@ pub struct Dimensional {
     pub d_c: f64,
     /// Driving velocity v0.
     pub v0: f64,
+    /// Shear modulus G of the surrounding medium (radiation damping; with `shear_wave_speed`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_modulus: Option<f64>,
+    /// Shear-wave speed c_s (radiation damping; with `shear_modulus`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_wave_speed: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -316,7 +329,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -387,6 +400,8 @@ fn only_model_keys(m: &RawModel, kind: &str, allowed: &[&str], err: &impl Fn(&st
         ("epsilon", m.epsilon.is_some()),
         ("dimensional", m.dimensional.is_some()),
         ("friction", m.friction.is_some()),
+        ("state_law", m.state_law.is_some()),
+        ("radiation_damping", m.radiation_damping.is_some()),
         ("mu0", m.mu0.is_some()),
         ("r", m.r.is_some()),
         ("x0", m.x0.is_some()),
@@ -475,7 +490,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         return Err(err("name", "must not be empty".into()));
     }
     let m = &raw.model;
-    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction"], err)?;
+    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction", "state_law", "radiation_damping"], err)?;
     let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
         (Some(d), None, None, None) => {
             for (name, v) in [("k", d.k), ("mass", d.mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
@@ -506,7 +521,15 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             Friction::Power { alpha: positive("model.friction.power.alpha", alpha, "g_α(v) = (v^α − 1)/α, e.g. 0.31", err)? }
         }
     };
-    let params = DrrParams { gamma, xi, epsilon, friction };
+    let state_law = match m.state_law.as_deref() {
+        None => StateLaw::Slip,
+        Some(name) => StateLaw::from_name(name).ok_or_else(|| {
+            let names: Vec<String> = StateLaw::ALL.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            err("model.state_law", format!("\"{name}\" is not a state law; use one of {} (default \"slip\")", names.join(", ")))
+        })?,
+    };
+    let eta = radiation_damping(m, err)?;
+    let params = DrrParams { gamma, xi, epsilon, friction, state_law, eta };
     let drr = Drr::new(params);
 
     let units = match raw.units.clone() {
@@ -526,7 +549,67 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let initial = initial_state(&drr, raw.initial.as_ref(), err)?;
     let solver = solver_spec(raw.solver.as_ref(), err)?;
     let analyses = analyses(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
+    papers_model_only(&params, &analyses, err)?;
     Ok(Scene { name: raw.name, description: raw.description, params, dimensional: m.dimensional, units, initial, solver, analyses })
+}
+
+/// η from `model.radiation_damping` (dimensionless) or from `model.dimensional`'s shear
+/// modulus G and shear-wave speed c_s: η = G·v0/(2·c_s·A); 0 when neither is given.
+fn radiation_damping(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
+    let from_medium = match m.dimensional {
+        Some(Dimensional { shear_modulus: Some(g), shear_wave_speed: Some(c), a, v0, .. }) => {
+            let g = positive("model.dimensional.shear_modulus", g, "the shear modulus G, e.g. 3e10 (Pa)", err)?;
+            let c = positive("model.dimensional.shear_wave_speed", c, "the shear-wave speed c_s, e.g. 3e3 (m/s)", err)?;
+            Some(g * v0 / (2.0 * c * a))
+        }
+        Some(Dimensional { shear_modulus: Some(_), shear_wave_speed: None, .. }) => {
+            return Err(err("model.dimensional.shear_wave_speed", "missing: radiation damping η = G·v0/(2·c_s·A) needs both shear_modulus and shear_wave_speed".into()));
+        }
+        Some(Dimensional { shear_modulus: None, shear_wave_speed: Some(_), .. }) => {
+            return Err(err("model.dimensional.shear_modulus", "missing: radiation damping η = G·v0/(2·c_s·A) needs both shear_modulus and shear_wave_speed".into()));
+        }
+        _ => None,
+    };
+    let eta = match (m.radiation_damping, from_medium) {
+        (Some(_), Some(_)) => {
+            return Err(err("model.radiation_damping", "give either radiation_damping or dimensional.shear_modulus/shear_wave_speed, not both".into()));
+        }
+        (Some(eta), None) => finite("model.radiation_damping", eta, err)?,
+        (None, Some(eta)) => eta,
+        (None, None) => 0.0,
+    };
+    if !(0.0..=1e100).contains(&eta) || !eta.is_finite() {
+        return Err(err("model.radiation_damping", format!("{eta:e} must be in 0 … 1e100 (η = G·v0/(2·c_s·A) ≥ 0; 0 = no radiation damping)")));
+    }
+    Ok(eta)
+}
+
+/// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when
+/// the scene has another state law or radiation damping.
+fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+    if params.is_papers_model() {
+        return Ok(());
+    }
+    let slip_only = [
+        (a.paper, "paper", "the paper's values are for its model"),
+        (a.asymptotics.is_some(), "asymptotics", "the slow flow, matching and slip scaling are derived for the slip law"),
+        (a.lyapunov.is_some(), "lyapunov", "its quasi-static formula and the paper's claims are derived for the slip law"),
+        (a.noise.is_some(), "noise", "its drift is written for the slip law"),
+    ];
+    for (asked, name, why) in slip_only {
+        if asked {
+            let field = if params.state_law != StateLaw::Slip { "model.state_law" } else { "model.radiation_damping" };
+            return Err(err(
+                field,
+                format!(
+                    "the \"{name}\" analysis needs the slip law without radiation damping ({why}); this scene has state_law \"{}\" and radiation_damping {}: drop \"{name}\" or use the slip law with no damping",
+                    params.state_law.name(),
+                    params.eta
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The start: given values, with v (or u) completed on the slow manifold when missing.
@@ -717,10 +800,14 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                     "epsilon" => Parameter::Epsilon,
                     "xi" => Parameter::Xi,
                     "gamma" => Parameter::Gamma,
-                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\" or \"gamma\""))),
+                    "radiation_damping" => Parameter::Eta,
+                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\", \"gamma\" or \"radiation_damping\""))),
                 };
                 let to = finite(&format!("{f}.to"), c.to, err)?;
-                if parameter != Parameter::Epsilon && to <= 0.0 {
+                if parameter == Parameter::Eta && to < 0.0 {
+                    return Err(err(&format!("{f}.to"), format!("{to} must be ≥ 0 for radiation_damping")));
+                }
+                if !matches!(parameter, Parameter::Epsilon | Parameter::Eta) && to <= 0.0 {
                     return Err(err(&format!("{f}.to"), format!("{to} must be > 0 for {}", parameter.name())));
                 }
                 if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
@@ -732,6 +819,9 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 let log = c.log.unwrap_or(parameter == Parameter::Gamma);
                 if log && parameter == Parameter::Epsilon {
                     return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
+                }
+                if log && parameter == Parameter::Eta {
+                    return Err(err(&format!("{f}.log"), "η can be 0: continue it on a linear grid (\"log\": false)".into()));
                 }
                 out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
             }

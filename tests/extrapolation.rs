@@ -351,7 +351,7 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
 
 #[test]
 fn drr_at_gamma_1e8_from_the_slow_manifold() {
-    let drr = Drr::new(DrrParams { gamma: 1e8, xi: 0.8, epsilon: 1.0, friction: Friction::Log });
+    let drr = Drr::new(DrrParams::new(1e8, 0.8, 1.0, Friction::Log));
     // The scene default start: v = 0.5, θ at its fixed-point value, u on the slow manifold.
     let (w, theta) = (0.5f64.ln(), drr.fixed_point()[2]);
     let y0 = [drr.manifold_u(w, theta), w, theta];

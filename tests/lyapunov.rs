@@ -103,7 +103,7 @@ fn ftle_matches_finite_differences_of_the_poincare_map() {
     let ours = ftle.per_period.last().unwrap().ln_r[1];
     let orbit = Orbit::from_cycle(r.cycle.as_ref().unwrap()).unwrap();
     let x = [orbit.u[orbit.up], orbit.theta[orbit.up]];
-    let drr = Drr::new(DrrParams { gamma: 1e4, xi: 0.8, epsilon: 1.0, friction: Friction::Log });
+    let drr = Drr::new(DrrParams::new(1e4, 0.8, 1.0, Friction::Log));
     // δ = 1e-2: nonlinear error O(δ); δ = 1e-3: the return moves by ~2e-11, near the
     // integration noise. Their spread bounds the reference's own error.
     let (a, b) = (ln_mu2_by_differences(drr, x, 1e-2), ln_mu2_by_differences(drr, x, 1e-3));

@@ -124,7 +124,7 @@ fn ensembles_reproduce_the_exact_mean_and_the_scheme_variance() {
 }
 
 fn fig1_drr(amplitudes: [f64; 3]) -> (NoiseModel, Vec<f64>) {
-    let drr = Drr::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction: Friction::Log });
+    let drr = Drr::new(DrrParams::new(1e3, 0.7, 0.72, Friction::Log));
     let w = 0.5f64.ln();
     let theta = drr.fixed_point()[2];
     (NoiseModel::Drr { system: drr, amplitudes }, vec![drr.manifold_u(w, theta), w, theta])

@@ -289,7 +289,7 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
 
 #[test]
 fn drr_at_gamma_1e8_from_the_slow_manifold() {
-    let drr = Drr::new(DrrParams { gamma: 1e8, xi: 0.8, epsilon: 1.0, friction: Friction::Log });
+    let drr = Drr::new(DrrParams::new(1e8, 0.8, 1.0, Friction::Log));
     let (w, theta) = (0.5f64.ln(), drr.fixed_point()[2]);
     let y0 = [drr.manifold_u(w, theta), w, theta];
     let options = |rtol: f64| Options::new(rtol, Tolerance::PerComponent(vec![rtol * 1e-2; 3]));

@@ -29,7 +29,7 @@ pub const TAIL: f64 = 0.01;
 
 /// The model at γ.
 pub fn drr(gamma: f64) -> Drr {
-    Drr::new(DrrParams { gamma, xi: XI, epsilon: EPSILON, friction: Friction::Log })
+    Drr::new(DrrParams::new(gamma, XI, EPSILON, Friction::Log))
 }
 
 /// Absolute tolerance of every grid cell: rtol·1e-2 on each of (u, ln v, θ) (the scene

@@ -28,6 +28,8 @@ pub enum Parameter {
     Xi,
     /// γ (stepped in log10 γ).
     Gamma,
+    /// The radiation damping η (scene name "radiation_damping").
+    Eta,
 }
 
 impl Parameter {
@@ -37,6 +39,7 @@ impl Parameter {
             Parameter::Epsilon => "epsilon",
             Parameter::Xi => "xi",
             Parameter::Gamma => "gamma",
+            Parameter::Eta => "radiation_damping",
         }
     }
 
@@ -46,6 +49,7 @@ impl Parameter {
             Parameter::Epsilon => p.epsilon,
             Parameter::Xi => p.xi,
             Parameter::Gamma => p.gamma,
+            Parameter::Eta => p.eta,
         }
     }
 
@@ -56,6 +60,7 @@ impl Parameter {
             Parameter::Epsilon => q.epsilon = value,
             Parameter::Xi => q.xi = value,
             Parameter::Gamma => q.gamma = value,
+            Parameter::Eta => q.eta = value,
         }
         q
     }
@@ -249,7 +254,7 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: 
                 Err(why) => {
                     step *= 0.5;
                     if step < spacing / 1024.0 {
-                        let near_threshold = par == Parameter::Epsilon || par == Parameter::Xi;
+                        let near_threshold = par != Parameter::Gamma;
                         let hint = if near_threshold {
                             let eps_c = hopf::analyse(&Drr::new(par.set(base, value))).epsilon_c;
                             format!(" (Hopf threshold there: ε_c = {eps_c:.9})")

@@ -527,12 +527,12 @@ impl<'a> Tracker<'a> {
 }
 
 /// Whether a restart (time re-base) at y is safe: the model's dw/dt there, whose error is the
-/// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, over ξ) amplified by
+/// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, times ∂G/∂w) amplified by
 /// γ² e^{−w}, is resolved to 1e-3 of `rate`, the scale of dw/dt in the current rise.
 pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
     let p = drr.params();
     let (rtol, atol) = w_tolerance;
-    let error_g = (rtol * y[W].abs() + atol) / p.xi;
+    let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y[W]);
     p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
 }
 

@@ -1,9 +1,23 @@
 //! Linear stability of the fixed point and the Hopf threshold.
 //!
-//! At the fixed point (v = 1, θ* = −(1+ε) f(1), u* = ε f(1)/ξ) the Jacobian in (u, v, θ) has
-//! the characteristic polynomial λ³ + a₂λ² + a₁λ + a₀ with g = γ², f₁ = f'(1):
-//! a₂ = 1 + g f₁/ξ, a₁ = g (1 − ε f₁/ξ), a₀ = g. Routh–Hurwitz gives the threshold
-//! ε_c = ξ g/(ξ + g f₁) (= ξγ²/(γ²+ξ) for f = ln v) and ω_c² = a₀/a₂ at threshold.
+//! At the fixed point (v = 1, see [`Drr::fixed_point`]) the Jacobian in (u, v, θ) has the
+//! characteristic polynomial λ³ + a₂λ² + a₁λ + a₀ with g = γ², f₁ = f'(1), the radiation
+//! damping η and the state law's relaxation rate κ = −F'(x*) (1 for the slip, ageing and PRZ
+//! laws, so that their linearisations coincide):
+//!
+//! ```text
+//! a₂ = κ + g (f₁ + η)/ξ,   a₁ = g (1 + κ (η − ε f₁)/ξ),   a₀ = g κ.
+//! ```
+//!
+//! Routh–Hurwitz (a₂a₁ = a₀) gives the threshold and the frequency there:
+//!
+//! ```text
+//! ε_c = [η + ξ g (f₁ + η) / (κ (κξ + g (f₁ + η)))] / f₁,   ω_c² = a₀/a₂ = g κ ξ/(κξ + g (f₁ + η)),
+//! ```
+//!
+//! i.e. ε_c = ξγ²/(γ²+ξ) for f = ln v, η = 0; as γ → ∞, ε_c → (ξ/κ + η)/f₁ and
+//! ω_c² → κξ/(f₁ + η): damping raises the threshold by η/f₁ and slows the oscillation
+//! (derivation: docs/state-laws.md).
 //!
 //! The eigenvalues are computed from the polynomial, not from the 3×3 matrix: at γ = 1e8 its
 //! entries reach 1e16 and a matrix eigen-solver would lose the O(1) real part of the slow pair.
@@ -21,7 +35,7 @@ pub struct HopfReport {
     /// Eigenvalues of the Jacobian at the fixed point, as [re, im] (1/time unit), fast real
     /// one first.
     pub eigenvalues: Vec<[f64; 2]>,
-    /// Threshold ε_c = ξγ²/(ξ + γ² f'(1)) (dimensionless).
+    /// Threshold ε_c (dimensionless; ξγ²/(ξ + γ²) for f = ln v without damping).
     pub epsilon_c: f64,
     /// Angular frequency at threshold ω_c = √(a₀/a₂) (1/time unit).
     pub omega_c: f64,
@@ -48,7 +62,18 @@ pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
     let p = drr.params();
     let g = p.gamma * p.gamma;
     let (_, f1) = p.friction.eval(0.0);
-    (1.0 + g * f1 / p.xi, g * (1.0 - p.epsilon * f1 / p.xi), g)
+    let kappa = p.state_law.steady_rate();
+    (kappa + g * (f1 + p.eta) / p.xi, g * (1.0 + kappa * (p.eta - p.epsilon * f1) / p.xi), g * kappa)
+}
+
+/// The threshold ε_c at the parameters' γ, ξ, η, friction and state law (their ε is ignored).
+pub fn epsilon_c(drr: &Drr) -> f64 {
+    let p = drr.params();
+    let g = p.gamma * p.gamma;
+    let (_, f1) = p.friction.eval(0.0);
+    let kappa = p.state_law.steady_rate();
+    let e = f1 + p.eta;
+    (p.eta + p.xi * g * e / (kappa * (kappa * p.xi + g * e))) / f1
 }
 
 /// Roots of λ³ + a₂λ² + a₁λ + a₀ as [re, im], the real root found by Newton first.
@@ -92,9 +117,7 @@ pub fn analyse(drr: &Drr) -> HopfReport {
     let params = drr.params();
     let (a2, a1, a0) = characteristic_polynomial(drr);
     let eigenvalues = cubic_roots(a2, a1, a0);
-    let g = params.gamma * params.gamma;
-    let (_, f1) = params.friction.eval(0.0);
-    let epsilon_c = params.xi * g / (params.xi + g * f1);
+    let epsilon_c = epsilon_c(drr);
     let omega_c = (a0 / a2).sqrt();
     let fp = drr.fixed_point();
     HopfReport {
@@ -112,29 +135,51 @@ pub fn analyse(drr: &Drr) -> HopfReport {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{DrrParams, Friction};
+    use crate::integrate::{JacobianMatrix, OdeSystem};
+    use crate::model::{DrrParams, Friction, StateLaw};
     use nalgebra::Matrix3;
 
     fn drr(gamma: f64, xi: f64, epsilon: f64, friction: Friction) -> Drr {
-        Drr::new(DrrParams { gamma, xi, epsilon, friction })
+        Drr::new(DrrParams::new(gamma, xi, epsilon, friction))
+    }
+
+    fn frictions() -> [Friction; 3] {
+        [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }]
+    }
+
+    /// The model's analytic Jacobian at its fixed point, in (u, w, θ). At v = 1 the change of
+    /// variables w = ln v is the identity to first order, so its eigenvalues are those of the
+    /// linearisation in (u, v, θ).
+    fn matrix_at_fixed_point(d: &Drr) -> Matrix3<f64> {
+        let mut columns = [0.0; 9];
+        d.jacobian(0.0, &d.fixed_point(), &mut JacobianMatrix::new(&mut columns, 3));
+        Matrix3::from_column_slice(&columns)
+    }
+
+    fn matrix_eigenvalues(d: &Drr) -> Vec<[f64; 2]> {
+        matrix_at_fixed_point(d).complex_eigenvalues().iter().map(|z| [z.re, z.im]).collect()
     }
 
     #[test]
-    fn eigenvalues_agree_with_a_matrix_eigensolver_at_moderate_gamma() {
-        for friction in [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }] {
-            for gamma in [1.0, 3.0, 10.0, 100.0] {
-                let d = drr(gamma, 0.7, 0.72, friction);
-                let (_, f1) = friction.eval(0.0);
-                let (g, xi, e) = (gamma * gamma, 0.7, 0.72);
-                let j = Matrix3::new(0.0, 1.0, 0.0, -g, -g * f1 / xi, -g / xi, 0.0, -(1.0 + e) * f1, -1.0);
-                let mut reference: Vec<[f64; 2]> = j.complex_eigenvalues().iter().map(|z| [z.re, z.im]).collect();
-                let mut ours = analyse(&d).eigenvalues;
-                let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
-                reference.sort_by(key);
-                ours.sort_by(key);
-                for (a, b) in ours.iter().zip(&reference) {
-                    let scale = 1.0 + b[0].hypot(b[1]);
-                    assert!((a[0] - b[0]).abs() < 1e-9 * scale && (a[1] - b[1]).abs() < 1e-9 * scale, "{friction:?} γ={gamma}: {ours:?} vs {reference:?}");
+    fn eigenvalues_agree_with_a_matrix_eigensolver_for_every_law_at_moderate_gamma() {
+        for friction in frictions() {
+            for (_, state_law) in StateLaw::ALL {
+                for eta in [0.0, 0.05, 0.8] {
+                    for gamma in [1.0, 3.0, 10.0, 100.0] {
+                        let d = Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.72, friction) });
+                        let mut reference = matrix_eigenvalues(&d);
+                        let mut ours = analyse(&d).eigenvalues;
+                        let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
+                        reference.sort_by(key);
+                        ours.sort_by(key);
+                        for (a, b) in ours.iter().zip(&reference) {
+                            let scale = 1.0 + b[0].hypot(b[1]);
+                            assert!(
+                                (a[0] - b[0]).abs() < 1e-9 * scale && (a[1] - b[1]).abs() < 1e-9 * scale,
+                                "{friction:?} {state_law:?} η={eta} γ={gamma}: {ours:?} vs {reference:?}"
+                            );
+                        }
+                    }
                 }
             }
         }
@@ -156,5 +201,61 @@ mod tests {
         }
         let large = analyse(&drr(1e8, 0.8, 1.0, Friction::Log));
         assert!((large.period_c - large.period_c_large_gamma).abs() < 1e-12 * large.period_c);
+    }
+
+    /// ε_c and ω_c against the matrix eigenvalues: the ε where the largest real part of the
+    /// numerically computed eigenvalues of the analytic Jacobian crosses 0 (bisection), and the
+    /// imaginary part there. Every state law, friction law and damping, at moderate γ where a
+    /// matrix eigensolver is accurate.
+    #[test]
+    fn threshold_and_frequency_match_the_jacobians_eigenvalues_for_every_law_and_damping() {
+        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
+        for friction in frictions() {
+            for (_, state_law) in StateLaw::ALL {
+                for eta in [0.0, 0.1, 1.0] {
+                    for gamma in [2.0, 10.0, 50.0] {
+                        let base = DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.0, friction) };
+                        let derived = analyse(&Drr::new(base));
+                        let (mut lo, mut hi) = (0.0, 20.0);
+                        assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
+                        for _ in 0..60 {
+                            let mid = 0.5 * (lo + hi);
+                            if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
+                        }
+                        let eps = 0.5 * (lo + hi);
+                        assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{friction:?} {state_law:?} η={eta} γ={gamma}: {eps} vs {}", derived.epsilon_c);
+                        let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
+                        assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{friction:?} {state_law:?} η={eta} γ={gamma}: ω {omega} vs {}", derived.omega_c);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_three_state_laws_share_the_threshold_and_frequency() {
+        for friction in frictions() {
+            for gamma in [10.0, 1e3, 1e8] {
+                let at = |state_law| analyse(&Drr::new(DrrParams { state_law, ..DrrParams::new(gamma, 0.8, 1.0, friction) }));
+                let slip = at(StateLaw::Slip);
+                for law in [StateLaw::Ageing, StateLaw::Prz] {
+                    let other = at(law);
+                    let close = |a: f64, b: f64| (a - b).abs() <= 1e-14 * a.abs().max(b.abs());
+                    assert!(close(other.epsilon_c, slip.epsilon_c) && close(other.omega_c, slip.omega_c), "{friction:?} {law:?} γ={gamma}: {other:?} vs {slip:?}");
+                    for (a, b) in other.eigenvalues.iter().zip(&slip.eigenvalues) {
+                        assert!((a[0] - b[0]).abs() <= 1e-13 * b[0].hypot(b[1]) && (a[1] - b[1]).abs() <= 1e-13 * b[0].hypot(b[1]), "{friction:?} {law:?} γ={gamma}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn damping_raises_the_threshold_by_eta_over_f1_at_large_gamma() {
+        for eta in [0.0, 0.3, 2.0] {
+            let h = analyse(&Drr::new(DrrParams { eta, ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log) }));
+            assert!((h.epsilon_c - (0.8 + eta)).abs() < 1e-12, "η={eta}: {}", h.epsilon_c);
+            assert!((h.omega_c - (0.8 / (1.0 + eta)).sqrt()).abs() < 1e-12, "η={eta}: {}", h.omega_c);
+        }
     }
 }

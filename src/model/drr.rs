@@ -1,14 +1,23 @@
 //! The Dieterich–Ruina–Rice spring-slider in dimensionless form, integrated in
 //! y = (u, w = ln v, θ):
 //!
-//!   du/dt = v − 1,  dw/dt = −γ² e^{−w} (u + (θ + f(v))/ξ),  dθ/dt = −v (θ + (1+ε) f(v)).
+//! ```text
+//! du/dt = v − 1,
+//! dw/dt = −γ² e^{−w} G,   G = u + (θ + f(v) + η v)/ξ,
+//! dθ/dt = (1+ε) v F(x),   x = θ/(1+ε) + f(v),
+//! ```
+//!
+//! with the friction law f (see [`Friction`]), the state law F (see [`StateLaw`]; the slip law
+//! F(x) = −x gives the paper's dθ/dt = −v(θ + (1+ε) f(v))) and the radiation damping η ≥ 0
+//! (η v is the damping stress η_dim·V over A; see docs/state-laws.md).
 //!
 //! Working in w keeps v > 0 automatically and lets v span 1e-30 … 1e10.
 //!
 //! Reference: Pomeau & Le Berre, "Critical speed-up vs critical slow-down" (eqs. DR1–DR3
-//! rescaled); Rice & Tse (1986); Dieterich (1979); Ruina (1983).
+//! rescaled); Rice & Tse (1986); Dieterich (1979); Ruina (1983); Perrin, Rice & Zheng (1995).
 
 use super::friction::Friction;
+use super::state_law::StateLaw;
 use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem};
 
 /// Parameters of the dimensionless DRR model.
@@ -22,6 +31,23 @@ pub struct DrrParams {
     pub epsilon: f64,
     /// The friction law f(v).
     pub friction: Friction,
+    /// The state-evolution law.
+    pub state_law: StateLaw,
+    /// Radiation damping η = η_dim·v0/A ≥ 0 (dimensionless; η_dim = G/(2c_s)).
+    pub eta: f64,
+}
+
+impl DrrParams {
+    /// The paper's model: the slip law without radiation damping.
+    pub fn new(gamma: f64, xi: f64, epsilon: f64, friction: Friction) -> Self {
+        Self { gamma, xi, epsilon, friction, state_law: StateLaw::Slip, eta: 0.0 }
+    }
+
+    /// Whether this is the paper's model (slip law, η = 0), for which the paper-specific
+    /// analyses are derived.
+    pub fn is_papers_model(&self) -> bool {
+        self.state_law == StateLaw::Slip && self.eta == 0.0
+    }
 }
 
 /// Index of u in the state vector.
@@ -38,6 +64,15 @@ pub struct Drr {
     gamma2: f64,
 }
 
+/// The velocity-dependent part of the force balance, f(v) + η v, at w = ln v: its value, its
+/// w-derivative v f'(v) + η v and the w-derivative of that.
+#[derive(Debug, Clone, Copy)]
+struct Resistance {
+    value: f64,
+    slope: f64,
+    curvature: f64,
+}
+
 impl Drr {
     /// The system for the given parameters.
     pub fn new(params: DrrParams) -> Self {
@@ -49,24 +84,42 @@ impl Drr {
         &self.params
     }
 
-    /// The fixed point (u*, w* = 0, θ*): v = 1, θ* = −(1+ε) f(1), u* = ε f(1)/ξ.
+    fn resistance(&self, w: f64) -> Resistance {
+        let p = &self.params;
+        let (f, vfp) = p.friction.eval(w);
+        let h = p.friction.d_vfprime_dw(w);
+        if p.eta == 0.0 {
+            return Resistance { value: f, slope: vfp, curvature: h };
+        }
+        let ev = p.eta * w.exp();
+        Resistance { value: f + ev, slope: vfp + ev, curvature: h + ev }
+    }
+
+    /// The fixed point (u*, w* = 0, θ*): v = 1, θ* = (1+ε)(x* − f(1)) with x* the state law's
+    /// steady value of x, and u* = −(θ* + f(1) + η)/ξ.
     pub fn fixed_point(&self) -> [f64; 3] {
         let p = &self.params;
         let (f1, _) = p.friction.eval(0.0);
-        [p.epsilon * f1 / p.xi, 0.0, -(1.0 + p.epsilon) * f1]
+        let theta = (1.0 + p.epsilon) * (p.state_law.steady_x() - f1);
+        [-(theta + f1 + p.eta) / p.xi, 0.0, theta]
     }
 
-    /// The distance to the slow manifold, G = u + (θ + f(v))/ξ (dv/dt = −γ² G).
+    /// The distance to the slow manifold, G = u + (θ + f(v) + η v)/ξ (dv/dt = −γ² G).
     pub fn manifold_offset(&self, y: &[f64]) -> f64 {
-        let (f, _) = self.params.friction.eval(y[W]);
-        y[U] + (y[THETA] + f) / self.params.xi
+        y[U] + (y[THETA] + self.resistance(y[W]).value) / self.params.xi
+    }
+
+    /// ∂G/∂w = (v f'(v) + η v)/ξ: how an error in w shows in the manifold offset G.
+    pub fn manifold_offset_slope(&self, w: f64) -> f64 {
+        self.resistance(w).slope / self.params.xi
     }
 
     /// w on the slow manifold G = 0 for given (u, θ), if the friction law allows it
-    /// (f(v) = −(ξu + θ) must be in the range of f).
+    /// (f(v) + η v = −(ξu + θ) must be in the range of f + η v).
     pub fn manifold_w(&self, u: f64, theta: f64) -> Option<f64> {
         let target = -(self.params.xi * u + theta);
         let w = match self.params.friction {
+            _ if self.params.eta > 0.0 => self.solve_resistance(target)?,
             Friction::Log => target,
             Friction::Asinh => (target > 0.0).then(|| target.sinh().ln())?,
             Friction::Power { alpha } => {
@@ -77,18 +130,50 @@ impl Drr {
         w.is_finite().then_some(w)
     }
 
+    /// w with f(e^w) + η e^w = target (η > 0): f + η v increases strictly with w, so bisection
+    /// on a bracket, finished by Newton steps that stay inside it.
+    fn solve_resistance(&self, target: f64) -> Option<f64> {
+        let r = |w: f64| self.resistance(w).value - target;
+        // Bracket: w ≤ 700 keeps e^w finite; below, f + ηv tends to inf f (−∞ for ln v).
+        let (mut lo, mut hi) = (-700.0f64, 700.0f64);
+        if !(r(lo) < 0.0 && r(hi) > 0.0) {
+            return None;
+        }
+        let mut w = 0.0f64.clamp(lo, hi);
+        for _ in 0..400 {
+            let value = r(w);
+            if value == 0.0 {
+                return Some(w);
+            }
+            if value < 0.0 { lo = w } else { hi = w }
+            let newton = w - value / self.resistance(w).slope;
+            let next = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+            if (next - w).abs() <= 4.0 * f64::EPSILON * w.abs().max(1.0) {
+                return Some(next);
+            }
+            w = next;
+        }
+        Some(w)
+    }
+
     /// u on the slow manifold for given (w, θ).
     pub fn manifold_u(&self, w: f64, theta: f64) -> f64 {
-        let (f, _) = self.params.friction.eval(w);
-        -(theta + f) / self.params.xi
+        -(theta + self.resistance(w).value) / self.params.xi
+    }
+
+    /// x = θ/(1+ε) + f(v), the state law's argument, and v f'(v) with its w-derivative.
+    fn law_argument(&self, y: &[f64]) -> (f64, f64, f64) {
+        let p = &self.params;
+        let (f, vfp) = p.friction.eval(y[W]);
+        (y[THETA] / (1.0 + p.epsilon) + f, vfp, p.friction.d_vfprime_dw(y[W]))
     }
 
     fn split(&self, y: &[f64]) -> (f64, f64, f64) {
         let w = y[W];
-        let (f, _) = self.params.friction.eval(w);
-        let g = y[U] + (y[THETA] + f) / self.params.xi;
+        let g = self.manifold_offset(y);
         let dw = -self.gamma2 * (-w).exp() * g;
-        let dtheta = -w.exp() * (y[THETA] + (1.0 + self.params.epsilon) * f);
+        let (x, _, _) = self.law_argument(y);
+        let dtheta = (1.0 + self.params.epsilon) * self.params.state_law.terms(w, x).f;
         (w.exp_m1(), dw, dtheta)
     }
 }
@@ -112,16 +197,19 @@ impl OdeSystem for Drr {
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
         let p = &self.params;
         let w = y[W];
-        let v = w.exp();
-        let (f, vfp) = p.friction.eval(w);
-        let g = y[U] + (y[THETA] + f) / p.xi;
+        let r = self.resistance(w);
+        let g = y[U] + (y[THETA] + r.value) / p.xi;
         let a = self.gamma2 * (-w).exp();
-        jac.set(U, W, v);
+        let c = 1.0 + p.epsilon;
+        let (x, s, _) = self.law_argument(y);
+        let law = p.state_law.terms(w, x);
+        jac.set(U, W, w.exp());
         jac.set(W, U, -a);
-        jac.set(W, W, a * (g - vfp / p.xi));
+        jac.set(W, W, a * (g - r.slope / p.xi));
         jac.set(W, THETA, -a / p.xi);
-        jac.set(THETA, W, -v * (y[THETA] + (1.0 + p.epsilon) * f) - v * (1.0 + p.epsilon) * vfp);
-        jac.set(THETA, THETA, -v);
+        // R = c v F(x): ∂R/∂w = c (vF + vF' s), ∂R/∂θ = vF'.
+        jac.set(THETA, W, c * (law.f + law.d1 * s));
+        jac.set(THETA, THETA, law.d1);
     }
 
     fn has_jacobian_derivative(&self) -> bool {
@@ -131,25 +219,28 @@ impl OdeSystem for Drr {
     fn jacobian_derivative(&self, _t: f64, y: &[f64], k: usize, out: &mut JacobianMatrix<'_>) {
         let p = &self.params;
         let w = y[W];
-        let v = w.exp();
-        let (f, vfp) = p.friction.eval(w);
-        let h = p.friction.d_vfprime_dw(w);
-        let g = y[U] + (y[THETA] + f) / p.xi;
+        let r = self.resistance(w);
+        let g = y[U] + (y[THETA] + r.value) / p.xi;
         let a = self.gamma2 * (-w).exp();
         let c = 1.0 + p.epsilon;
+        let (x, s, h) = self.law_argument(y);
+        let law = p.state_law.terms(w, x);
         match k {
             U => out.set(W, W, a),
             THETA => {
                 out.set(W, W, a / p.xi);
-                out.set(THETA, W, -v);
+                // ∂²R/∂θ∂w = vF' + vF'' s, ∂²R/∂θ² = vF''/c.
+                out.set(THETA, W, law.d1 + law.d2 * s);
+                out.set(THETA, THETA, law.d2 / c);
             }
             _ => {
-                out.set(U, W, v);
+                out.set(U, W, w.exp());
                 out.set(W, U, a);
-                out.set(W, W, -a * g + 2.0 * a * vfp / p.xi - a * h / p.xi);
+                out.set(W, W, -a * g + 2.0 * a * r.slope / p.xi - a * r.curvature / p.xi);
                 out.set(W, THETA, a / p.xi);
-                out.set(THETA, W, -v * (y[THETA] + c * f) - 2.0 * c * v * vfp - c * v * h);
-                out.set(THETA, THETA, -v);
+                // ∂²R/∂w² = c (vF + 2vF' s + vF'' s² + vF' h).
+                out.set(THETA, W, c * (law.f + 2.0 * law.d1 * s + law.d2 * s * s + law.d1 * h));
+                out.set(THETA, THETA, law.d1 + law.d2 * s);
             }
         }
     }
@@ -188,17 +279,32 @@ mod tests {
     use super::*;
     use crate::integrate::jacobian_against_differences;
 
-    fn laws() -> [Friction; 3] {
+    fn frictions() -> [Friction; 3] {
         [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }]
     }
 
+    /// Every friction law × state law, without and with radiation damping.
+    fn models(gamma: f64, xi: f64, epsilon: f64) -> Vec<Drr> {
+        let mut out = Vec::new();
+        for friction in frictions() {
+            for (_, state_law) in StateLaw::ALL {
+                for eta in [0.0, 0.37] {
+                    out.push(Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, xi, epsilon, friction) }));
+                }
+            }
+        }
+        out
+    }
+
+    const STATES: [[f64; 3]; 3] = [[0.3, -0.4, 0.2], [-1.0, 2.5, 0.7], [2.0, -3.0, -1.0]];
+
     #[test]
     fn jacobian_matches_central_differences() {
-        for friction in laws() {
-            let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction });
-            for y in [[0.3, -0.4, 0.2], [-1.0, 2.5, 0.7], [2.0, -3.0, -1.0]] {
+        for drr in models(10.0, 0.7, 0.72) {
+            let p = drr.params();
+            for y in STATES {
                 for (row, col, exact, fd) in jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs())) {
-                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} y={y:?} ({row},{col}): {exact} vs {fd}");
+                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}");
                 }
             }
         }
@@ -206,9 +312,9 @@ mod tests {
 
     #[test]
     fn jacobian_derivative_matches_central_differences_of_the_jacobian() {
-        for friction in laws() {
-            let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction });
-            for y in [[0.3, -0.4, 0.2], [-1.0, 2.5, 0.7], [2.0, -3.0, -1.0]] {
+        for drr in models(10.0, 0.7, 0.72) {
+            let p = drr.params();
+            for y in STATES {
                 for k in 0..3 {
                     let mut exact = [0.0; 9];
                     drr.jacobian_derivative(0.0, &y, k, &mut JacobianMatrix::new(&mut exact, 3));
@@ -221,7 +327,7 @@ mod tests {
                     drr.jacobian(0.0, &ym, &mut JacobianMatrix::new(&mut jm, 3));
                     for i in 0..9 {
                         let fd = (jp[i] - jm[i]) / (2.0 * h);
-                        assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{friction:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
+                        assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{p:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
                     }
                 }
             }
@@ -229,21 +335,53 @@ mod tests {
     }
 
     #[test]
-    fn fixed_point_is_stationary_and_on_the_manifold() {
-        for friction in laws() {
-            let drr = Drr::new(DrrParams { gamma: 1e8, xi: 0.8, epsilon: 1.0, friction });
-            let y = drr.fixed_point();
-            let mut f = [1.0; 3];
-            drr.rhs(0.0, &y, &mut f);
-            assert!(f.iter().all(|v| v.abs() < 1e-12), "{friction:?}: {f:?}");
-            let w = drr.manifold_w(y[U], y[THETA]).unwrap();
-            assert!(w.abs() < 1e-12, "{friction:?}: {w}");
+    fn slip_law_is_the_papers_theta_equation() {
+        for friction in frictions() {
+            let drr = Drr::new(DrrParams::new(10.0, 0.7, 0.72, friction));
+            for y in STATES {
+                let mut d = [0.0; 3];
+                drr.rhs(0.0, &y, &mut d);
+                let (f, _) = friction.eval(y[W]);
+                let paper = -y[W].exp() * (y[THETA] + 1.72 * f);
+                assert!((d[THETA] - paper).abs() <= 1e-14 * (1.0 + paper.abs()), "{friction:?} y={y:?}: {} vs {paper}", d[THETA]);
+            }
         }
     }
 
     #[test]
+    fn fixed_point_is_stationary_and_on_the_manifold() {
+        for drr in models(1e8, 0.8, 1.0) {
+            let p = drr.params();
+            let y = drr.fixed_point();
+            let mut f = [1.0; 3];
+            drr.rhs(0.0, &y, &mut f);
+            assert!(f.iter().all(|v| v.abs() < 1e-12), "{p:?}: {f:?}");
+            let w = drr.manifold_w(y[U], y[THETA]).unwrap();
+            assert!(w.abs() < 1e-12, "{p:?}: {w}");
+        }
+    }
+
+    #[test]
+    fn manifold_w_inverts_manifold_u_with_damping() {
+        for drr in models(1e3, 0.7, 0.72) {
+            let p = drr.params();
+            for (w, theta) in [(-20.0, 0.3), (-1.0, -0.5), (0.4, 1.0), (18.0, -2.0)] {
+                let u = drr.manifold_u(w, theta);
+                let back = drr.manifold_w(u, theta).unwrap();
+                // w is determined by u only to the rounding of ξu + θ over ∂(ξG)/∂w.
+                let conditioning = 1e-15 * (1.0 + (p.xi * u).abs() + theta.abs()) / (p.xi * drr.manifold_offset_slope(w));
+                assert!((back - w).abs() < 1e-10 * (1.0 + w.abs()) + 10.0 * conditioning, "{p:?} w={w}: {back}");
+                assert!(drr.manifold_offset(&[u, back, theta]).abs() < 1e-12 * (1.0 + u.abs()), "{p:?} w={w}");
+            }
+        }
+        // Outside the range of f + ηv (asinh: f + ηv > 0): no point of the manifold.
+        let asinh = Drr::new(DrrParams { eta: 0.5, ..DrrParams::new(1e3, 0.7, 0.72, Friction::Asinh) });
+        assert_eq!(asinh.manifold_w(1.0, 0.0), None);
+    }
+
+    #[test]
     fn imex_parts_add_up_to_the_full_rhs() {
-        let drr = Drr::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction: Friction::Log });
+        let drr = Drr::new(DrrParams::new(1e3, 0.7, 0.72, Friction::Log));
         let y = [0.4, 1.3, -0.8];
         let (mut full, mut e, mut i) = ([0.0; 3], [0.0; 3], [0.0; 3]);
         drr.rhs(0.0, &y, &mut full);

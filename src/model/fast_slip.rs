@@ -82,7 +82,7 @@ mod tests {
     use crate::model::Drr;
 
     fn params(gamma: f64) -> DrrParams {
-        DrrParams { gamma, xi: 0.7, epsilon: 0.72, friction: Friction::Log }
+        DrrParams::new(gamma, 0.7, 0.72, Friction::Log)
     }
 
     #[test]

@@ -5,12 +5,14 @@ pub mod fast_slip;
 pub mod friction;
 pub mod robertson;
 pub mod slow_manifold;
+pub mod state_law;
 pub mod saddle_node;
 pub mod van_der_pol;
 pub mod variational;
 
 pub use drr::{Drr, DrrParams};
 pub use friction::Friction;
+pub use state_law::StateLaw;
 pub use saddle_node::{SaddleNode, SaddleNodeParams};
 pub use van_der_pol::{VanDerPol, VanDerPolParams};
 pub use variational::Variational;

@@ -145,7 +145,7 @@ mod tests {
     use crate::model::Friction;
 
     fn flow(friction: Friction) -> SlowFlow {
-        SlowFlow::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction })
+        SlowFlow::new(DrrParams::new(1e3, 0.7, 0.72, friction))
     }
 
     #[test]

@@ -174,18 +174,22 @@ impl<S: ImexSystem, const N: usize> ImexSystem for Variational<S, N> {
 mod tests {
     use super::*;
     use crate::integrate::jacobian_against_differences;
-    use crate::model::{Drr, DrrParams, Friction};
+    use crate::model::{Drr, DrrParams, Friction, StateLaw};
 
     #[test]
     fn augmented_jacobian_matches_central_differences() {
-        let drr = Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction: Friction::Log });
-        let var = Variational::<_, 3>::new(drr);
-        let mut z = Variational::<Drr, 3>::initial(&[0.3, -0.4, 0.2]);
-        for (i, v) in z.iter_mut().enumerate().skip(3) {
-            *v += 0.1 * (i as f64).sin();
-        }
-        for (row, col, exact, fd) in jacobian_against_differences(&var, &z, |x| 1e-6 * (1.0 + x.abs())) {
-            assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "({row},{col}): {exact} vs {fd}");
+        for (_, state_law) in StateLaw::ALL {
+            for eta in [0.0, 0.37] {
+                let drr = Drr::new(DrrParams { state_law, eta, ..DrrParams::new(10.0, 0.7, 0.72, Friction::Log) });
+                let var = Variational::<_, 3>::new(drr);
+                let mut z = Variational::<Drr, 3>::initial(&[0.3, -0.4, 0.2]);
+                for (i, v) in z.iter_mut().enumerate().skip(3) {
+                    *v += 0.1 * (i as f64).sin();
+                }
+                for (row, col, exact, fd) in jacobian_against_differences(&var, &z, |x| 1e-6 * (1.0 + x.abs())) {
+                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{state_law:?} η={eta} ({row},{col}): {exact} vs {fd}");
+                }
+            }
         }
     }
 }

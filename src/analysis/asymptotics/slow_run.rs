@@ -119,7 +119,7 @@ mod tests {
     use crate::model::{DrrParams, Friction};
 
     fn flow() -> SlowFlow {
-        SlowFlow::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction: Friction::Log })
+        SlowFlow::new(DrrParams::new(1e3, 0.7, 0.72, Friction::Log))
     }
 
     fn radau(y0: [f64; 3]) -> Radau5<SlowFlow> {

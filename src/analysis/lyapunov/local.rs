@@ -122,7 +122,7 @@ mod tests {
     use crate::model::Friction;
 
     fn params(gamma: f64, friction: Friction) -> DrrParams {
-        DrrParams { gamma, xi: 0.7, epsilon: 0.72, friction }
+        DrrParams::new(gamma, 0.7, 0.72, friction)
     }
 
     #[test]

@@ -282,7 +282,7 @@ mod tests {
     fn forced_rhs_is_drift_plus_forcing() {
         for friction in [Friction::Log, Friction::Power { alpha: 0.15 }, Friction::Asinh] {
             let m = NoiseModel::Drr {
-                system: Drr::new(DrrParams { gamma: 1e3, xi: 0.7, epsilon: 0.72, friction }),
+                system: Drr::new(DrrParams::new(1e3, 0.7, 0.72, friction)),
                 amplitudes: [0.1, 3e3, 0.2],
             };
             for x in [[0.3, -0.4, 0.2], [1.0, 0.1, -0.3], [-2.0, 5.0, 1.0]] {
@@ -301,7 +301,7 @@ mod tests {
     #[test]
     fn forcing_jacobian_matches_differences() {
         let m = NoiseModel::Drr {
-            system: Drr::new(DrrParams { gamma: 10.0, xi: 0.7, epsilon: 0.72, friction: Friction::Log }),
+            system: Drr::new(DrrParams::new(10.0, 0.7, 0.72, Friction::Log)),
             amplitudes: [0.1, 3.0, 0.2],
         };
         let (x, eta) = ([0.3, -0.4, 0.2], [0.5, -1.2, 0.7]);

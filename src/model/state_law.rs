@@ -1,0 +1,127 @@
+//! State-evolution laws of rate-and-state friction, in the paper's scaling.
+//!
+//! With φ = ln(v0·Θ/D_c), θ = (1+ε)φ, v = V/v0 and time in D_c/v0, every law reads
+//!
+//! ```text
+//! dθ/dt = (1+ε) · v · F(x),   x = θ/(1+ε) + f(v)   (x = ln(VΘ/D_c) for f = ln v),
+//! ```
+//!
+//! where the dimensional law dΘ/dt = G(VΘ/D_c) gives dφ/dt = v e^{−x} G(e^x), i.e.
+//! F(x) = e^{−x} G(e^x):
+//!
+//! ```text
+//! slip (Ruina):          dΘ/dt = −(VΘ/D_c) ln(VΘ/D_c)   F(x) = −x
+//! ageing (Dieterich):    dΘ/dt = 1 − VΘ/D_c             F(x) = e^{−x} − 1
+//! PRZ (Perrin–Rice–Zheng): dΘ/dt = 1 − (VΘ/(2D_c))²     F(x) = e^{−x} − e^{x}/4
+//! ```
+//!
+//! For f = ln v the ageing law is dθ/dt = (1+ε)(e^{−θ/(1+ε)} − v). Other friction laws replace
+//! ln v by f(v) inside x, the paper's convention for the slip law (its eq. puiss). The
+//! derivation is in docs/state-laws.md.
+//!
+//! Steady sliding is F(x*) = 0: x* = 0 (slip, ageing), x* = ln 2 (PRZ), and the relaxation rate
+//! there, κ = −F'(x*), is 1 for all three, so their linearisations at steady sliding coincide.
+
+use serde::{Deserialize, Serialize};
+
+/// The state-evolution law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StateLaw {
+    /// Ruina's slip law (the paper's law).
+    #[default]
+    Slip,
+    /// Dieterich's ageing law.
+    Ageing,
+    /// The Perrin–Rice–Zheng (1995) law.
+    Prz,
+}
+
+/// v·F(x), v·F'(x) and v·F''(x) at (w = ln v, x).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawTerms {
+    /// v F(x).
+    pub f: f64,
+    /// v F'(x).
+    pub d1: f64,
+    /// v F''(x).
+    pub d2: f64,
+}
+
+impl StateLaw {
+    /// Every law with its scene name.
+    pub const ALL: [(&'static str, StateLaw); 3] = [("slip", StateLaw::Slip), ("ageing", StateLaw::Ageing), ("prz", StateLaw::Prz)];
+
+    /// The scene name: "slip", "ageing" or "prz".
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(_, l)| *l == self).map_or("?", |(n, _)| n)
+    }
+
+    /// The law by its scene name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, l)| *l)
+    }
+
+    /// v·F(x) and its first two x-derivatives times v, at w = ln v. The exponentials are
+    /// combined (e^{w∓x}) so that v e^{∓x} does not overflow where the product is finite.
+    pub fn terms(self, w: f64, x: f64) -> LawTerms {
+        match self {
+            StateLaw::Slip => {
+                let v = w.exp();
+                LawTerms { f: -v * x, d1: -v, d2: 0.0 }
+            }
+            StateLaw::Ageing => {
+                let a = (w - x).exp();
+                LawTerms { f: a - w.exp(), d1: -a, d2: a }
+            }
+            StateLaw::Prz => {
+                let (a, b) = ((w - x).exp(), 0.25 * (w + x).exp());
+                LawTerms { f: a - b, d1: -a - b, d2: a - b }
+            }
+        }
+    }
+
+    /// x* with F(x*) = 0: the value of ln(VΘ/D_c) at steady sliding.
+    pub fn steady_x(self) -> f64 {
+        match self {
+            StateLaw::Slip | StateLaw::Ageing => 0.0,
+            StateLaw::Prz => std::f64::consts::LN_2,
+        }
+    }
+
+    /// κ = −F'(x*), the relaxation rate of the state at steady sliding (per unit v).
+    pub fn steady_rate(self) -> f64 {
+        -self.terms(0.0, self.steady_x()).d1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn terms_match_differences_and_vanish_at_steady_sliding() {
+        for (_, law) in StateLaw::ALL {
+            let w = 0.7;
+            for x in [-2.0, -0.3, 0.0, 0.4, 1.5] {
+                let t = law.terms(w, x);
+                let h = 1e-6;
+                let (p, m) = (law.terms(w, x + h), law.terms(w, x - h));
+                assert!(((p.f - m.f) / (2.0 * h) - t.d1).abs() < 1e-7 * (1.0 + t.d1.abs()), "{law:?} x={x}");
+                assert!(((p.d1 - m.d1) / (2.0 * h) - t.d2).abs() < 1e-7 * (1.0 + t.d2.abs()), "{law:?} x={x}");
+            }
+            assert!(law.terms(0.3, law.steady_x()).f.abs() < 1e-15, "{law:?}");
+            assert!((law.steady_rate() - 1.0).abs() < 1e-15, "{law:?}: κ = {}", law.steady_rate());
+        }
+    }
+
+    #[test]
+    fn ageing_with_log_friction_is_dieterichs_law_in_the_papers_scaling() {
+        // dθ/dt = (1+ε)(e^{−θ/(1+ε)} − v) with x = θ/(1+ε) + ln v.
+        let (eps, theta, w) = (1.0f64, 0.37, -1.2f64);
+        let c = 1.0 + eps;
+        let ours = c * StateLaw::Ageing.terms(w, theta / c + w).f;
+        let direct = c * ((-theta / c).exp() - w.exp());
+        assert!((ours - direct).abs() < 1e-15, "{ours} vs {direct}");
+    }
+}
