@@ -76,19 +76,31 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     })
 }
 
-/// Adds the likely physical cause to a failure: v falling to 0 in finite time. With
-/// dv/dt = −γ² G and G > 0 at v → 0, e^w decreases linearly to 0 and w = ln v → −∞: the block
-/// stops. That needs a friction law bounded below (no point of the slow manifold at this
-/// (u, θ)): with the regularised asinh law the block would go on and reverse, which the ln v
-/// formulation cannot follow. Under f = ln v, G → −∞ as v → 0 and v cannot reach 0.
+/// Adds the physical cause to a failure where one is known, and only where it is true.
+///
+/// - v falling to 0 in finite time: with dv/dt = −γ² G and G > 0 at v → 0, e^w decreases
+///   linearly to 0 and w = ln v → −∞: the block stops. That needs a friction law bounded below
+///   (no point of the slow manifold at this (u, θ)): with the regularised asinh law the block
+///   would go on and reverse, which the ln v formulation cannot follow. Under f = ln v,
+///   G → −∞ as v → 0 and v cannot reach 0.
+/// - An arrest deeper than doubles reach: ln v falls towards its floor, the slow manifold's
+///   w at this (u, θ); below w = −700, v = e^w and the rate γ² e^{−w} leave the range of
+///   doubles although the solution is smooth.
 fn diagnose(drr: &Drr, mut error: SolverError) -> SolverError {
     if let [u, w, theta] = error.state[..] {
         let g = drr.manifold_offset(&[u, w, theta]);
-        if w < -10.0 && g > 0.0 && drr.manifold_w(u, theta).is_none() {
+        let floor = drr.manifold_w(u, theta);
+        if w < -10.0 && g > 0.0 && floor.is_none() {
             error.message.push_str(&format!(
-                " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0): the block stops, \
-                 which the integration in ln v cannot pass]",
+                " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0 and no slow manifold \
+                 below it): the block stops, which the integration in ln v cannot pass]",
                 w.exp()
+            ));
+        } else if let Some(floor) = floor.filter(|f| *f < -700.0 && w < 0.0) {
+            error.message.push_str(&format!(
+                " [the arrest is deeper than double precision reaches: ln v falls towards its floor {floor:.1} \
+                 (the slow manifold at u = {u:.4e}, θ = {theta:.4e}), below −700, where v = e^w and the rate \
+                 γ²e^(−w) leave the range of doubles]"
             ));
         }
     }
