@@ -91,9 +91,13 @@ enum Command {
     /// Run the numerical stress grid (γ, ξ, ε, tolerances, far-off starts, every method).
     /// Exit 1 if any cell panics, reports a non-finite number or methods disagree.
     Stress {
-        /// The small grid (runs in CI).
-        #[arg(long)]
+        /// The small grid (runs in CI); same as `--grid quick`.
+        #[arg(long, conflicts_with = "grid")]
         quick: bool,
+        /// Which grid: quick, full (the default) or physical (every stiff method over the
+        /// unstable regime, γ = 10 … 1e12, ε/ξ up to 25).
+        #[arg(long, value_enum)]
+        grid: Option<stress::Grid>,
         /// Print the counts and defects as JSON.
         #[arg(long)]
         json: bool,
@@ -383,8 +387,8 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     }
 }
 
-fn stress_command(quick: bool, json: bool, threads: Option<usize>, table: Option<PathBuf>) -> Result<(), Failure> {
-    let cells = stress::grid(quick);
+fn stress_command(grid: stress::Grid, json: bool, threads: Option<usize>, table: Option<PathBuf>) -> Result<(), Failure> {
+    let cells = stress::grid(grid);
     let progress = Progress::new("stress", "cells");
     let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
     let seconds = progress.finish();
@@ -505,7 +509,10 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
-        Command::Stress { quick, json, threads, table } => stress_command(quick, json, threads, table),
+        Command::Stress { quick, grid, json, threads, table } => {
+            let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };
+            stress_command(grid, json, threads, table)
+        }
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
         Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),

@@ -95,9 +95,24 @@ pub enum Outcome {
     },
 }
 
-/// The grid: the quick one runs in CI in well under a minute on 2 cores.
-pub fn grid(quick: bool) -> Vec<Cell> {
-    let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = if quick {
+/// Which grid to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Grid {
+    /// The small grid that CI runs (far-off starts, every method, ε/ξ up to 25 at γ = 1e8).
+    Quick,
+    /// The full grid of docs/robustness.md.
+    Full,
+    /// The physical region of issue #13: every stiff method from the default start at rtol
+    /// 1e-6, 1e-8, 1e-10 over γ = 10 … 1e12 and (ξ, ε) with 1.05 ξ < ε ≤ 25 ξ.
+    Physical,
+}
+
+/// The cells of a grid.
+pub fn grid(kind: Grid) -> Vec<Cell> {
+    if kind == Grid::Physical {
+        return physical_grid();
+    }
+    let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = if kind == Grid::Quick {
         (vec![1.0, 1e4, 1e8], vec![0.2, 2.0], vec![0.1, 3.0, 5.0], vec![1e-4, 1e-10])
     } else {
         (
@@ -117,6 +132,28 @@ pub fn grid(quick: bool) -> Vec<Cell> {
                         for (_, method) in Method::ALL {
                             cells.push(Cell { gamma, xi, epsilon, rtol, start: *start, method });
                         }
+                    }
+                }
+            }
+        }
+    }
+    cells
+}
+
+/// The physical-region grid (see [`Grid::Physical`]).
+fn physical_grid() -> Vec<Cell> {
+    let methods = [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
+    let mut cells = Vec::new();
+    for k in 1..=12 {
+        let gamma = 10f64.powi(k);
+        for xi in [0.1, 0.2, 0.5, 0.7, 1.0, 2.0, 5.0] {
+            for epsilon in [0.5, 1.0, 2.0, 3.0, 5.0, 10.0] {
+                if epsilon <= 1.05 * xi || epsilon > 25.0 * xi {
+                    continue;
+                }
+                for rtol in [1e-6, 1e-8, 1e-10] {
+                    for method in methods {
+                        cells.push(Cell { gamma, xi, epsilon, rtol, start: None, method });
                     }
                 }
             }
