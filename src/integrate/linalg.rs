@@ -135,4 +135,39 @@ mod tests {
         assert!(!lu_real(&mut nan, &mut [0; 2], 2));
         assert!((rms(&[3.0, 4.0], &[1.0, 2.0]) - 6.5f64.sqrt()).abs() < 1e-15);
     }
+
+    /// E5's Jacobian (column-major) at a state of its t ≈ 1e4 phase, with the slow rate A = 0
+    /// and y₂ = 0 so that J₂ − J₃ − J₄ = 0 holds exactly in floating point (otherwise the
+    /// entries A − B·y₃ and −B·y₁ − CM·y₂ round, and J itself breaks the invariant by u·B·y₁).
+    fn e5_jacobian(y: [f64; 4]) -> Vec<f64> {
+        let (a, b, cm, c) = (0.0, 1.1e7, 1.13e9, 1.13e3);
+        let rows = [
+            [-a - b * y[2], 0.0, -b * y[0], 0.0],
+            [a, -cm * y[2], -cm * y[1], 0.0],
+            [a - b * y[2], -cm * y[2], -b * y[0] - cm * y[1], c],
+            [b * y[2], 0.0, b * y[0], -c],
+        ];
+        (0..16).map(|k| rows[k % 4][k / 4]).collect()
+    }
+
+    #[test]
+    fn refined_solve_keeps_a_linear_invariant_that_the_plain_solve_loses() {
+        let jac = e5_jacobian([7.24e-4, 0.0, 7.96e-12, 5.61e-11]);
+        let d = 1.0 / (4500.0 * 0.21);
+        let mut w: Vec<f64> = jac.iter().map(|v| -v).collect();
+        for i in 0..4 {
+            w[i * 4 + i] += d;
+        }
+        let mut ip = [0; 4];
+        assert!(lu_real(&mut w, &mut ip, 4));
+        // b₂ − b₃ − b₄ = 0 exactly (powers of two), so x₂ − x₃ − x₄ = 0 in exact arithmetic.
+        let b = [-2f64.powi(-24), 2f64.powi(-40), 2f64.powi(-42), 3.0 * 2f64.powi(-42)];
+        let balance = |x: &[f64]| (x[1] - x[2] - x[3]).abs() / x[1].abs();
+        let mut plain = b;
+        solve_real(&w, &ip, 4, &mut plain);
+        let (mut refined, mut r) = (b, [0.0; 4]);
+        solve_refined(&w, &ip, &jac, d, &b, &mut refined, &mut r);
+        assert!(balance(&refined) < 1e-14, "refined: {:e}", balance(&refined));
+        assert!(balance(&plain) > 100.0 * balance(&refined), "plain {:e}, refined {:e}", balance(&plain), balance(&refined));
+    }
 }
