@@ -629,3 +629,18 @@ fn failures_are_typed_errors_with_time_and_state() {
     let e = outcomes[0].as_ref().unwrap().as_ref().unwrap_err();
     assert!((e.t - 1.0).abs() < 1e-6, "{e}");
 }
+
+/// The stability boundaries of the explicit scheme are a constant computed once: two integrators
+/// built one after the other take the same steps to the same result.
+#[test]
+fn two_constructions_integrate_identically() {
+    let options = Options::new(1e-6, Tolerance::Scalar(1e-6));
+    let run = || {
+        let mut solver = Extrapolation::new(VanDerPol(1e-3), 0.0, &[2.0, 0.0], &options).unwrap();
+        solver.advance(1.0, Task::Normal).unwrap();
+        (solver.state().to_vec(), solver.stats(), solver.switches())
+    };
+    let (first, second) = (run(), run());
+    assert_eq!(first, second);
+    assert!(first.2 > 0, "the run must switch schemes, so that the boundaries are used: {first:?}");
+}

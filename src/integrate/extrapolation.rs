@@ -83,7 +83,7 @@
 //! small, −4 matrix repeatedly singular, −5 repeated row failures (stability checks), −6
 //! right-hand-side failure, −7 repeated error-test failures.
 
-use super::linalg::{lu_real, rms, solve_real};
+use super::linalg::{lu_real, rms, solve_real, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper};
 use super::{
     ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance,
@@ -108,8 +108,6 @@ const REPEATS: u32 = 3;
 const WINDOW: u32 = 5;
 /// Consecutive singular iteration matrices before giving up.
 const MAX_SINGULAR: u32 = 5;
-/// Defaults for the failure bounds of one step.
-const DEFAULT_MAX_STEPS: i64 = 500;
 const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_MAX_ROW_FAILS: u32 = 50;
 /// Failed attempts of any kind in one step before giving up (a guard).
@@ -295,13 +293,13 @@ impl Work {
 /// continuous output of degree k_c after an implicit step, ODEX's of degree 2k_c + 1 after an
 /// explicit one), `reinit` restarts with the explicit scheme and fresh step-size history and
 /// keeps the statistics and the switch count. Options: `rtol`/`atol` (used as given, as in
-/// SEULEX/ODEX), `max_steps` (per Normal call, default 500), `max_order` (caps the tableau:
-/// max_order rows for the linearly implicit scheme, ⌈max_order/2⌉ for the midpoint one; at least
-/// 4, at most 12 and 9), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
-/// disabled once reached), `max_err_test_fails` (consecutive rejections in one step, default 50),
-/// `max_conv_fails` (rows stopped by the stability checks in one step, default 50),
-/// `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef` are ignored (no Newton
-/// iteration).
+/// SEULEX/ODEX), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
+/// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
+/// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
+/// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
+/// rejections in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
+/// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
+/// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
 pub struct Extrapolation<S: OdeSystem> {
     system: S,
     n: usize,
@@ -395,6 +393,17 @@ fn midpoint_stability(nj: &[f64], k: usize, z: f64) -> f64 {
 
 /// The linear stability boundary of T_{k,k} on the negative real axis: the first z < 0 where
 /// |R(z)| exceeds 1 (scanned in steps of 0.01, then bisected).
+/// The linear stability boundaries of the explicit T_{k,k}, k = 1..=KM_EXPLICIT (index 0
+/// unused), of ODEX's step-number sequence: a constant of the method, computed on first use
+/// (a scan of about a millisecond) and shared by every integrator.
+fn stability_boundaries() -> &'static [f64] {
+    static BOUNDARIES: std::sync::OnceLock<Vec<f64>> = std::sync::OnceLock::new();
+    BOUNDARIES.get_or_init(|| {
+        let nj = Control::odex(KM_EXPLICIT).nj;
+        (0..=KM_EXPLICIT).map(|k| if k == 0 { 0.0 } else { stability_boundary(&nj, k) }).collect()
+    })
+}
+
 fn stability_boundary(nj: &[f64], k: usize) -> f64 {
     let stable = |z: f64| midpoint_stability(nj, k, z).abs() <= 1.0;
     let mut z = 0.0;
@@ -447,15 +456,24 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// non-finite, non-finite t0, invalid options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats::default())?;
+        let core = Core::new(NAME, n, t0, y0, options, Stats::default())?;
+        let no_newton = "linearly implicit extrapolation has no Newton iteration";
+        core.reject_unsupported(&[
+            ("max_nonlin_iters", options.max_nonlin_iters.is_some(), no_newton),
+            ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
+        ])?;
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![*a; n],
             Tolerance::PerComponent(v) => v.clone(),
         };
         let (km_imp, km_exp) = match options.max_order {
+            Some(m) if !(4..=KM_IMPLICIT as i32).contains(&m) => {
+                let message = format!("max_order = {m} must be in 4..={KM_IMPLICIT} (tableau rows of the linearly implicit scheme)");
+                return Err(core.invalid(message));
+            }
             Some(m) => {
-                let m = m.max(1) as usize;
-                (m.clamp(4, KM_IMPLICIT), m.div_ceil(2).clamp(4, KM_EXPLICIT))
+                let m = m as usize;
+                (m, m.div_ceil(2).clamp(4, KM_EXPLICIT))
             }
             None => (KM_IMPLICIT, KM_EXPLICIT),
         };
@@ -468,10 +486,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             exp.off[km_exp + 1],
             (km_imp + 1).max(2 * km_exp + 3),
         );
-        let mut lsb = vec![0.0; km_exp + 1];
-        for (k, b) in lsb.iter_mut().enumerate().skip(1) {
-            *b = stability_boundary(&exp.nj, k);
-        }
+        let lsb = stability_boundaries()[..=km_exp].to_vec();
         let km = km_imp.max(km_exp);
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
         let thet = options.rtol.min(1e-4);
@@ -745,7 +760,8 @@ impl<S: OdeSystem> Extrapolation<S> {
         }
         w.yh1.copy_from_slice(&self.core.y);
         w.del.copy_from_slice(&w.dy);
-        solve_real(&w.lu, &w.ip, n, &mut w.del);
+        // Refined solves keep the linear invariants of f (see `solve_refined`).
+        solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
         let base = self.imp.off[j];
         w.incr[base].copy_from_slice(&w.del);
         for mm in 1..m {
@@ -773,7 +789,7 @@ impl<S: OdeSystem> Extrapolation<S> {
                 }
             }
             w.del.copy_from_slice(&w.dy);
-            solve_real(&w.lu, &w.ip, n, &mut w.del);
+            solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
             w.incr[base + mm].copy_from_slice(&w.del);
         }
         for i in 0..n {

@@ -9,6 +9,13 @@ pub enum Tolerance {
     PerComponent(Vec<f64>),
 }
 
+/// Default step budget per call to `advance` ([`Options::max_steps`]). SUNDIALS' own default,
+/// 500, stops long stiff runs part-way (VDPOL to t = 2 at rtol 1e-8 needs thousands of steps),
+/// while an unlimited budget would let a run whose step size stagnates above the round-off
+/// floor go on for ever; one million steps completes every problem of the stiff test set
+/// (docs/test-set.md) and still bounds a runaway run to seconds for small systems.
+pub const DEFAULT_MAX_STEPS: i64 = 1_000_000;
+
 /// Integrator options. `None` keeps the integrator's own default.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -16,9 +23,15 @@ pub struct Options {
     pub rtol: f64,
     /// Absolute tolerance (≥ 0, finite).
     pub atol: Tolerance,
-    /// Maximum number of internal steps per call to `advance` (SUNDIALS default: 500).
+    /// Maximum number of internal steps per call to `advance` (as SUNDIALS' `mxstep`): a call
+    /// that needs more fails with [`crate::integrate::ErrorKind::TooMuchWork`] at the last
+    /// step reached, from where a further call may go on. `None` is [`DEFAULT_MAX_STEPS`] for
+    /// every integrator, so that a whole integration finishes in one call; pass `Some(500)`
+    /// for SUNDIALS' own default.
     pub max_steps: Option<i64>,
-    /// Maximum method order (CVODE: ≤ 5 for BDF, ≤ 12 for Adams).
+    /// Maximum method order. Only CVODE (≤ 5 for BDF, ≤ 12 for Adams) and Extrapolation (4 to
+    /// 12 tableau rows) have one; the other integrators reject it with
+    /// [`crate::integrate::ErrorKind::InvalidInput`].
     pub max_order: Option<i32>,
     /// First step size to try.
     pub initial_step: Option<f64>,

@@ -57,7 +57,6 @@ const FACR: f64 = 0.125;
 /// Consecutive singular iteration matrices before giving up (RADAU5: 5).
 const MAX_SINGULAR: u32 = 5;
 /// Defaults for options RADAU5 does not bound (it relies on the step underflow test).
-const DEFAULT_MAX_STEPS: i64 = 500;
 const DEFAULT_MAX_CONV_FAILS: u32 = 10;
 const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_NIT: u32 = 7;
@@ -212,12 +211,12 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (the collocation
 /// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `max_steps` (per Normal
-/// call, default 500), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
+/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `max_steps` (per call,
+/// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
 /// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
 /// step, default 10), `max_err_test_fails` (consecutive rejections, default 50),
-/// `fail_on_step_underflow`. `max_order` is ignored (the order is 5).
+/// `fail_on_step_underflow`. `max_order` is an InvalidInput error (the order is 5).
 pub struct Radau5<S: OdeSystem> {
     system: S,
     n: usize,
@@ -367,7 +366,8 @@ impl<S: OdeSystem> Radau5<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats { last_order: 5, ..Stats::default() })?;
+        let core = Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+        core.reject_unsupported(&[("max_order", options.max_order.is_some(), "the order is fixed at 5")])?;
         // RADAU5's tolerance transformation.
         let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
         let atol: Vec<f64> = match &options.atol {

@@ -42,7 +42,7 @@
 // The published coefficients are kept with all their digits.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real};
+use super::linalg::{lu_real, rms, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper};
 use super::{
     ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task,
@@ -61,7 +61,6 @@ const FAC2: f64 = 1.0 / 6.0;
 const EXPONENT: f64 = 0.2;
 /// Consecutive singular matrices W within one step before giving up.
 const MAX_SINGULAR: u32 = 5;
-const DEFAULT_MAX_STEPS: i64 = 500;
 const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 
 /// Number of stages.
@@ -159,11 +158,12 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous
 /// output is a quartic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `max_steps` (per Normal
-/// call, default 500), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
+/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `max_steps` (per call,
+/// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_err_test_fails` (consecutive rejections,
 /// default 50), `fail_on_step_underflow`. `max_order` (the order is 5), `max_nonlin_iters`,
-/// `max_conv_fails` and `nonlin_conv_coef` (there is no nonlinear iteration) are ignored.
+/// `max_conv_fails` and `nonlin_conv_coef` (there is no nonlinear iteration) are InvalidInput
+/// errors.
 ///
 /// Non-autonomous systems: ∂f/∂t is a forward difference (see the module documentation).
 pub struct Rodas5p<S: OdeSystem> {
@@ -222,7 +222,14 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, DEFAULT_MAX_STEPS, Stats { last_order: 5, ..Stats::default() })?;
+        let core = Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+        let no_newton = "a Rosenbrock method has no nonlinear iteration";
+        core.reject_unsupported(&[
+            ("max_order", options.max_order.is_some(), "the order is fixed at 5"),
+            ("max_nonlin_iters", options.max_nonlin_iters.is_some(), no_newton),
+            ("max_conv_fails", options.max_conv_fails.is_some(), no_newton),
+            ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
+        ])?;
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![*a; n],
             Tolerance::PerComponent(v) => v.clone(),
@@ -417,7 +424,9 @@ impl<S: OdeSystem> Rodas5p<S> {
                     *k += hd * ft;
                 }
             }
-            solve_real(&w.e, &w.ip, n, ks);
+            // Solve (I/(hγ) − J) k_s = b_s, refined: see `solve_refined`.
+            w.tmp.copy_from_slice(ks);
+            solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
         }
         let last = &w.k[(STAGES - 1) * n..];
         for ((ynew, u), k) in w.ynew.iter_mut().zip(&w.u).zip(last) {

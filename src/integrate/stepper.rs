@@ -6,7 +6,7 @@
 //!
 //! [`Integrator::advance`]: super::Integrator::advance
 
-use super::{ErrorKind, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task};
+use super::{ErrorKind, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
 
 /// Unit roundoff of the step-underflow test (as in RADAU5, RODAS, SEULEX and ODEX).
 const UROUND: f64 = 1e-16;
@@ -66,7 +66,6 @@ impl Core {
         t0: f64,
         y0: &[f64],
         options: &Options,
-        default_max_steps: i64,
         stats: Stats,
     ) -> Result<Self, SolverError> {
         let invalid = |message: String| SolverError {
@@ -92,7 +91,7 @@ impl Core {
         options.validate(n).map_err(invalid)?;
         Ok(Self {
             name,
-            max_steps: options.max_steps.unwrap_or(default_max_steps).max(1) as u64,
+            max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
             hmin: options.min_step.unwrap_or(0.0),
             hmax: options.max_step.unwrap_or(f64::INFINITY),
             initial_step: options.initial_step,
@@ -119,6 +118,17 @@ impl Core {
     /// An error at the internal point (the last accepted step's end).
     pub fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
         SolverError { solver: self.name, kind, t: self.x, state: self.y.clone(), flag, message }
+    }
+
+    /// Options the method does not have, as (name, is set, why): an invalid-input error naming
+    /// the first one that is set (an option is never silently ignored).
+    pub fn reject_unsupported(&self, options: &[(&str, bool, &str)]) -> Result<(), SolverError> {
+        match options.iter().find(|(_, set, _)| *set) {
+            Some((name, _, why)) => {
+                Err(self.invalid(format!("{name} is not an option of {} ({why}): leave it unset (None)", self.name)))
+            }
+            None => Ok(()),
+        }
     }
 
     /// An invalid-input error at the last returned point.

@@ -123,7 +123,9 @@ impl Default for ArkMethod {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ArkSettings {
     /// Implicit-stage predictor (ARKStepSetPredictorMethod: 0 trivial … 5); `None` keeps
-    /// ARKODE's default.
+    /// ARKODE's default (0), or 1 (maximum order) for implicit stages without
+    /// `deduce_implicit_rhs`, which also default to `nonlin_conv_coef` = 1e-7 and
+    /// `max_err_test_fails` = 20 (the settings of SUNDIALS' ark_robertson example).
     pub predictor_method: Option<i32>,
     /// Deduce each implicit stage derivative from the stage equation, (z_i − a_i)/(h γ),
     /// instead of evaluating f_I(z_i) (ARKStepSetDeduceImplicitRhs). On very stiff problems
@@ -249,7 +251,21 @@ impl<S> Solver<S> {
         }
         // SAFETY: live ARKStep memory; the ids name built-in tables of this ARKODE.
         self.check(unsafe { ffi::ARKStepSetTableNum(m, tables.0, tables.1) })?;
-        if let Some(p) = settings.predictor_method {
+        // Implicit defaults (unless set, or deducing the stage derivatives): SUNDIALS'
+        // ark_robertson settings. With ARKODE's own defaults the Newton residual, times the
+        // stiffness, enters the error estimate through f_I(z_i), and OREGO, ROBER and E5 end
+        // in repeated error-test failures (docs/test-set.md).
+        let tight_newton = tables.0 != ffi::ARKODE_DIRKTableID_ARKODE_DIRK_NONE && !settings.deduce_implicit_rhs;
+        let predictor = settings.predictor_method.or(tight_newton.then_some(1));
+        if tight_newton && options.nonlin_conv_coef.is_none() {
+            // SAFETY: live ARKStep memory; stores a scalar.
+            self.check(unsafe { ffi::ARKStepSetNonlinConvCoef(m, 1e-7) })?;
+        }
+        if tight_newton && options.max_err_test_fails.is_none() {
+            // SAFETY: live ARKStep memory; stores a scalar.
+            self.check(unsafe { ffi::ARKStepSetMaxErrTestFails(m, 20) })?;
+        }
+        if let Some(p) = predictor {
             // SAFETY: live ARKStep memory; stores a scalar.
             self.check(unsafe { ffi::ARKStepSetPredictorMethod(m, p) })?;
         }

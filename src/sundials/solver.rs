@@ -192,10 +192,9 @@ impl<S> Solver<S> {
         let api = self.api;
         // SAFETY (all calls below): `m` is live solver memory and each setter only stores a
         // scalar option.
-        if let Some(v) = o.max_steps {
-            // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
-            self.check(unsafe { (api.set_max_num_steps)(m, v as c_long) })?;
-        }
+        let max_steps = o.max_steps.unwrap_or(crate::integrate::DEFAULT_MAX_STEPS);
+        // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
+        self.check(unsafe { (api.set_max_num_steps)(m, max_steps as c_long) })?;
         if let Some(v) = o.initial_step {
             // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (api.set_init_step)(m, v) })?;
