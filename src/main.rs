@@ -107,6 +107,11 @@ enum Command {
         /// Also write the full table of outcomes (per γ and method, per start) as Markdown.
         #[arg(long, value_name = "FILE.md")]
         table: Option<PathBuf>,
+        /// Known failures (one cell key a line, as printed): the run fails on any other
+        /// failure, and on a known one that no longer fails (update the file). Without it, any
+        /// failure fails the run.
+        #[arg(long, value_name = "FILE")]
+        known: Option<PathBuf>,
     },
     /// Remake the paper's figures (SVG), their JSON reports and a summary of its claims
     /// against ours (summary.md, summary.html) in DIR.
@@ -387,7 +392,19 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     }
 }
 
-fn stress_command(grid: stress::Grid, json: bool, threads: Option<usize>, table: Option<PathBuf>) -> Result<(), Failure> {
+fn stress_command(
+    grid: stress::Grid,
+    json: bool,
+    threads: Option<usize>,
+    table: Option<PathBuf>,
+    known: Option<PathBuf>,
+) -> Result<(), Failure> {
+    let known = match &known {
+        Some(path) => Some(
+            std::fs::read_to_string(path).map_err(|e| Failure(2, format!("--known {}: cannot read it: {e}", path.display())))?,
+        ),
+        None => None,
+    };
     let cells = stress::grid(grid);
     let progress = Progress::new("stress", "cells");
     let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
@@ -400,35 +417,46 @@ fn stress_command(grid: stress::Grid, json: bool, threads: Option<usize>, table:
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
     } else {
         println!(
-            "stress: {} cells in {seconds:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent; \
-             physical region {} of {} converged",
-            summary.cells,
-            summary.ok,
-            summary.typed_errors,
-            summary.panics,
-            summary.nan,
-            summary.inconsistent,
-            summary.physical_ok,
-            summary.physical
+            "stress: {} cells in {seconds:.1} s: {} ok, typed errors {:?}, {} panics, {} nan, {} inconsistent",
+            summary.cells, summary.ok, summary.typed_errors, summary.panics, summary.nan, summary.inconsistent
         );
         for (reason, (n, errors)) in &summary.limits {
             println!("  expected limit ({n} cells, {errors} typed errors): {reason}");
         }
+        for f in &summary.failures {
+            println!("  FAILURE {f}");
+        }
         for d in &summary.defects {
             println!("  DEFECT {d}");
         }
-        // A physical cell passes only with a converged cycle, a below-threshold one only
-        // without a cycle or error, any other cell with a finite report or a typed error.
-        let failed = summary.panics + summary.nan + summary.physical_failures + summary.decay_failures;
-        println!("stress: {} passed, {} failed", summary.cells - failed, failed);
-        if summary.inconsistent > 0 {
-            println!("stress: {} parameter points where methods disagree on the period", summary.inconsistent);
-        }
+        println!(
+            "stress: physical region {} of {} cells converged, {} failed; below threshold {} failed; {} defects",
+            summary.physical_ok,
+            summary.physical,
+            summary.physical_failures,
+            summary.decay_failures,
+            summary.defects.len()
+        );
     }
-    if summary.defects.is_empty() {
+    let mut problems = summary.defects.len();
+    match &known {
+        Some(text) => {
+            let (new, fixed) = stress::against_known(&cells, &outcomes, text);
+            for k in &new {
+                println!("  NEW FAILURE (not in the known-failures file) {k}");
+            }
+            for k in &fixed {
+                println!("  NOW PASSES (remove it from the known-failures file) {k}");
+            }
+            println!("stress: {} known failures, {} new failures, {} fixed", summary.failures.len() - new.len(), new.len(), fixed.len());
+            problems += new.len() + fixed.len();
+        }
+        None => problems += summary.failures.len(),
+    }
+    if problems == 0 {
         Ok(())
     } else {
-        Err(Failure(1, format!("{} defects in the stress grid", summary.defects.len())))
+        Err(Failure(1, format!("{problems} problems in the stress grid (defects, failures not known, known failures fixed)")))
     }
 }
 
@@ -509,9 +537,9 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
-        Command::Stress { quick, grid, json, threads, table } => {
+        Command::Stress { quick, grid, json, threads, table, known } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };
-            stress_command(grid, json, threads, table)
+            stress_command(grid, json, threads, table, known)
         }
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
