@@ -179,6 +179,22 @@ pub fn reference_states(drr: Drr, method: Method, rtol: f64, start: f64, y0: [f6
     Ok((out, clock.rebases()))
 }
 
+/// The Radau5 step ends (global time, (u, w, θ)) from (start, y0) to past `end`, through a
+/// [`Clock`].
+fn reference_steps(drr: Drr, rtol: f64, start: f64, y0: [f64; 3], end: f64) -> Result<(Vec<f64>, Vec<[f64; 3]>), SolverError> {
+    let spec = SolverSpec { method: Method::Radau5, rtol, atol: [rtol; 3], table: None, explicit_table: None };
+    let (mut integ, _) = engine::integrator(drr, &spec, &y0)?;
+    let mut clock = Clock::new(integ.as_mut(), Time::new(start));
+    let (mut times, mut states) = (vec![start], vec![y0]);
+    while clock.now().to_f64() < end {
+        clock.step().map_err(|e| clock.at_global(e))?;
+        let y = clock.state();
+        times.push(clock.now().to_f64());
+        states.push([y[0], y[1], y[2]]);
+    }
+    Ok((times, states))
+}
+
 /// Linear interpolation of the time where w crosses `level` between samples i and i + 1;
 /// an error if the samples are too far apart in w to locate it.
 fn crossing(t: &[f64], w: &[f64], i: usize, level: f64, what: &str, origin: &[String]) -> Result<f64, String> {
@@ -303,7 +319,18 @@ pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> R
     let w_user: Vec<f64> = uw.iter().map(|y| y[1]).collect();
     let w_ref: Vec<f64> = reference.iter().map(|y| y[1]).collect();
     let user_cycles = cycle_events(&user.t, &w_user, &user.origin).map_err(CompareError::Input)?;
-    let ref_cycles = cycle_events(&user.t, &w_ref, &user.origin).map_err(CompareError::Input)?;
+    // The reference's events on the user's sample times (interpolation common to both); where
+    // the reference is too far off the user's to be resolved at those times (e.g. out of
+    // phase), on its own Radau5 steps.
+    let ref_cycles = match cycle_events(&user.t, &w_ref, &user.origin) {
+        Ok(c) => c,
+        Err(_) => {
+            let (fine, states) = reference_steps(drr, rtol, start, y0, *user.t.last().expect("two samples"))?;
+            let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
+            let origin: Vec<String> = fine.iter().map(|t| format!("reference at t = {t}")).collect();
+            cycle_events(&fine, &w, &origin).map_err(|e| CompareError::Input(format!("the reference could not be resolved: {e}")))?
+        }
+    };
     let mut reasons = Vec::new();
     if user_cycles.len() != ref_cycles.len() {
         reasons.push(format!("{} complete cycles against the reference's {} over the same span", user_cycles.len(), ref_cycles.len()));
