@@ -86,12 +86,12 @@ fn an_accurate_ten_cycle_trajectory_agrees_and_a_one_percent_period_error_disagr
     let dir = temp_dir("ten");
     let good = dir.join("good.csv");
     std::fs::write(&good, csv(&times, &states)).unwrap();
-    let (code, stdout, stderr) = compare_cli(&good, &["--tolerance", "1e-5", "--json"]);
+    let (code, stdout, stderr) = compare_cli(&good, &["--json"]);
     assert_eq!(code, Some(0), "{stdout}\n{stderr}");
     let c: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(c["verdict"], "agrees");
     assert!(c["cycles"][0].as_u64().unwrap() >= 9, "{}", c["cycles"]);
-    assert!(c["reference"]["accuracy"].as_f64().unwrap() < 1e-6, "{}", c["reference"]);
+    assert!(c["reference"]["accuracy"].as_f64().unwrap() < 1e-5, "{}", c["reference"]);
     // The same samples on a clock running 1 % slow: a 1 % period error.
     let slow: Vec<f64> = times.iter().map(|t| 1.01 * t).collect();
     let bad = dir.join("slow.csv");
@@ -152,4 +152,34 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     let (code, _, stderr) = compare_cli(&file, &[]);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("unknown field `perod`"), "{stderr}");
+}
+
+/// The reference's own error, cycle by cycle, against the rtol-1e-13 two-method trajectory
+/// (largest |Δ ln v| at fixed time within each cycle), for the reference of `compare` (Radau5
+/// through the clock at rtol 1e-12) and for the former one (CVODE BDF at rtol 1e-11, atol
+/// 1e-13, one global clock). Prints the table (docs/compare.md):
+/// `cargo test --release --test compare reference_error_by_cycle -- --ignored --nocapture`
+#[test]
+#[ignore]
+fn reference_error_by_cycle() {
+    let (times, truth) = accurate_ten_cycles();
+    let drr = stickslip::model::Drr::new(fig1().params);
+    let (clocked, _) = compare::trajectory::reference_states(drr, Method::Radau5, 1e-12, 0.0, truth[0], &times).unwrap();
+    let spec = scene::SolverSpec { method: Method::CvodeBdf, rtol: 1e-11, atol: [1e-13; 3], table: None, explicit_table: None };
+    let (mut integ, _) = stickslip::engine::integrator(drr, &spec, &truth[0]).unwrap();
+    let mut former = vec![truth[0]];
+    for &t in &times[1..] {
+        integ.advance(t, stickslip::integrate::Task::Normal).unwrap();
+        let y = integ.state();
+        former.push([y[0], y[1], y[2]]);
+    }
+    let w: Vec<f64> = truth.iter().map(|y| y[1]).collect();
+    let origin: Vec<String> = times.iter().map(|t| format!("t = {t}")).collect();
+    let cycles = compare::trajectory::cycle_events(&times, &w, &origin).unwrap();
+    for (k, c) in cycles.iter().enumerate() {
+        let within = |r: &[[f64; 3]]| {
+            (0..times.len()).filter(|&i| times[i] >= c.start && times[i] < c.start + c.period).map(|i| (r[i][1] - truth[i][1]).abs()).fold(0.0, f64::max)
+        };
+        println!("cycle {:>2}: |Δ ln v| clocked radau5 1e-12 {:.2e}, former cvode 1e-11 {:.2e}", k + 1, within(&clocked), within(&former));
+    }
 }
