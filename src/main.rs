@@ -38,7 +38,8 @@ enum Command {
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
     /// Cross-check: run a scene with several methods and compare the cycle, or compare a
-    /// user's trajectory (CSV t,u,v,theta or JSON) or report against a CVODE reference.
+    /// user's trajectory (CSV t,u,v,theta or JSON; per cycle) or report against a reference
+    /// (exit 0 agrees, 3 disagrees).
     Compare {
         /// Scene file (its model and initial state; its tolerances for --methods).
         scene: PathBuf,
@@ -48,9 +49,8 @@ enum Command {
         /// A user's trajectory or report to check against the reference.
         #[arg(long, value_name = "FILE")]
         against: Option<PathBuf>,
-        /// Tolerance for --against (relative for u, θ and report values; absolute in ln v).
-        /// Inside a slip a fixed-time comparison turns a phase error δt into δ ln v = (dw/dt) δt,
-        /// so two accurate solvers differ there by ~1e-5: see docs/compare.md.
+        /// Tolerance for --against (relative for durations, u, θ and report values; absolute in
+        /// ln v). Exit 0 if the file agrees within it, 3 if it disagrees: see docs/compare.md.
         #[arg(long, default_value_t = 1e-4)]
         tolerance: f64,
         /// Print JSON.
