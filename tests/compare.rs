@@ -106,6 +106,21 @@ fn an_accurate_ten_cycle_trajectory_agrees_and_a_one_percent_period_error_disagr
     // 1.0022e-2 measured: the reference's events are then located on its own steps, the user's by
     // linear interpolation between its samples.
     assert!((period - 0.01).abs() < 5e-5, "{period}");
+    // θ off by 1e-3 from sample 1000 on: the worst state deviation is located there.
+    let mut shifted = states.clone();
+    for y in shifted.iter_mut().skip(1000) {
+        y[2] += 1e-3;
+    }
+    let user = compare::Trajectory {
+        t: times.clone(),
+        y: shifted.iter().map(|y| [y[0], y[1].exp(), y[2]]).collect(),
+        origin: (0..times.len()).map(|i| format!("index {i}")).collect(),
+    };
+    let c = compare::against_trajectory(&fig1(), &user, 1e-4).unwrap();
+    assert_eq!(c.verdict, compare::Verdict::Disagrees);
+    let worst = c.worst_state.unwrap();
+    assert_eq!(worst.quantity, "theta");
+    assert!(worst.t >= times[1000] && worst.deviation > 5e-4, "{worst:?}");
     // Too coarse to locate the slips: a clear message, exit 2.
     let coarse: Vec<usize> = (0..times.len()).step_by(times.len() / 40).collect();
     let sparse = dir.join("coarse.csv");
@@ -114,6 +129,7 @@ fn an_accurate_ten_cycle_trajectory_agrees_and_a_one_percent_period_error_disagr
     let (code, _, stderr) = compare_cli(&sparse, &[]);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("sampled too coarsely"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -152,6 +168,7 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     let (code, _, stderr) = compare_cli(&file, &[]);
     assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("unknown field `perod`"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The reference's own error, cycle by cycle, against the rtol-1e-13 two-method trajectory
