@@ -160,6 +160,8 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     assert_eq!(c.verdict, compare::Verdict::Disagrees);
     let e = compare::read_user_data(r#"{"cycle": {"perod": 18.1}}"#).unwrap_err();
     assert!(e.contains("perod"), "{e}");
+    let e = compare::read_user_data(r#"{"cycle": {"status": "periodic"}}"#).unwrap_err();
+    assert!(e.contains("none of the compared keys"), "{e}");
     let e = compare::read_user_data(r#"{"cycle": {"period": "18.1"}}"#).unwrap_err();
     assert!(e.contains("cycle.period"), "{e}");
     let dir = temp_dir("report");

@@ -125,6 +125,9 @@ pub fn read_user_data(text: &str) -> Result<UserData, String> {
                 let path = e.path().to_string();
                 format!("report: {path}: {} (the keys of docs/reports.md's cycle section)", e.into_inner())
             })?;
+            if super::QUANTITIES.iter().all(|k| report.cycle.get(k).is_none()) {
+                return Err(format!("report: cycle has none of the compared keys {} (all absent or null)", super::QUANTITIES.join(", ")));
+            }
             return Ok(UserData::Report(report.cycle));
         }
         return read_json_trajectory(&json).and_then(check).map(UserData::Trajectory);
