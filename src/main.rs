@@ -1,5 +1,5 @@
 //! The `stickslip` command line. Subcommands are thin: parse, call the library, print.
-//! Exit codes: 0 success, 1 failed computation, 2 bad input.
+//! Exit codes: 0 success, 1 failed computation, 2 bad input, 3 `compare`: disagrees.
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -38,7 +38,8 @@ enum Command {
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
     /// Cross-check: run a scene with several methods and compare the cycle, or compare a
-    /// user's trajectory (CSV t,u,v,theta or JSON) or report against a CVODE reference.
+    /// user's trajectory (CSV t,u,v,theta or JSON; per cycle) or report against a reference
+    /// (exit 0 agrees, 3 disagrees).
     Compare {
         /// Scene file (its model and initial state; its tolerances for --methods).
         scene: PathBuf,
@@ -48,9 +49,8 @@ enum Command {
         /// A user's trajectory or report to check against the reference.
         #[arg(long, value_name = "FILE")]
         against: Option<PathBuf>,
-        /// Tolerance for --against (relative for u, θ and report values; absolute in ln v).
-        /// Inside a slip a fixed-time comparison turns a phase error δt into δ ln v = (dw/dt) δt,
-        /// so two accurate solvers differ there by ~1e-5: see docs/compare.md.
+        /// Tolerance for --against (relative for durations, u, θ and report values; absolute in
+        /// ln v). Exit 0 if the file agrees within it, 3 if it disagrees: see docs/compare.md.
         #[arg(long, default_value_t = 1e-4)]
         tolerance: f64,
         /// Print JSON.
@@ -265,33 +265,51 @@ fn compare_command(
     if let Some(file) = against {
         let text = std::fs::read_to_string(&file).map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
         let data = compare::read_user_data(&text).map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
-        let failed = |e: stickslip::integrate::SolverError| Failure(1, format!("reference run failed: {e}"));
-        return match data {
+        let verdict = match data {
             compare::UserData::Trajectory(t) => {
-                let c = compare::against_trajectory(&scene, &t, tolerance).map_err(failed)?;
+                let c = compare::against_trajectory(&scene, &t, tolerance).map_err(|e| match e {
+                    compare::CompareError::Input(m) => Failure(2, format!("{}: {m}", file.display())),
+                    other => Failure(1, other.to_string()),
+                })?;
                 if json {
                     print_json(&c);
                 } else {
-                    println!("{} samples against {}", c.samples, c.reference);
-                    println!("max deviation: u {:.2e}, ln v {:.2e}, θ {:.2e} (tolerance {:.1e})", c.max_deviation[0], c.max_deviation[1], c.max_deviation[2], c.tolerance);
-                    match &c.first_divergence {
-                        Some((t, q, theirs, ours)) => println!("first divergence at t = {t}: {q} = {theirs} (reference {ours})"),
-                        None => println!("agrees within tolerance at every sample"),
+                    let r = &c.reference;
+                    println!("{} samples, {} complete cycles (reference: {})", c.samples, c.cycles[0], c.cycles[1]);
+                    println!("reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy {:.1e} (against rodas5p)", r.rtol, r.rebases, r.accuracy);
+                    for q in &c.worst_per_quantity {
+                        println!("{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}", q.quantity, q.cycle, q.user, q.reference, q.deviation);
+                    }
+                    let m = &c.max_state_deviation;
+                    println!("state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}", m.u, m.ln_v, m.theta);
+                    if let Some(w) = &c.worst_state {
+                        println!("worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}", w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference);
+                    }
+                    for reason in &c.reasons {
+                        println!("DISAGREES: {reason}");
                     }
                 }
-                Ok(())
+                c.verdict
             }
             compare::UserData::Report(r) => {
-                let c = compare::against_report(&scene, &r, tolerance).map_err(failed)?;
+                let c = compare::against_report(&scene, &r, tolerance).map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
                 if json {
                     print_json(&c);
                 } else {
-                    for (key, theirs, ours, rel, beyond) in &c.rows {
-                        println!("{key:<16} yours {theirs:<22} ours {ours:<22} {rel:.1e}{}", if *beyond { "  BEYOND TOLERANCE" } else { "" });
+                    for row in &c.rows {
+                        let flag = if row.beyond_tolerance { "  BEYOND TOLERANCE" } else { "" };
+                        println!("{:<16} yours {:<22} ours {:<22} {:.1e}{flag}", row.quantity, row.user, row.reference, row.deviation);
                     }
                 }
-                Ok(())
+                c.verdict
             }
+        };
+        if !json {
+            println!("verdict: {} (tolerance {tolerance:.1e})", if verdict == compare::Verdict::Agrees { "agrees" } else { "disagrees" });
+        }
+        return match verdict {
+            compare::Verdict::Agrees => Ok(()),
+            compare::Verdict::Disagrees => Err(Failure(3, format!("{} disagrees with the reference beyond the tolerance {tolerance:e}", file.display()))),
         };
     }
     if methods.is_empty() {

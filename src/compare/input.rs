@@ -1,0 +1,207 @@
+//! Reading a user's file: a trajectory (CSV or JSON columns) or a report (JSON with a
+//! `cycle` object). Every error names where (file line, or JSON path), the column and the value.
+
+use serde::Deserialize;
+use serde::de::IgnoredAny;
+
+/// A user's trajectory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    /// Times (increasing).
+    pub t: Vec<f64>,
+    /// States (u, v, θ).
+    pub y: Vec<[f64; 3]>,
+    /// Where each sample comes from, for messages: "line 17" (CSV) or "index 16" (JSON).
+    pub origin: Vec<String>,
+}
+
+/// The `cycle` keys of a user's report: the keys of our own report's `cycle` section
+/// (docs/reports.md). The compared ones must be numbers (or null); the others are accepted
+/// and ignored; any other key is an error.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UserCycle {
+    /// Time between upward crossings of v = 1.
+    pub period: Option<f64>,
+    /// From the upward crossing of v = 1 to the v maximum.
+    pub t0: Option<f64>,
+    /// Full width of v(t) at half its maximum.
+    pub slip_half_width: Option<f64>,
+    /// ln v_max.
+    pub ln_v_max: Option<f64>,
+    /// ln v_min.
+    pub ln_v_min: Option<f64>,
+    /// u at the v maximum.
+    pub u_at_v_max: Option<f64>,
+    /// θ at the v maximum.
+    pub theta_at_v_max: Option<f64>,
+    /// Slip per event.
+    pub slip: Option<f64>,
+    #[serde(default, rename = "v_max")]
+    _v_max: Option<IgnoredAny>,
+    #[serde(default, rename = "v_min")]
+    _v_min: Option<IgnoredAny>,
+    #[serde(default, rename = "u_min")]
+    _u_min: Option<IgnoredAny>,
+    #[serde(default, rename = "u_max")]
+    _u_max: Option<IgnoredAny>,
+    #[serde(default, rename = "theta_min")]
+    _theta_min: Option<IgnoredAny>,
+    #[serde(default, rename = "theta_max")]
+    _theta_max: Option<IgnoredAny>,
+    #[serde(default, rename = "slip_duration")]
+    _slip_duration: Option<IgnoredAny>,
+    #[serde(default, rename = "steps")]
+    _steps: Option<IgnoredAny>,
+    #[serde(default, rename = "status")]
+    _status: Option<IgnoredAny>,
+    #[serde(default, rename = "converged")]
+    _converged: Option<IgnoredAny>,
+    #[serde(default, rename = "cycles_per_period")]
+    _cycles_per_period: Option<IgnoredAny>,
+    #[serde(default, rename = "spread")]
+    _spread: Option<IgnoredAny>,
+    #[serde(default, rename = "orbit")]
+    _orbit: Option<IgnoredAny>,
+    #[serde(default, rename = "orbit_period")]
+    _orbit_period: Option<IgnoredAny>,
+    #[serde(default, rename = "last_cycles")]
+    _last_cycles: Option<IgnoredAny>,
+    #[serde(default, rename = "cycles_used")]
+    _cycles_used: Option<IgnoredAny>,
+    #[serde(default, rename = "cycles_computed")]
+    _cycles_computed: Option<IgnoredAny>,
+    #[serde(default, rename = "time_integrated")]
+    _time_integrated: Option<IgnoredAny>,
+    #[serde(default, rename = "convergence_rule")]
+    _convergence_rule: Option<IgnoredAny>,
+    #[serde(default, rename = "tolerance")]
+    _tolerance: Option<IgnoredAny>,
+    #[serde(default, rename = "steps_per_cycle")]
+    _steps_per_cycle: Option<IgnoredAny>,
+    #[serde(default, rename = "trajectory")]
+    _trajectory: Option<IgnoredAny>,
+}
+
+impl UserCycle {
+    /// The value the user gave for a compared key.
+    pub fn get(&self, key: &str) -> Option<f64> {
+        match key {
+            "period" => self.period,
+            "t0" => self.t0,
+            "slip_half_width" => self.slip_half_width,
+            "ln_v_max" => self.ln_v_max,
+            "ln_v_min" => self.ln_v_min,
+            "u_at_v_max" => self.u_at_v_max,
+            "theta_at_v_max" => self.theta_at_v_max,
+            "slip" => self.slip,
+            _ => None,
+        }
+    }
+}
+
+/// A user's report: other top-level keys (a whole stickslip report) are ignored.
+#[derive(Debug, Clone, Deserialize)]
+struct UserReport {
+    cycle: UserCycle,
+}
+
+/// A user's file: a trajectory or a report.
+#[derive(Debug, Clone, PartialEq)]
+pub enum UserData {
+    /// t, u, v, θ samples.
+    Trajectory(Trajectory),
+    /// The `cycle` object of a report.
+    Report(UserCycle),
+}
+
+/// Reads a user's CSV or JSON file; errors say what is wrong and where (file lines for CSV,
+/// JSON paths for JSON), naming the column and the value.
+pub fn read_user_data(text: &str) -> Result<UserData, String> {
+    if text.trim_start().starts_with('{') {
+        let json: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))?;
+        if json.get("cycle").is_some() {
+            let report: UserReport = serde_path_to_error::deserialize(&json).map_err(|e| {
+                let path = e.path().to_string();
+                format!("report: {path}: {} (the keys of docs/reports.md's cycle section)", e.into_inner())
+            })?;
+            if super::QUANTITIES.iter().all(|k| report.cycle.get(k).is_none()) {
+                return Err(format!("report: cycle has none of the compared keys {} (all absent or null)", super::QUANTITIES.join(", ")));
+            }
+            return Ok(UserData::Report(report.cycle));
+        }
+        return read_json_trajectory(&json).and_then(check).map(UserData::Trajectory);
+    }
+    read_csv(text).and_then(check).map(UserData::Trajectory)
+}
+
+fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, String> {
+    let column = |name: &str| -> Result<Vec<f64>, String> {
+        json.get(name)
+            .and_then(|c| c.as_array())
+            .ok_or_else(|| format!("JSON trajectory: missing array \"{name}\" (need t, u, v, theta; or a report with \"cycle\")"))?
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x.as_f64().ok_or_else(|| format!("JSON trajectory: {name}[{i}] = {x} is not a number")))
+            .collect()
+    };
+    let (t, u, v, theta) = (column("t")?, column("u")?, column("v")?, column("theta")?);
+    if [u.len(), v.len(), theta.len()].iter().any(|&n| n != t.len()) {
+        return Err(format!(
+            "JSON trajectory: t, u, v and theta must have the same length (they have {}, {}, {}, {})",
+            t.len(),
+            u.len(),
+            v.len(),
+            theta.len()
+        ));
+    }
+    let y = (0..t.len()).map(|i| [u[i], v[i], theta[i]]).collect();
+    Ok(Trajectory { t, y, origin: (0..u.len()).map(|i| format!("index {i}")).collect() })
+}
+
+fn read_csv(text: &str) -> Result<Trajectory, String> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let (_, header) = lines.next().ok_or("empty file")?;
+    let names: Vec<String> = header.split(',').map(|s| s.trim().to_lowercase()).collect();
+    let index = |name: &str| {
+        names.iter().position(|n| n == name).ok_or_else(|| format!("CSV header {header:?} lacks column \"{name}\" (need t,u,v,theta)"))
+    };
+    let cols = [("t", index("t")?), ("u", index("u")?), ("v", index("v")?), ("theta", index("theta")?)];
+    let mut trajectory = Trajectory { t: Vec::new(), y: Vec::new(), origin: Vec::new() };
+    for (n, line) in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        let value = |(name, c): (&str, usize)| -> Result<f64, String> {
+            let cell = cells.get(c).ok_or_else(|| format!("line {}: column {name} is missing ({} columns, header has {})", n + 1, cells.len(), names.len()))?;
+            cell.trim().parse::<f64>().map_err(|_| format!("line {}: column {name} = {:?} is not a number", n + 1, cell.trim()))
+        };
+        trajectory.t.push(value(cols[0])?);
+        trajectory.y.push([value(cols[1])?, value(cols[2])?, value(cols[3])?]);
+        trajectory.origin.push(format!("line {}", n + 1));
+    }
+    Ok(trajectory)
+}
+
+fn check(trajectory: Trajectory) -> Result<Trajectory, String> {
+    if trajectory.t.len() < 2 {
+        return Err(format!("a trajectory needs at least two samples (it has {})", trajectory.t.len()));
+    }
+    let names = ["u", "v", "theta"];
+    for (i, (t, y)) in trajectory.t.iter().zip(&trajectory.y).enumerate() {
+        let at = &trajectory.origin[i];
+        if !t.is_finite() {
+            return Err(format!("{at}: column t = {t} must be finite"));
+        }
+        if i > 0 && *t <= trajectory.t[i - 1] {
+            return Err(format!("{at}: column t = {t} must be greater than the previous sample's t = {} (times must increase)", trajectory.t[i - 1]));
+        }
+        for k in [0, 2] {
+            if !y[k].is_finite() {
+                return Err(format!("{at}: column {} = {} must be finite", names[k], y[k]));
+            }
+        }
+        if !(y[1].is_finite() && y[1] > 0.0) {
+            return Err(format!("{at}: column v = {} must be finite and > 0", y[1]));
+        }
+    }
+    Ok(trajectory)
+}
