@@ -28,6 +28,15 @@ pub(crate) struct Diagnostics {
     pub nonfinite_rhs: u64,
     /// Why the root function failed, if it did.
     pub root_failure: Option<String>,
+    /// Stop the integration at the first "t + h = t" (`fail_on_step_underflow`): the next
+    /// right-hand-side call after the warning fails unrecoverably, so SUNDIALS returns at once.
+    pub stop_on_underflow: bool,
+    /// Set when a right-hand-side call refused to continue because of a step underflow.
+    pub stopped_for_underflow: bool,
+    /// SUNDIALS 7's warning stream (the logger's), read after each call and, with
+    /// `stop_on_underflow`, in every right-hand-side call.
+    #[cfg(sundials7)]
+    pub warning_log: Option<super::context::WarningLog>,
 }
 
 const MAX_KEPT_WARNINGS: usize = 64;
@@ -36,7 +45,46 @@ impl Diagnostics {
     /// Marks the start of a call into SUNDIALS.
     pub fn begin_call(&mut self) {
         self.last_error = None;
+        self.stopped_for_underflow = false;
         self.at_call = (self.nonfinite_rhs, self.step_underflows);
+    }
+
+    /// Records one message from SUNDIALS: an error (negative code) or a warning, counting
+    /// "t + h = t" step underflows.
+    fn record(&mut self, message: String, is_error: bool) {
+        if message.contains("t + h = t") {
+            self.step_underflows += 1;
+        }
+        if is_error {
+            self.last_error = Some(message);
+        } else if self.warnings.len() < MAX_KEPT_WARNINGS {
+            self.warnings.push(message);
+        }
+    }
+
+    /// Brings the warning counters up to date. SUNDIALS 6 reports warnings through the error
+    /// handler as they happen (nothing to do); SUNDIALS 7 writes them to its logger, read here.
+    pub fn poll_warnings(&mut self) {
+        #[cfg(sundials7)]
+        if let Some(log) = self.warning_log.as_mut() {
+            let text = log.take_new();
+            for line in text.lines().filter(|l| !l.is_empty()) {
+                self.record(line.to_string(), false);
+            }
+        }
+    }
+
+    /// Whether the right-hand side must refuse to continue: `stop_on_underflow` is set and a
+    /// step underflow happened during the current call.
+    fn must_stop_for_underflow(&mut self) -> bool {
+        if !self.stop_on_underflow {
+            return false;
+        }
+        self.poll_warnings();
+        if self.step_underflows > self.at_call.1 {
+            self.stopped_for_underflow = true;
+        }
+        self.stopped_for_underflow
     }
 
     /// (non-finite RHS results, step underflows) since [`Diagnostics::begin_call`].
@@ -77,6 +125,9 @@ pub(crate) struct Shared<S> {
 
 /// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.
 fn rhs_code(diag: &mut Diagnostics, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
+    if diag.must_stop_for_underflow() {
+        return -1;
+    }
     if !diag.guarded(|| f(&mut *dydt)) {
         return -1;
     }
@@ -221,8 +272,22 @@ pub(crate) unsafe extern "C" fn roots<S>(
     0
 }
 
-/// SUNDIALS' error handler (CVErrHandlerFn / ARKErrHandlerFn): records messages instead of
-/// printing them.
+/// Text of a C string from SUNDIALS (empty for null).
+///
+/// # Safety
+/// `p` is null or a NUL-terminated string valid for the call.
+unsafe fn text(p: *const c_char) -> String {
+    if p.is_null() {
+        String::new()
+    } else {
+        // SAFETY: guaranteed by the caller.
+        unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+    }
+}
+
+/// SUNDIALS 6's error handler (CVErrHandlerFn / ARKErrHandlerFn, set per solver memory):
+/// records errors and warnings instead of printing them.
+#[cfg(not(sundials7))]
 pub(crate) unsafe extern "C" fn error_handler(
     error_code: c_int,
     _module: *const c_char,
@@ -230,23 +295,28 @@ pub(crate) unsafe extern "C" fn error_handler(
     msg: *mut c_char,
     data: *mut c_void,
 ) {
-    let text = |p: *const c_char| {
-        if p.is_null() {
-            String::new()
-        } else {
-            // SAFETY: SUNDIALS passes NUL-terminated strings valid for this call.
-            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
-        }
-    };
+    // SAFETY: SUNDIALS passes NUL-terminated strings valid for this call.
+    let message = unsafe { format!("{}: {}", text(function), text(msg)) };
     // SAFETY: `data` is the `Diagnostics` inside the registered `Shared<S>`.
     let diag = unsafe { &mut *(data as *mut Diagnostics) };
-    let message = format!("{}: {}", text(function), text(msg));
-    if message.contains("t + h = t") {
-        diag.step_underflows += 1;
-    }
-    if error_code < 0 {
-        diag.last_error = Some(message);
-    } else if diag.warnings.len() < MAX_KEPT_WARNINGS {
-        diag.warnings.push(message);
-    }
+    diag.record(message, error_code < 0);
+}
+
+/// SUNDIALS 7's error handler (SUNErrHandlerFn, pushed on the context): records errors instead
+/// of logging them. Warnings do not come here in 7 (see [`Diagnostics::poll_warnings`]).
+#[cfg(sundials7)]
+pub(crate) unsafe extern "C" fn error_handler(
+    _line: c_int,
+    function: *const c_char,
+    _file: *const c_char,
+    msg: *const c_char,
+    error_code: ffi::SUNErrCode,
+    data: *mut c_void,
+    _ctx: ffi::SUNContext,
+) {
+    // SAFETY: SUNDIALS passes NUL-terminated strings (or null) valid for this call.
+    let message = unsafe { format!("{}: {}", text(function), text(msg)) };
+    // SAFETY: `data` is the `Diagnostics` inside the solver's boxed `Shared<S>`.
+    let diag = unsafe { &mut *(data as *mut Diagnostics) };
+    diag.record(message, error_code < 0);
 }
