@@ -60,6 +60,7 @@ bind() {
 bind /proc /proc
 bind /sys /sys
 bind /dev /dev
+bind /dev/pts /dev/pts
 bind "$cargo_home" /opt/cargo
 bind "$rustup_home" /opt/rustup
 
