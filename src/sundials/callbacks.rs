@@ -33,6 +33,9 @@ pub(crate) struct Diagnostics {
     pub stop_on_underflow: bool,
     /// Set when a right-hand-side call refused to continue because of a step underflow.
     pub stopped_for_underflow: bool,
+    /// Time of the previous right-hand-side call (SUNDIALS 7: when to read the warning log).
+    #[cfg(sundials7)]
+    last_rhs_t: Option<f64>,
     /// SUNDIALS 7's warning stream (the logger's), read after each call and, with
     /// `stop_on_underflow`, in every right-hand-side call.
     #[cfg(sundials7)]
@@ -76,11 +79,19 @@ impl Diagnostics {
 
     /// Whether the right-hand side must refuse to continue: `stop_on_underflow` is set and a
     /// step underflow happened during the current call.
-    fn must_stop_for_underflow(&mut self) -> bool {
+    #[cfg_attr(not(sundials7), allow(unused_variables))]
+    fn must_stop_for_underflow(&mut self, t: f64) -> bool {
         if !self.stop_on_underflow {
             return false;
         }
-        self.poll_warnings();
+        // On 7 a look at the warning log costs a system call, too much for every call. A step
+        // below the spacing of t evaluates the right-hand side at the time of the previous
+        // evaluation (t + c·h = t), so look then: at the latest the second evaluation of the
+        // step that makes no progress. (Every warning is still counted after the call.)
+        #[cfg(sundials7)]
+        if self.last_rhs_t.replace(t) == Some(t) {
+            self.poll_warnings();
+        }
         if self.step_underflows > self.at_call.1 {
             self.stopped_for_underflow = true;
         }
@@ -124,8 +135,8 @@ pub(crate) struct Shared<S> {
 }
 
 /// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.
-fn rhs_code(diag: &mut Diagnostics, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
-    if diag.must_stop_for_underflow() {
+fn rhs_code(diag: &mut Diagnostics, t: f64, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
+    if diag.must_stop_for_underflow(t) {
         return -1;
     }
     if !diag.guarded(|| f(&mut *dydt)) {
@@ -153,7 +164,7 @@ pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs(t, y, dy))
 }
 
 /// f_E(t, y) for ARKStep IMEX.
@@ -168,7 +179,7 @@ pub(crate) unsafe extern "C" fn rhs_explicit<S: ImexSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs_explicit(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_explicit(t, y, dy))
 }
 
 /// f_I(t, y) for ARKStep IMEX.
@@ -183,7 +194,7 @@ pub(crate) unsafe extern "C" fn rhs_implicit<S: ImexSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs_implicit(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_implicit(t, y, dy))
 }
 
 /// Fills a dense Jacobian through `fill` and maps the outcome to a return code.

@@ -62,10 +62,14 @@ mod v7 {
             // SAFETY: the logger belongs to the context, which outlives this log (the solver
             // drops its callback data, which holds this log, before the context).
             unsafe { ffi::SUNLogger_Flush(self.logger, ffi::SUNLogLevel_SUN_LOGLEVEL_WARNING) };
-            let mut text = String::new();
-            // A failed read leaves the text empty; the next call retries from the same offset.
-            let _ = self.file.read_to_string(&mut text);
-            text
+            // One read(2) when nothing is new (read_to_string would add statx and lseek).
+            let mut bytes = Vec::new();
+            let mut chunk = [0u8; 4096];
+            // A failed read ends this look; the next call resumes from the same offset.
+            while let Ok(n @ 1..) = self.file.read(&mut chunk) {
+                bytes.extend_from_slice(&chunk[..n]);
+            }
+            String::from_utf8_lossy(&bytes).into_owned()
         }
     }
 
