@@ -1,52 +1,77 @@
-//! Links Debian's SUNDIALS (libsundials-dev, 6.x) and generates the ARKStep bindings that
-//! `sundials-sys` lacks. Fails loudly, naming the Debian packages to install, when the headers,
-//! the libraries or libclang are missing; it never falls back to a vendored SUNDIALS.
+//! Links Debian's SUNDIALS (libsundials-dev: 6.x on Debian 12, 7.x built with MPI on Debian 13)
+//! and generates the bindings stickslip uses with one bindgen pass over the system headers.
+//!
+//! Why not `sundials-sys`: its build script passes no MPI include folder to bindgen, so on an
+//! MPI-enabled system SUNDIALS (Debian 13) it cannot read `sundials_types.h` (which includes
+//! `<mpi.h>`) and silently falls back to building its vendored SUNDIALS; nor can it express
+//! `SUN_COMM_NULL`, which is OpenMPI's `MPI_COMM_NULL` macro (the address of
+//! `ompi_mpi_comm_null`). Its wrapper header also binds no ARKODE function, so we already ran
+//! bindgen here for ARKStep. One pass over the system headers, with the MPI flags when SUNDIALS
+//! needs them, serves both versions and can never pick up a vendored copy.
+//!
+//! Emits `cfg(sundials7)` for the 7.x API; the version differences stay in src/sundials/.
+//! Fails loudly, naming what is actually missing and the Debian package that provides it.
 
 use std::env;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
-const FIX: &str = "install Debian's SUNDIALS and libclang: \
-                   `apt-get install -y libsundials-dev libclang-dev` \
-                   (or run `bash tools/deps.sh`, which the README commands call)";
+fn fail(what: &str, fix: &str) -> ! {
+    panic!("\n\nstickslip build: {what}\n  fix: {fix}\n  stickslip never builds a vendored SUNDIALS.\n\n");
+}
 
-fn fail(what: &str) -> ! {
-    panic!("\n\nstickslip build: {what}\n  fix: {FIX}\n  stickslip never builds a vendored SUNDIALS.\n\n");
+const FIX_SUNDIALS: &str = "`apt-get install -y libsundials-dev` (or run `bash tools/deps.sh`, which the README commands call)";
+
+/// What sundials_config.h says about the installed SUNDIALS.
+struct Config {
+    version: String,
+    major: u32,
+    mpi: bool,
 }
 
 fn include_dir() -> PathBuf {
     let candidates: Vec<PathBuf> = env::var_os("SUNDIALS_INCLUDE_DIR")
         .map(|d| vec![PathBuf::from(d)])
         .unwrap_or_else(|| vec![PathBuf::from("/usr/include"), PathBuf::from("/usr/local/include")]);
+    let needed = ["sundials/sundials_config.h", "cvode/cvode.h", "arkode/arkode_arkstep.h"];
     for dir in &candidates {
-        let needed = ["sundials/sundials_config.h", "cvode/cvode.h", "arkode/arkode_arkstep.h"];
         if needed.iter().all(|h| dir.join(h).is_file()) {
             return dir.clone();
         }
     }
-    fail(&format!(
-        "SUNDIALS headers (sundials/sundials_config.h, cvode/cvode.h, arkode/arkode_arkstep.h) \
-         not found in {candidates:?}"
-    ));
+    let missing: Vec<String> = candidates
+        .iter()
+        .flat_map(|d| needed.iter().map(move |h| d.join(h)))
+        .filter(|p| !p.is_file())
+        .map(|p| p.display().to_string())
+        .collect();
+    fail(&format!("the SUNDIALS headers are missing: {}", missing.join(", ")), FIX_SUNDIALS);
 }
 
-/// Reads `SUNDIALS_VERSION "x.y.z"` from sundials_config.h.
-fn header_version(inc: &Path) -> String {
-    let config = std::fs::read_to_string(inc.join("sundials/sundials_config.h"))
-        .unwrap_or_else(|e| fail(&format!("cannot read sundials_config.h: {e}")));
-    let version = config
-        .lines()
-        .find_map(|l| l.strip_prefix("#define SUNDIALS_VERSION "))
-        .map(|v| v.trim().trim_matches('"').to_string())
-        .unwrap_or_else(|| fail("sundials_config.h has no SUNDIALS_VERSION"));
-    if !version.starts_with("6.") {
-        fail(&format!(
-            "found SUNDIALS {version}; stickslip targets the 6.x series shipped by Debian bookworm"
-        ));
+/// Reads the version and the MPI switch from sundials_config.h.
+fn read_config(inc: &Path) -> Config {
+    let path = inc.join("sundials/sundials_config.h");
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", path.display()), FIX_SUNDIALS));
+    let define = |name: &str| {
+        text.lines()
+            .find_map(|l| l.trim().strip_prefix("#define ")?.strip_prefix(name)?.strip_prefix(' ').map(str::trim))
+            .map(|v| v.trim_matches('"').to_string())
+    };
+    let version = define("SUNDIALS_VERSION")
+        .unwrap_or_else(|| fail(&format!("{} has no SUNDIALS_VERSION", path.display()), FIX_SUNDIALS));
+    let major: u32 = version.split('.').next().and_then(|m| m.parse().ok()).unwrap_or(0);
+    if major != 6 && major != 7 {
+        fail(
+            &format!("found SUNDIALS {version} in {}; stickslip supports the 6.x (Debian 12) and 7.x (Debian 13) series", path.display()),
+            "install Debian 12's or 13's libsundials-dev, or point SUNDIALS_INCLUDE_DIR / SUNDIALS_LIBRARY_DIR at a 6.x or 7.x installation",
+        );
     }
-    version
+    let mpi = define("SUNDIALS_MPI_ENABLED").is_some_and(|v| v == "1");
+    Config { version, major, mpi }
 }
 
-fn library_dir() -> PathBuf {
+fn library_dir(config: &Config) -> PathBuf {
     let arch = env::var("CARGO_CFG_TARGET_ARCH").unwrap_or_default();
     let mut candidates: Vec<PathBuf> = Vec::new();
     if let Some(d) = env::var_os("SUNDIALS_LIBRARY_DIR") {
@@ -56,66 +81,219 @@ fn library_dir() -> PathBuf {
         [format!("/usr/lib/{arch}-linux-gnu"), "/usr/lib".into(), "/usr/lib64".into(), "/usr/local/lib".into()]
             .map(PathBuf::from),
     );
+    let needed: Vec<String> = libraries(config).iter().map(|l| format!("lib{l}.so")).collect();
     for dir in &candidates {
-        let needed = ["libsundials_cvode.so", "libsundials_arkode.so", "libsundials_nvecserial.so"];
         if needed.iter().all(|l| dir.join(l).exists()) {
             return dir.clone();
         }
     }
-    fail(&format!(
-        "SUNDIALS shared libraries (libsundials_cvode.so, libsundials_arkode.so) not found in {candidates:?}"
-    ));
+    let first = &candidates[0];
+    let missing: Vec<&str> = needed.iter().filter(|l| !first.join(l).exists()).map(String::as_str).collect();
+    fail(
+        &format!(
+            "SUNDIALS {} shared libraries not found: {} missing from {} (also searched {:?})",
+            config.version,
+            missing.join(", "),
+            first.display(),
+            &candidates[1..]
+        ),
+        FIX_SUNDIALS,
+    );
 }
 
-/// ARKStep/ERKStep bindings and `SUNDIALSGetVersion`, reusing sundials-sys's shared types (N_Vector, SUNMatrix, ...).
-fn arkode_bindings(inc: &Path, out: &Path) {
-    let shared_types = [
-        "N_Vector", "_generic_N_Vector", "_generic_N_Vector_Ops", "N_Vector_Ops", "N_Vector_ID",
-        "SUNContext", "_SUNContext", "SUNMatrix", "_generic_SUNMatrix", "_generic_SUNMatrix_Ops",
-        "SUNMatrix_ID", "SUNLinearSolver", "_generic_SUNLinearSolver", "_generic_SUNLinearSolver_Ops",
-        "SUNLinearSolver_Type", "SUNLinearSolver_ID", "SUNNonlinearSolver", "_generic_SUNNonlinearSolver",
-        "_generic_SUNNonlinearSolver_Ops", "SUNNonlinearSolver_Type", "realtype", "sunrealtype",
-        "sunindextype", "booleantype", "sunbooleantype", "SUNLogger", "_SUNLogger", "SUNProfiler",
-        "_SUNProfiler", "FILE", "_IO_FILE", "SUNOutputFormat", "SUNComm",
+/// The SUNDIALS libraries stickslip links.
+fn libraries(config: &Config) -> Vec<&'static str> {
+    let mut libs = vec![
+        "sundials_cvode",
+        "sundials_arkode",
+        "sundials_nvecserial",
+        "sundials_sunmatrixdense",
+        "sundials_sunlinsoldense",
     ];
+    if config.major >= 7 {
+        // SUNContext, SUNLogger and the error handlers moved into sundials_core in 7.0.
+        libs.push("sundials_core");
+    }
+    libs
+}
+
+/// Include folders and link flags of the MPI implementation SUNDIALS was built with.
+#[derive(Default)]
+struct Mpi {
+    include: Vec<PathBuf>,
+    link_dirs: Vec<PathBuf>,
+    libs: Vec<String>,
+    source: String,
+}
+
+/// Finds MPI the Debian way: pkg-config (`mpi-c` from mpi-default-dev, then `ompi-c`,
+/// `mpich`), else the compiler wrapper (`mpicc --showme:compile/link` for OpenMPI, `mpicc
+/// -show` for MPICH). Accepts the first that provides a folder holding mpi.h.
+fn find_mpi(config: &Config) -> Mpi {
+    let mut tried = Vec::new();
+    for name in ["mpi-c", "ompi-c", "mpich"] {
+        match pkg_config::Config::new().cargo_metadata(false).env_metadata(false).probe(name) {
+            Ok(lib) => {
+                let mpi = Mpi {
+                    include: lib.include_paths,
+                    link_dirs: lib.link_paths,
+                    libs: lib.libs,
+                    source: format!("pkg-config {name}"),
+                };
+                if has_mpi_h(&mpi) {
+                    return mpi;
+                }
+                tried.push(format!("pkg-config {name} (no mpi.h in {:?})", mpi.include));
+            }
+            Err(_) => tried.push(format!("pkg-config {name} (not found)")),
+        }
+    }
+    let wrapper = env::var("MPICC").unwrap_or_else(|_| "mpicc".into());
+    let run = |args: &[&str]| -> Option<Vec<String>> {
+        let out = Command::new(&wrapper).args(args).output().ok().filter(|o| o.status.success())?;
+        Some(String::from_utf8_lossy(&out.stdout).split_whitespace().map(String::from).collect())
+    };
+    let flags = match (run(&["--showme:compile"]), run(&["--showme:link"])) {
+        (Some(mut compile), Some(link)) => {
+            compile.extend(link);
+            Some(compile)
+        }
+        _ => run(&["-show"]),
+    };
+    if let Some(flags) = flags {
+        let mut mpi = Mpi { source: format!("{wrapper} flags"), ..Mpi::default() };
+        for f in flags {
+            if let Some(d) = f.strip_prefix("-I") {
+                mpi.include.push(d.into());
+            } else if let Some(d) = f.strip_prefix("-L") {
+                mpi.link_dirs.push(d.into());
+            } else if let Some(l) = f.strip_prefix("-l") {
+                mpi.libs.push(l.into());
+            }
+        }
+        if has_mpi_h(&mpi) {
+            return mpi;
+        }
+        tried.push(format!("{wrapper} (no mpi.h in {:?})", mpi.include));
+    } else {
+        tried.push(format!("{wrapper} (not found)"));
+    }
+    fail(
+        &format!(
+            "SUNDIALS {} was built with MPI (SUNDIALS_MPI_ENABLED 1), so its sundials_types.h includes <mpi.h>, \
+             but no MPI include folder holding mpi.h was found; tried: {}",
+            config.version,
+            tried.join("; ")
+        ),
+        "`apt-get install -y mpi-default-dev pkg-config` (Debian's MPI headers and their pkg-config file; \
+         libsundials-dev normally pulls them in), or set MPICC to your MPI compiler wrapper",
+    );
+}
+
+fn has_mpi_h(mpi: &Mpi) -> bool {
+    mpi.include.iter().any(|d| d.join("mpi.h").is_file())
+}
+
+/// Bindings for everything src/sundials/ calls: context (and on 7.x logger and error
+/// handlers), serial vectors, dense matrix and linear solver, CVODE, ARKStep and ARKODE.
+fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
+    let mut header = String::from(
+        "#include <sundials/sundials_context.h>\n#include <sundials/sundials_version.h>\n\
+         #include <nvector/nvector_serial.h>\n#include <sunmatrix/sunmatrix_dense.h>\n\
+         #include <sunlinsol/sunlinsol_dense.h>\n#include <cvode/cvode.h>\n\
+         #include <arkode/arkode_arkstep.h>\n",
+    );
+    if config.major >= 7 {
+        header.push_str("#include <sundials/sundials_logger.h>\n#include <sundials/sundials_errors.h>\n");
+    }
+    let functions = "SUNContext_.*|SUNLogger_.*|SUNDIALSGetVersion|N_VNew_Serial|N_VDestroy|N_VGetArrayPointer\
+                     |SUNDenseMatrix|SUNDenseMatrix_Data|SUNMatDestroy|SUNLinSol_Dense|SUNLinSolFree\
+                     |CVode.*|ARKStep.*|ARKode.*";
     let mut builder = bindgen::Builder::default()
-        .header_contents(
-            "stickslip_arkode.h",
-            "#include <sundials/sundials_version.h>\n#include <arkode/arkode_arkstep.h>\n#include <arkode/arkode_erkstep.h>\n",
-        )
+        .header_contents("stickslip_sundials.h", &header)
         .clang_arg(format!("-I{}", inc.display()))
-        .allowlist_function("ARKStep.*|ERKStep.*|SUNDIALSGetVersion")
-        .allowlist_var("ARK_.*|ARKODE_.*|ARKSTEP_.*")
-        .allowlist_type("ARKODE_.*")
-        .layout_tests(false);
-    for ty in shared_types {
-        builder = builder.blocklist_type(ty);
+        .allowlist_function(functions)
+        .allowlist_var("CV_.*|ARK_.*|ARKODE_.*|SUN_LOGLEVEL_.*")
+        .allowlist_type("ARKODE_.*|SUNLogLevel")
+        // Only ever behind pointers (the *PrintAllStats functions); glibc's layout has bitfields.
+        .opaque_type("FILE|_IO_FILE")
+        // SUNDIALS' flags and return codes are C ints (`CV_BDF`, `ARK_SUCCESS`, ...).
+        .default_macro_constant_type(bindgen::MacroTypeVariation::Signed)
+        .layout_tests(false)
+        .derive_debug(false);
+    for dir in &mpi.include {
+        builder = builder.clang_arg(format!("-I{}", dir.display()));
     }
     let generated = std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
     match generated {
         Ok(Ok(bindings)) => bindings
             .write_to_file(out)
-            .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display()))),
-        Ok(Err(e)) => fail(&format!("bindgen could not parse the ARKODE headers: {e}")),
-        Err(_) => fail("bindgen could not load libclang (needed to read the ARKODE headers)"),
+            .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display()), "check the target directory")),
+        Ok(Err(e)) => fail(
+            &format!("bindgen could not parse the SUNDIALS {} headers in {}: {e}", config.version, inc.display()),
+            "the compiler error above names the missing header; install the Debian package that provides it",
+        ),
+        Err(_) => fail(
+            "bindgen could not load libclang (needed to read the SUNDIALS headers)",
+            "`apt-get install -y libclang-dev` (or run `bash tools/deps.sh`)",
+        ),
     }
+}
+
+/// SUNDIALS 7's `SUN_COMM_NULL` is a macro: 0 without MPI, `MPI_COMM_NULL` with it (for
+/// OpenMPI the address of the `ompi_mpi_comm_null` object, which bindgen cannot translate). A
+/// one-line C function returns whatever the headers define, compiled with SUNDIALS' own flags.
+fn comm_null_shim(inc: &Path, mpi: &Mpi) {
+    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    let source = out.join("stickslip_comm_null.c");
+    std::fs::write(
+        &source,
+        "#include <sundials/sundials_types.h>\nSUNComm stickslip_sun_comm_null(void) { return SUN_COMM_NULL; }\n",
+    )
+    .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", source.display()), "check the target directory"));
+    let mut build = cc::Build::new();
+    build.file(&source).include(inc).warnings(true);
+    for dir in &mpi.include {
+        build.include(dir);
+    }
+    build
+        .try_compile("stickslip_comm_null")
+        .unwrap_or_else(|e| fail(&format!("cannot compile the SUN_COMM_NULL shim: {e}"), "`apt-get install -y gcc`"));
 }
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
-    println!("cargo:rerun-if-env-changed=SUNDIALS_INCLUDE_DIR");
-    println!("cargo:rerun-if-env-changed=SUNDIALS_LIBRARY_DIR");
+    for var in ["SUNDIALS_INCLUDE_DIR", "SUNDIALS_LIBRARY_DIR", "MPICC", "PKG_CONFIG_PATH"] {
+        println!("cargo:rerun-if-env-changed={var}");
+    }
+    println!("cargo::rustc-check-cfg=cfg(sundials7)");
 
     let inc = include_dir();
-    let version = header_version(&inc);
-    let lib = library_dir();
+    let config = read_config(&inc);
+    let lib = library_dir(&config);
+    let mpi = if config.mpi { find_mpi(&config) } else { Mpi::default() };
     println!("cargo:rerun-if-changed={}", inc.join("sundials/sundials_config.h").display());
-    println!("cargo:rustc-env=STICKSLIP_SUNDIALS_HEADER_VERSION={version}");
+    println!("cargo:rustc-env=STICKSLIP_SUNDIALS_HEADER_VERSION={}", config.version);
     println!("cargo:rustc-env=STICKSLIP_SUNDIALS_LIBRARY_DIR={}", lib.display());
+    println!("cargo:rustc-env=STICKSLIP_SUNDIALS_MPI={}", if config.mpi { mpi.source.as_str() } else { "no" });
+    if config.major >= 7 {
+        println!("cargo:rustc-cfg=sundials7");
+    }
 
-    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("arkode_bindings.rs");
-    arkode_bindings(&inc, &out);
+    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("sundials_bindings.rs");
+    bindings(&inc, &config, &mpi, &out);
+    if config.major >= 7 {
+        comm_null_shim(&inc, &mpi);
+    }
 
     println!("cargo:rustc-link-search=native={}", lib.display());
-    println!("cargo:rustc-link-lib=dylib=sundials_arkode");
+    for l in libraries(&config) {
+        println!("cargo:rustc-link-lib=dylib={l}");
+    }
+    for dir in &mpi.link_dirs {
+        println!("cargo:rustc-link-search=native={}", dir.display());
+    }
+    for l in &mpi.libs {
+        println!("cargo:rustc-link-lib=dylib={l}");
+    }
 }

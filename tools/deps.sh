@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# Installs what stickslip needs on Debian, idempotently: Debian's SUNDIALS (headers and shared
-# libraries), libclang (bindgen reads the ARKODE headers), a C compiler and pkg-config. Needs
-# root (or sudo) only when something is missing. Also checks for a Rust toolchain.
+# Installs what stickslip needs on Debian 12 or 13, idempotently, also on a minbase system:
+# Debian's SUNDIALS (headers and shared libraries; on 13 it pulls in the OpenMPI headers its
+# MPI-enabled build needs), libclang (bindgen reads the SUNDIALS headers), a C compiler
+# (linking, and the SUN_COMM_NULL shim on 13), pkg-config (finds MPI) and the CA certificates
+# cargo needs to download crates. Needs root (or sudo) only when something is missing. Also
+# checks for a Rust toolchain.
 set -euo pipefail
 
-packages=(libsundials-dev libclang-dev gcc pkg-config)
+packages=(libsundials-dev libclang-dev gcc libc6-dev pkg-config ca-certificates)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -7,6 +7,94 @@ use super::solver::{Api, Creation, Solver};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
+/// One name per ARKStep operation. SUNDIALS 7 deprecates the `ARKStep*` spellings of the
+/// operations every ARKODE stepper shares in favour of the generic `ARKode*` ones (same
+/// signatures); 6.x has only the former.
+#[cfg(sundials7)]
+mod ark {
+    pub(super) use super::ffi::{
+        ARKodeFree as Free,
+        ARKodeEvolve as Evolve,
+        ARKodeGetDky as GetDky,
+        ARKodeSetUserData as SetUserData,
+        ARKodeSStolerances as SStolerances,
+        ARKodeSVtolerances as SVtolerances,
+        ARKodeSetLinearSolver as SetLinearSolver,
+        ARKodeSetJacFn as SetJacFn,
+        ARKodeRootInit as RootInit,
+        ARKodeSetRootDirection as SetRootDirection,
+        ARKodeGetRootInfo as GetRootInfo,
+        ARKodeSetStopTime as SetStopTime,
+        ARKodeSetMaxNumSteps as SetMaxNumSteps,
+        ARKodeSetInitStep as SetInitStep,
+        ARKodeSetMinStep as SetMinStep,
+        ARKodeSetMaxStep as SetMaxStep,
+        ARKodeSetMaxErrTestFails as SetMaxErrTestFails,
+        ARKodeSetMaxNonlinIters as SetMaxNonlinIters,
+        ARKodeSetMaxConvFails as SetMaxConvFails,
+        ARKodeSetNonlinConvCoef as SetNonlinConvCoef,
+        ARKodeSetMaxHnilWarns as SetMaxHnilWarns,
+        ARKodeReset as Reset,
+        ARKodeGetNumSteps as GetNumSteps,
+        ARKodeGetNumStepAttempts as GetNumStepAttempts,
+        ARKodeGetNumLinSolvSetups as GetNumLinSolvSetups,
+        ARKodeGetNumErrTestFails as GetNumErrTestFails,
+        ARKodeGetNumStepSolveFails as GetNumStepSolveFails,
+        ARKodeGetNumNonlinSolvIters as GetNumNonlinSolvIters,
+        ARKodeGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
+        ARKodeGetNumJacEvals as GetNumJacEvals,
+        ARKodeGetNumLinRhsEvals as GetNumLinRhsEvals,
+        ARKodeGetNumGEvals as GetNumGEvals,
+        ARKodeGetLastStep as GetLastStep,
+        ARKodeGetCurrentStep as GetCurrentStep,
+        ARKodeGetActualInitStep as GetActualInitStep,
+        ARKodeSetPredictorMethod as SetPredictorMethod,
+        ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
+    };
+}
+#[cfg(not(sundials7))]
+mod ark {
+    pub(super) use super::ffi::{
+        ARKStepFree as Free,
+        ARKStepEvolve as Evolve,
+        ARKStepGetDky as GetDky,
+        ARKStepSetUserData as SetUserData,
+        ARKStepSStolerances as SStolerances,
+        ARKStepSVtolerances as SVtolerances,
+        ARKStepSetLinearSolver as SetLinearSolver,
+        ARKStepSetJacFn as SetJacFn,
+        ARKStepRootInit as RootInit,
+        ARKStepSetRootDirection as SetRootDirection,
+        ARKStepGetRootInfo as GetRootInfo,
+        ARKStepSetStopTime as SetStopTime,
+        ARKStepSetMaxNumSteps as SetMaxNumSteps,
+        ARKStepSetInitStep as SetInitStep,
+        ARKStepSetMinStep as SetMinStep,
+        ARKStepSetMaxStep as SetMaxStep,
+        ARKStepSetMaxErrTestFails as SetMaxErrTestFails,
+        ARKStepSetMaxNonlinIters as SetMaxNonlinIters,
+        ARKStepSetMaxConvFails as SetMaxConvFails,
+        ARKStepSetNonlinConvCoef as SetNonlinConvCoef,
+        ARKStepSetMaxHnilWarns as SetMaxHnilWarns,
+        ARKStepReset as Reset,
+        ARKStepGetNumSteps as GetNumSteps,
+        ARKStepGetNumStepAttempts as GetNumStepAttempts,
+        ARKStepGetNumLinSolvSetups as GetNumLinSolvSetups,
+        ARKStepGetNumErrTestFails as GetNumErrTestFails,
+        ARKStepGetNumStepSolveFails as GetNumStepSolveFails,
+        ARKStepGetNumNonlinSolvIters as GetNumNonlinSolvIters,
+        ARKStepGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
+        ARKStepGetNumJacEvals as GetNumJacEvals,
+        ARKStepGetNumLinRhsEvals as GetNumLinRhsEvals,
+        ARKStepGetNumGEvals as GetNumGEvals,
+        ARKStepGetLastStep as GetLastStep,
+        ARKStepGetCurrentStep as GetCurrentStep,
+        ARKStepGetActualInitStep as GetActualInitStep,
+        ARKStepSetPredictorMethod as SetPredictorMethod,
+        ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
+    };
+}
+
 /// Implicit (DIRK) Butcher tables of the linked ARKODE, by name without the `ARKODE_` prefix.
 const DIRK_TABLES: &[(&str, c_int)] = &[
     ("SDIRK_2_1_2", ffi::ARKODE_DIRKTableID_ARKODE_SDIRK_2_1_2),
@@ -163,18 +251,18 @@ unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
         unsafe { get(m, &mut v) };
         v.max(0) as u64
     };
-    s.steps = count(ffi::ARKStepGetNumSteps);
-    s.step_attempts = count(ffi::ARKStepGetNumStepAttempts);
-    s.lin_setups = count(ffi::ARKStepGetNumLinSolvSetups);
-    s.err_test_fails = count(ffi::ARKStepGetNumErrTestFails);
-    s.step_solve_fails = count(ffi::ARKStepGetNumStepSolveFails);
-    s.nonlin_iters = count(ffi::ARKStepGetNumNonlinSolvIters);
-    s.nonlin_conv_fails = count(ffi::ARKStepGetNumNonlinSolvConvFails);
+    s.steps = count(ark::GetNumSteps);
+    s.step_attempts = count(ark::GetNumStepAttempts);
+    s.lin_setups = count(ark::GetNumLinSolvSetups);
+    s.err_test_fails = count(ark::GetNumErrTestFails);
+    s.step_solve_fails = count(ark::GetNumStepSolveFails);
+    s.nonlin_iters = count(ark::GetNumNonlinSolvIters);
+    s.nonlin_conv_fails = count(ark::GetNumNonlinSolvConvFails);
     if has_linear_solver {
-        s.jac_evals = count(ffi::ARKStepGetNumJacEvals);
-        s.rhs_evals_jacobian = count(ffi::ARKStepGetNumLinRhsEvals);
+        s.jac_evals = count(ark::GetNumJacEvals);
+        s.rhs_evals_jacobian = count(ark::GetNumLinRhsEvals);
     }
-    s.root_evals = count(ffi::ARKStepGetNumGEvals);
+    s.root_evals = count(ark::GetNumGEvals);
     let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
     let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =
         (std::ptr::null_mut(), std::ptr::null_mut());
@@ -183,9 +271,9 @@ unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
     // read here, while the memory is alive.
     unsafe {
         ffi::ARKStepGetNumRhsEvals(m, &mut nfe, &mut nfi);
-        ffi::ARKStepGetLastStep(m, &mut s.last_step);
-        ffi::ARKStepGetCurrentStep(m, &mut s.current_step);
-        ffi::ARKStepGetActualInitStep(m, &mut s.initial_step);
+        ark::GetLastStep(m, &mut s.last_step);
+        ark::GetCurrentStep(m, &mut s.current_step);
+        ark::GetActualInitStep(m, &mut s.initial_step);
         ffi::ARKStepGetCurrentButcherTables(m, &mut implicit, &mut explicit);
         let table = if implicit.is_null() { explicit } else { implicit };
         if !table.is_null() {
@@ -199,30 +287,31 @@ unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
 
 static ARKSTEP: Api = Api {
     name: "ARKStep",
-    free: ffi::ARKStepFree,
-    evolve: ffi::ARKStepEvolve,
-    get_dky: ffi::ARKStepGetDky,
-    set_user_data: ffi::ARKStepSetUserData,
+    free: ark::Free,
+    evolve: ark::Evolve,
+    get_dky: ark::GetDky,
+    set_user_data: ark::SetUserData,
+    #[cfg(not(sundials7))]
     set_err_handler: ffi::ARKStepSetErrHandlerFn,
-    ss_tolerances: ffi::ARKStepSStolerances,
-    sv_tolerances: ffi::ARKStepSVtolerances,
-    set_linear_solver: ffi::ARKStepSetLinearSolver,
-    set_jac_fn: ffi::ARKStepSetJacFn,
-    root_init: ffi::ARKStepRootInit,
-    set_root_direction: ffi::ARKStepSetRootDirection,
-    get_root_info: ffi::ARKStepGetRootInfo,
-    set_stop_time: ffi::ARKStepSetStopTime,
-    set_max_num_steps: ffi::ARKStepSetMaxNumSteps,
-    set_init_step: ffi::ARKStepSetInitStep,
-    set_min_step: ffi::ARKStepSetMinStep,
-    set_max_step: ffi::ARKStepSetMaxStep,
-    set_max_err_test_fails: ffi::ARKStepSetMaxErrTestFails,
-    set_max_nonlin_iters: ffi::ARKStepSetMaxNonlinIters,
-    set_max_conv_fails: ffi::ARKStepSetMaxConvFails,
-    set_nonlin_conv_coef: ffi::ARKStepSetNonlinConvCoef,
-    set_max_hnil_warns: ffi::ARKStepSetMaxHnilWarns,
+    ss_tolerances: ark::SStolerances,
+    sv_tolerances: ark::SVtolerances,
+    set_linear_solver: ark::SetLinearSolver,
+    set_jac_fn: ark::SetJacFn,
+    root_init: ark::RootInit,
+    set_root_direction: ark::SetRootDirection,
+    get_root_info: ark::GetRootInfo,
+    set_stop_time: ark::SetStopTime,
+    set_max_num_steps: ark::SetMaxNumSteps,
+    set_init_step: ark::SetInitStep,
+    set_min_step: ark::SetMinStep,
+    set_max_step: ark::SetMaxStep,
+    set_max_err_test_fails: ark::SetMaxErrTestFails,
+    set_max_nonlin_iters: ark::SetMaxNonlinIters,
+    set_max_conv_fails: ark::SetMaxConvFails,
+    set_nonlin_conv_coef: ark::SetNonlinConvCoef,
+    set_max_hnil_warns: ark::SetMaxHnilWarns,
     // ARKStepReset keeps options and counters; only time, state and step history restart.
-    reinit: ffi::ARKStepReset,
+    reinit: ark::Reset,
     reinit_resets_counters: false,
     read_stats,
     classify,
@@ -267,11 +356,11 @@ impl<S> Solver<S> {
         }
         if let Some(p) = predictor {
             // SAFETY: live ARKStep memory; stores a scalar.
-            self.check(unsafe { ffi::ARKStepSetPredictorMethod(m, p) })?;
+            self.check(unsafe { ark::SetPredictorMethod(m, p) })?;
         }
         if settings.deduce_implicit_rhs {
             // SAFETY: live ARKStep memory; stores a flag.
-            self.check(unsafe { ffi::ARKStepSetDeduceImplicitRhs(m, 1) })?;
+            self.check(unsafe { ark::SetDeduceImplicitRhs(m, 1) })?;
         }
         Ok(())
     }

@@ -28,6 +28,18 @@ pub(crate) struct Diagnostics {
     pub nonfinite_rhs: u64,
     /// Why the root function failed, if it did.
     pub root_failure: Option<String>,
+    /// Stop the integration at the first "t + h = t" (`fail_on_step_underflow`): the next
+    /// right-hand-side call after the warning fails unrecoverably, so SUNDIALS returns at once.
+    pub stop_on_underflow: bool,
+    /// Set when a right-hand-side call refused to continue because of a step underflow.
+    pub stopped_for_underflow: bool,
+    /// Time of the previous right-hand-side call (SUNDIALS 7: when to read the warning log).
+    #[cfg(sundials7)]
+    last_rhs_t: Option<f64>,
+    /// SUNDIALS 7's warning stream (the logger's), read after each call and, with
+    /// `stop_on_underflow`, in every right-hand-side call.
+    #[cfg(sundials7)]
+    pub warning_log: Option<super::context::WarningLog>,
 }
 
 const MAX_KEPT_WARNINGS: usize = 64;
@@ -36,7 +48,54 @@ impl Diagnostics {
     /// Marks the start of a call into SUNDIALS.
     pub fn begin_call(&mut self) {
         self.last_error = None;
+        self.stopped_for_underflow = false;
         self.at_call = (self.nonfinite_rhs, self.step_underflows);
+    }
+
+    /// Records one message from SUNDIALS: an error (negative code) or a warning, counting
+    /// "t + h = t" step underflows.
+    fn record(&mut self, message: String, is_error: bool) {
+        if message.contains("t + h = t") {
+            self.step_underflows += 1;
+        }
+        if is_error {
+            self.last_error = Some(message);
+        } else if self.warnings.len() < MAX_KEPT_WARNINGS {
+            self.warnings.push(message);
+        }
+    }
+
+    /// Brings the warning counters up to date. SUNDIALS 6 reports warnings through the error
+    /// handler as they happen (nothing to do); SUNDIALS 7 writes them to its logger, read here.
+    pub fn poll_warnings(&mut self) {
+        #[cfg(sundials7)]
+        if let Some(log) = self.warning_log.as_mut() {
+            let text = log.take_new();
+            for line in text.lines().filter(|l| !l.is_empty()) {
+                self.record(line.to_string(), false);
+            }
+        }
+    }
+
+    /// Whether the right-hand side must refuse to continue: `stop_on_underflow` is set and a
+    /// step underflow happened during the current call.
+    #[cfg_attr(not(sundials7), allow(unused_variables))]
+    fn must_stop_for_underflow(&mut self, t: f64) -> bool {
+        if !self.stop_on_underflow {
+            return false;
+        }
+        // On 7 a look at the warning log costs a system call, too much for every call. A step
+        // below the spacing of t evaluates the right-hand side at the time of the previous
+        // evaluation (t + c·h = t), so look then: at the latest the second evaluation of the
+        // step that makes no progress. (Every warning is still counted after the call.)
+        #[cfg(sundials7)]
+        if self.last_rhs_t.replace(t) == Some(t) {
+            self.poll_warnings();
+        }
+        if self.step_underflows > self.at_call.1 {
+            self.stopped_for_underflow = true;
+        }
+        self.stopped_for_underflow
     }
 
     /// (non-finite RHS results, step underflows) since [`Diagnostics::begin_call`].
@@ -76,7 +135,10 @@ pub(crate) struct Shared<S> {
 }
 
 /// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.
-fn rhs_code(diag: &mut Diagnostics, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
+fn rhs_code(diag: &mut Diagnostics, t: f64, dydt: &mut [f64], f: impl FnOnce(&mut [f64])) -> c_int {
+    if diag.must_stop_for_underflow(t) {
+        return -1;
+    }
     if !diag.guarded(|| f(&mut *dydt)) {
         return -1;
     }
@@ -102,7 +164,7 @@ pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs(t, y, dy))
 }
 
 /// f_E(t, y) for ARKStep IMEX.
@@ -117,7 +179,7 @@ pub(crate) unsafe extern "C" fn rhs_explicit<S: ImexSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs_explicit(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_explicit(t, y, dy))
 }
 
 /// f_I(t, y) for ARKStep IMEX.
@@ -132,7 +194,7 @@ pub(crate) unsafe extern "C" fn rhs_implicit<S: ImexSystem>(
     // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
     let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
     let system = &shared.system;
-    rhs_code(&mut shared.diag, dy, |dy| system.rhs_implicit(t, y, dy))
+    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_implicit(t, y, dy))
 }
 
 /// Fills a dense Jacobian through `fill` and maps the outcome to a return code.
@@ -221,8 +283,22 @@ pub(crate) unsafe extern "C" fn roots<S>(
     0
 }
 
-/// SUNDIALS' error handler (CVErrHandlerFn / ARKErrHandlerFn): records messages instead of
-/// printing them.
+/// Text of a C string from SUNDIALS (empty for null).
+///
+/// # Safety
+/// `p` is null or a NUL-terminated string valid for the call.
+unsafe fn text(p: *const c_char) -> String {
+    if p.is_null() {
+        String::new()
+    } else {
+        // SAFETY: guaranteed by the caller.
+        unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+    }
+}
+
+/// SUNDIALS 6's error handler (CVErrHandlerFn / ARKErrHandlerFn, set per solver memory):
+/// records errors and warnings instead of printing them.
+#[cfg(not(sundials7))]
 pub(crate) unsafe extern "C" fn error_handler(
     error_code: c_int,
     _module: *const c_char,
@@ -230,23 +306,28 @@ pub(crate) unsafe extern "C" fn error_handler(
     msg: *mut c_char,
     data: *mut c_void,
 ) {
-    let text = |p: *const c_char| {
-        if p.is_null() {
-            String::new()
-        } else {
-            // SAFETY: SUNDIALS passes NUL-terminated strings valid for this call.
-            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
-        }
-    };
+    // SAFETY: SUNDIALS passes NUL-terminated strings valid for this call.
+    let message = unsafe { format!("{}: {}", text(function), text(msg)) };
     // SAFETY: `data` is the `Diagnostics` inside the registered `Shared<S>`.
     let diag = unsafe { &mut *(data as *mut Diagnostics) };
-    let message = format!("{}: {}", text(function), text(msg));
-    if message.contains("t + h = t") {
-        diag.step_underflows += 1;
-    }
-    if error_code < 0 {
-        diag.last_error = Some(message);
-    } else if diag.warnings.len() < MAX_KEPT_WARNINGS {
-        diag.warnings.push(message);
-    }
+    diag.record(message, error_code < 0);
+}
+
+/// SUNDIALS 7's error handler (SUNErrHandlerFn, pushed on the context): records errors instead
+/// of logging them. Warnings do not come here in 7 (see [`Diagnostics::poll_warnings`]).
+#[cfg(sundials7)]
+pub(crate) unsafe extern "C" fn error_handler(
+    _line: c_int,
+    function: *const c_char,
+    _file: *const c_char,
+    msg: *const c_char,
+    error_code: ffi::SUNErrCode,
+    data: *mut c_void,
+    _ctx: ffi::SUNContext,
+) {
+    // SAFETY: SUNDIALS passes NUL-terminated strings (or null) valid for this call.
+    let message = unsafe { format!("{}: {}", text(function), text(msg)) };
+    // SAFETY: `data` is the `Diagnostics` inside the solver's boxed `Shared<S>`.
+    let diag = unsafe { &mut *(data as *mut Diagnostics) };
+    diag.record(message, error_code < 0);
 }

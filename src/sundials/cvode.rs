@@ -88,6 +88,7 @@ static CVODE: Api = Api {
     evolve: ffi::CVode,
     get_dky: ffi::CVodeGetDky,
     set_user_data: ffi::CVodeSetUserData,
+    #[cfg(not(sundials7))]
     set_err_handler: ffi::CVodeSetErrHandlerFn,
     ss_tolerances: ffi::CVodeSStolerances,
     sv_tolerances: ffi::CVodeSVtolerances,

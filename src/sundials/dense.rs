@@ -15,7 +15,8 @@ pub(crate) struct DenseLinearSolver {
 
 impl DenseLinearSolver {
     pub(crate) fn new(template: &SerialVector, n: usize, ctx: &Context) -> Option<Self> {
-        let n = n as ffi::sunindextype;
+        // sunindextype is 32-bit on Debian 13: refuse sizes it cannot hold.
+        let n = ffi::sunindextype::try_from(n).ok()?;
         // SAFETY: creates an n×n dense matrix owned by the returned handle.
         let matrix = NonNull::new(unsafe { ffi::SUNDenseMatrix(n, n, ctx.raw()) })?;
         // SAFETY: `template` and `matrix` are live objects of matching size from `ctx`.

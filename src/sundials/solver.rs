@@ -19,6 +19,8 @@ pub(crate) struct Api {
     pub evolve: unsafe extern "C" fn(Mem, f64, ffi::N_Vector, *mut f64, c_int) -> c_int,
     pub get_dky: unsafe extern "C" fn(Mem, f64, c_int, ffi::N_Vector) -> c_int,
     pub set_user_data: unsafe extern "C" fn(Mem, *mut c_void) -> c_int,
+    /// SUNDIALS 6's per-memory error handler setter (7 has one handler stack per context).
+    #[cfg(not(sundials7))]
     pub set_err_handler: unsafe extern "C" fn(Mem, ffi::CVErrHandlerFn, *mut c_void) -> c_int,
     pub ss_tolerances: unsafe extern "C" fn(Mem, f64, f64) -> c_int,
     pub sv_tolerances: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
@@ -129,7 +131,14 @@ impl<S> Solver<S> {
             Tolerance::Scalar(_) => None,
         };
         let mem = NonNull::new(create(&y, &ctx)).ok_or_else(|| resource("solver memory"))?;
-        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag: Diagnostics::default() });
+        let mut diag = Diagnostics::default();
+        diag.stop_on_underflow = options.fail_on_step_underflow;
+        #[cfg(sundials7)]
+        {
+            let log = ctx.warning_log().map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
+            diag.warning_log = Some(log);
+        }
+        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -154,11 +163,17 @@ impl<S> Solver<S> {
         let diag = unsafe { &raw mut (*solver.shared.as_ptr()).diag } as *mut c_void;
         // SAFETY: `m` is live solver memory; `user_data` and `diag` point into the boxed
         // `Shared`, which lives (at a fixed address) as long as the solver memory.
+        #[cfg(not(sundials7))]
         solver.check(unsafe { (api.set_err_handler)(m, Some(callbacks::error_handler), diag) })?;
+        #[cfg(sundials7)]
+        {
+            let flag = solver.ctx.capture_errors(diag as *mut Diagnostics);
+            solver.check(flag)?;
+        }
         // SAFETY: `m` is live; `user_data` points into the leaked `Shared`, alive until Drop, after the memory is freed.
         solver.check(unsafe { (api.set_user_data)(m, user_data) })?;
-        // Every "t + h = t" warning reaches the handler and is counted (SUNDIALS stops
-        // issuing them after 10 by default).
+        // Every "t + h = t" warning is issued and counted (SUNDIALS stops issuing them after
+        // 10 by default).
         // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
         solver.check(unsafe { (api.set_max_hnil_warns)(m, c_int::MAX) })?;
         match &atol {
@@ -289,7 +304,21 @@ impl<S> Solver<S> {
         // callbacks reach `shared`, which outlives the call.
         let flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         self.t = t;
+        self.shared_mut().diag.poll_warnings();
         let (nonfinite, underflows) = self.shared_mut().diag.since_call();
+        if self.shared().diag.stopped_for_underflow {
+            // The right-hand side refused the first step after a "t + h = t" warning, so
+            // SUNDIALS' own return code (a right-hand-side failure) is only the consequence.
+            self.shared_mut().diag.last_error = None;
+            let mut e = self.underflow_error(underflows, flag);
+            if nonfinite > 0 {
+                // Steps shrank to nothing because the right-hand side kept failing: that is
+                // the root cause.
+                e.kind = ErrorKind::RhsFailure;
+                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            }
+            return Err(e);
+        }
         let flag = self.check(flag).map_err(|mut e| {
             // Name the root cause: SUNDIALS reports its consequence (e.g. "too much work"
             // when t + h = t stalls time, or repeated failures after NaN values).
@@ -307,9 +336,7 @@ impl<S> Solver<S> {
             e
         })?;
         if self.fail_on_step_underflow && underflows > 0 {
-            let warning = self.shared().diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
-            let message = format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
-            return Err(self.error(ErrorKind::StepUnderflow, flag, message));
+            return Err(self.underflow_error(underflows, flag));
         }
         let event = match flag {
             1 => StepEvent::StopTime,
@@ -323,6 +350,13 @@ impl<S> Solver<S> {
             _ => StepEvent::Reached,
         };
         Ok(Step { t, event })
+    }
+
+    /// The typed error for `fail_on_step_underflow`, quoting SUNDIALS' last "t + h = t" warning.
+    fn underflow_error(&self, underflows: u64, flag: c_int) -> SolverError {
+        let warning = self.shared().diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
+        let message = format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
+        self.error(ErrorKind::StepUnderflow, flag, message)
     }
 
     /// The state at the time of the last return ([`Solver::t`]).

@@ -15,9 +15,11 @@ impl SerialVector {
     /// A new vector holding a copy of `values`.
     pub(crate) fn from_slice(values: &[f64], ctx: &Context) -> Option<Self> {
         let len = values.len();
+        // sunindextype is 32-bit on Debian 13 (64-bit on 12): refuse lengths it cannot hold.
+        let n = ffi::sunindextype::try_from(len).ok()?;
         // SAFETY: N_VNew_Serial allocates a vector of `len` reals owned by the returned
         // handle; `ctx` is a live context.
-        let raw = unsafe { ffi::N_VNew_Serial(len as ffi::sunindextype, ctx.raw()) };
+        let raw = unsafe { ffi::N_VNew_Serial(n, ctx.raw()) };
         let mut vector = Self { raw: NonNull::new(raw)?, len };
         vector.as_mut_slice().copy_from_slice(values);
         Some(vector)
