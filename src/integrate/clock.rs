@@ -73,9 +73,12 @@ pub struct ClockStep {
     pub event: StepEvent,
 }
 
-/// Default [`Clock::threshold`] for integrators whose re-base is an exact time shift: re-base
-/// when the last step is below 1e-9 of the local time, ~7 decades before t + h = t.
-pub const DEFAULT_THRESHOLD: f64 = 1e-9;
+/// Default [`Clock::threshold`] for integrators whose re-base is an exact time shift (free):
+/// re-base when the last step is below 1e-3 of the local time, ~13 decades before t + h = t.
+/// Measured on the physical grid against 1e-9: the same cells converge but for two more with
+/// extrapolation (3713 against 3711 of 4680). A step that collapses by 13 decades inside one
+/// call (Radau5 after an accepted step undershot the arrest's floor) is beyond any threshold.
+pub const DEFAULT_THRESHOLD: f64 = 1e-3;
 
 /// Threshold for integrators whose re-base is a restart (SUNDIALS): only when the clock is
 /// about to run out, the last step within 1e4 ulps of the local time. A restart costs work
