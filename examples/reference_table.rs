@@ -10,33 +10,61 @@
 //!
 //!     cargo run --release --example reference_table -- ageing
 //!
+//! With the argument `far`, the table far from the stability threshold (issue #13),
+//! data/reference/drr_cycles_far.json: ε/ξ = 1.5 … 25 (k/k_c = 0.67 … 0.04) at γ = 1e2 … 1e12,
+//! slip law, from Radau5 and Rodas5P at rtol 1e-12 (see [`far`]):
+//!
+//!     cargo run --release --example reference_table -- far
+//!
+//! With the argument `cost`, no file: a Markdown table on stdout of the cost per cycle (steps,
+//! wall time) against ε/ξ at γ = 1e8, rtol 1e-8, for each stiff method (docs/far-from-threshold.md):
+//!
+//!     cargo run --release --example reference_table -- cost
+//!
 //! The reference value of each quantity is the mean of the two; `agreement` is their relative
-//! difference. Tests check the engine against this table (tests/reference.rs).
+//! difference. Tests check the engine against these tables (tests/reference.rs,
+//! tests/reference_ageing.rs, tests/reference_far.rs).
 
 use serde_json::json;
 use stickslip::{engine, scene};
 
-fn cycle(gamma: f64, xi: f64, epsilon: f64, state_law: &str, method: &str) -> serde_json::Value {
+/// One cycle analysis; the row of a table, or the typed error as a string.
+fn try_cycle(
+    gamma: f64,
+    xi: f64,
+    epsilon: f64,
+    state_law: &str,
+    method: &str,
+    (rtol, atol, tolerance): (f64, f64, f64),
+) -> Result<serde_json::Value, String> {
     let text = json!({
         "name": format!("reference γ={gamma:e} ξ={xi} ε={epsilon} {state_law} {method}"),
         "model": { "gamma": gamma, "xi": xi, "epsilon": epsilon, "state_law": state_law },
-        "solver": { "method": method, "rtol": 1e-11, "atol": 1e-13 },
-        "analyses": [{ "cycle": { "tolerance": 1e-8 } }]
+        "solver": { "method": method, "rtol": rtol, "atol": atol },
+        "analyses": [{ "cycle": { "tolerance": tolerance } }]
     });
     let scene = scene::parse(&text.to_string(), "reference").expect("valid scene");
-    let report = engine::run(&scene, text).unwrap_or_else(|e| panic!("{method} γ={gamma}: {e}"));
+    let report = engine::run(&scene, text).map_err(|e| {
+        format!("{e} [kind {:?}, t = {:e}, state (u, ln v, θ) = {:?}]", e.kind, e.t, e.state)
+    })?;
     let c = report.cycle.expect("cycle asked");
-    let v = c.values.unwrap_or_else(|| panic!("{method} γ={gamma}: not periodic: {:?}", c.status));
-    json!({
+    let v = c.values.ok_or_else(|| format!("not periodic: {:?} after {} cycles", c.status, c.cycles_computed))?;
+    Ok(json!({
         "period": v.period,
         "t0": v.t0,
         "slip_half_width_times_gamma": v.slip_half_width.map(|w| w * gamma),
         "ln_v_max": v.ln_v_max,
+        "ln_v_min": v.ln_v_min,
         "cycles_computed": c.cycles_computed,
         "spread_period": c.spread.map(|s| s.period),
         "steps": report.solver.stats.steps,
+        "steps_per_cycle": c.steps_per_cycle,
         "wall_time_s": report.wall_time_s,
-    })
+    }))
+}
+
+fn cycle(gamma: f64, xi: f64, epsilon: f64, state_law: &str, method: &str) -> serde_json::Value {
+    try_cycle(gamma, xi, epsilon, state_law, method, (1e-11, 1e-13, 1e-8)).unwrap_or_else(|e| panic!("{method} γ={gamma}: {e}"))
 }
 
 /// A table: its state law, integrators (scene name, description), file and title.
@@ -51,8 +79,10 @@ fn main() {
     let ageing = match std::env::args().nth(1).as_deref() {
         None | Some("slip") => false,
         Some("ageing") => true,
+        Some("far") => return far(),
+        Some("cost") => return cost(),
         Some(other) => {
-            eprintln!("reference_table: unknown argument \"{other}\"; use no argument (slip law) or \"ageing\"");
+            eprintln!("reference_table: unknown argument \"{other}\"; use no argument (slip law), \"ageing\", \"far\" or \"cost\"");
             std::process::exit(2);
         }
     };
@@ -118,4 +148,152 @@ fn main() {
     let path = format!("{}/data/reference/{}", env!("CARGO_MANIFEST_DIR"), t.file);
     std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n").expect("write table");
     eprintln!("wrote {path}; worst agreement on period and ln v_max: {worst:.2e}");
+}
+
+/// (ξ, ε) of the far table: ε/ξ = 1.5, 2.86, 4, 5, 10, 10, 25 (k/k_c = ξ/ε from 0.67 to 0.04).
+const FAR_POINTS: [(f64, f64); 7] = [(2.0, 3.0), (0.7, 2.0), (0.5, 2.0), (0.2, 1.0), (0.2, 2.0), (0.5, 5.0), (0.2, 5.0)];
+/// Relative agreement on the period and ln v_max a far row needs to be a reference.
+const FAR_AGREEMENT: f64 = 1e-9;
+
+/// The output of a command (trimmed), or `"unknown"`.
+fn command_output(program: &str, args: &[&str]) -> String {
+    std::process::Command::new(program)
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The machine: CPU model, cores, kernel.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|m| m.trim().to_string()))
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0);
+    format!("{cpu}, {cores} cores, {}", command_output("uname", &["-srm"]))
+}
+
+/// data/reference/drr_cycles_far.json: the slip law far from threshold, γ = 1e2 … 1e12, from
+/// Radau5 and Rodas5P (stickslip's pure-Rust Radau IIA 5 and Rosenbrock Rodas5P, both with the
+/// analytic Jacobian, both through the cycle analysis and its `Clock`) at rtol 1e-12,
+/// atol 1e-14, cycle convergence 1e-9. A row is a reference (`"agrees": true`) when the two agree
+/// to 1e-9 on the period and ln v_max; otherwise it keeps both numbers (or errors) and no
+/// reference. CVODE BDF at the same tolerances is kept beside them as a third check, not part of
+/// the mean.
+fn far() {
+    let settings = (1e-12, 1e-14, 1e-9);
+    let methods = ["radau5", "rodas5p"];
+    let keys = ["period", "t0", "slip_half_width_times_gamma", "ln_v_max"];
+    let started = std::time::Instant::now();
+    let date = command_output("date", &["-u", "+%Y-%m-%dT%H:%M:%SZ"]);
+    let dirty = !command_output("git", &["status", "--porcelain", "--untracked-files=no"]).is_empty();
+    let commit = command_output("git", &["rev-parse", "HEAD"]) + if dirty { " (with uncommitted changes)" } else { "" };
+    let mut rows = Vec::new();
+    let (mut worst, mut disagreeing) = (0.0f64, 0);
+    for (xi, epsilon) in FAR_POINTS {
+        for k in [2, 4, 6, 8, 10, 12] {
+            let gamma = 10f64.powi(k);
+            let run = |m: &str| try_cycle(gamma, xi, epsilon, "slip", m, settings);
+            let (a, b, check) = (run(methods[0]), run(methods[1]), run("cvode-bdf"));
+            let as_json = |r: &Result<serde_json::Value, String>| match r {
+                Ok(v) => v.clone(),
+                Err(e) => json!({ "error": e }),
+            };
+            let mut row = json!({
+                "gamma": gamma, "xi": xi, "epsilon": epsilon, "epsilon_over_xi": epsilon / xi,
+                "k_over_kc": xi / epsilon, "friction": "log", "state_law": "slip",
+                "radau5": as_json(&a), "rodas5p": as_json(&b), "cvode_bdf_check": as_json(&check),
+            });
+            let mut agrees = false;
+            if let (Ok(a), Ok(b)) = (&a, &b) {
+                let mut reference = serde_json::Map::new();
+                let mut agreement = serde_json::Map::new();
+                for key in keys {
+                    let (x, y) = (a[key].as_f64().expect("number"), b[key].as_f64().expect("number"));
+                    reference.insert(key.into(), json!(0.5 * (x + y)));
+                    agreement.insert(key.into(), json!((x - y).abs() / x.abs().max(y.abs())));
+                }
+                let decisive = agreement["period"].as_f64().unwrap().max(agreement["ln_v_max"].as_f64().unwrap());
+                agrees = decisive <= FAR_AGREEMENT;
+                if agrees {
+                    worst = worst.max(decisive);
+                    row["reference"] = json!(reference);
+                }
+                row["relative_agreement"] = json!(agreement);
+            }
+            if !agrees {
+                disagreeing += 1;
+            }
+            row["agrees"] = json!(agrees);
+            let period = |r: &Result<serde_json::Value, String>| match r {
+                Ok(v) => format!("{}", v["period"]),
+                Err(e) => format!("ERROR {e}"),
+            };
+            eprintln!(
+                "ξ={xi} ε={epsilon} γ=1e{k}: agrees {agrees}; radau5 {} rodas5p {} cvode-bdf {}",
+                period(&a),
+                period(&b),
+                period(&check)
+            );
+            rows.push(row);
+        }
+    }
+    let table = json!({
+        "description": "Limit cycle of the DRR spring-slider (dimensionless), f = ln v, slip law, far from the stability threshold: ε/ξ = 1.5 … 25 (k/k_c = ξ/ε = 0.67 … 0.04), γ = 1e2 … 1e12. Reference = mean of two independent integrators where they agree to 1e-9 relative on the period and ln v_max (\"agrees\": true); rows that do not agree keep both runs and have no reference. relative_agreement = |a − b|/max(|a|, |b|).",
+        "provenance": {
+            "generator": "cargo run --release --example reference_table -- far",
+            "stickslip_version": env!("CARGO_PKG_VERSION"),
+            "commit": commit,
+            "date": date,
+            "machine": machine(),
+            "sundials_version": stickslip::sundials::version(),
+            "integrators": [
+                "radau5 (stickslip's Radau IIA order 5, analytic Jacobian)",
+                "rodas5p (stickslip's Rosenbrock Rodas5P, analytic Jacobian)"
+            ],
+            "check": "cvode_bdf_check: CVODE BDF (analytic Jacobian) at the same tolerances, not part of the reference",
+            "tolerances": "rtol 1e-12, atol 1e-14 on (u, ln v, θ); cycle convergence 1e-9",
+            "agreement_required": FAR_AGREEMENT,
+            "start": "the scene default: v = 0.5 on the slow manifold, θ = 0",
+            "definitions": "period: between upward crossings of v = 1; t0: v = 1 to the v maximum; slip half-width: full width of v(t) at half maximum; ln_v_min: the floor of ln v in the arrest",
+            "wall_time_total_s": started.elapsed().as_secs_f64(),
+        },
+        "worst_relative_agreement_period_and_ln_v_max": worst,
+        "rows_not_agreeing": disagreeing,
+        "rows": rows,
+    });
+    let path = format!("{}/data/reference/drr_cycles_far.json", env!("CARGO_MANIFEST_DIR"));
+    std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n").expect("write table");
+    eprintln!("wrote {path}; worst agreement on period and ln v_max: {worst:.2e}; rows not agreeing: {disagreeing}");
+}
+
+/// The cost per cycle against ε/ξ at γ = 1e8, rtol 1e-8 (scene defaults otherwise), for each
+/// stiff method, as a Markdown table on stdout. Wall time per cycle = the run's wall time over
+/// the cycles computed (transient included), so it depends on the machine and its load.
+fn cost() {
+    let rtol: f64 = 1e-8;
+    let settings = (rtol, rtol * 1e-2, (1000.0 * rtol).clamp(1e-7, 1e-3));
+    println!("| ε/ξ | k/k_c | ξ | ε | ln v_min | method | cycles | steps/cycle | wall ms/cycle |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (xi, epsilon) in FAR_POINTS {
+        for method in ["cvode-bdf", "arkode-dirk", "radau5", "rodas5p", "extrapolation"] {
+            let lead = format!("| {:.2} | {:.3} | {xi} | {epsilon} |", epsilon / xi, xi / epsilon);
+            match try_cycle(1e8, xi, epsilon, "slip", method, settings) {
+                Ok(r) => {
+                    let cycles = r["cycles_computed"].as_u64().expect("count");
+                    println!(
+                        "{lead} {:.1} | {method} | {cycles} | {} | {:.2} |",
+                        r["ln_v_min"].as_f64().expect("number"),
+                        r["steps_per_cycle"],
+                        1e3 * r["wall_time_s"].as_f64().expect("number") / cycles as f64
+                    );
+                }
+                Err(e) => println!("{lead} | {method} | error: {e} | | |"),
+            }
+        }
+    }
 }

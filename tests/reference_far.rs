@@ -1,0 +1,112 @@
+//! The engine far from the stability threshold against data/reference/drr_cycles_far.json
+//! (ε/ξ = 1.5 … 25, i.e. k/k_c = 0.67 … 0.04, at γ = 1e2 … 1e12, slip law, from the default
+//! start; Radau5 and Rodas5P at rtol 1e-12 that agree to 1.2e-10 on the period and ln v_max,
+//! built by `cargo run --release --example reference_table -- far`).
+//!
+//! Each method runs the cycle analysis at scene defaults (atol = rtol/100) and must match the
+//! reference within `PERIOD_FACTOR`·rtol on the period and ln v_max and `T0_FACTOR`·rtol on t0
+//! (the time from v = 1 to the v maximum, a located event). The slip half-width is not checked:
+//! at γ ≥ 1e10 even the two reference integrators agree on it only to ~1e-5 (see the table).
+//! Rows on which the reference integrators did not agree (`"agrees": false`) are skipped.
+//!
+//! Measured worst relative deviations over the 42 rows (period, ln v_max, t0):
+//! radau5 8.7e-10, 2.3e-9, 2.1e-7 at rtol 1e-10 and 4.7e-8, 3.4e-8, 1.9e-6 at rtol 1e-8;
+//! rodas5p 6.6e-10, 1.8e-10, 9.9e-9 at rtol 1e-10 and 2.0e-8, 2.2e-9, 5.2e-8 at rtol 1e-8.
+//!
+//! CVODE BDF fails today on 25 of the 42 rows at rtol 1e-10 and at rtol 1e-8 (typed
+//! right-hand-side failures in the arrest after the slip, issue #13), and where it succeeds at
+//! rtol 1e-10 its period is off by up to 1.2e-7 at γ = 1e12. Its tests are behind `#[ignore]`
+//! until that is fixed; run them with
+//!
+//!     cargo test --release --test reference_far -- --ignored
+
+use stickslip::{engine, scene};
+
+/// Bound on the relative deviation of the period and ln v_max, in units of rtol.
+const PERIOD_FACTOR: f64 = 1e3;
+/// Bound on the relative deviation of t0, in units of rtol.
+const T0_FACTOR: f64 = 1e4;
+
+#[test]
+fn radau5_matches_the_far_table_at_rtol_1e_10() {
+    check_against_table("radau5", 1e-10);
+}
+
+#[test]
+fn rodas5p_matches_the_far_table_at_rtol_1e_10() {
+    check_against_table("rodas5p", 1e-10);
+}
+
+#[test]
+#[ignore = "fails today: CVODE RhsFailure on 25 of 42 rows (issue #13)"]
+fn cvode_bdf_matches_the_far_table_at_rtol_1e_10() {
+    check_against_table("cvode-bdf", 1e-10);
+}
+
+#[test]
+fn radau5_matches_the_far_table_at_rtol_1e_8() {
+    check_against_table("radau5", 1e-8);
+}
+
+#[test]
+fn rodas5p_matches_the_far_table_at_rtol_1e_8() {
+    check_against_table("rodas5p", 1e-8);
+}
+
+#[test]
+#[ignore = "fails today: CVODE RhsFailure on 25 of 42 rows (issue #13)"]
+fn cvode_bdf_matches_the_far_table_at_rtol_1e_8() {
+    check_against_table("cvode-bdf", 1e-8);
+}
+
+/// Runs `method` at `rtol` on every agreeing row; collects every failure (typed error, no cycle,
+/// deviation beyond the bound) and fails once with all of them.
+fn check_against_table(method: &str, rtol: f64) {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/reference/drr_cycles_far.json");
+    let table: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 42);
+    let keys = ["period", "ln_v_max", "t0"];
+    let bounds = [PERIOD_FACTOR * rtol, PERIOD_FACTOR * rtol, T0_FACTOR * rtol];
+    let mut worst = [0.0f64; 3];
+    let mut failures = Vec::new();
+    let mut checked = 0;
+    for row in rows {
+        if row["agrees"] != true {
+            continue;
+        }
+        checked += 1;
+        let (gamma, xi, epsilon) = (row["gamma"].as_f64().unwrap(), row["xi"].as_f64().unwrap(), row["epsilon"].as_f64().unwrap());
+        let agreement = row["relative_agreement"]["period"].as_f64().unwrap();
+        assert!(agreement <= 1e-9, "γ = {gamma}: the two reference integrators disagree by {agreement}");
+        let point = format!("ξ={xi} ε={epsilon} γ={gamma:e}");
+        let text = format!(
+            r#"{{"name": "far", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
+                "solver": {{"method": "{method}", "rtol": {rtol:e}}}, "analyses": ["cycle"]}}"#
+        );
+        let s = scene::parse(&text, "reference_far").unwrap();
+        let report = match engine::run(&s, serde_json::Value::Null) {
+            Ok(r) => r,
+            Err(e) => {
+                failures.push(format!("{point}: {e} [{:?}]", e.kind));
+                continue;
+            }
+        };
+        let c = report.cycle.unwrap();
+        let Some(v) = c.values else {
+            failures.push(format!("{point}: {:?} after {} cycles", c.status, c.cycles_computed));
+            continue;
+        };
+        let ours = [v.period, v.ln_v_max, v.t0];
+        for k in 0..3 {
+            let reference = row["reference"][keys[k]].as_f64().unwrap();
+            let rel = (ours[k] - reference).abs() / reference.abs();
+            worst[k] = worst[k].max(rel);
+            if !(rel < bounds[k]) {
+                failures.push(format!("{point}: {} = {} vs reference {reference} ({rel:.1e} > {:.0e})", keys[k], ours[k], bounds[k]));
+            }
+        }
+    }
+    eprintln!("{method} rtol {rtol:e}: {checked} rows; worst relative deviations (period, ln v_max, t0): {:.1e}, {:.1e}, {:.1e}", worst[0], worst[1], worst[2]);
+    assert!(failures.is_empty(), "{method} at rtol {rtol:e}: {} failures of {checked} rows:\n{}", failures.len(), failures.join("\n"));
+}
