@@ -201,14 +201,18 @@ fn physical_grid() -> Vec<Cell> {
 fn scene_text(cell: &Cell) -> String {
     // A physical cell must find its cycle: room for slow transients and long periods far from
     // threshold (~900 at ε/ξ = 25). Elsewhere the grid's own limits bound the work.
-    let (max_time, max_steps) = if cell.expectation() == Expectation::Cycle { (30_000, 2_000_000) } else { (3000, 200_000) };
+    let (time, max_steps) = if cell.expectation() == Expectation::Cycle { (30_000.0, 2_000_000) } else { (3000.0, 200_000) };
+    // A far-off start adds its own transient: launched at v0 the block slides ~v0/γ, and the
+    // stick that follows lasts about as long as the plate takes to catch up (u0 likewise).
+    let transient = cell.start.map_or(0.0, |[u, v, _]| u.abs() + v / cell.gamma);
+    let max_time = time + 10.0 * transient;
     let initial = cell.start.map_or(String::new(), |[u, v, theta]| {
         format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
     });
     format!(
         r#"{{"name": "stress", "model": {{"gamma": {:e}, "xi": {}, "epsilon": {}}}, {initial}
             "solver": {{"method": "{}", "rtol": {:e}, "atol": {:e}}},
-            "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": {max_time}, "max_steps": {max_steps}}}}}]}}"#,
+            "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": {max_time:e}, "max_steps": {max_steps}}}}}]}}"#,
         cell.gamma,
         cell.xi,
         cell.epsilon,

@@ -179,6 +179,36 @@ fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
 }
 
 #[test]
+fn far_off_starts_reach_the_cycle_far_from_threshold() {
+    // ε/ξ = 25 (k/k_c = 0.04) and ε/ξ = 1.5 at γ = 1e8; reference periods from
+    // data/reference/drr_cycles_far.json (Radau5 and Rodas5P at rtol 1e-12). From v = 1e30 the
+    // block slides ~1e22 and its arrest drops ln v to ~ −2e21 (−2e22 at ξ = 2): the stick that
+    // follows is crossed in closed form and lasts ~1e22. From (u, θ) = (1e3, −1e3) at ξ = 2 the
+    // floor is ln v = −1000.
+    let cases = [(0.2, 5.0, 1383.4781149035373), (2.0, 3.0, 68.04034164421667)];
+    let starts = [(0.0, 1e30, 0.0), (1e3, 1.0, -1e3)];
+    for (xi, epsilon, reference) in cases {
+        for method in ["cvode-bdf", "arkode-dirk", "radau5", "rodas5p", "extrapolation"] {
+            for (u, v, theta) in starts {
+                let report = run(&format!(
+                    r#"{{"name": "far", "model": {{"gamma": 1e8, "xi": {xi}, "epsilon": {epsilon}}},
+                        "initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},
+                        "solver": {{"method": "{method}", "rtol": 1e-8}},
+                        "analyses": [{{"cycle": {{"max_time": 1e40}}}}]}}"#
+                ));
+                let cycle = report.cycle.unwrap();
+                let what = format!("{method} ξ = {xi}, ε = {epsilon} from (u, v, θ) = ({u:e}, {v:e}, {theta:e})");
+                let period = cycle.values.unwrap_or_else(|| panic!("{what}: no periodic cycle")).period;
+                assert!((period - reference).abs() < 1e-5 * reference, "{what}: period {period}, reference {reference}");
+                if v > 1.0 {
+                    assert!(cycle.deep_sticks >= 1 && cycle.time_integrated > 1e21, "{what}: {} deep sticks in {:e}", cycle.deep_sticks, cycle.time_integrated);
+                }
+            }
+        }
+    }
+}
+
+#[test]
 fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
     // From v = 1e-30 the run passes close to the unstable fixed point (ε − ε_c = 0.02) and
     // spirals out over ~250 turns of period 7.51 whose ln v range grows ~8 % per turn; the

@@ -13,10 +13,10 @@
 //! radau5 8.7e-10, 2.3e-9, 2.1e-7 at rtol 1e-10 and 4.7e-8, 3.4e-8, 1.9e-6 at rtol 1e-8;
 //! rodas5p 6.6e-10, 1.8e-10, 9.9e-9 at rtol 1e-10 and 2.0e-8, 2.2e-9, 5.2e-8 at rtol 1e-8.
 //!
-//! CVODE BDF fails today on 25 of the 42 rows at rtol 1e-10 and at rtol 1e-8 (typed
-//! right-hand-side failures in the arrest after the slip, issue #13), and where it succeeds at
-//! rtol 1e-10 its period is off by up to 1.2e-7 at γ = 1e12. Its tests are behind `#[ignore]`
-//! until that is fixed; run them with
+//! CVODE BDF (with a fresh Jacobian at every step, docs/robustness.md) completes all 42 rows at
+//! both tolerances and matches the table at rtol 1e-8 (it failed on 25 rows before). At rtol
+//! 1e-10 its period is off by 1.0e-7 to 1.3e-7 on 5 rows at γ = 1e12 (ξ, ε = 0.5, 2; 0.2, 1;
+//! 0.2, 2; 0.5, 5; 0.2, 5), just beyond 1e3·rtol: that test is behind `#[ignore]`; run it with
 //!
 //!     cargo test --release --test reference_far -- --ignored
 
@@ -38,7 +38,7 @@ fn rodas5p_matches_the_far_table_at_rtol_1e_10() {
 }
 
 #[test]
-#[ignore = "fails today: CVODE RhsFailure on 25 of 42 rows (issue #13)"]
+#[ignore = "fails today: CVODE's period is off by 1.0e-7 to 1.3e-7 on 5 rows at γ = 1e12 (issue #13)"]
 fn cvode_bdf_matches_the_far_table_at_rtol_1e_10() {
     check_against_table("cvode-bdf", 1e-10);
 }
@@ -54,7 +54,6 @@ fn rodas5p_matches_the_far_table_at_rtol_1e_8() {
 }
 
 #[test]
-#[ignore = "fails today: CVODE RhsFailure on 25 of 42 rows (issue #13)"]
 fn cvode_bdf_matches_the_far_table_at_rtol_1e_8() {
     check_against_table("cvode-bdf", 1e-8);
 }

@@ -5,7 +5,8 @@
  * (src/sundials/solver.rs, cvode.rs): CVodeCreate(CV_BDF), CVodeInit, an error handler that
  * records messages instead of printing them, CVodeSetMaxHnilWarns(INT_MAX),
  * CVodeSVtolerances(rtol 1e-10, atol 1e-12 per component), dense matrix + dense linear
- * solver, analytic Jacobian, CVODE defaults otherwise. The RHS and Jacobian are the formulas
+ * solver, analytic Jacobian, a linear-solver setup and Jacobian at every step, CVODE defaults
+ * otherwise. The RHS and Jacobian are the formulas
  * of src/model/drr.rs written in the same order of operations (du/dt = expm1(w)), and return
  * +1 (recoverable) on non-finite values as the wrapper's trampolines do.
  *
@@ -633,6 +634,10 @@ static int run_once(int n_cycles, Result *out) {
   if (!LS) goto done;
   if (CVodeSetLinearSolver(tr.mem, LS, A) != CVLS_SUCCESS) goto done;
   if (CVodeSetJacFn(tr.mem, jac) != CVLS_SUCCESS) goto done;
+  /* engine::integrator: jacobian_max_age = 1 (a linear-solver setup and a Jacobian at every
+   * step; docs/robustness.md) */
+  if (CVodeSetLSetupFrequency(tr.mem, 1) != CV_SUCCESS) goto done;
+  if (CVodeSetJacEvalFrequency(tr.mem, 1) != CVLS_SUCCESS) goto done;
 
   /* first_sample: the RHS gives the derivative at the start */
   tr.prev.t = 0.0;

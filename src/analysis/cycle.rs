@@ -33,6 +33,7 @@
 use super::events::{self, Knot};
 use crate::integrate::{Clock, ErrorKind, Integrator, OdeSystem, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
+use crate::model::DeepStick;
 use serde::Serialize;
 
 /// How the cycle analysis runs; defaults documented on each field.
@@ -170,6 +171,10 @@ pub struct CycleReport {
     pub cycles_computed: usize,
     /// Total time integrated (dimensionless).
     pub time_integrated: f64,
+    /// Sticks crossed in closed form because ln v lay below −500 there, where v is zero in
+    /// double precision (see [`crate::model::deep_stick`]); 0 when none (key omitted).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub deep_sticks: u64,
     /// The convergence rule, in words.
     pub convergence_rule: String,
     /// Relative tolerance of the rule.
@@ -256,6 +261,8 @@ struct Tracker<'a> {
     /// Largest |dw/dt| since the last minimum of w.
     rise_rate: f64,
     steps: u64,
+    /// Sticks crossed in closed form ([`Tracker::cross`]).
+    deep_sticks: u64,
 }
 
 /// The first sample of a run: the RHS gives the derivative (no interpolant exists yet).
@@ -407,6 +414,30 @@ impl<'a> Tracker<'a> {
         Ok(false)
     }
 
+    /// Crosses a stick below the arrest-rate hold in closed form ([`Drr::deep_stick`]): its
+    /// floor is the lowest ln v of the cycle, and the integrator restarts where ln v comes back
+    /// up to the hold, `stick.duration` later. No event lies inside (u falls, ln v rises).
+    fn cross(&mut self, stick: DeepStick) -> Result<(), SolverError> {
+        let y = self.prev.y;
+        self.update_ranges(&[y[U], stick.floor, y[THETA]]);
+        self.record(self.prev.t, &[y[U], stick.floor, y[THETA]]);
+        let at = self.clock.now().plus(stick.duration);
+        self.clock.reinit(at, &stick.exit)?;
+        self.steps += 1;
+        self.deep_sticks += 1;
+        // On the slow manifold dw/dt = −(ξ du/dt + dθ/dt) exactly; the right-hand side's dw/dt
+        // there is G's round-off times the held rate.
+        let mut next = first_sample(self.drr, 0.0, stick.exit);
+        next.d[W] = -(self.drr.params().xi * next.d[U] + next.d[THETA]);
+        self.update_ranges(&stick.exit);
+        self.record(0.0, &stick.exit);
+        self.rise_rate = 0.0;
+        self.rise.clear();
+        self.rise.push(Knot { t: 0.0, x: stick.exit[W], dx: next.d[W] });
+        self.prev = next;
+        Ok(())
+    }
+
     fn close(&mut self, c: OpenCycle, period: f64) {
         let Some((t_peak, y_peak)) = c.peak else {
             // No peak with v > 1: a sub-threshold wiggle, not a cycle of the oscillation.
@@ -481,6 +512,9 @@ impl<'a> Tracker<'a> {
     }
 
     fn step(&mut self) -> Result<(), SolverError> {
+        if let Some(stick) = self.drr.deep_stick(&self.prev.y) {
+            return self.cross(stick);
+        }
         let step = self.clock.step()?;
         if step.start != self.prev.t {
             // The clock re-based before this step (its last step fell below its threshold).
@@ -620,6 +654,10 @@ fn combine(cycles: &[CycleValues], f: impl Fn(&[f64]) -> f64) -> CycleValues {
     }
 }
 
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
 fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len() as f64
 }
@@ -654,6 +692,7 @@ pub fn analyse(
         rebase_in_rise: false,
         rise_rate: 0.0,
         steps: 0,
+        deep_sticks: 0,
     };
     let fixed = drr.fixed_point();
     let mut seen = 0;
@@ -691,6 +730,7 @@ pub fn analyse(
         }
     };
     let time_integrated = tracker.clock.now().since(t_start);
+    let deep_sticks = tracker.deep_sticks;
     let closed = tracker.closed;
     let n = periodicity(&closed, settings).filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
     let (values, spread, orbit, used) = match (outcome, n) {
@@ -721,6 +761,7 @@ pub fn analyse(
         cycles_used: used,
         cycles_computed: closed.len(),
         time_integrated,
+        deep_sticks,
         convergence_rule: format!(
             "periodic when period, ln v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
              pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \

@@ -100,6 +100,7 @@ mod tests {
             cycles_used: 1,
             cycles_computed: 2,
             time_integrated: 1.0,
+            deep_sticks: 0,
             convergence_rule: String::new(),
             tolerance: 1e-7,
             steps_per_cycle: None,

@@ -73,6 +73,8 @@ pub struct UserCycle {
     _cycles_computed: Option<IgnoredAny>,
     #[serde(default, rename = "time_integrated")]
     _time_integrated: Option<IgnoredAny>,
+    #[serde(default, rename = "deep_sticks")]
+    _deep_sticks: Option<IgnoredAny>,
     #[serde(default, rename = "convergence_rule")]
     _convergence_rule: Option<IgnoredAny>,
     #[serde(default, rename = "tolerance")]

@@ -49,6 +49,15 @@ pub struct Options {
     pub max_conv_fails: Option<i32>,
     /// Safety factor in the nonlinear convergence test.
     pub nonlin_conv_coef: Option<f64>,
+    /// Most steps between two Jacobian evaluations (1: a fresh Jacobian at every step). For
+    /// systems whose stiff rates change by large factors within a few steps (the DRR's
+    /// γ²e^(−ln v)/ξ on the stick), where a Newton iteration with an older Jacobian leaves an
+    /// error in the stiff components that the next steps amplify. CVODE and ARKStep (implicit)
+    /// set their linear-solver setup and Jacobian frequencies to it; Radau5 evaluates a new one
+    /// after that many accepted steps even when its Newton contraction allows reuse; Rodas5P
+    /// evaluates the Jacobian at every step anyway; Extrapolation (reuse by its stability
+    /// checks) and ARKStep ERK (no Jacobian) reject it.
+    pub jacobian_max_age: Option<i64>,
     /// When true, a step below the spacing of t ("t + h = t") makes `advance` fail with
     /// [`crate::integrate::ErrorKind::StepUnderflow`]; when false it is counted in
     /// [`crate::integrate::Stats::step_underflow_warnings`] and integration goes on.
@@ -71,6 +80,7 @@ impl Options {
             max_nonlin_iters: None,
             max_conv_fails: None,
             nonlin_conv_coef: None,
+            jacobian_max_age: None,
             fail_on_step_underflow: true,
         }
     }
@@ -116,6 +126,7 @@ impl Options {
             ("max_nonlin_iters", self.max_nonlin_iters.map(i64::from)),
             ("max_conv_fails", self.max_conv_fails.map(i64::from)),
             ("max_steps", self.max_steps),
+            ("jacobian_max_age", self.jacobian_max_age),
         ];
         for (name, value) in counts {
             if let Some(v) = value {

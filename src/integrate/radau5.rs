@@ -216,7 +216,9 @@ impl Work {
 /// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
 /// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
 /// step, default 10), `max_err_test_fails` (consecutive rejections, default 50),
-/// `fail_on_step_underflow`. `max_order` is an InvalidInput error (the order is 5).
+/// `jacobian_max_age` (a new Jacobian after that many accepted steps even when the Newton
+/// contraction allows reuse), `fail_on_step_underflow`. `max_order` is an InvalidInput error
+/// (the order is 5).
 pub struct Radau5<S: OdeSystem> {
     system: S,
     n: usize,
@@ -240,6 +242,10 @@ pub struct Radau5<S: OdeSystem> {
     erracc: f64,
     /// The Jacobian was computed at the current point (no step accepted since).
     caljac: bool,
+    /// Steps accepted since the Jacobian in use was computed, and the most allowed
+    /// ([`Options::jacobian_max_age`]; `u64::MAX` when unset).
+    jacobian_age: u64,
+    jacobian_max_age: u64,
     action: Action,
     /// Step size the LU factors were computed for (NaN: none).
     lu_h: f64,
@@ -394,6 +400,8 @@ impl<S: OdeSystem> Radau5<S> {
             hacc: 0.0,
             erracc: 0.0,
             caljac: false,
+            jacobian_age: 0,
+            jacobian_max_age: options.jacobian_max_age.map_or(u64::MAX, |a| a as u64),
             action: Action::Jacobian,
             lu_h: f64::NAN,
             core,
@@ -686,6 +694,7 @@ impl<S: OdeSystem> Radau5<S> {
                     return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
                 }
                 self.caljac = true;
+                self.jacobian_age = 0;
                 self.action = Action::Decompose;
             }
             if self.action == Action::Decompose || self.lu_h != self.core.h {
@@ -764,11 +773,12 @@ impl<S: OdeSystem> Radau5<S> {
                     hnew = self.core.posneg * hf;
                 }
                 let qt = hnew / h;
-                if self.theta <= THET && (QUOT1..=QUOT2).contains(&qt) {
+                let fresh = self.theta <= THET && self.jacobian_age < self.jacobian_max_age;
+                if fresh && (QUOT1..=QUOT2).contains(&qt) {
                     self.action = Action::Reuse;
                 } else {
                     self.core.h = hnew;
-                    self.action = if self.theta <= THET { Action::Decompose } else { Action::Jacobian };
+                    self.action = if fresh { Action::Decompose } else { Action::Jacobian };
                 }
                 self.core.stats.current_step = self.core.h;
                 return Ok(last);
@@ -823,6 +833,7 @@ impl<S: OdeSystem> Radau5<S> {
         self.update_scal();
         self.core.count_accepted(h);
         self.caljac = false;
+        self.jacobian_age += 1;
     }
 
     /// Restarts at (t0, y0): step-size history, Jacobian and polynomial are dropped; options

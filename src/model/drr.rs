@@ -57,6 +57,19 @@ pub const W: usize = 1;
 /// Index of θ in the state vector.
 pub const THETA: usize = 2;
 
+/// ln v below which the arrest rate γ²e^(−w) is held at its value here ([`Drr`]).
+///
+/// Where an arrest's floor −(ξu + θ) lies far below (a far-off start: after v = 1e30 the floor
+/// is near ln v = −2e21), e^(−w) leaves the range of doubles and no integrator can pass. Below
+/// ln v = −500 (v < 1e-217) the block is stuck to every digit: v − 1 rounds to −1, and the
+/// distance G to the slow manifold relaxes at a rate above γ²e^500/ξ ≈ 1e217 γ², so on any
+/// resolvable time scale G = 0 to all digits whatever the rate. Holding the rate at its value
+/// at −500 keeps the same solution in double precision (G still relaxes to 0 within
+/// ~1e-217/γ², ln v follows −(ξu + θ)) with finite values everywhere. Only under logarithmic
+/// friction, the one law with such a floor: under the power law f(v) stays bounded as v → 0
+/// and under the asinh law v reaches 0 in finite time, so no slow manifold lies below.
+pub const ARREST_RATE_HELD_BELOW: f64 = -500.0;
+
 /// The DRR system in (u, w, θ).
 #[derive(Debug, Clone, Copy)]
 pub struct Drr {
@@ -168,10 +181,20 @@ impl Drr {
         (y[THETA] / (1.0 + p.epsilon) + f, vfp, p.friction.d_vfprime_dw(y[W]))
     }
 
+    /// The arrest rate γ²e^(−w) (held below [`ARREST_RATE_HELD_BELOW`] under logarithmic
+    /// friction) and whether it depends on w there.
+    fn arrest_rate(&self, w: f64) -> (f64, bool) {
+        if w > ARREST_RATE_HELD_BELOW || self.params.friction != Friction::Log {
+            (self.gamma2 * (-w).exp(), true)
+        } else {
+            (self.gamma2 * (-ARREST_RATE_HELD_BELOW).exp(), false)
+        }
+    }
+
     fn split(&self, y: &[f64]) -> (f64, f64, f64) {
         let w = y[W];
         let g = self.manifold_offset(y);
-        let dw = -self.gamma2 * (-w).exp() * g;
+        let dw = -self.arrest_rate(w).0 * g;
         let (x, _, _) = self.law_argument(y);
         let dtheta = (1.0 + self.params.epsilon) * self.params.state_law.terms(w, x).f;
         (w.exp_m1(), dw, dtheta)
@@ -199,13 +222,14 @@ impl OdeSystem for Drr {
         let w = y[W];
         let r = self.resistance(w);
         let g = y[U] + (y[THETA] + r.value) / p.xi;
-        let a = self.gamma2 * (-w).exp();
+        let (a, varies) = self.arrest_rate(w);
+        let da = if varies { a } else { 0.0 };
         let c = 1.0 + p.epsilon;
         let (x, s, _) = self.law_argument(y);
         let law = p.state_law.terms(w, x);
         jac.set(U, W, w.exp());
         jac.set(W, U, -a);
-        jac.set(W, W, a * (g - r.slope / p.xi));
+        jac.set(W, W, da * g - a * r.slope / p.xi);
         jac.set(W, THETA, -a / p.xi);
         // R = c v F(x): ∂R/∂w = c (vF + vF' s), ∂R/∂θ = vF'.
         jac.set(THETA, W, c * (law.f + law.d1 * s));
@@ -221,23 +245,25 @@ impl OdeSystem for Drr {
         let w = y[W];
         let r = self.resistance(w);
         let g = y[U] + (y[THETA] + r.value) / p.xi;
-        let a = self.gamma2 * (-w).exp();
+        let (a, varies) = self.arrest_rate(w);
+        // da/dw = −a where the rate varies, 0 where it is held.
+        let da = if varies { a } else { 0.0 };
         let c = 1.0 + p.epsilon;
         let (x, s, h) = self.law_argument(y);
         let law = p.state_law.terms(w, x);
         match k {
-            U => out.set(W, W, a),
+            U => out.set(W, W, da),
             THETA => {
-                out.set(W, W, a / p.xi);
+                out.set(W, W, da / p.xi);
                 // ∂²R/∂θ∂w = vF' + vF'' s, ∂²R/∂θ² = vF''/c.
                 out.set(THETA, W, law.d1 + law.d2 * s);
                 out.set(THETA, THETA, law.d2 / c);
             }
             _ => {
                 out.set(U, W, w.exp());
-                out.set(W, U, a);
-                out.set(W, W, -a * g + 2.0 * a * r.slope / p.xi - a * r.curvature / p.xi);
-                out.set(W, THETA, a / p.xi);
+                out.set(W, U, da);
+                out.set(W, W, -da * g + 2.0 * da * r.slope / p.xi - a * r.curvature / p.xi);
+                out.set(W, THETA, da / p.xi);
                 // ∂²R/∂w² = c (vF + 2vF' s + vF'' s² + vF' h).
                 out.set(THETA, W, c * (law.f + 2.0 * law.d1 * s + law.d2 * s * s + law.d1 * h));
                 out.set(THETA, THETA, law.d1 + law.d2 * s);
@@ -310,27 +336,53 @@ mod tests {
         }
     }
 
+    /// ∂J/∂y_k against central differences of the Jacobian, for each k.
+    fn assert_jacobian_derivative_matches_differences(drr: &Drr, y: [f64; 3]) {
+        let p = drr.params();
+        for k in 0..3 {
+            let mut exact = [0.0; 9];
+            drr.jacobian_derivative(0.0, &y, k, &mut JacobianMatrix::new(&mut exact, 3));
+            let h = 1e-6 * (1.0 + y[k].abs());
+            let (mut yp, mut ym) = (y, y);
+            yp[k] += h;
+            ym[k] -= h;
+            let (mut jp, mut jm) = ([0.0; 9], [0.0; 9]);
+            drr.jacobian(0.0, &yp, &mut JacobianMatrix::new(&mut jp, 3));
+            drr.jacobian(0.0, &ym, &mut JacobianMatrix::new(&mut jm, 3));
+            for i in 0..9 {
+                let fd = (jp[i] - jm[i]) / (2.0 * h);
+                assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{p:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
+            }
+        }
+    }
+
     #[test]
     fn jacobian_derivative_matches_central_differences_of_the_jacobian() {
         for drr in models(10.0, 0.7, 0.72) {
-            let p = drr.params();
             for y in STATES {
-                for k in 0..3 {
-                    let mut exact = [0.0; 9];
-                    drr.jacobian_derivative(0.0, &y, k, &mut JacobianMatrix::new(&mut exact, 3));
-                    let h = 1e-6 * (1.0 + y[k].abs());
-                    let (mut yp, mut ym) = (y, y);
-                    yp[k] += h;
-                    ym[k] -= h;
-                    let (mut jp, mut jm) = ([0.0; 9], [0.0; 9]);
-                    drr.jacobian(0.0, &yp, &mut JacobianMatrix::new(&mut jp, 3));
-                    drr.jacobian(0.0, &ym, &mut JacobianMatrix::new(&mut jm, 3));
-                    for i in 0..9 {
-                        let fd = (jp[i] - jm[i]) / (2.0 * h);
-                        assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{p:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
-                    }
-                }
+                assert_jacobian_derivative_matches_differences(&drr, y);
             }
+        }
+    }
+
+    /// Deep below the hold (a far-off start's arrest): the Jacobian and its derivative are
+    /// those of the held rate, and the right-hand side is finite and continuous at the hold.
+    #[test]
+    fn held_arrest_rate_has_consistent_jacobians_and_is_continuous() {
+        for drr in models(1e8, 0.7, 3.0).into_iter().filter(|d| d.params().friction == Friction::Log) {
+            let p = drr.params();
+            let y = [900.0, -800.0, -1.0];
+            for (row, col, exact, fd) in jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs())) {
+                assert!(exact.is_finite() && (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}");
+            }
+            assert_jacobian_derivative_matches_differences(&drr, y);
+            let at = |w: f64| {
+                let mut d = [0.0; 3];
+                drr.rhs(0.0, &[900.0, w, -1.0], &mut d);
+                d[W]
+            };
+            let (below, above) = (at(ARREST_RATE_HELD_BELOW - 1e-12), at(ARREST_RATE_HELD_BELOW + 1e-12));
+            assert!(below.is_finite() && (below - above).abs() <= 1e-9 * above.abs(), "{p:?}: {below:e} vs {above:e}");
         }
     }
 

@@ -1,5 +1,6 @@
 //! Models: ODE systems with their Jacobians.
 
+pub mod deep_stick;
 pub mod drr;
 pub mod fast_slip;
 pub mod friction;
@@ -10,6 +11,7 @@ pub mod saddle_node;
 pub mod van_der_pol;
 pub mod variational;
 
+pub use deep_stick::DeepStick;
 pub use drr::{Drr, DrrParams};
 pub use friction::Friction;
 pub use state_law::StateLaw;

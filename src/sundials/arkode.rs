@@ -50,6 +50,8 @@ mod ark {
         ARKodeGetActualInitStep as GetActualInitStep,
         ARKodeSetPredictorMethod as SetPredictorMethod,
         ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
+        ARKodeSetLSetupFrequency as SetLSetupFrequency,
+        ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
     };
 }
 #[cfg(not(sundials7))]
@@ -92,6 +94,8 @@ mod ark {
         ARKStepGetActualInitStep as GetActualInitStep,
         ARKStepSetPredictorMethod as SetPredictorMethod,
         ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
+        ARKStepSetLSetupFrequency as SetLSetupFrequency,
+        ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
     };
 }
 
@@ -285,6 +289,20 @@ unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
     s
 }
 
+/// [`Api::set_jacobian_max_age`] for ARKStep.
+///
+/// # Safety
+/// `m` is live ARKStep memory with a linear solver attached.
+unsafe fn set_jacobian_max_age(m: *mut c_void, age: i64) -> c_int {
+    // SAFETY: per this function's contract; the setter stores a scalar.
+    let flag = unsafe { ark::SetLSetupFrequency(m, c_int::try_from(age).unwrap_or(c_int::MAX)) };
+    if flag != 0 {
+        return flag;
+    }
+    // SAFETY: as above.
+    unsafe { ark::SetJacEvalFrequency(m, age as c_long) }
+}
+
 static ARKSTEP: Api = Api {
     name: "ARKStep",
     free: ark::Free,
@@ -311,6 +329,7 @@ static ARKSTEP: Api = Api {
     set_nonlin_conv_coef: ark::SetNonlinConvCoef,
     set_max_hnil_warns: ark::SetMaxHnilWarns,
     // ARKStepReset keeps options and counters; only time, state and step history restart.
+    set_jacobian_max_age,
     reinit: ark::Reset,
     reinit_resets_counters: false,
     read_stats,

@@ -82,6 +82,21 @@ unsafe fn read_stats(m: *mut c_void, _has_linear_solver: bool) -> Stats {
     s
 }
 
+/// [`Api::set_jacobian_max_age`] for CVODE.
+///
+/// # Safety
+/// `m` is live CVODE memory with a linear solver attached.
+unsafe fn set_jacobian_max_age(m: *mut c_void, age: i64) -> c_int {
+    let age = age as c_long;
+    // SAFETY: per this function's contract; the setter stores a scalar.
+    let flag = unsafe { ffi::CVodeSetLSetupFrequency(m, age) };
+    if flag != 0 {
+        return flag;
+    }
+    // SAFETY: as above.
+    unsafe { ffi::CVodeSetJacEvalFrequency(m, age) }
+}
+
 static CVODE: Api = Api {
     name: "CVODE",
     free: ffi::CVodeFree,
@@ -107,6 +122,7 @@ static CVODE: Api = Api {
     set_max_conv_fails: ffi::CVodeSetMaxConvFails,
     set_nonlin_conv_coef: ffi::CVodeSetNonlinConvCoef,
     set_max_hnil_warns: ffi::CVodeSetMaxHnilWarns,
+    set_jacobian_max_age,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
     read_stats,

@@ -39,6 +39,9 @@ pub(crate) struct Api {
     pub set_max_conv_fails: unsafe extern "C" fn(Mem, c_int) -> c_int,
     pub set_nonlin_conv_coef: unsafe extern "C" fn(Mem, f64) -> c_int,
     pub set_max_hnil_warns: unsafe extern "C" fn(Mem, c_int) -> c_int,
+    /// Sets the most steps between linear-solver setups and between Jacobian evaluations
+    /// ([`Options::jacobian_max_age`]); needs a linear solver attached.
+    pub set_jacobian_max_age: unsafe fn(Mem, i64) -> c_int,
     /// Restarts at (t0, y0) keeping the options.
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
@@ -198,6 +201,13 @@ impl<S> Solver<S> {
                 // SAFETY: `m` is live and has a linear solver attached just above; the trampoline matches CVLsJacFn/ARKLsJacFn.
                 solver.check(unsafe { (api.set_jac_fn)(m, jacobian) })?;
             }
+        }
+        if let Some(age) = options.jacobian_max_age {
+            if !needs_linear_solver {
+                return Err(invalid(format!("jacobian_max_age = {age}: an explicit method has no Jacobian; leave it unset (None)")));
+            }
+            // SAFETY: `m` is live and has its linear solver attached above; stores two scalars.
+            solver.check(unsafe { (api.set_jacobian_max_age)(m, age) })?;
         }
         Ok(solver)
     }

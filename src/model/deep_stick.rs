@@ -1,0 +1,101 @@
+//! Sticks deeper than double precision: v is zero in every sum, and the exact solution is known.
+//!
+//! After a far-off start (v = 1e30 launches the block to u ≈ v/γ) or far from threshold, an
+//! arrest can drop ln v to a floor −(ξu + θ) far below [`ARREST_RATE_HELD_BELOW`] (−500; at
+//! v = 1e30, γ = 1e8, ξ = 0.2 the floor is near −2e21), and the stick that follows lasts
+//! ~u time units (1e22). There v < 1e-217, so in double precision du/dt = v − 1 = −1, the state
+//! law's v-terms vanish, and ln v stays on the slow manifold −(ξu + θ) (its distance to it
+//! relaxes at a rate above 1e217 γ²). The solution to the point where ln v comes back up to
+//! [`STICK_EXIT`] = −50 is then exact to double precision in closed form:
+//!
+//! ```text
+//! u(t) = u0 − t,   θ(t) = θ0 (slip law),   θ(t) = θ0 + (1+ε) ln(1 + t e^(−θ0/(1+ε))) (ageing, PRZ),
+//! ```
+//!
+//! and integrating it step by step (steps of at most the model's max step, over 1e22 time
+//! units) is neither possible nor more accurate. What the closed form leaves out is v itself:
+//! ∫v dt over the rest of the stick, ≤ e^(−50)/ξ ≈ 2e-22/ξ in u (and as little in θ), below
+//! the spacing of doubles at |u| ≳ 1e-5/ξ. The integration resumes at ln v = −50 rather than
+//! at the hold: a restarted integrator's first steps on the manifold at −500, where the
+//! round-off of G times the rate 1e217γ² dominates f, do not grow (Rodas5P, extrapolation). Only the logarithmic friction law has such a
+//! floor (the power law's f(v) stays bounded as v → 0; the asinh law reaches v = 0).
+//!
+//! Reference: the slow manifold and its stick, ../shared/paper (section on the relaxation
+//! oscillation); the state laws' v → 0 limits, docs/state-laws.md.
+
+use super::drr::{Drr, ARREST_RATE_HELD_BELOW, THETA, U, W};
+use super::friction::Friction;
+use super::state_law::StateLaw;
+
+/// A stick below the hold, crossed in closed form ([`Drr::deep_stick`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeepStick {
+    /// ln v on the slow manifold at the start: −(ξu0 + θ0).
+    pub floor: f64,
+    /// Time until ln v comes back up to [`STICK_EXIT`].
+    pub duration: f64,
+    /// The state there (on the slow manifold, ln v = [`STICK_EXIT`]).
+    pub exit: [f64; 3],
+}
+
+/// ln v where the integration resumes after a stick crossed in closed form: v = 2e-22, still
+/// below every sum's resolution (see the module documentation).
+pub const STICK_EXIT: f64 = -50.0;
+
+/// How close ln v must be to the floor (relative) for the arrest to count as settled.
+const SETTLED: f64 = 1e-6;
+
+impl Drr {
+    /// The stick ahead of `y` when it lies wholly below the hold: ln v has settled on a floor
+    /// −(ξu + θ) < −500 (logarithmic friction only). None otherwise.
+    pub fn deep_stick(&self, y: &[f64; 3]) -> Option<DeepStick> {
+        let p = self.params();
+        if p.friction != Friction::Log || y[W] >= ARREST_RATE_HELD_BELOW {
+            return None;
+        }
+        let floor = -(p.xi * y[U] + y[THETA]);
+        let settled = (y[W] - floor).abs() <= SETTLED * floor.abs();
+        if !(floor < ARREST_RATE_HELD_BELOW && settled && floor.is_finite()) {
+            return None;
+        }
+        let c = 1.0 + p.epsilon;
+        let theta = |t: f64| at_rest(p.state_law, y[THETA], c, t);
+        // ln v = −(ξ(u0 − t) + θ(t)) rises to the exit: the root of the concave, eventually
+        // decreasing F(t) = ξ(u0 − t) + θ(t) + exit, with F(0) = exit − floor > 0.
+        let excess = |t: f64| p.xi * (y[U] - t) + theta(t) + STICK_EXIT;
+        let mut hi = (STICK_EXIT - floor) / p.xi;
+        while excess(hi) > 0.0 {
+            hi *= 2.0;
+            if !hi.is_finite() {
+                return None;
+            }
+        }
+        let mut lo = 0.0;
+        for _ in 0..2100 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if excess(mid) > 0.0 { lo = mid } else { hi = mid }
+        }
+        let theta_exit = theta(hi);
+        let u_exit = -(theta_exit + STICK_EXIT) / p.xi;
+        Some(DeepStick { floor, duration: hi, exit: [u_exit, STICK_EXIT, theta_exit] })
+    }
+}
+
+/// θ after `t` at rest (v = 0 in double precision) from θ0, with c = 1 + ε.
+fn at_rest(law: StateLaw, theta0: f64, c: f64, t: f64) -> f64 {
+    match law {
+        // dθ/dt = −c v x → 0.
+        StateLaw::Slip => theta0,
+        // dθ/dt = c e^(−θ/c) (PRZ's v²-term vanishes too): e^(θ/c) grows by t, i.e.
+        // θ = θ0 + c ln(1 + t e^(−θ0/c)) = θ0 + c softplus(ln t − θ0/c), which stays finite
+        // where e^(−θ0/c) overflows.
+        StateLaw::Ageing | StateLaw::Prz if t > 0.0 => {
+            let l = t.ln() - theta0 / c;
+            theta0 + c * (l.max(0.0) + (-l.abs()).exp().ln_1p())
+        }
+        StateLaw::Ageing | StateLaw::Prz => theta0,
+    }
+}
