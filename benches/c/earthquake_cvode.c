@@ -123,7 +123,7 @@ static int jac(realtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void *user_dat
   memset(data, 0, NEQ * NEQ * sizeof *data);
   SM_ELEMENT_D(J, U, W) = v;
   SM_ELEMENT_D(J, W, U) = -a;
-  SM_ELEMENT_D(J, W, W) = a * (g - vfp / XI);
+  SM_ELEMENT_D(J, W, W) = a * g - a * vfp / XI;
   SM_ELEMENT_D(J, W, TH) = -a / XI;
   SM_ELEMENT_D(J, TH, W) = -v * (y[TH] + (1.0 + EPS) * f) - v * (1.0 + EPS) * vfp;
   SM_ELEMENT_D(J, TH, TH) = -v;
