@@ -99,3 +99,58 @@ fn at_rest(law: StateLaw, theta0: f64, c: f64, t: f64) -> f64 {
         StateLaw::Ageing | StateLaw::Prz => theta0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::DrrParams;
+
+    fn drr(law: StateLaw, friction: Friction) -> Drr {
+        Drr::new(DrrParams { state_law: law, ..DrrParams::new(1e8, 2.0, 5.0, friction) })
+    }
+
+    #[test]
+    fn slip_law_stick_is_the_plate_catching_up() {
+        // ξu + θ = 1000: the floor is ln v = −1000, and ln v = −(ξ(u0 − t) + θ0) reaches −50
+        // after (1000 − 50)/ξ.
+        let stick = drr(StateLaw::Slip, Friction::Log).deep_stick(&[1e3, -1e3, -1e3]).expect("a deep stick");
+        assert_eq!(stick.floor, -1e3);
+        assert!((stick.duration - 475.0).abs() < 1e-12, "{stick:?}");
+        assert!((stick.exit[U] - 525.0).abs() < 1e-12 && stick.exit[W] == STICK_EXIT && stick.exit[THETA] == -1e3, "{stick:?}");
+    }
+
+    #[test]
+    fn ageing_and_prz_sticks_follow_their_healing_law() {
+        for law in [StateLaw::Ageing, StateLaw::Prz] {
+            let d = drr(law, Friction::Log);
+            let (u, theta0) = (510.0, -20.0);
+            let y = [u, -(2.0 * u + theta0), theta0];
+            let stick = d.deep_stick(&y).expect("a deep stick");
+            // RK4 on dθ/dt = (1+ε) e^(−θ/(1+ε)) (v = 0) over the stick's duration.
+            let c = 6.0;
+            let (n, mut theta) = (200_000, y[THETA]);
+            let h = stick.duration / n as f64;
+            let f = |th: f64| c * (-th / c).exp();
+            for _ in 0..n {
+                let k1 = f(theta);
+                let k2 = f(theta + 0.5 * h * k1);
+                let k3 = f(theta + 0.5 * h * k2);
+                let k4 = f(theta + h * k3);
+                theta += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            }
+            assert!((stick.exit[THETA] - theta).abs() < 1e-9 * theta.abs().max(1.0), "{law:?}: {} vs {theta}", stick.exit[THETA]);
+            // The exit is on the slow manifold at ln v = −50, and u fell by the duration.
+            assert!((2.0 * stick.exit[U] + stick.exit[THETA] + STICK_EXIT).abs() < 1e-9, "{stick:?}");
+            assert!((y[U] - stick.duration - stick.exit[U]).abs() < 1e-9 * y[U], "{stick:?}");
+        }
+    }
+
+    #[test]
+    fn only_a_settled_log_friction_stick_below_the_hold_is_crossed() {
+        let log = drr(StateLaw::Slip, Friction::Log);
+        assert!(log.deep_stick(&[1e3, -900.0, -1e3]).is_none(), "still falling to its floor −1000");
+        assert!(log.deep_stick(&[100.0, -150.0, -50.0]).is_none(), "floor −150 is above the hold");
+        let power = drr(StateLaw::Slip, Friction::Power { alpha: 0.3 });
+        assert!(power.deep_stick(&[1e3, -1e3, -1e3]).is_none(), "no floor under the power law");
+    }
+}
