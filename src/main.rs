@@ -317,12 +317,7 @@ fn compare_command(
     }
     let parsed = methods
         .iter()
-        .map(|m| {
-            scene::Method::ALL.iter().find(|(n, _)| n == m).map(|(_, x)| *x).ok_or_else(|| {
-                let names: Vec<&str> = scene::Method::ALL.iter().map(|(n, _)| *n).collect();
-                Failure(2, format!("--methods: unknown method \"{m}\"; use {}", names.join(", ")))
-            })
-        })
+        .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
         .collect::<Result<Vec<_>, _>>()?;
     let c = compare::methods(&scene, &parsed);
     if json {

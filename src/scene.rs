@@ -225,7 +225,22 @@ impl Method {
     pub fn name(self) -> &'static str {
         Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
     }
+}
 
+impl std::str::FromStr for Method {
+    type Err = String;
+
+    /// The method by its scene name (the one parser of method names: scenes and the CLI); the
+    /// error names the valid ones.
+    fn from_str(name: &str) -> Result<Self, String> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| {
+            let names: Vec<&str> = Self::ALL.iter().map(|(n, _)| *n).collect();
+            format!("\"{name}\" is not a method; use one of {}", names.join(", "))
+        })
+    }
+}
+
+impl Method {
     /// Whether the method is meant for stiff problems.
     pub fn is_stiff(self) -> bool {
         matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p | Method::Extrapolation)
@@ -638,12 +653,9 @@ fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String
 }
 
 fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneError) -> Result<SolverSpec, SceneError> {
-    let names: Vec<&str> = Method::ALL.iter().map(|(n, _)| *n).collect();
     let method = match raw.and_then(|r| r.method.as_deref()) {
         None => Method::CvodeBdf,
-        Some(name) => Method::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| {
-            err("solver.method", format!("\"{name}\" is not a method; use one of {}", names.join(", ")))
-        })?,
+        Some(name) => name.parse().map_err(|e| err("solver.method", e))?,
     };
     let rtol = positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-8), "e.g. 1e-8", err)?;
     let atol = match raw.and_then(|r| r.atol.clone()) {
