@@ -8,8 +8,8 @@
 //!
 //! whose solution is y = (sin t, e^(−t)) exactly: a stiff component that tracks a slow
 //! manifold (as ln v does on the stick of the spring-slider) and a smooth one. Each method
-//! integrates it to t = 10 at rtol 1e-8 with outputs at t = 1, 2, …, 10, and must match the
-//! exact solution to 1e3·rtol there and in its dense output. The example also shows the
+//! integrates it to t = 10 at rtol 1e-8 with outputs at t = 1, 2, …, 10, then to a stop time
+//! at 10.25, and must match the exact solution to 1e3·rtol there and in its dense output. The example also shows the
 //! statistics, a root (CVODE and ARKStep), a typed error and an option a method rejects.
 //! It exits with status 1 if any check fails (CI runs it: tools/test.sh).
 //!
@@ -91,6 +91,11 @@ fn main() -> ExitCode {
             }
         };
         let mut worst: f64 = 0.0;
+        // The same stop-time call on every method (set before the integration passes it: the
+        // one-step methods step past an output time and interpolate back).
+        if let Err(e) = integ.set_stop_time(10.25) {
+            failures.push(format!("{method}: {e}"));
+        }
         for k in 1..=10 {
             // Task::Normal returns the state at tout (interpolated from the last step).
             match integ.advance(k as f64, Task::Normal) {
@@ -100,6 +105,14 @@ fn main() -> ExitCode {
                     break;
                 }
             }
+        }
+        // The step ends exactly at the stop time.
+        match integ.advance(20.0, Task::Normal) {
+            Ok(step) if step.event == StepEvent::StopTime && step.t == 10.25 => worst = worst.max(error(integ.state(), step.t)),
+            other => failures.push(format!("{method}: stop time 10.25 gave {other:?}")),
+        }
+        if integ.set_stop_time(f64::NAN).map_err(|e| e.kind) != Err(ErrorKind::InvalidInput) {
+            failures.push(format!("{method}: a NaN stop time was accepted"));
         }
         // One internal step, then the dense output inside it (value and first derivative).
         let start = integ.t();
@@ -117,7 +130,7 @@ fn main() -> ExitCode {
         };
         let s = integ.stats();
         println!(
-            "{method:13} error at t = 1…10: {worst:.1e}, dense output: {dense_error:.1e}; {} steps, {} RHS, {} Jacobians, {} error-test failures",
+            "{method:13} error at t = 1…10.25: {worst:.1e}, dense output: {dense_error:.1e}; {} steps, {} RHS, {} Jacobians, {} error-test failures",
             s.steps, s.rhs_evals, s.jac_evals, s.err_test_fails
         );
         if !(worst <= bound && dense_error <= bound) {

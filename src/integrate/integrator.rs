@@ -17,6 +17,11 @@ pub trait Integrator {
     fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError>;
     /// Restarts at (t0, y0).
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError>;
+    /// Sets (or moves) the time the integrator must not step past, as
+    /// [`Options::stop_time`](super::Options::stop_time) does at construction; a step that
+    /// ends there returns [`StepEvent::StopTime`](super::StepEvent::StopTime), after which the
+    /// stop time is disabled. A non-finite time is an `InvalidInput` error.
+    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError>;
     /// Moves the time origin to the last returned point: afterwards `t()` is 0 and the state
     /// is unchanged. Methods that can keep their step size and history do (an exact time shift
     /// for an autonomous system); by default the integrator restarts at (0, state), with

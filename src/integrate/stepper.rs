@@ -40,6 +40,9 @@ pub(super) struct Core {
     /// An accepted step exists since the last (re)start: the dense output is valid.
     pub have_step: bool,
     pub reject: bool,
+    /// The internal point x is a stop time that a call has not returned yet (a step ended
+    /// there while the call returned an earlier tout).
+    pub stop_pending: bool,
     // Returned state.
     pub t_out: f64,
     pub y_out: Vec<f64>,
@@ -108,6 +111,7 @@ impl Core {
             xold: t0,
             have_step: false,
             reject: false,
+            stop_pending: false,
             t_out: t0,
             y_out: y0.to_vec(),
             dense: vec![0.0; n],
@@ -241,6 +245,7 @@ impl Core {
         self.started = false;
         self.have_step = false;
         self.reject = false;
+        self.stop_pending = false;
         self.stats.reinits += 1;
         Ok(())
     }
@@ -334,6 +339,14 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
     }
     m.check_fixed().map_err(|message| m.core().invalid(message))?;
     start(m, tout, task)?;
+    // A stop time reached by a step whose call returned an earlier tout: return it now.
+    if m.core().stop_pending && (task == Task::OneStep || (tout - m.core().x) * m.core().posneg >= 0.0) {
+        let c = m.core_mut();
+        c.stop_pending = false;
+        c.t_out = c.x;
+        c.y_out.copy_from_slice(&c.y);
+        return Ok(Step { t: c.x, event: StepEvent::StopTime });
+    }
     if task == Task::OneStep {
         let stopped = m.step()?;
         let c = m.core_mut();
@@ -358,7 +371,10 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
                 let message = format!("tout = {tout:e} is behind the last step (t = {:e})", c.x);
                 return Err(c.invalid(message));
             }
-            m.core_mut().t_out = tout;
+            let c = m.core_mut();
+            c.t_out = tout;
+            // The step ended at the stop time beyond tout: the next call returns it.
+            c.stop_pending = stopped && tout != c.x;
             return Ok(Step { t: tout, event: StepEvent::Reached });
         }
         if stopped {
@@ -449,12 +465,26 @@ macro_rules! integrator_via_stepper {
                 stepper::advance(self, tout, task)
             }
 
-            /// Sets (Some) or clears (None) the time the integrator must not step past, as
-            /// [`Options::stop_time`](super::Options::stop_time) does at construction; a step
-            /// that ends there returns [`StepEvent::StopTime`](super::StepEvent::StopTime).
-            /// Lets a caller integrate piecewise-smooth forcing node by node without restarts.
-            pub fn set_stop_time(&mut self, t: Option<f64>) {
-                self.core_mut().stop_time = t;
+            /// Sets (or moves) the time the integrator must not step past (see
+            /// [`Integrator::set_stop_time`]). Lets a caller integrate piecewise-smooth forcing
+            /// node by node without restarts.
+            pub fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
+                let c = self.core();
+                if !t_stop.is_finite() {
+                    return Err(c.invalid(format!("stop time {t_stop} must be finite")));
+                }
+                // As CVODE: a stop time behind the internal time cannot be honoured (these
+                // methods step past tout and interpolate, so the internal time may already be
+                // past a stop time set after a call).
+                if c.started && (t_stop - c.x) * c.posneg <= 0.0 {
+                    let message = format!(
+                        "stop time {t_stop:e} is not ahead of the integrator's internal time {:e} (last returned t = {:e}): set it before the integration passes it",
+                        c.x, c.t_out
+                    );
+                    return Err(c.invalid(message));
+                }
+                self.core_mut().stop_time = Some(t_stop);
+                Ok(())
             }
 
             /// The state at `t()`.
@@ -490,6 +520,9 @@ macro_rules! integrator_via_stepper {
             }
             fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
                 $T::reinit(self, t0, y0)
+            }
+            fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
+                $T::set_stop_time(self, t_stop)
             }
             fn rebase(&mut self, _first_step: Option<f64>) -> Result<(), SolverError> {
                 self.core_mut().shift_origin();

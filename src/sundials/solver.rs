@@ -426,7 +426,8 @@ impl<S> Solver<S> {
         Ok(())
     }
 
-    /// Sets (or moves) the stop time past which the solver will not step.
+    /// Sets (or moves) the stop time past which the solver will not step (see
+    /// [`Integrator::set_stop_time`]).
     pub fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
         if !t_stop.is_finite() {
             return Err(self.error(ErrorKind::InvalidInput, 0, format!("stop time {t_stop} must be finite")));
@@ -521,6 +522,9 @@ impl<S> Integrator for Solver<S> {
     }
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         Solver::reinit(self, t0, y0)
+    }
+    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
+        Solver::set_stop_time(self, t_stop)
     }
     fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
         Solver::rebase(self, first_step)

@@ -236,7 +236,7 @@ fn adjoint_sweep(model: &NoiseModel, orbit: &Orbit, tau: f64, times: &[f64], j: 
     let mut out = vec![Vec::new(); j + 1];
     out[j] = mu_j.to_vec();
     for k in (0..j).rev() {
-        integ.set_stop_time(Some(times[k]));
+        integ.set_stop_time(times[k])?;
         integ.advance(times[k], Task::Normal)?;
         out[k] = integ.state().to_vec();
     }
@@ -290,7 +290,7 @@ pub fn compute(
         covariance.clear();
         let mut max_var = vec![0.0f64; nn];
         for &t in times {
-            integ.set_stop_time(Some(t));
+            integ.set_stop_time(t)?;
             integ.advance(t, Task::Normal)?;
             let c = integ.state().to_vec();
             for (i, m) in max_var.iter_mut().enumerate() {

@@ -289,7 +289,7 @@ pub fn realisation(
             return Err(no_event(t0, &x, format!("no event before t = {t_max:e} (the noise is too strong, or the start is not before an event)")));
         }
         integ.system().segment.set(Segment { t0, t1, eta });
-        integ.set_stop_time(Some(t1));
+        integ.set_stop_time(t1)?;
         integ.advance(t1, Task::Normal)?;
         let x = integ.state();
         derivative(t1, x, &eta[2], &mut f[..n]);
