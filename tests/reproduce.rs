@@ -2,9 +2,12 @@
 //! well-formed with one plot area per panel, nothing is NaN, and the figures still to come are
 //! listed as not yet reproduced.
 
+mod xml;
+
+use xml::check_well_formed;
+
 use std::path::PathBuf;
 use std::process::Command;
-use stickslip::figure::svg::check_well_formed;
 use stickslip::reproduce::{FIGURES, PENDING};
 
 const EXE: &str = env!("CARGO_BIN_EXE_stickslip");

@@ -103,14 +103,6 @@ pub enum FigureError {
         /// Upper end.
         hi: f64,
     },
-    /// The SVG written is not well-formed (a bug in this module).
-    #[error("the SVG written for {title:?} is not well-formed: {why}")]
-    Malformed {
-        /// Figure title.
-        title: String,
-        /// What the checker found.
-        why: String,
-    },
     /// Writing the file failed.
     #[error("cannot write {path}: {source}")]
     Io {
