@@ -5,7 +5,7 @@
 //! (analyses, the engine, library users): whoever needs an integrator names a method and gets
 //! a boxed [`Integrator`] of the same shape, whatever implements it.
 
-use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError};
+use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p, SolverError};
 use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
 use serde::Serialize;
 
@@ -48,6 +48,13 @@ impl Method {
     /// The scene name, e.g. "cvode-bdf".
     pub fn name(self) -> &'static str {
         Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
+    }
+}
+
+impl std::fmt::Display for Method {
+    /// The scene name (padded to a width if one is given).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
     }
 }
 
@@ -124,6 +131,8 @@ pub struct Built<'s> {
 /// `ARKodeSetDeduceImplicitRhs`): evaluating f_I at converged stages re-amplifies the Newton
 /// residual by the stiffness in ARKStep's error estimate, which makes it fail on very stiff
 /// problems (at γ ≥ 1e3 on the DRR system). CVODE runs without stability-limit detection.
+///
+/// For a system that is not split into explicit and implicit parts, use [`build_ode`].
 pub fn build<'s, S: ImexSystem + 's>(
     method: Method,
     settings: &MethodSettings,
@@ -132,26 +141,37 @@ pub fn build<'s, S: ImexSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
+    if method != Method::ArkodeImex {
+        return build_ode(method, settings, system, t0, y0, options);
+    }
+    let tables = check_tables(method, settings).map_err(|message| invalid(method, t0, y0, message))?;
+    let (default_i, default_e) = sundials::default_imex_tables();
+    let (implicit, explicit) = (tables.implicit.unwrap_or(default_i), tables.explicit.unwrap_or(default_e));
+    let integrator = Box::new(Solver::arkstep_imex(system, implicit, explicit, ark_settings(), t0, y0, options)?);
+    Ok(Built { integrator, tables: vec![implicit.name().into(), explicit.name().into()] })
+}
+
+/// [`build`] for a system without an explicit/implicit split: every method except
+/// arkode-imex, which is an [`ErrorKind::InvalidInput`] error here.
+pub fn build_ode<'s, S: OdeSystem + 's>(
+    method: Method,
+    settings: &MethodSettings,
+    system: S,
+    t0: f64,
+    y0: &[f64],
+    options: &Options,
+) -> Result<Built<'s>, SolverError> {
+    let tables = check_tables(method, settings).map_err(|message| invalid(method, t0, y0, message))?;
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
-    let tables = check_tables(method, settings).map_err(|message| SolverError {
-        solver: method.name(),
-        kind: ErrorKind::InvalidInput,
-        t: t0,
-        state: y0.to_vec(),
-        flag: 0,
-        message,
-    })?;
+    let (dirk, erk) = (tables.implicit.unwrap_or_default(), tables.explicit.unwrap_or_default());
     let integrator: Box<dyn Integrator + 's> = match method {
         Method::CvodeBdf => Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), t0, y0, options)?),
         Method::CvodeAdams => Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), t0, y0, options)?),
-        Method::ArkodeDirk => Box::new(Solver::arkstep(system, ArkMethod::Dirk(tables.implicit.unwrap_or_default()), ark, t0, y0, options)?),
-        Method::ArkodeErk => Box::new(Solver::arkstep(system, ArkMethod::Erk(tables.explicit.unwrap_or_default()), ark, t0, y0, options)?),
+        Method::ArkodeDirk => Box::new(Solver::arkstep(system, ArkMethod::Dirk(dirk), ark_settings(), t0, y0, options)?),
+        Method::ArkodeErk => Box::new(Solver::arkstep(system, ArkMethod::Erk(erk), ark_settings(), t0, y0, options)?),
         Method::ArkodeImex => {
-            let (default_i, default_e) = sundials::default_imex_tables();
-            let implicit = tables.implicit.unwrap_or(default_i);
-            let explicit = tables.explicit.unwrap_or(default_e);
-            Box::new(Solver::arkstep_imex(system, implicit, explicit, ark, t0, y0, options)?)
+            let message = "arkode-imex needs a system split into explicit and implicit parts: implement ImexSystem and use solver::build";
+            return Err(invalid(method, t0, y0, message.into()));
         }
         Method::Radau5 => Box::new(Radau5::new(system, t0, y0, options)?),
         Method::Rodas5p if settings.autonomous => Box::new(Rodas5p::new(system, t0, y0, options)?.autonomous()),
@@ -159,15 +179,21 @@ pub fn build<'s, S: ImexSystem + 's>(
         Method::Extrapolation => Box::new(Extrapolation::new(system, t0, y0, options)?),
     };
     let tables = match method {
-        Method::ArkodeDirk => vec![tables.implicit.unwrap_or_default().name().into()],
-        Method::ArkodeErk => vec![tables.explicit.unwrap_or_default().name().into()],
-        Method::ArkodeImex => {
-            let (default_i, default_e) = sundials::default_imex_tables();
-            vec![tables.implicit.unwrap_or(default_i).name().into(), tables.explicit.unwrap_or(default_e).name().into()]
-        }
+        Method::ArkodeDirk => vec![dirk.name().into()],
+        Method::ArkodeErk => vec![erk.name().into()],
         _ => vec![],
     };
     Ok(Built { integrator, tables })
+}
+
+/// ARKStep's settings for every ARKStep method (see [`build`]).
+fn ark_settings() -> ArkSettings {
+    ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() }
+}
+
+/// Invalid input to [`build`], at the start.
+fn invalid(method: Method, t0: f64, y0: &[f64], message: String) -> SolverError {
+    SolverError { solver: method.name(), kind: ErrorKind::InvalidInput, t: t0, state: y0.to_vec(), flag: 0, message }
 }
 
 /// The Butcher tables a method asked for by name (None: its default).
@@ -180,16 +206,15 @@ struct Tables {
 /// method that takes none, is an error naming the field (made an
 /// [`ErrorKind::InvalidInput`] by [`build`]).
 fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, String> {
-    let invalid = |message: String| message;
     let dirk = |field: &str, name: &str| {
-        DirkTable::from_name(name).ok_or_else(|| invalid(format!("{field}: unknown implicit table \"{name}\"; available: {}", DirkTable::names().collect::<Vec<_>>().join(", "))))
+        DirkTable::from_name(name).ok_or_else(|| format!("{field}: unknown implicit table \"{name}\"; available: {}", DirkTable::names().collect::<Vec<_>>().join(", ")))
     };
     let erk = |field: &str, name: &str| {
-        ErkTable::from_name(name).ok_or_else(|| invalid(format!("{field}: unknown explicit table \"{name}\"; available: {}", ErkTable::names().collect::<Vec<_>>().join(", "))))
+        ErkTable::from_name(name).ok_or_else(|| format!("{field}: unknown explicit table \"{name}\"; available: {}", ErkTable::names().collect::<Vec<_>>().join(", ")))
     };
     let (table, explicit_table) = (settings.table.as_deref(), settings.explicit_table.as_deref());
     if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(invalid(format!("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name())));
+        return Err(format!("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name()));
     }
     match method {
         Method::ArkodeDirk => Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None }),
@@ -203,7 +228,88 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Str
             };
             Ok(Tables { implicit, explicit })
         }
-        _ if table.is_some() => Err(invalid(format!("table: {} takes no Butcher table (only the arkode methods do)", method.name()))),
+        _ if table.is_some() => Err(format!("table: {} takes no Butcher table (only the arkode methods do)", method.name())),
         _ => Ok(Tables { implicit: None, explicit: None }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::{JacobianMatrix, Task, Tolerance};
+
+    /// y' = −y (all of it implicit in the IMEX split), y(0) = 1: y(1) = e^(−1).
+    struct Decay;
+
+    impl OdeSystem for Decay {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+            dydt[0] = -y[0];
+        }
+        fn has_jacobian(&self) -> bool {
+            true
+        }
+        fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+            jac.set(0, 0, -1.0);
+        }
+    }
+
+    impl ImexSystem for Decay {
+        fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
+            dydt[0] = 0.0;
+        }
+        fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+            self.rhs(t, y, dydt);
+        }
+    }
+
+    fn options() -> Options {
+        Options::new(1e-9, Tolerance::Scalar(1e-12))
+    }
+
+    #[test]
+    fn every_method_by_name_builds_and_integrates_the_decay() {
+        for (name, method) in Method::ALL {
+            assert_eq!(name.parse::<Method>(), Ok(method));
+            assert_eq!(format!("{method}"), name);
+            let mut integ = build(method, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).unwrap().integrator;
+            let step = integ.advance(1.0, Task::Normal).unwrap();
+            assert_eq!(step.t, 1.0, "{name}");
+            let error = (integ.state()[0] - (-1f64).exp()).abs();
+            assert!(error < 1e-6, "{name}: error {error:e}");
+        }
+    }
+
+    #[test]
+    fn a_bad_method_name_lists_the_valid_ones() {
+        let message = "radau".parse::<Method>().unwrap_err();
+        assert!(Method::ALL.iter().all(|(n, _)| message.contains(n)), "{message}");
+    }
+
+    #[test]
+    fn tables_are_named_and_checked() {
+        let built = build(Method::ArkodeImex, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).unwrap();
+        assert_eq!(built.tables.len(), 2);
+        let table = |name: &str| MethodSettings { table: Some(name.into()), ..MethodSettings::default() };
+        let error = |method, settings: MethodSettings| build(method, &settings, Decay, 0.0, &[1.0], &options()).err().map(|e| (e.kind, e.message));
+        let (kind, message) = error(Method::ArkodeDirk, table("NO_SUCH_TABLE")).unwrap();
+        assert_eq!(kind, ErrorKind::InvalidInput);
+        assert!(message.starts_with("table: unknown implicit table \"NO_SUCH_TABLE\""), "{message}");
+        let (kind, message) = error(Method::Radau5, table("ARK436L2SA_DIRK_6_3_4")).unwrap();
+        assert_eq!(kind, ErrorKind::InvalidInput);
+        assert!(message.contains("radau5 takes no Butcher table"), "{message}");
+        let explicit = MethodSettings { explicit_table: Some("ARK436L2SA_ERK_6_3_4".into()), ..MethodSettings::default() };
+        assert_eq!(error(Method::ArkodeDirk, explicit).map(|e| e.0), Some(ErrorKind::InvalidInput));
+        let pair = build(Method::ArkodeImex, &table("ARK436L2SA_DIRK_6_3_4"), Decay, 0.0, &[1.0], &options()).unwrap();
+        assert_eq!(pair.tables, ["ARK436L2SA_DIRK_6_3_4", "ARK436L2SA_ERK_6_3_4"]);
+    }
+
+    #[test]
+    fn build_ode_refuses_imex() {
+        let error = build_ode(Method::ArkodeImex, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).err().unwrap();
+        assert_eq!(error.kind, ErrorKind::InvalidInput);
+        assert_eq!(error.solver, "arkode-imex");
     }
 }
