@@ -212,7 +212,7 @@ pub fn run_with(
         return Err(non_finite(&path));
     }
     let lyapunov = match &a.lyapunov {
-        Some(o) => Some(lyapunov::analyse(scene, cycle_report.as_ref(), o)?),
+        Some(o) => Some(lyapunov::analyse(&scene.params, &scene.solver, &mut |drr, spec, y0| variational_integrator(drr, spec, y0), cycle_report.as_ref(), o)?),
         None => None,
     };
     if let Some(path) = lyapunov.as_ref().and_then(|r| finite::first_non_finite(r, "lyapunov")) {
