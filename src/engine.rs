@@ -205,7 +205,13 @@ pub fn run_with(
         return Err(non_finite("cycle"));
     }
     let asymptotics = match &a.asymptotics {
-        Some(o) => Some(asymptotics::analyse(scene, cycle_report.as_ref(), o)?),
+        Some(o) => {
+            let options = a.cycle.clone().unwrap_or_default();
+            let mut cycle_at = |drr: &Drr, start: [f64; 3], stable: bool| {
+                Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, stable)?.0)
+            };
+            Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o)?)
+        }
         None => None,
     };
     if let Some(path) = asymptotics.as_ref().and_then(|r| finite::first_non_finite(r, "asymptotics")) {
