@@ -4,12 +4,13 @@ use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettin
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper};
-use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, Options, Radau5, Rodas5p, SolverError, Stats, Tolerance};
+use crate::integrate::{ErrorKind, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::report::{ModelSection, Physical, Report, SolverSection};
 use crate::scene::{CycleOptions, Method, Scene, SolverSpec};
-use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
+use crate::solver::{self, MethodSettings};
+use crate::sundials;
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
@@ -19,7 +20,7 @@ pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn
 
 /// Builds the scene's integrator on any system derived from `drr` (e.g. its variational
 /// equations), starting at (0, y0) with absolute tolerances `atol`. Also returns the Butcher
-/// tables used (ARKStep).
+/// tables used (ARKStep). The DRR system and its derivatives are autonomous.
 pub fn integrator_for<S: ImexSystem + 'static>(
     system: S,
     drr: &Drr,
@@ -58,36 +59,8 @@ pub fn integrator_for<S: ImexSystem + 'static>(
         jacobian_max_age,
         ..Options::new(spec.rtol, atol)
     };
-    // Deduce implicit stage derivatives: evaluating f_I at converged stages re-amplifies the
-    // Newton residual by γ² in ARKStep's error estimate, which makes it fail at γ ≥ 1e3.
-    let ark = ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() };
-    let dirk = || spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or_default();
-    let erk = || spec.table.as_deref().and_then(ErkTable::from_name).unwrap_or_default();
-    let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
-    Ok(match spec.method {
-        Method::CvodeBdf => (Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), 0.0, y0, options)?), vec![]),
-        Method::CvodeAdams => (Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), 0.0, y0, options)?), vec![]),
-        Method::ArkodeDirk => {
-            let t = dirk();
-            (Box::new(Solver::arkstep(system, ArkMethod::Dirk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
-        }
-        Method::ArkodeErk => {
-            let t = erk();
-            (Box::new(Solver::arkstep(system, ArkMethod::Erk(t), ark, 0.0, y0, options)?), vec![t.name().into()])
-        }
-        Method::Radau5 => (Box::new(Radau5::new(system, 0.0, y0, options)?), vec![]),
-        // The DRR system is autonomous: no ∂f/∂t evaluations.
-        Method::Rodas5p => (Box::new(Rodas5p::new(system, 0.0, y0, options)?.autonomous()), vec![]),
-        Method::Extrapolation => (Box::new(Extrapolation::new(system, 0.0, y0, options)?), vec![]),
-        Method::ArkodeImex => {
-            let (default_i, default_e) = sundials::default_imex_tables();
-            let implicit = spec.table.as_deref().and_then(DirkTable::from_name).unwrap_or(default_i);
-            let paired = spec.table.as_deref().and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
-            let explicit = spec.explicit_table.as_deref().and_then(ErkTable::from_name).or(paired).unwrap_or(default_e);
-            let solver = Solver::arkstep_imex(system, implicit, explicit, ark, 0.0, y0, options)?;
-            (Box::new(solver), vec![implicit.name().into(), explicit.name().into()])
-        }
-    })
+    let built = solver::build(spec.method, &MethodSettings::of(spec, true), system, 0.0, y0, options)?;
+    Ok((built.integrator, built.tables))
 }
 
 /// Adds the physical cause to a failure where one is known, and only where it is true.
@@ -232,14 +205,20 @@ pub fn run_with(
         return Err(non_finite("cycle"));
     }
     let asymptotics = match &a.asymptotics {
-        Some(o) => Some(asymptotics::analyse(scene, cycle_report.as_ref(), o)?),
+        Some(o) => {
+            let options = a.cycle.clone().unwrap_or_default();
+            let mut cycle_at = |drr: &Drr, start: [f64; 3], stable: bool| {
+                Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, stable)?.0)
+            };
+            Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o)?)
+        }
         None => None,
     };
     if let Some(path) = asymptotics.as_ref().and_then(|r| finite::first_non_finite(r, "asymptotics")) {
         return Err(non_finite(&path));
     }
     let lyapunov = match &a.lyapunov {
-        Some(o) => Some(lyapunov::analyse(scene, cycle_report.as_ref(), o)?),
+        Some(o) => Some(lyapunov::analyse(&scene.params, &scene.solver, &mut |drr, spec, y0| variational_integrator(drr, spec, y0), cycle_report.as_ref(), o)?),
         None => None,
     };
     if let Some(path) = lyapunov.as_ref().and_then(|r| finite::first_non_finite(r, "lyapunov")) {

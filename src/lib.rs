@@ -17,6 +17,7 @@ pub mod model;
 pub mod report;
 pub mod reproduce;
 pub mod scene;
+pub mod solver;
 pub mod stress;
 pub mod sweep;
 pub mod sundials;

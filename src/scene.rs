@@ -5,6 +5,7 @@
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
 use serde::{Deserialize, Serialize};
+pub use crate::solver::{Method, SolverSpec};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -183,83 +184,6 @@ struct RawContinuation {
 #[serde(deny_unknown_fields)]
 struct RawTrajectory {
     cycles: usize,
-}
-
-/// Integration methods a scene can ask for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// CVODE, variable-order BDF (stiff).
-    CvodeBdf,
-    /// CVODE, Adams–Moulton (non-stiff).
-    CvodeAdams,
-    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
-    ArkodeDirk,
-    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
-    ArkodeImex,
-    /// ARKStep, explicit Runge–Kutta (non-stiff).
-    ArkodeErk,
-    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
-    Radau5,
-    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
-    Rodas5p,
-    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
-    /// modified midpoint, the family the paper used; pure Rust).
-    Extrapolation,
-}
-
-impl Method {
-    /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 8] = [
-        ("cvode-bdf", Method::CvodeBdf),
-        ("cvode-adams", Method::CvodeAdams),
-        ("arkode-dirk", Method::ArkodeDirk),
-        ("arkode-imex", Method::ArkodeImex),
-        ("arkode-erk", Method::ArkodeErk),
-        ("radau5", Method::Radau5),
-        ("rodas5p", Method::Rodas5p),
-        ("extrapolation", Method::Extrapolation),
-    ];
-
-    /// The scene name, e.g. "cvode-bdf".
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
-    }
-}
-
-impl std::str::FromStr for Method {
-    type Err = String;
-
-    /// The method by its scene name (the one parser of method names: scenes and the CLI); the
-    /// error names the valid ones.
-    fn from_str(name: &str) -> Result<Self, String> {
-        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| {
-            let names: Vec<&str> = Self::ALL.iter().map(|(n, _)| *n).collect();
-            format!("\"{name}\" is not a method; use one of {}", names.join(", "))
-        })
-    }
-}
-
-impl Method {
-    /// Whether the method is meant for stiff problems.
-    pub fn is_stiff(self) -> bool {
-        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p | Method::Extrapolation)
-    }
-}
-
-/// Validated solver settings of a scene.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SolverSpec {
-    /// The method.
-    pub method: Method,
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Absolute tolerances of (u, ln v, θ).
-    pub atol: [f64; 3],
-    /// Butcher table (implicit one for DIRK/IMEX, explicit one for ERK), None = default.
-    pub table: Option<String>,
-    /// Explicit table of an IMEX pair, None = default.
-    pub explicit_table: Option<String>,
 }
 
 /// Options of the "cycle" analysis (None = default, see [`crate::analysis::cycle`]).

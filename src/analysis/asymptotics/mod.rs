@@ -26,7 +26,7 @@ use crate::analysis::claims::Claim;
 use crate::analysis::cycle::CycleReport;
 use crate::analysis::orbit::Orbit;
 use crate::integrate::SolverError;
-use crate::scene::Scene;
+use crate::model::{Drr, DrrParams};
 use serde::{Deserialize, Serialize};
 
 /// Options of the "asymptotics" analysis (scene: `{"asymptotics": {...}}`).
@@ -152,9 +152,20 @@ pub struct AsymptoticsReport {
     pub claims: Vec<Claim>,
 }
 
-/// Runs the analysis for a scene whose "cycle" analysis produced `cycle`.
-pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &AsymptoticsOptions) -> Result<AsymptoticsReport, SolverError> {
-    let params = &scene.params;
+/// Runs the brute-force "cycle" analysis (the scene's solver and cycle options, recording no
+/// trajectory) on a DRR system from a start, given the Hopf verdict "fixed point stable" (the
+/// engine's `cycle_with`).
+pub type CycleAt<'a> = dyn FnMut(&Drr, [f64; 3], bool) -> Result<CycleReport, SolverError> + 'a;
+
+/// Runs the analysis on the model `params`, started at `initial`, whose "cycle" analysis
+/// produced `cycle`; the γ scan runs its cycles by `cycle_at`.
+pub fn analyse(
+    params: &DrrParams,
+    initial: [f64; 3],
+    cycle_at: &mut CycleAt<'_>,
+    cycle: Option<&CycleReport>,
+    options: &AsymptoticsOptions,
+) -> Result<AsymptoticsReport, SolverError> {
     let orbit = cycle.ok_or_else(|| "the scene ran no cycle analysis".to_string()).and_then(Orbit::from_cycle);
     let (manifold, matching, note) = match &orbit {
         Ok(o) => {
@@ -164,7 +175,7 @@ pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &Asymptotics
         }
         Err(why) => (None, None, Some(why.clone())),
     };
-    let scan = scan::run(scene, &options.gammas);
+    let scan = scan::run(params, initial, &options.gammas, cycle_at);
     let all = scan::usable(&scan, 0.0);
     let fit = scan::usable(&scan, options.fit_min_gamma);
     let half_width_3d = cycle.and_then(|c| c.values).and_then(|v| v.slip_half_width).map(|w| w * params.gamma);
@@ -180,7 +191,7 @@ pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &Asymptotics
         singular: &singular,
         all: &all,
     });
-    let [u, w, theta] = scan::start(scene);
+    let [u, w, theta] = scan::start(params, initial);
     Ok(AsymptoticsReport {
         options: options.clone(),
         note,

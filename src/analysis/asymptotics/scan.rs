@@ -6,11 +6,10 @@
 //! while the limit cycle does not depend on the start. A failed or non-periodic point is kept
 //! as a row with its status and is left out of the fits.
 
+use super::CycleAt;
 use crate::analysis::cycle::{CycleStatus, CycleValues};
 use crate::analysis::hopf;
-use crate::engine;
 use crate::model::{Drr, DrrParams};
-use crate::scene::Scene;
 use serde::Serialize;
 
 /// The cycle quantities the asymptotic fits use (dimensionless).
@@ -70,25 +69,24 @@ pub struct ScanRow {
     pub values: Option<ScanValues>,
 }
 
-/// The start of every scan run: the scene's (u, θ) with v on S if possible, else the scene's
-/// start.
-pub fn start(scene: &Scene) -> [f64; 3] {
-    let [u, w, theta] = scene.initial;
-    let drr = Drr::new(scene.params);
+/// The start of every scan run: the scene's (u, θ) (from its start `initial` on the model
+/// `params`) with v on S if possible, else `initial`.
+pub fn start(params: &DrrParams, initial: [f64; 3]) -> [f64; 3] {
+    let [u, w, theta] = initial;
+    let drr = Drr::new(*params);
     [u, drr.manifold_w(u, theta).unwrap_or(w), theta]
 }
 
-/// Runs the scene's cycle at each γ, from [`start`].
-pub fn run(scene: &Scene, gammas: &[f64]) -> Vec<ScanRow> {
-    let options = scene.analyses.cycle.clone().unwrap_or_default();
-    let scene = &Scene { initial: start(scene), ..scene.clone() };
+/// Runs the cycle (by `cycle_at`) at each γ on the model `params`, from [`start`].
+pub fn run(params: &DrrParams, initial: [f64; 3], gammas: &[f64], cycle_at: &mut CycleAt<'_>) -> Vec<ScanRow> {
+    let start = start(params, initial);
     gammas
         .iter()
         .map(|&gamma| {
-            let drr = Drr::new(DrrParams { gamma, ..scene.params });
+            let drr = Drr::new(DrrParams { gamma, ..*params });
             let stable = hopf::analyse(&drr).max_real_part < 0.0;
-            match engine::cycle_with(scene, &drr, &options, 0, stable) {
-                Ok((report, ..)) => {
+            match cycle_at(&drr, start, stable) {
+                Ok(report) => {
                     let status = serde_json::to_value(report.status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
                     let values = report.values.filter(|_| report.status == CycleStatus::Periodic).map(|c| ScanValues::of(&c, gamma));
                     ScanRow { gamma, status, error: None, values }

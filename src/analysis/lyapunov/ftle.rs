@@ -36,11 +36,12 @@ use crate::analysis::events;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
-use crate::engine;
 use crate::integrate::{Clock, ErrorKind, SolverError, Time};
 use crate::model::drr::{Drr, W};
 use crate::model::Variational;
-use crate::scene::{Method, Scene, SolverSpec};
+use crate::model::DrrParams;
+use crate::solver::{Method, SolverSpec};
+use super::VariationalFactory;
 use nalgebra::{Matrix3x2, Vector3};
 use serde::Serialize;
 
@@ -145,14 +146,21 @@ fn reorthonormalise(z: &[f64], f: &[f64; 3], f0_norm: f64) -> ([f64; 3], Vec<f64
     ([(norm / f0_norm).ln(), r[(0, 0)].abs().ln(), r[(1, 1)].abs().ln()], out)
 }
 
-/// Integrates `periods` periods from the orbit's v maximum.
-pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usize) -> Result<FtleReport, SolverError> {
-    let drr = Drr::new(scene.params);
-    let p = scene.params;
+/// Integrates `periods` periods from the orbit's v maximum, on the model `p` with `solver`'s
+/// tolerances; `variational` builds the integrators of the variational equations.
+pub fn analyse(
+    p: DrrParams,
+    solver: &SolverSpec,
+    variational: &mut VariationalFactory<'_>,
+    orbit: &Orbit,
+    periods: usize,
+    series_points: usize,
+) -> Result<FtleReport, SolverError> {
+    let drr = Drr::new(p);
     let start = orbit.state(orbit.peak);
-    let spec = SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..scene.solver.clone() };
-    let mut integ = engine::variational_integrator(drr, &spec, &start)?;
-    let w_tol = (scene.solver.rtol, scene.solver.atol[1]);
+    let spec = SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..solver.clone() };
+    let mut integ = variational(drr, &spec, &start)?;
+    let w_tol = (solver.rtol, solver.atol[1]);
     let floor = 1e-9f64.max(1e3 * (w_tol.0 + w_tol.1));
     let descent_level = p.gamma.ln();
     let mut d0 = [0.0; 3];
@@ -265,7 +273,7 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
     let r11: Vec<f64> = series.iter().map(|(_, l)| l[0]).collect();
     let r22: Vec<f64> = series.iter().map(|(_, l)| l[1]).collect();
     let keep = decimate(&t, &[&r11, &r22], series_points);
-    let (floquet, floquet_note) = match floquet_link(scene, &drr, orbit, &per_period, &exponents)? {
+    let (floquet, floquet_note) = match floquet_link(solver, variational, &drr, orbit, &per_period, &exponents)? {
         Ok(f) => (Some(f), None),
         Err(why) => (None, Some(why)),
     };
@@ -283,10 +291,17 @@ pub fn analyse(scene: &Scene, orbit: &Orbit, periods: usize, series_points: usiz
     })
 }
 
-fn floquet_link(scene: &Scene, drr: &Drr, orbit: &Orbit, per_period: &[PeriodLogs], exponents: &[f64; 3]) -> Result<Result<FloquetLink, String>, SolverError> {
-    let settings = ShootingSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
+fn floquet_link(
+    solver: &SolverSpec,
+    variational: &mut VariationalFactory<'_>,
+    drr: &Drr,
+    orbit: &Orbit,
+    per_period: &[PeriodLogs],
+    exponents: &[f64; 3],
+) -> Result<Result<FloquetLink, String>, SolverError> {
+    let settings = ShootingSettings::defaults(solver.rtol, solver.atol[1]);
     let y0 = orbit.state(orbit.up);
-    let mut integ = engine::variational_integrator(*drr, &scene.solver, &y0)?;
+    let mut integ = variational(*drr, solver, &y0)?;
     let report = shooting::analyse(integ.as_mut(), drr, y0, &settings)?;
     let Some(o) = report.orbit else {
         return Ok(Err(format!("shooting did not converge: {}", report.failure.unwrap_or_default())));

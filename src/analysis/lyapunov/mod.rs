@@ -16,9 +16,9 @@ use crate::analysis::claims::{Claim, Source};
 use crate::analysis::cycle::CycleReport;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
-use crate::integrate::SolverError;
-use crate::model::{DrrParams, Friction};
-use crate::scene::Scene;
+use crate::integrate::{Integrator, SolverError};
+use crate::model::{Drr, DrrParams, Friction};
+use crate::solver::SolverSpec;
 use local::Crossing;
 use serde::{Deserialize, Serialize};
 
@@ -162,13 +162,25 @@ fn empty(options: &LyapunovOptions, note: String) -> LyapunovReport {
     }
 }
 
-/// Runs the analysis for a scene whose "cycle" analysis produced `cycle`.
-pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &LyapunovOptions) -> Result<LyapunovReport, SolverError> {
+/// Builds an integrator of the variational equations (state and fundamental matrix Φ) of a
+/// DRR system with the given solver settings, starting at (0, y0) with Φ = I (the engine's
+/// `variational_integrator`).
+pub type VariationalFactory<'a> = dyn FnMut(Drr, &SolverSpec, &[f64; 3]) -> Result<Box<dyn Integrator>, SolverError> + 'a;
+
+/// Runs the analysis on the model `params` whose "cycle" analysis produced `cycle`, with
+/// `solver`'s tolerances; `variational` builds the integrators of the variational equations.
+pub fn analyse(
+    params: &DrrParams,
+    solver: &SolverSpec,
+    variational: &mut VariationalFactory<'_>,
+    cycle: Option<&CycleReport>,
+    options: &LyapunovOptions,
+) -> Result<LyapunovReport, SolverError> {
     let orbit = match cycle.ok_or_else(|| "the scene ran no cycle analysis".to_string()).and_then(Orbit::from_cycle) {
         Ok(o) => o,
         Err(why) => return Ok(empty(options, why)),
     };
-    let p = &scene.params;
+    let p = params;
     let n = orbit.peak + 1;
     let locals: Vec<local::Local> = (0..orbit.len()).map(|k| local::at(p, &orbit.state(k))).collect();
     let stick = &locals[..n];
@@ -225,7 +237,7 @@ pub fn analyse(scene: &Scene, cycle: Option<&CycleReport>, options: &LyapunovOpt
     };
     // The frequency and v at the zero crossing: at the sample just after it.
     let at_zero = zero.map(|z| (locals[z.index].slow_im, orbit.w[z.index].exp()));
-    let ftle = if options.ftle_periods > 0 { Some(ftle::analyse(scene, &orbit, options.ftle_periods, options.series_points)?) } else { None };
+    let ftle = if options.ftle_periods > 0 { Some(ftle::analyse(*params, solver, variational, &orbit, options.ftle_periods, options.series_points)?) } else { None };
     let mut report = LyapunovReport {
         options: options.clone(),
         note: None,

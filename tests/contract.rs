@@ -1,0 +1,141 @@
+//! The `Integrator` contract, written once and run over every method through the one
+//! constructor (`solver::build`): output times, the stop time, restarts, typed errors.
+//! Method-specific behaviour (orders, fixed steps, Jacobian counts) stays in each method's
+//! own tests (tests/radau5.rs, rodas5p.rs, extrapolation.rs, wrappers.rs).
+
+use stickslip::integrate::{ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, Step, StepEvent, Task, Tolerance};
+use stickslip::solver::{self, Method, MethodSettings};
+
+/// y0' = y1, y1' = −y0 from (0, 1): y = (sin t, cos t). All of it implicit in the IMEX split.
+#[derive(Clone, Copy)]
+struct Oscillator;
+
+impl OdeSystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[1];
+        dydt[1] = -y[0];
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 1, 1.0);
+        jac.set(1, 0, -1.0);
+    }
+}
+
+impl ImexSystem for Oscillator {
+    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
+        dydt.fill(0.0);
+    }
+    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.rhs(t, y, dydt);
+    }
+    fn has_implicit_jacobian(&self) -> bool {
+        true
+    }
+    fn implicit_jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        self.jacobian(t, y, jac);
+    }
+}
+
+fn methods() -> impl Iterator<Item = Method> {
+    Method::ALL.iter().map(|(_, m)| *m)
+}
+
+fn build(method: Method, options: &Options) -> Box<dyn Integrator> {
+    solver::build(method, &MethodSettings::default(), Oscillator, 0.0, &[0.0, 1.0], options).unwrap_or_else(|e| panic!("{method}: {e}")).integrator
+}
+
+fn error_at(integ: &dyn Integrator) -> f64 {
+    let t = integ.t();
+    (integ.state()[0] - t.sin()).abs().max((integ.state()[1] - t.cos()).abs())
+}
+
+#[test]
+fn normal_task_returns_the_state_at_tout() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = build(method, &options);
+        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 1.0, event: StepEvent::Reached }, "{method}");
+        assert_eq!(integ.t(), 1.0, "{method}");
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}: error {:e}", error_at(integ.as_ref()));
+        // The returned state is the interpolant's value there.
+        let interpolated = integ.dense(1.0, 0).unwrap().to_vec();
+        assert!((0..2).all(|i| (integ.state()[i] - interpolated[i]).abs() <= 1e-14), "{method}");
+        // One internal step goes beyond the returned time, and its end is the interpolant's.
+        let one = integ.advance(10.0, Task::OneStep).unwrap();
+        assert!(one.t > 1.0 && one.t < 10.0, "{method}: {one:?}");
+        let end = integ.dense(one.t, 0).unwrap().to_vec();
+        assert!((0..2).all(|i| (integ.state()[i] - end[i]).abs() <= 1e-14), "{method}");
+        assert_eq!(integ.advance(f64::NAN, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        assert_eq!(integ.dense(one.t + 1.0, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+    }
+}
+
+#[test]
+fn the_stop_time_is_reached_exactly_then_disabled() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = build(method, &options);
+        integ.set_stop_time(0.75).unwrap();
+        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 0.75, event: StepEvent::StopTime }, "{method}");
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
+        assert_eq!(integ.advance(1.0, Task::Normal).unwrap().event, StepEvent::Reached, "{method}");
+        assert_eq!(integ.set_stop_time(f64::NAN).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        // OneStep lands on a stop time exactly.
+        integ.set_stop_time(1.5).unwrap();
+        let last = loop {
+            let step = integ.advance(10.0, Task::OneStep).unwrap();
+            if step.event != StepEvent::Reached {
+                break step;
+            }
+            assert!(step.t < 1.5, "{method}: {step:?}");
+        };
+        assert_eq!(last, Step { t: 1.5, event: StepEvent::StopTime }, "{method}");
+    }
+}
+
+#[test]
+fn reinit_restarts_and_statistics_accumulate() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = build(method, &options);
+        integ.advance(1.0, Task::Normal).unwrap();
+        let before = integ.stats();
+        integ.reinit(0.0, &[0.0, 1.0]).unwrap();
+        assert_eq!((integ.t(), integ.state()), (0.0, &[0.0, 1.0][..]), "{method}");
+        integ.advance(2.0, Task::Normal).unwrap();
+        let after = integ.stats();
+        assert_eq!(after.reinits, 1, "{method}");
+        // ARKStep counts its explicit evaluations apart (all of ERK's).
+        let rhs = |s: &stickslip::integrate::Stats| s.rhs_evals + s.rhs_evals_explicit;
+        assert!(after.steps > before.steps && rhs(&after) > rhs(&before), "{method}: {before:?} {after:?}");
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
+        assert_eq!(integ.reinit(0.0, &[1.0]).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+    }
+}
+
+#[test]
+fn failures_are_typed_errors_with_time_and_state() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        // The step budget of one Normal call, with the time and state where it ran out.
+        let few = Options { max_steps: Some(10), ..options.clone() };
+        let mut integ = build(method, &few);
+        let e = integ.advance(100.0, Task::Normal).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::TooMuchWork, "{method}: {e}");
+        assert!(e.t > 0.0 && e.t < 100.0 && e.state.len() == 2 && e.state.iter().all(|x| x.is_finite()), "{method}: {e}");
+        // Invalid input at construction.
+        let bad = |y0: &[f64], t0: f64, options: &Options| {
+            solver::build(method, &MethodSettings::default(), Oscillator, t0, y0, options).map(|_| ()).unwrap_err().kind
+        };
+        assert_eq!(bad(&[0.0], 0.0, &options), ErrorKind::InvalidInput, "{method}");
+        assert_eq!(bad(&[f64::NAN, 0.0], 0.0, &options), ErrorKind::InvalidInput, "{method}");
+        assert_eq!(bad(&[0.0, 0.0], f64::INFINITY, &options), ErrorKind::InvalidInput, "{method}");
+        assert_eq!(bad(&[0.0, 0.0], 0.0, &Options::new(-1.0, Tolerance::Scalar(1e-8))), ErrorKind::InvalidInput, "{method}");
+    }
+}
