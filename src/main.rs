@@ -112,6 +112,9 @@ enum Command {
         /// failure fails the run.
         #[arg(long, value_name = "FILE")]
         known: Option<PathBuf>,
+        /// Only these methods' cells (comma-separated, e.g. arkode-dirk,radau5); default: all.
+        #[arg(long, value_delimiter = ',')]
+        methods: Vec<String>,
     },
     /// Remake the paper's figures (SVG), their JSON reports and a summary of its claims
     /// against ours (summary.md, summary.html) in DIR.
@@ -407,6 +410,7 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
 
 fn stress_command(
     grid: stress::Grid,
+    methods: &[String],
     json: bool,
     threads: Option<usize>,
     table: Option<PathBuf>,
@@ -418,7 +422,14 @@ fn stress_command(
         ),
         None => None,
     };
-    let cells = stress::grid(grid);
+    let methods = methods
+        .iter()
+        .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut cells = stress::grid(grid);
+    if !methods.is_empty() {
+        cells.retain(|cell| methods.contains(&cell.method));
+    }
     let progress = Progress::new("stress", "cells");
     let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
     let seconds = progress.finish();
@@ -550,9 +561,9 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
-        Command::Stress { quick, grid, json, threads, table, known } => {
+        Command::Stress { quick, grid, json, threads, table, known, methods } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };
-            stress_command(grid, json, threads, table, known)
+            stress_command(grid, &methods, json, threads, table, known)
         }
         Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),

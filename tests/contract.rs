@@ -100,6 +100,33 @@ fn the_stop_time_is_reached_exactly_then_disabled() {
 }
 
 #[test]
+fn the_max_step_can_be_changed_between_steps() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = build(method, &options);
+        integ.advance(1.0, Task::Normal).unwrap();
+        // After the step already taken beyond t = 1, no step is longer than the limit;
+        // lifted, they grow again.
+        integ.set_max_step(Some(1e-3)).unwrap();
+        integ.advance(10.0, Task::OneStep).unwrap();
+        let mut t = integ.advance(10.0, Task::OneStep).unwrap().t;
+        for _ in 0..20 {
+            let next = integ.advance(10.0, Task::OneStep).unwrap().t;
+            assert!(next - t <= 1e-3 * (1.0 + 1e-12), "{method}: step {:e} above the limit", next - t);
+            t = next;
+        }
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
+        integ.set_max_step(None).unwrap();
+        let steps = integ.stats().steps;
+        integ.advance(t + 1.0, Task::Normal).unwrap();
+        assert!(integ.stats().steps - steps < 100, "{method}: the limit was not lifted");
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(integ.set_max_step(Some(bad)).unwrap_err().kind, ErrorKind::InvalidInput, "{method}: {bad}");
+        }
+    }
+}
+
+#[test]
 fn reinit_restarts_and_statistics_accumulate() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     for method in methods() {

@@ -209,6 +209,31 @@ fn far_off_starts_reach_the_cycle_far_from_threshold() {
 }
 
 #[test]
+fn a_start_that_lands_on_the_unstable_fixed_point_leaves_it() {
+    // From v = 1e-30 with u and θ at the fixed point's, the initial layer ends ~1e-16 from the
+    // unstable fixed point (eigenvalues 0.5 ± 1.32i at ξ = 2, ε = 3). CVODE, whose error
+    // estimates see nothing at that size, fell to order 1 at the engine's max step, where
+    // backward Euler damps the spiral: it settled on the fixed point (the quick stress grid's
+    // known failure at rtol 1e-10 and 1e-4). The cycle analysis now limits the steps there
+    // (cycle::EscapeStep) and every method leaves it for the relaxation cycle.
+    for method in ["cvode-bdf", "arkode-dirk", "radau5", "rodas5p", "extrapolation"] {
+        for rtol in [1e-4, 1e-10] {
+            let report = run(&format!(
+                r#"{{"name": "focus", "model": {{"gamma": 1e8, "xi": 2, "epsilon": 3}},
+                    "initial": {{"u": 0, "v": 1e-30, "theta": 0}},
+                    "solver": {{"method": "{method}", "rtol": {rtol:e}, "atol": {:e}}}, "analyses": ["cycle"]}}"#,
+                rtol / 100.0
+            ));
+            let cycle = report.cycle.unwrap();
+            let period = cycle.values.unwrap_or_else(|| panic!("{method} rtol {rtol:e}: no cycle ({:?})", cycle.status)).period;
+            let reference = 68.04034164421667; // data/reference/drr_cycles_far.json
+            assert!((period - reference).abs() < 1e3 * rtol * reference, "{method} rtol {rtol:e}: period {period}");
+            assert!(cycle.fixed_point_escapes >= 1, "{method} rtol {rtol:e}: the run did not come to rest at the fixed point");
+        }
+    }
+}
+
+#[test]
 fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
     // From v = 1e-30 the run passes close to the unstable fixed point (ε − ε_c = 0.02) and
     // spirals out over ~250 turns of period 7.51 whose ln v range grows ~8 % per turn; the

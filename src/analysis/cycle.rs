@@ -53,6 +53,43 @@ pub struct CycleSettings {
     pub trajectory_cycles: usize,
     /// The integrator's (rtol, atol) on w = ln v, to judge where f is meaningful.
     pub w_tolerance: (f64, f64),
+    /// Step limits that keep a run from being held at an unstable fixed point (default None:
+    /// no limit).
+    pub escape: Option<EscapeStep>,
+}
+
+/// Step limits near an unstable fixed point.
+///
+/// A start far off the cycle can land within round-off of the unstable fixed point (from
+/// v = 1e-30 with u and θ at the fixed point's, the initial layer ends 1e-16 from it); the
+/// exact solution spirals out at the rate Re λ, but an integrator whose error estimates see
+/// nothing at that size takes its largest steps at low order, and there its own damping can
+/// beat the growth: CVODE falls to order 1, and backward Euler damps e^{λt} unless
+/// |1 − hλ| < 1, i.e. h < 2 Re λ/|λ|² (measured: γ = 1e8, ξ = 2, ε = 3 settled on the fixed
+/// point with h = period_c/8 = 0.59, while 2 Re λ/|λ|² = 0.5). While the state lies within
+/// the integration noise of the fixed point, the cycle analysis therefore limits the steps to
+/// [`EscapeStep::near`], where every method's amplification stays close to e^{hλ}, and
+/// restores [`EscapeStep::elsewhere`] once ln v has moved away from it by more than 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EscapeStep {
+    /// The largest step near the fixed point: the minimum over its eigenvalues λ with
+    /// Re λ > 0 of Re λ/|λ|² (half the step at which backward Euler stops growing).
+    pub near: f64,
+    /// The integrator's largest step elsewhere (None: no limit).
+    pub elsewhere: Option<f64>,
+}
+
+impl EscapeStep {
+    /// The limits for a fixed point with `eigenvalues` ([re, im]), or None if none is
+    /// unstable.
+    pub fn for_eigenvalues(eigenvalues: &[[f64; 2]], elsewhere: Option<f64>) -> Option<Self> {
+        let near = eigenvalues
+            .iter()
+            .filter(|[re, _]| *re > 0.0)
+            .map(|[re, im]| re / (re * re + im * im))
+            .fold(f64::INFINITY, f64::min);
+        near.is_finite().then_some(Self { near, elsewhere })
+    }
 }
 
 impl CycleSettings {
@@ -66,6 +103,7 @@ impl CycleSettings {
             max_time: 1e6,
             max_steps: 20_000_000,
             trajectory_cycles: 0,
+            escape: None,
         }
     }
 }
@@ -175,6 +213,11 @@ pub struct CycleReport {
     /// double precision (see [`crate::model::deep_stick`]); 0 when none (key omitted).
     #[serde(skip_serializing_if = "is_zero")]
     pub deep_sticks: u64,
+    /// Times the run came to rest within the integration noise of the unstable fixed point
+    /// and its steps were limited so that it could leave it (see [`EscapeStep`]); 0 when none
+    /// (key omitted).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub fixed_point_escapes: u64,
     /// The convergence rule, in words.
     pub convergence_rule: String,
     /// Relative tolerance of the rule.
@@ -263,6 +306,12 @@ struct Tracker<'a> {
     steps: u64,
     /// Sticks crossed in closed form ([`Tracker::cross`]).
     deep_sticks: u64,
+    /// The fixed point (u, w, θ).
+    fixed: [f64; 3],
+    /// The steps are limited to [`EscapeStep::near`] ([`Tracker::escape`]).
+    escaping: bool,
+    /// How often they were.
+    escapes: u64,
 }
 
 /// The first sample of a run: the RHS gives the derivative (no interpolant exists yet).
@@ -511,6 +560,27 @@ impl<'a> Tracker<'a> {
         self.prev.t -= shift;
     }
 
+    /// Limits the steps while the state rests within the integration noise of the unstable
+    /// fixed point, and lifts the limit once ln v has left it by more than 1 (see
+    /// [`EscapeStep`]).
+    fn escape(&mut self, escape: EscapeStep) -> Result<(), SolverError> {
+        let (y, fixed) = (self.clock.state(), self.fixed);
+        if self.escaping {
+            if (y[W] - fixed[W]).abs() > 1.0 {
+                self.escaping = false;
+                self.clock.integrator().set_max_step(escape.elsewhere)?;
+            }
+        } else {
+            let floor = noise_floor(self.settings);
+            if (0..3).all(|i| (y[i] - fixed[i]).abs() < floor * (1.0 + fixed[i].abs())) {
+                self.escaping = true;
+                self.escapes += 1;
+                self.clock.integrator().set_max_step(Some(escape.near))?;
+            }
+        }
+        Ok(())
+    }
+
     fn step(&mut self) -> Result<(), SolverError> {
         if let Some(stick) = self.drr.deep_stick(&self.prev.y) {
             return self.cross(stick);
@@ -680,6 +750,7 @@ pub fn analyse(
     let y = integ.state();
     let start = first_sample(drr, integ.t(), [y[0], y[1], y[2]]);
     let t_start = Time::new(integ.t());
+    let fixed = drr.fixed_point();
     let mut tracker = Tracker {
         clock: Clock::new(integ, t_start),
         drr,
@@ -693,12 +764,17 @@ pub fn analyse(
         rise_rate: 0.0,
         steps: 0,
         deep_sticks: 0,
+        fixed,
+        escaping: false,
+        escapes: 0,
     };
-    let fixed = drr.fixed_point();
     let mut seen = 0;
     let outcome = loop {
         if let Err(e) = tracker.step() {
             return Err(tracker.clock.at_global(e));
+        }
+        if let Some(escape) = settings.escape {
+            tracker.escape(escape).map_err(|e| tracker.clock.at_global(e))?;
         }
         if tracker.steps > settings.max_steps {
             let message = format!("{} steps without settling on a cycle (cycle.max_steps)", settings.max_steps);
@@ -730,7 +806,7 @@ pub fn analyse(
         }
     };
     let time_integrated = tracker.clock.now().since(t_start);
-    let deep_sticks = tracker.deep_sticks;
+    let (deep_sticks, fixed_point_escapes) = (tracker.deep_sticks, tracker.escapes);
     let closed = tracker.closed;
     let n = periodicity(&closed, settings).filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
     let (values, spread, orbit, used) = match (outcome, n) {
@@ -762,6 +838,7 @@ pub fn analyse(
         cycles_computed: closed.len(),
         time_integrated,
         deep_sticks,
+        fixed_point_escapes,
         convergence_rule: format!(
             "periodic when period, ln v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
              pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \
@@ -829,6 +906,19 @@ mod tests {
         let noisy: Vec<CycleValues> =
             (0..8).map(|k| cycle(18.0 * (1.0 + if k % 2 == 0 { 0.0 } else { 3e-7 }), 4.8, -2.0)).collect();
         assert_eq!(periodicity(&noisy, &settings()), None);
+    }
+
+    #[test]
+    fn the_escape_step_keeps_backward_euler_growing() {
+        // 0.5 ± 1.32i (γ = 1e8, ξ = 2, ε = 3) and the fast stable eigenvalue.
+        let eigenvalues = [[-5e7, 0.0], [0.5, 1.32], [0.5, -1.32]];
+        let escape = EscapeStep::for_eigenvalues(&eigenvalues, Some(0.59)).unwrap();
+        let growth = |h: f64| 1.0 / ((1.0 - 0.5 * h).powi(2) + (1.32 * h).powi(2)).sqrt();
+        assert!(growth(escape.near) > 1.0 && growth(0.59) < 1.0, "{escape:?}");
+        assert_eq!(escape.elsewhere, Some(0.59));
+        // Two real unstable eigenvalues: the faster one sets the step.
+        assert_eq!(EscapeStep::for_eigenvalues(&[[4.0, 0.0], [0.05, 0.0]], None).unwrap().near, 0.25);
+        assert_eq!(EscapeStep::for_eigenvalues(&[[-1.0, 0.0], [-0.1, 2.0], [-0.1, -2.0]], None), None);
     }
 
     #[test]

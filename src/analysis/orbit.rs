@@ -101,6 +101,7 @@ mod tests {
             cycles_computed: 2,
             time_integrated: 1.0,
             deep_sticks: 0,
+            fixed_point_escapes: 0,
             convergence_rule: String::new(),
             tolerance: 1e-7,
             steps_per_cycle: None,

@@ -20,7 +20,7 @@
 //! Requirements: the system must be autonomous (f independent of t), since the integrator
 //! sees the local time only.
 
-use super::{Integrator, SolverError, StepEvent, Task};
+use super::{ErrorKind, Integrator, SolverError, StepEvent, Task};
 
 /// A time as an unevaluated sum `hi + lo` of two doubles (|lo| ≤ ulp(hi)/2): about 106 bits.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -131,8 +131,20 @@ impl<'a> Clock<'a> {
             // fresh estimate from f there can be off by decades).
             self.rebase_with(Some(self.last_step))?;
         }
-        let start = self.integ.t();
-        let step = self.integ.advance(start + HORIZON, Task::OneStep)?;
+        let mut start = self.integ.t();
+        let step = match self.integ.advance(start + HORIZON, Task::OneStep) {
+            // The step collapsed within one call below the spacing of the local clock (e.g. a
+            // cascade of rejections where a rise begins): the clock ran out before the
+            // threshold could see it. Re-base at the last returned point, going on with that
+            // step, and try once more.
+            Err(e) if e.kind == ErrorKind::StepUnderflow && start != 0.0 => {
+                let h = self.integ.stats().current_step.abs();
+                self.rebase_with((h > 0.0).then_some(h))?;
+                start = 0.0;
+                self.integ.advance(HORIZON, Task::OneStep)?
+            }
+            other => other?,
+        };
         self.last_step = (step.t - start).abs();
         Ok(ClockStep { start, t: step.t, event: step.event })
     }

@@ -22,6 +22,11 @@ pub trait Integrator {
     /// ends there returns [`StepEvent::StopTime`](super::StepEvent::StopTime), after which the
     /// stop time is disabled. A non-finite time is an `InvalidInput` error.
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError>;
+    /// Sets the largest step the integrator may take from its next step on (`None`: no
+    /// limit), as [`Options::max_step`](super::Options::max_step) does at construction (a step
+    /// already taken beyond the last returned time stays). A value that is not finite and
+    /// positive is an `InvalidInput` error.
+    fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError>;
     /// Moves the time origin to the last returned point: afterwards `t()` is 0 and the state
     /// is unchanged. Methods that can keep their step size and history do (an exact time shift
     /// for an autonomous system); by default the integrator restarts at (0, state), with

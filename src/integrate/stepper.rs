@@ -487,6 +487,18 @@ macro_rules! integrator_via_stepper {
                 Ok(())
             }
 
+            /// Sets the largest step from the next step on (see [`Integrator::set_max_step`]);
+            /// a step already chosen is shortened to it.
+            pub fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
+                let c = self.core_mut();
+                if max_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
+                    return Err(c.invalid(format!("max step {max_step:?} must be finite and positive (or None: no limit)")));
+                }
+                c.hmax = max_step.unwrap_or(f64::INFINITY);
+                c.h = c.h.signum() * c.h.abs().min(c.hmax);
+                Ok(())
+            }
+
             /// The state at `t()`.
             pub fn state(&self) -> &[f64] {
                 &self.core().y_out
@@ -523,6 +535,9 @@ macro_rules! integrator_via_stepper {
             }
             fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
                 $T::set_stop_time(self, t_stop)
+            }
+            fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
+                $T::set_max_step(self, max_step)
             }
             fn rebase(&mut self, _first_step: Option<f64>) -> Result<(), SolverError> {
                 self.core_mut().shift_origin();

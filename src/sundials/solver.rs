@@ -437,6 +437,25 @@ impl<S> Solver<S> {
         Ok(())
     }
 
+    /// Sets the largest step from the next step on (`None`: no limit; see
+    /// [`Integrator::set_max_step`]); restarts at the last returned point if the current step
+    /// size is above the new limit.
+    pub fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
+        if max_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
+            let message = format!("max step {max_step:?} must be finite and positive (or None: no limit)");
+            return Err(self.error(ErrorKind::InvalidInput, 0, message));
+        }
+        // SAFETY: live solver memory; stores a scalar (0 means no limit in CVODE and ARKODE).
+        self.check(unsafe { (self.api.set_max_step)(self.mem.as_ptr(), max_step.unwrap_or(0.0)) })?;
+        // CVODE and ARKODE apply the limit only when they enlarge the step: a step size
+        // already above it would be kept. Restart there, with the limit as the first step.
+        if let Some(h) = max_step.filter(|h| self.raw_stats().current_step.abs() > *h) {
+            let (t, y) = (self.t, self.state().to_vec());
+            self.restart(t, &y, Some(h))?;
+        }
+        Ok(())
+    }
+
     /// Restarts the integration at (t0, y0), keeping options, tolerances, root functions and
     /// the running statistics.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
@@ -467,7 +486,12 @@ impl<S> Solver<S> {
     /// `first_step` as its first step when given, else with its own estimate.
     pub fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
         let y = self.state().to_vec();
-        self.reinit(0.0, &y)?;
+        self.restart(0.0, &y, first_step)
+    }
+
+    /// [`Solver::reinit`] at (t0, y0), with `first_step` as the first step when given.
+    fn restart(&mut self, t0: f64, y0: &[f64], first_step: Option<f64>) -> Result<(), SolverError> {
+        self.reinit(t0, y0)?;
         if let Some(h) = first_step.filter(|h| h.is_finite() && *h > 0.0) {
             // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
             self.check(unsafe { (self.api.set_init_step)(self.mem.as_ptr(), h) })?;
@@ -525,6 +549,9 @@ impl<S> Integrator for Solver<S> {
     }
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
         Solver::set_stop_time(self, t_stop)
+    }
+    fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
+        Solver::set_max_step(self, max_step)
     }
     fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
         Solver::rebase(self, first_step)
