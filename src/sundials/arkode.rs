@@ -52,6 +52,7 @@ mod ark {
         ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
         ARKodeSetLSetupFrequency as SetLSetupFrequency,
         ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
+        ARKodeSetInterpolantType as SetInterpolantType,
     };
 }
 #[cfg(not(sundials7))]
@@ -96,6 +97,7 @@ mod ark {
         ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
         ARKStepSetLSetupFrequency as SetLSetupFrequency,
         ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
+        ARKStepSetInterpolantType as SetInterpolantType,
     };
 }
 
@@ -418,7 +420,9 @@ impl<S: OdeSystem> Solver<S> {
 
 impl<S: ImexSystem> Solver<S> {
     /// ARKStep IMEX: f_E explicit with `explicit`, f_I implicit with `implicit` (the tables
-    /// must form an ARK pair, e.g. ARK436L2SA_DIRK_6_3_4 with ARK436L2SA_ERK_6_3_4).
+    /// must form an ARK pair, e.g. ARK436L2SA_DIRK_6_3_4 with ARK436L2SA_ERK_6_3_4). Dense
+    /// output uses ARKODE's Lagrange interpolant (solution values only), on SUNDIALS 6 and 7
+    /// alike; see the comment in the body.
     #[allow(clippy::too_many_arguments)]
     pub fn arkstep_imex(
         system: S,
@@ -439,6 +443,18 @@ impl<S: ImexSystem> Solver<S> {
             // SAFETY: creates ARKStep memory in a live context; ARKStepCreate copies `y`.
             unsafe { ffi::ARKStepCreate(fe, fi, t0, y.raw(), ctx.raw()) }
         })?;
+        // The Lagrange interpolant, on every SUNDIALS version: the default Hermite one needs
+        // f(t_n, y_n), which SUNDIALS 6 took from the last stage of an ARK pair with c_s = 1
+        // (the deduced implicit stage derivative) and SUNDIALS 7 (since 6.7.0) evaluates afresh
+        // for a pair whose explicit table is not stiffly accurate, which is every ARK pair. On
+        // very stiff problems that fresh f_I carries the error in y_n times the stiffness (at
+        // γ = 1e8, γ² ~ 1e16) into the dense output and its derivative, and the γ = 1e8 cycle
+        // fails on 7 ("error test failed repeatedly"). The Lagrange interpolant uses solution
+        // values only, so both versions run the same algorithm (docs/debian.md).
+        let m = solver.mem();
+        // SAFETY: live ARKStep memory, not yet initialised (no step taken): the module may
+        // still replace its interpolation module.
+        solver.check(unsafe { ark::SetInterpolantType(m, ffi::ARK_INTERP_LAGRANGE as c_int) })?;
         solver.finish_arkstep(options, settings, (implicit.0, explicit.0))?;
         Ok(solver)
     }

@@ -53,14 +53,38 @@ const MINIMUM_SCD: &[(&str, &str, [f64; 3])] = &[
     ("MEDAKZO", "extrapolation", [2.6, 6.1, 8.6]),
 ];
 
+/// Where the linked SUNDIALS genuinely gives a different result, from 6.7.0 on (Debian 13's
+/// 7.1.1), measured on 2026-11-24 and replacing the row of `MINIMUM_SCD` above.
+///
+/// ROBER with ARKStep's DIRK (SDIRK-5-3-4, stiffly accurate): SUNDIALS 6.7.0 (commit
+/// e659bb8, "Update Full RHS Calls") made `arkStep_ComputeSolutions` return the last stage z_s
+/// as y_{n+1} for a stiffly accurate table, where 6.4.1 formed y_n + h Σ b_j f_I(z_j) from the
+/// evaluated stage derivatives. The two differ by the Newton stopping error of the last stage,
+/// which 7.x keeps in the solution; no ARKODE option restores the 6.x formula. Measured on
+/// 7.1.1: 8.70, 10.59 and 13.62 digits (2336, 5410, 79717 steps) against 10.20, 12.96 and
+/// 13.61 on 6.4.1. The same 7.1.1 library with that one line reverted gives 10.20 and 12.96
+/// in 2790 and 5635 steps, 6.4.1's digits and step counts exactly; with a 1000× tighter
+/// Newton tolerance (1e-10) 7.1.1 gets 10.66 and 14.17. See docs/debian.md.
+const MINIMUM_SCD_SINCE_6_7: &[(&str, &str, [f64; 3])] = &[("ROBER", "arkode-dirk", [8.2, 10.0, 13.1])];
+
+/// Whether the linked SUNDIALS is 6.7.0 or newer.
+fn sundials_since_6_7() -> bool {
+    let version = stickslip::sundials::version();
+    let mut parts = version.split('.').map(|p| p.parse::<u32>().unwrap_or(0));
+    let (major, minor) = (parts.next().unwrap_or(0), parts.next().unwrap_or(0));
+    (major, minor) >= (6, 7)
+}
+
 /// The expectation of one cell.
 pub fn expectation(problem: &str, method: &str, rtol: f64) -> Expect {
     if (problem, method) == ("E5", "extrapolation") {
         return Expect::KnownWrong;
     }
     let index = RTOLS.iter().position(|r| *r == rtol).expect("one of RTOLS");
-    let (_, _, minimum) = MINIMUM_SCD
+    let by_version = if sundials_since_6_7() { MINIMUM_SCD_SINCE_6_7 } else { &[] };
+    let (_, _, minimum) = by_version
         .iter()
+        .chain(MINIMUM_SCD)
         .find(|(p, m, _)| *p == problem && *m == method)
         .unwrap_or_else(|| panic!("no expectation for {problem} {method}"));
     Expect::Scd(minimum[index])
