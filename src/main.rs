@@ -182,6 +182,12 @@ fn robertson_command() -> Result<(), String> {
 /// A failure and its exit code: 2 for bad input, 1 for a failed computation.
 struct Failure(u8, String);
 
+/// A failed run of the scene `name`: exit code 2 when an option does not fit the computed
+/// orbit (bad input, the field named), 1 otherwise.
+fn failed(name: &str, error: engine::EngineError) -> Failure {
+    Failure(if error.is_bad_input() { 2 } else { 1 }, format!("scene {name}: {error}"))
+}
+
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
 fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads: Option<usize>) -> Result<(), Failure> {
@@ -199,11 +205,11 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads:
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
-            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
         scene::AnyScene::Other(scene) => {
-            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
     };

@@ -11,7 +11,6 @@
 
 use crate::analysis::cycle::CycleStatus;
 use crate::engine;
-use crate::integrate::ErrorKind;
 use crate::scene::{self, Method};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -227,7 +226,7 @@ pub fn run_cell(cell: &Cell) -> Outcome {
     let text = scene_text(cell);
     let outcome = std::panic::catch_unwind(|| {
         let scene = scene::parse(&text, "stress").map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
-        engine::run(&scene, serde_json::Value::Null).map_err(|e| (format!("{:?}", e.kind), e.to_string()))
+        engine::run(&scene, serde_json::Value::Null).map_err(|e| (e.kind.label(), e.to_string()))
     });
     match outcome {
         Ok(Ok(report)) => {
@@ -343,7 +342,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
                 }
             }
             Outcome::Error { kind, message } => {
-                if kind == &format!("{:?}", ErrorKind::Other) && message.contains("non-finite") {
+                if kind == "NonFinite" {
                     s.nan += 1;
                     s.defects.push(format!("{cell:?}: {message}"));
                 }

@@ -49,7 +49,7 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
         return Ok(done.clone());
     }
     let name = json["name"].as_str().unwrap_or("?").to_string();
-    let failed = |source| ReproduceError::Solver { case: name.clone(), source };
+    let failed = |source| ReproduceError::Run { case: name.clone(), source };
     let progress = |done, total| ctx.progress.points(done, total);
     let (report, noise) = match scene::parse_any(&json.to_string(), &name).map_err(|e| ReproduceError::Scene(e.to_string()))? {
         AnyScene::Drr(s) => {

@@ -8,7 +8,8 @@ use super::slow_run::{self, SlowRun};
 use super::AsymptoticsOptions;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
-use crate::integrate::{Options, Radau5, SolverError, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Options, Radau5, Tolerance};
 use crate::model::slow_manifold::SlowFlow;
 use crate::model::DrrParams;
 use serde::Serialize;
@@ -126,7 +127,7 @@ fn first_exceeding(orbit: &Orbit, gamma: f64, range: std::ops::Range<usize>, thr
 }
 
 /// The manifold analysis of one cycle.
-pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, SolverError> {
+pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, AnalysisError> {
     let gamma = params.gamma;
     let flow = SlowFlow::new(*params);
     let (rtol, atol) = (options.rtol, options.rtol * 1e-2);

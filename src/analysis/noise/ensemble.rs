@@ -6,7 +6,8 @@
 use super::models::{EventKind, NoiseModel};
 use super::rng::Rng;
 use super::scheme::{self, Path, SchemeSettings, Start};
-use crate::integrate::{OdeSystem, SolverError, Stats};
+use crate::analysis::AnalysisError;
+use crate::integrate::{ErrorKind, OdeSystem, Stats};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -58,7 +59,7 @@ pub struct EnsembleSpec<'a> {
 }
 
 /// Reads realisation `path`'s observables at the sampling times into `out` ([observable][k]).
-fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), String> {
+fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), AnalysisError> {
     let reference = sampling.fixed_reference.unwrap_or(path.t_event);
     let k_n = sampling.s.len();
     let mut x = vec![0.0; model.dim()];
@@ -67,7 +68,16 @@ fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = path.value(t, i).ok_or_else(|| {
                 let (a, b) = path.span();
-                format!("the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span [{a:e}, {b:e}]")
+                AnalysisError::Failed {
+                    analysis: "noise",
+                    t: path.t_event,
+                    state: vec![],
+                    message: format!(
+                        "the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span \
+                         [{a:e}, {b:e}]: the event moved too far from the deterministic one (lower the amplitudes or raise \
+                         start_before_event)"
+                    ),
+                }
             })?;
         }
         for (o, (_, obs)) in model.observables().iter().enumerate() {
@@ -86,10 +96,10 @@ pub fn run(
     count: usize,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<EnsembleData, SolverError> {
+) -> Result<EnsembleData, AnalysisError> {
     let per = spec.model.observables().len() * sampling.s.len();
     let slots: Vec<Slot> = (0..count).map(|_| Mutex::new(None)).collect();
-    let failures: Mutex<Vec<(usize, SolverError)>> = Mutex::new(Vec::new());
+    let failures: Mutex<Vec<(usize, AnalysisError)>> = Mutex::new(Vec::new());
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
@@ -118,28 +128,20 @@ pub fn run(
                     )
                     .and_then(|()| {
                         let mut out = vec![0.0; per];
-                        sample(spec.model, &path, sampling, &mut out).map_err(|message| SolverError {
-                            solver: "stickslip noise",
-                            kind: crate::integrate::ErrorKind::Other,
-                            t: path.t_event,
-                            state: vec![],
-                            flag: 0,
-                            message: format!(
-                                "{message}: the event moved too far from the deterministic one \
-                                 (lower the amplitudes or raise start_before_event)"
-                            ),
-                        })?;
+                        sample(spec.model, &path, sampling, &mut out)?;
                         Ok(out)
                     });
                     match outcome {
                         Ok(out) => *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((path.t_event, out, path.stats, path.nodes())),
                         Err(mut e) => {
-                            let hint = if e.kind == crate::integrate::ErrorKind::ErrorTestFailures {
+                            let hint = if matches!(&e, AnalysisError::Solver(s) if s.kind == ErrorKind::ErrorTestFailures) {
                                 " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
                             } else {
                                 ""
                             };
-                            e.message = format!("realisation {i}: {}{hint}", e.message);
+                            if let Some(message) = e.message_mut() {
+                                *message = format!("realisation {i}: {message}{hint}");
+                            }
                             failures.lock().unwrap_or_else(|e| e.into_inner()).push((i, e));
                             // Indices are handed out in order, so every index below a failure
                             // is already running or done: the lowest failure is always found.

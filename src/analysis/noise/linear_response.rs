@@ -27,7 +27,8 @@
 //! e.g. (0, v, 0) for v = e^w).
 
 use super::models::{EventKind, NoiseModel};
-use crate::integrate::{ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, SolverError, Task, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, SolverError, Task, Tolerance};
 
 /// Largest augmented dimension (2 × the DRR's 3).
 const MAX_BIG: usize = 6;
@@ -220,8 +221,8 @@ pub struct LinearResponse {
     rtol: f64,
 }
 
-fn failure(t: f64, message: String) -> SolverError {
-    SolverError { solver: "stickslip linear response", kind: ErrorKind::Other, t, state: vec![], flag: 0, message }
+fn failure(t: f64, message: String) -> AnalysisError {
+    AnalysisError::Failed { analysis: "the linear response", t, state: vec![], message }
 }
 
 /// μ_k = Φ(t_j, t_k)ᵀ μ_j for k = j, j−1, …, 0 (backwards along the orbit).
@@ -257,7 +258,7 @@ pub fn compute(
     tau: f64,
     rtol: f64,
     atol_x: &[f64],
-) -> Result<LinearResponse, SolverError> {
+) -> Result<LinearResponse, AnalysisError> {
     let n = model.dim();
     let nn = 2 * n;
     if model.amplitudes().iter().all(|a| *a == 0.0) {

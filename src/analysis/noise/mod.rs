@@ -26,7 +26,8 @@ pub mod rng;
 pub mod scheme;
 pub mod statistics;
 
-use crate::integrate::{ErrorKind, OdeSystem, SolverError};
+use crate::analysis::{AnalysisError, InvalidOption};
+use crate::integrate::{OdeSystem, SolverError};
 use models::{EventKind, NoiseModel};
 use options::{Alignment, NoiseOptions};
 use scheme::{SchemeSettings, Start};
@@ -258,15 +259,19 @@ pub struct NoiseReport {
     pub work: Work,
 }
 
-fn invalid(message: String) -> SolverError {
-    SolverError { solver: "stickslip noise", kind: ErrorKind::InvalidInput, t: 0.0, state: vec![], flag: 0, message }
+fn invalid(field: &str, message: String) -> AnalysisError {
+    InvalidOption::new(field, message).into()
+}
+
+fn not_applicable(reason: &str) -> AnalysisError {
+    AnalysisError::NotApplicable { reason: reason.into() }
 }
 
 /// The converged limit cycle of a periodic model: (period, state at an event, events used).
 /// Converged when three successive periods and the event states agree to 1e-8 (relative;
 /// absolute below 1): a decaying oscillation, whose period converges but whose amplitude does
 /// not, never qualifies.
-fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), SolverError> {
+fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), AnalysisError> {
     let mut x = initial.to_vec();
     let mut periods: Vec<f64> = Vec::new();
     let mut states: Vec<Vec<f64>> = Vec::new();
@@ -285,13 +290,11 @@ fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f6
             }
         }
     }
-    Err(SolverError {
-        solver: "stickslip noise",
-        kind: ErrorKind::Other,
-        t: 0.0,
-        state: x,
-        flag: 0,
-        message: format!("the deterministic orbit did not settle on a limit cycle in 2000 events (last periods {:?})", &periods[periods.len().saturating_sub(3)..]),
+    Err(AnalysisError::NoLimitCycle {
+        reason: format!(
+            "the deterministic orbit did not settle on a limit cycle in 2000 events (last periods {:?}, last state at an event {x:?})",
+            &periods[periods.len().saturating_sub(3)..]
+        ),
     })
 }
 
@@ -304,7 +307,7 @@ pub fn run(
     options: &NoiseOptions,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<NoiseReport, SolverError> {
+) -> Result<NoiseReport, AnalysisError> {
     let n = model.dim();
     let det_atol = vec![1e-12; n];
     // 1. The deterministic orbit.
@@ -316,12 +319,12 @@ pub fn run(
             (EventKind::CrossDown { component: 0, level, arm: 0.0 }, false)
         }
         NoiseModel::Linear { .. } => {
-            return Err(invalid("the linear validation model has no event to align on; it serves the scheme's tests".into()));
+            return Err(not_applicable("the linear validation model has no event to align on; it serves the scheme's tests"));
         }
     };
     if let NoiseModel::Drr { system, .. } = model {
         if crate::analysis::hopf::analyse(system).max_real_part < 0.0 {
-            return Err(invalid("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on".into()));
+            return Err(not_applicable("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on"));
         }
     }
     let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
@@ -331,7 +334,7 @@ pub fn run(
             _ => 0.45 * period,
         });
         if before >= period {
-            return Err(invalid(format!("start_before_event = {before} must be shorter than the period {period}")));
+            return Err(invalid("start_before_event", format!("{before} must be shorter than the period {period}")));
         }
         let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, &det_atol)?;
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, &det_atol)?;
@@ -340,7 +343,7 @@ pub fn run(
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, &det_atol)?;
         let before = options.start_before_event.unwrap_or(tc);
         if before > tc {
-            return Err(invalid(format!("start_before_event = {before} exceeds the time {tc} from t = 0 to the escape")));
+            return Err(invalid("start_before_event", format!("{before} exceeds the time {tc} from t = 0 to the escape")));
         }
         let x_start = scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, &det_atol)?;
         (None, 0, before, Start { t: tc - before, x: x_start }, tc, xc)
@@ -369,14 +372,14 @@ pub fn run(
     });
     let far = (1.0 - GRID_MARGIN) * before;
     if window[0] > far {
-        return Err(invalid(format!("window starts {} before the event, before the grid's first time {far} (raise start_before_event)", window[0])));
+        return Err(invalid("window", format!("starts {} before the event, before the grid's first time {far} (raise start_before_event)", window[0])));
     }
     let curves_at = options.correlation_curves_at.clone().unwrap_or(match model {
         NoiseModel::Drr { system, .. } => vec![2.3, 1.0, 30.0 / system.params().gamma],
         _ => vec![window[0], (window[0] * window[1]).sqrt(), window[1]],
     });
     if let Some(t) = curves_at.iter().find(|t| **t > far) {
-        return Err(invalid(format!("correlation_curves_at: {t} is before the grid's first time {far} before the event")));
+        return Err(invalid("correlation_curves_at", format!("{t} is before the grid's first time {far} before the event")));
     }
     let alignment = options.alignment.unwrap_or(Alignment::OwnEvent);
     let grid_points = options.grid_points.unwrap_or(1000);

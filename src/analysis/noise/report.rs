@@ -3,7 +3,8 @@
 
 use super::models::NoiseModel;
 use super::NoiseReport;
-use crate::integrate::SolverError;
+use crate::analysis::AnalysisError;
+use crate::engine::EngineError;
 use crate::model::{SaddleNode, VanDerPol};
 use crate::scene::{OtherModel, OtherScene};
 use serde::Serialize;
@@ -148,7 +149,7 @@ pub fn run_scene(
     scene_json: serde_json::Value,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<ModelReport, SolverError> {
+) -> Result<ModelReport, EngineError> {
     let started = std::time::Instant::now();
     let a = &scene.noise.amplitudes;
     let (model, initial) = match &scene.model {
@@ -157,16 +158,9 @@ pub fn run_scene(
             (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
         }
     };
-    let noise = super::run(&model, &initial, &scene.noise, threads, progress)?;
+    let noise = super::run(&model, &initial, &scene.noise, threads, progress).map_err(|e| EngineError::new("noise", e))?;
     if !noise.is_finite() {
-        return Err(SolverError {
-            solver: "stickslip",
-            kind: crate::integrate::ErrorKind::Other,
-            t: 0.0,
-            state: vec![],
-            flag: 0,
-            message: "the noise section contains a non-finite number; refusing to report it".into(),
-        });
+        return Err(EngineError::new("noise", AnalysisError::NonFinite { path: "noise".into() }));
     }
     Ok(ModelReport {
         stickslip_version: env!("CARGO_PKG_VERSION"),

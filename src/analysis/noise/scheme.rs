@@ -30,7 +30,8 @@
 use super::models::{EventKind, NoiseModel, MAX_DIM};
 use super::ou::{self, OuStep};
 use super::rng::Rng;
-use crate::integrate::{ErrorKind, JacobianMatrix, OdeSystem, Options, Rodas5p, SolverError, Stats, Task, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::integrate::{JacobianMatrix, OdeSystem, Options, Rodas5p, SolverError, Stats, Task, Tolerance};
 use std::cell::Cell;
 
 /// The OU values around the current interval [t_k, t_{k+1}]: η_{k−1}, η_k, η_{k+1}, η_{k+2}.
@@ -237,8 +238,8 @@ pub struct Start {
     pub x: Vec<f64>,
 }
 
-fn no_event(t: f64, x: &[f64], what: String) -> SolverError {
-    SolverError { solver: "stickslip noise", kind: ErrorKind::Other, t, state: x.to_vec(), flag: 0, message: what }
+fn no_event(t: f64, x: &[f64], what: String) -> AnalysisError {
+    AnalysisError::Failed { analysis: "noise", t, state: x.to_vec(), message: what }
 }
 
 /// Runs one realisation from `start` until its event has been located and `record_until` is
@@ -254,7 +255,7 @@ pub fn realisation(
     t_max: f64,
     rng: &mut Rng,
     path: &mut Path,
-) -> Result<(), SolverError> {
+) -> Result<(), AnalysisError> {
     let n = model.dim();
     let forced = Forced { model, segment: Cell::new(Segment::default()) };
     let mut integ = Rodas5p::new(forced, start.t, &start.x, &settings.options())?;
@@ -353,7 +354,7 @@ pub fn deterministic_event(
     t_max: f64,
     rtol: f64,
     atol: &[f64],
-) -> Result<(f64, Vec<f64>, Stats), SolverError> {
+) -> Result<(f64, Vec<f64>, Stats), AnalysisError> {
     let options = Options {
         max_steps: Some(10_000_000),
         max_err_test_fails: Some(20),
