@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
+use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::model::robertson::{self, ExampleRun};
@@ -513,14 +514,14 @@ fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Res
         }
     }
     let rows: Vec<_> = summary.rows().collect();
-    let count = |v: &str| rows.iter().filter(|r| r.verdict == v).count();
+    let count = |v: Verdict| rows.iter().filter(|r| r.verdict == v).count();
     println!(
         "claims: {} agree, {} roughly, {} disagree, {} hold, {} do not hold; not yet reproduced: {}",
-        count("agrees"),
-        count("roughly"),
-        count("disagrees"),
-        count("holds"),
-        count("does not hold"),
+        count(Verdict::Agrees),
+        count(Verdict::Roughly),
+        count(Verdict::Disagrees),
+        count(Verdict::Holds),
+        count(Verdict::DoesNotHold),
         if summary.pending.is_empty() { "none".to_string() } else { summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ") }
     );
     println!("summary: {} and summary.html ({:.1} s)", out.join("summary.md").display(), summary.wall_time_s);

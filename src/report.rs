@@ -7,7 +7,7 @@ use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
-use crate::analysis::paper::Claim;
+use crate::analysis::claims::Claim;
 use crate::integrate::Stats;
 use crate::scene::{Dimensional, Method, Units};
 use serde::Serialize;
@@ -252,7 +252,8 @@ impl Report {
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";
             for c in claims {
-                s += &format!("  {:<9} {} — paper {}, ours {:.6} ({:+.1} %)\n", c.verdict, c.claim, c.paper, c.ours, 100.0 * c.relative_difference);
+                let relative = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+                s += &format!("  {:<9} {} — paper {}, ours {:.6}{relative}\n", c.verdict, c.claim, c.reference, c.ours);
             }
         }
         s
