@@ -7,8 +7,9 @@ use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper, Analysi
 use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
-use crate::report::{ModelSection, Physical, Report, SolverSection};
-use crate::scene::{CycleOptions, Method, Scene, SolverSpec};
+use crate::model::{SaddleNode, VanDerPol};
+use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
+use crate::scene::{CycleOptions, Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -347,4 +348,34 @@ fn variational_integrator_with_tables(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]
     atol.extend([spec.rtol; 9]);
     let z0 = Variational::<Drr, 3>::initial(y0);
     integrator_for(Variational::<Drr, 3>::new(drr), &drr, spec, &z0, Tolerance::PerComponent(atol))
+}
+
+/// Runs a saddle-node or van der Pol scene (the noise analysis alone) on `threads` threads;
+/// `progress(done, total)` after each realisation.
+pub fn run_other(
+    scene: &OtherScene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelReport, EngineError> {
+    let started = std::time::Instant::now();
+    let a = &scene.noise.amplitudes;
+    let (model, initial) = match &scene.model {
+        OtherModel::SaddleNode { params, x0 } => (NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] }, vec![*x0]),
+        OtherModel::VanDerPol { params, initial } => {
+            (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
+        }
+    };
+    let noise = noise::run(&model, &initial, &scene.noise, threads, progress).map_err(|e| EngineError::new("noise", e))?;
+    if !noise.is_finite() {
+        return Err(EngineError::new("noise", AnalysisError::NonFinite { path: "noise".into() }));
+    }
+    Ok(ModelReport {
+        stickslip_version: env!("CARGO_PKG_VERSION"),
+        name: scene.name.clone(),
+        scene: scene_json,
+        model: scene.model.clone(),
+        noise,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
 }

@@ -210,7 +210,7 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads:
             (report.to_json(), report.summary())
         }
         scene::AnyScene::Other(scene) => {
-            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
+            let report = engine::run_other(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
     };

@@ -18,7 +18,8 @@ use crate::analysis::fit::{least_squares, power_limit, Fit, PowerLimit};
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
-use crate::integrate::{Integrator, Options, Radau5, SolverError, Task, Tolerance};
+use crate::integrate::{Integrator, Options, SolverError, Task, Tolerance};
+use crate::solver::{self, Method};
 use crate::model::fast_slip::{shifts, FastSlip};
 use crate::model::DrrParams;
 use serde::Serialize;
@@ -174,7 +175,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
     };
     let z0 = fast.to_fast(gamma, &orbit.state(k0));
     let t0 = gamma * orbit.s[k0];
-    let mut integ = Radau5::new(fast, t0, &z0, &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)))?;
+    let mut integ = solver::build_default(Method::Radau5, fast, t0, &z0, &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)))?;
     let mut d0 = [0.0; 3];
     crate::integrate::OdeSystem::rhs(&fast, t0, &z0, &mut d0);
     let mut knots = vec![Knot { t: t0, x: z0[1], dx: d0[1] }];
@@ -189,7 +190,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
         let d = integ.dense(step.t, 1)?[1];
         knots.push(Knot { t: step.t, x: z[1], dx: d });
         if peak.is_none() && prev_d > 0.0 && d <= 0.0 {
-            let tp = bisect(&mut integ, (prev_t, step.t), 1, &|x| x[1])?;
+            let tp = bisect(integ.as_mut(), (prev_t, step.t), 1, &|x| x[1])?;
             let zp = integ.dense(tp, 0)?;
             peak = Some((tp, [zp[0], zp[1], zp[2]]));
         }
@@ -197,7 +198,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
             let half = zp[1] - std::f64::consts::LN_2;
             if half_fall.is_none() && z[1] < half {
                 let a = prev_t.max(tp);
-                half_fall = Some(bisect(&mut integ, (a, step.t), 0, &|x| x[1] - half)?);
+                half_fall = Some(bisect(integ.as_mut(), (a, step.t), 0, &|x| x[1] - half)?);
             }
             if z[1] < zp[1] - 20f64.ln() {
                 break;

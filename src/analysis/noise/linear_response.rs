@@ -28,7 +28,8 @@
 
 use super::models::{EventKind, NoiseModel};
 use crate::analysis::AnalysisError;
-use crate::integrate::{Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, SolverError, Task, Tolerance};
+use crate::solver::{self, Method};
+use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, Tolerance};
 
 /// Largest augmented dimension (2 × the DRR's 3).
 const MAX_BIG: usize = 6;
@@ -53,13 +54,13 @@ impl Orbit {
             ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
         };
         let n = model.dim();
-        let mut integ = Rodas5p::new(*model, t0, x0, &options)?;
+        let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
         let mut f0 = vec![0.0; n];
         model.rhs(t0, x0, &mut f0);
         let mut orbit = Self { n, t: vec![t0], x: x0.to_vec(), f: f0 };
         while integ.t() < t1 {
             let step = integ.advance(t1, Task::OneStep)?;
-            let slope = Integrator::dense(&mut integ, step.t, 1)?.to_vec();
+            let slope = integ.dense(step.t, 1)?.to_vec();
             orbit.t.push(step.t);
             orbit.x.extend_from_slice(integ.state());
             orbit.f.extend_from_slice(&slope);
@@ -233,7 +234,7 @@ fn adjoint_sweep(model: &NoiseModel, orbit: &Orbit, tau: f64, times: &[f64], j: 
         ..Options::new(rtol, Tolerance::PerComponent(vec![1e-12 * scale; mu_j.len()]))
     };
     let sys = Adjoint { model, orbit, tau };
-    let mut integ = Radau5::new(sys, times[j], mu_j, &options)?;
+    let mut integ = solver::build_default(Method::Radau5, sys, times[j], mu_j, &options)?;
     let mut out = vec![Vec::new(); j + 1];
     out[j] = mu_j.to_vec();
     for k in (0..j).rev() {
@@ -287,7 +288,7 @@ pub fn compute(
         let atol: Vec<f64> = (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
         let pass_rtol = if pass == 0 { rtol.max(1e-4) } else { rtol };
         let options = Options { max_steps: Some(1_000_000), ..Options::new(pass_rtol, Tolerance::PerComponent(atol)) };
-        let mut integ = Radau5::new(sys, t_start, &c0, &options)?;
+        let mut integ = solver::build_default(Method::Radau5, sys, t_start, &c0, &options)?;
         covariance.clear();
         let mut max_var = vec![0.0f64; nn];
         for &t in times {
