@@ -16,6 +16,7 @@ pub mod integrate;
 pub mod model;
 pub mod report;
 pub mod reproduce;
+pub mod robertson_examples;
 pub mod scene;
 pub mod solver;
 pub mod stress;

@@ -8,7 +8,7 @@ use std::io::IsTerminal;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
-use stickslip::model::robertson::{self, ExampleRun};
+use stickslip::robertson_examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
 
 #[derive(Parser)]
