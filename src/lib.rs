@@ -14,6 +14,7 @@ pub mod engine;
 pub mod figure;
 pub mod integrate;
 pub mod model;
+pub mod parallel;
 pub mod report;
 pub mod reproduce;
 pub mod robertson_examples;

@@ -10,12 +10,10 @@
 //! a periodic orbit their periods must agree within 1e3·rtol.
 
 use crate::analysis::cycle::CycleStatus;
-use crate::engine;
+use crate::{engine, parallel};
 use crate::scene::{self, Method};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// One cell of the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -278,22 +276,7 @@ pub struct Summary {
 
 /// Runs the grid on `threads` threads; `progress` is called after each cell.
 pub fn run(cells: &[Cell], threads: usize, progress: &(dyn Fn(usize, usize) + Sync)) -> (Vec<Outcome>, Summary) {
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; cells.len()]);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(cell) = cells.get(i) else { break };
-                let outcome = run_cell(cell);
-                results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(outcome);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cells.len());
-            });
-        }
-    });
-    let outcomes: Vec<Outcome> =
-        results.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|o| o.expect("every cell ran")).collect();
+    let outcomes = parallel::map(cells.len(), threads, progress, |i| run_cell(&cells[i]));
     let summary = summarise(cells, &outcomes);
     (outcomes, summary)
 }
