@@ -71,9 +71,9 @@ pub struct EngineError {
     /// The analysis that failed ("cycle", "shooting", "asymptotics", "lyapunov", "noise"), or
     /// the report section refused for a non-finite number.
     pub analysis: &'static str,
-    /// The analysis's error; an integration failure carries the physical cause in its message
-    /// where the engine knows one (see `diagnose`).
-    pub kind: AnalysisError,
+    /// The analysis's error (boxed: it is large); an integration failure carries the physical
+    /// cause in its message where the engine knows one (see `diagnose`).
+    pub kind: Box<AnalysisError>,
     /// The state where it failed, when known (empty otherwise).
     pub state: Vec<f64>,
     /// `kind`'s message: what failed, where (t and the state) and why.
@@ -83,13 +83,13 @@ pub struct EngineError {
 impl EngineError {
     /// The error of `analysis`.
     pub fn new(analysis: &'static str, kind: AnalysisError) -> Self {
-        Self { analysis, state: kind.state().to_vec(), message: kind.to_string(), kind }
+        Self { analysis, state: kind.state().to_vec(), message: kind.to_string(), kind: Box::new(kind) }
     }
 
     /// Whether the input is at fault (an option that does not fit the computed orbit, named
     /// by its field) rather than the computation: the CLI's exit code 2, not 1.
     pub fn is_bad_input(&self) -> bool {
-        matches!(self.kind, AnalysisError::InvalidOption(_))
+        matches!(*self.kind, AnalysisError::InvalidOption(_))
     }
 }
 

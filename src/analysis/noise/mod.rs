@@ -373,7 +373,7 @@ pub fn run(
     statistics(model, &orbit, plan, realisations, linear, &det_atol)
 }
 
-/// 1. The deterministic orbit: for periodic models the converged limit cycle, the start
+/// Step 1, the deterministic orbit: for periodic models the converged limit cycle, the start
 /// `start_before_event` before an event, t_c and (DRR) t0; for the saddle-node the passage
 /// from t = 0.
 fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptions, det_atol: &[f64]) -> Result<Orbit, AnalysisError> {
@@ -515,7 +515,7 @@ fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &Orbit) -> Result<Pla
     })
 }
 
-/// 2. The realisations: the scheme's deterministic error (one realisation with zero
+/// Step 2, the realisations: the scheme's deterministic error (one realisation with zero
 /// amplitudes), then the ensemble, from the orbit's start.
 fn realisations(
     model: &NoiseModel,
@@ -562,8 +562,8 @@ fn realisations(
     Ok(Realisations { data, atol, event_time_without_noise, wall_time_s: started.elapsed().as_secs_f64() })
 }
 
-/// 3. The statistics of the realisations on the grid, beside the linear response (4) and
-/// where the two agree; the report.
+/// Step 3, the statistics of the realisations on the grid, beside the linear response (step
+/// 4) and where the two agree; the report.
 fn statistics(
     model: &NoiseModel,
     orbit: &Orbit,
@@ -620,7 +620,7 @@ fn statistics(
         let row_of = |m: &Moments, j: usize| -> Vec<f64> {
             m.rows.iter().find(|(r, _)| *r == j).map(|(_, row)| row.clone()).expect("a requested row")
         };
-        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, &s, j, width);
+        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, s, j, width);
         let sigma = m.sigma();
         let sigma_lin = lin.as_ref().map(|l| l.sigma());
         let points: Vec<CorrelationPoint> = report_rows
@@ -634,34 +634,7 @@ fn statistics(
             })
             .collect();
         if let Some(sl) = &sigma_lin {
-            let se = 1.0 / (2.0 * (realisations_n as f64 - 1.0)).sqrt();
-            let mut max_rel = 0.0f64;
-            let mut disagree = Vec::new();
-            for &j in &report_rows {
-                if sl[j] > 0.0 {
-                    let rel = sigma[j] / sl[j] - 1.0;
-                    max_rel = max_rel.max(rel.abs());
-                    if rel.abs() > 4.0 * se {
-                        disagree.push(-s[j]);
-                    }
-                }
-            }
-            let mut rels: Vec<f64> = points
-                .iter()
-                .filter_map(|p| match (p.tau, p.tau_linear_response) {
-                    (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
-                    _ => None,
-                })
-                .collect();
-            rels.sort_by(|a, b| a.total_cmp(b));
-            agreement.push(Agreement {
-                name,
-                sigma_standard_error: se,
-                sigma_max_relative_difference: max_rel,
-                sigma_disagree_at: disagree,
-                tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
-                tau_max_relative_difference: rels.last().copied(),
-            });
+            agreement.push(agreement_of(name, &sigma, sl, &points, &report_rows, s, realisations_n));
         }
         if o == 0 {
             for &j in &curve_rows {
@@ -675,27 +648,7 @@ fn statistics(
         series.push(Series { name, mean: m.mean.clone(), deterministic, sigma, sigma_linear_response: sigma_lin });
     }
     let correlation_functions = curves;
-    let growth = match (model, orbit.t0) {
-        (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
-            let (jf, j0) = (statistics::nearest(&s, -0.1), statistics::nearest(&s, -(0.1 + t0)));
-            let v = &series[1];
-            let v_growth = v.mean[jf] / v.mean[j0];
-            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
-            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
-            Some(Growth {
-                t_f_before_event: 0.1,
-                interval: t0,
-                v_growth,
-                sigma_v_growth,
-                ratio: sigma_v_growth / v_growth,
-                log10_ratio: (sigma_v_growth / v_growth).log10(),
-                v_growth_linear_response: lin.map(|l| l.0),
-                sigma_v_growth_linear_response: lin.map(|l| l.1),
-                ratio_linear_response: lin.map(|l| l.1 / l.0),
-            })
-        }
-        _ => None,
-    };
+    let growth = growth(model, orbit, &plan, &series);
     let r_n = realisations_n as f64;
     let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event_det).collect();
     let mean_shift = shifts.iter().sum::<f64>() / r_n;
@@ -753,4 +706,62 @@ fn statistics(
         },
     };
     Ok(report)
+}
+
+/// Ensemble against linear response for one observable over the report rows: σ's largest
+/// relative difference and where it exceeds 4 standard errors, τ's median and largest.
+fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[CorrelationPoint], report_rows: &[usize], s: &[f64], realisations: usize) -> Agreement {
+    let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
+    let mut max_rel = 0.0f64;
+    let mut disagree = Vec::new();
+    for &j in report_rows {
+        if sigma_lin[j] > 0.0 {
+            let rel = sigma[j] / sigma_lin[j] - 1.0;
+            max_rel = max_rel.max(rel.abs());
+            if rel.abs() > 4.0 * se {
+                disagree.push(-s[j]);
+            }
+        }
+    }
+    let mut rels: Vec<f64> = points
+        .iter()
+        .filter_map(|p| match (p.tau, p.tau_linear_response) {
+            (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
+            _ => None,
+        })
+        .collect();
+    rels.sort_by(|a, b| a.total_cmp(b));
+    Agreement {
+        name,
+        sigma_standard_error: se,
+        sigma_max_relative_difference: max_rel,
+        sigma_disagree_at: disagree,
+        tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
+        tau_max_relative_difference: rels.last().copied(),
+    }
+}
+
+/// DRR: the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1, from the series.
+fn growth(model: &NoiseModel, orbit: &Orbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
+    match (model, orbit.t0) {
+        (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
+            let (jf, j0) = (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));
+            let v = &series[1];
+            let v_growth = v.mean[jf] / v.mean[j0];
+            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
+            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
+            Some(Growth {
+                t_f_before_event: 0.1,
+                interval: t0,
+                v_growth,
+                sigma_v_growth,
+                ratio: sigma_v_growth / v_growth,
+                log10_ratio: (sigma_v_growth / v_growth).log10(),
+                v_growth_linear_response: lin.map(|l| l.0),
+                sigma_v_growth_linear_response: lin.map(|l| l.1),
+                ratio_linear_response: lin.map(|l| l.1 / l.0),
+            })
+        }
+        _ => None,
+    }
 }
