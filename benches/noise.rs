@@ -79,7 +79,7 @@ fn main() {
         let (wall0, cpu0) = (Instant::now(), cpu_seconds());
         let noise = match scene::parse_any(&text, other).expect("a valid scene") {
             AnyScene::Drr(s) => engine::run_with(&s, json, 2, &|_, _| {}).expect("the scene runs").noise.expect("a noise section"),
-            AnyScene::Other(s) => stickslip::analysis::noise::report::run_scene(&s, json, 2, &|_, _| {}).expect("the scene runs").noise,
+            AnyScene::Other(s) => stickslip::engine::run_other(&s, json, 2, &|_, _| {}).expect("the scene runs").noise,
         };
         println!(
             "{other}: {} realisations, {:.2} s wall, {:.2} s CPU, {:.0} nodes per realisation; load average {}",

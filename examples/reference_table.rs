@@ -45,7 +45,7 @@ fn try_cycle(
     });
     let scene = scene::parse(&text.to_string(), "reference").expect("valid scene");
     let report = engine::run(&scene, text).map_err(|e| {
-        format!("{e} [kind {:?}, t = {:e}, state (u, ln v, θ) = {:?}]", e.kind, e.t, e.state)
+        format!("{e} [kind {}, state (u, ln v, θ) = {:?}]", e.kind.label(), e.state)
     })?;
     let c = report.cycle.expect("cycle asked");
     let v = c.values.ok_or_else(|| format!("not periodic: {:?} after {} cycles", c.status, c.cycles_computed))?;

@@ -3,12 +3,13 @@
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting::{self, ShootingSettings};
-use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper};
-use crate::integrate::{ErrorKind, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
+use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper, AnalysisError};
+use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
-use crate::report::{ModelSection, Physical, Report, SolverSection};
-use crate::scene::{CycleOptions, Method, Scene, SolverSpec};
+use crate::model::{SaddleNode, VanDerPol};
+use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
+use crate::scene::{CycleOptions, Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -82,7 +83,47 @@ fn max_step(drr: &Drr) -> f64 {
     hopf::analyse(drr).period_c / 8.0
 }
 
-/// Adds the physical cause to a failure where one is known, and only where it is true.
+/// Why a run failed: the analysis at fault, its typed error, and where it happened.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{analysis}: {message}")]
+pub struct EngineError {
+    /// The analysis that failed ("cycle", "shooting", "asymptotics", "lyapunov", "noise"), or
+    /// the report section refused for a non-finite number.
+    pub analysis: &'static str,
+    /// The analysis's error (boxed: it is large); an integration failure carries the physical
+    /// cause in its message where the engine knows one (see `diagnose`).
+    pub kind: Box<AnalysisError>,
+    /// The state where it failed, when known (empty otherwise).
+    pub state: Vec<f64>,
+    /// `kind`'s message: what failed, where (t and the state) and why.
+    pub message: String,
+}
+
+impl EngineError {
+    /// The error of `analysis`.
+    pub fn new(analysis: &'static str, kind: AnalysisError) -> Self {
+        Self { analysis, state: kind.state().to_vec(), message: kind.to_string(), kind: Box::new(kind) }
+    }
+
+    /// Whether the input is at fault (an option that does not fit the computed orbit, named
+    /// by its field) rather than the computation: the CLI's exit code 2, not 1.
+    pub fn is_bad_input(&self) -> bool {
+        matches!(*self.kind, AnalysisError::InvalidOption(_))
+    }
+}
+
+/// The engine's error for `analysis` from an analysis error or an integrator's, with the
+/// physical cause added (see `diagnose`).
+fn failed<'a, E: Into<AnalysisError>>(drr: &'a Drr, analysis: &'static str) -> impl Fn(E) -> EngineError + 'a {
+    move |e| EngineError::new(analysis, diagnose(drr, e))
+}
+
+fn non_finite(path: &str, section: &'static str) -> EngineError {
+    EngineError::new(section, AnalysisError::NonFinite { path: path.to_string() })
+}
+
+/// Adds the physical cause to a failure at a state where one is known, and only where it is
+/// true.
 ///
 /// - v falling to 0 in finite time: with dv/dt = −γ² G and G > 0 at v → 0, e^w decreases
 ///   linearly to 0 and w = ln v → −∞: the block stops. That needs a friction law bounded below
@@ -92,49 +133,48 @@ fn max_step(drr: &Drr) -> f64 {
 /// - An arrest deeper than doubles reach: ln v falls towards its floor, the slow manifold's
 ///   w at this (u, θ); below w = −700, v = e^w and the rate γ² e^{−w} leave the range of
 ///   doubles although the solution is smooth.
-fn diagnose(drr: &Drr, mut error: SolverError) -> SolverError {
-    if let [u, w, theta] = error.state[..] {
-        let g = drr.manifold_offset(&[u, w, theta]);
-        let floor = drr.manifold_w(u, theta);
-        if w < -10.0 && g > 0.0 && floor.is_none() {
-            error.message.push_str(&format!(
-                " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0 and no slow manifold \
-                 below it): the block stops, which the integration in ln v cannot pass]",
-                w.exp()
-            ));
-        } else if let Some(floor) = floor.filter(|f| *f < -700.0 && w < 0.0) {
-            error.message.push_str(&format!(
-                " [the arrest is deeper than double precision reaches: ln v falls towards its floor {floor:.1} \
-                 (the slow manifold at u = {u:.4e}, θ = {theta:.4e}), below −700, where v = e^w and the rate \
-                 γ²e^(−w) leave the range of doubles]"
-            ));
+fn diagnose<E: Into<AnalysisError>>(drr: &Drr, error: E) -> AnalysisError {
+    let mut error = error.into();
+    let cause = match *error.state() {
+        [u, w, theta] => {
+            let g = drr.manifold_offset(&[u, w, theta]);
+            let floor = drr.manifold_w(u, theta);
+            if w < -10.0 && g > 0.0 && floor.is_none() {
+                Some(format!(
+                    " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0 and no slow manifold \
+                     below it): the block stops, which the integration in ln v cannot pass]",
+                    w.exp()
+                ))
+            } else {
+                floor.filter(|f| *f < -700.0 && w < 0.0).map(|floor| {
+                    format!(
+                        " [the arrest is deeper than double precision reaches: ln v falls towards its floor {floor:.1} \
+                         (the slow manifold at u = {u:.4e}, θ = {theta:.4e}), below −700, where v = e^w and the rate \
+                         γ²e^(−w) leave the range of doubles]"
+                    )
+                })
+            }
         }
+        _ => None,
+    };
+    if let (Some(cause), Some(message)) = (cause, error.message_mut()) {
+        message.push_str(&cause);
     }
     error
-}
-
-fn non_finite(what: &str) -> SolverError {
-    SolverError {
-        solver: "stickslip",
-        kind: ErrorKind::Other,
-        t: 0.0,
-        state: Vec::new(),
-        flag: 0,
-        message: format!("the {what} section contains a non-finite number; refusing to report it"),
-    }
 }
 
 /// Runs the "cycle" analysis with the scene's solver, start and cycle options on `drr`'s
 /// parameters (which may differ from the scene's, e.g. in a γ scan), keeping the trajectory of
 /// the last `trajectory_cycles` cycles. `stable` is the Hopf verdict on the fixed point.
-/// Returns the report, the integrator's name, its Butcher tables and statistics.
+/// Returns the report, the integrator's name, its Butcher tables and statistics; a failure
+/// carries its physical cause where one is known.
 pub fn cycle_with(
     scene: &Scene,
     drr: &Drr,
     o: &CycleOptions,
     trajectory_cycles: usize,
     stable: bool,
-) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), SolverError> {
+) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
     let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
     let settings = cycle::CycleSettings {
         tolerance: o.tolerance.unwrap_or(defaults.tolerance),
@@ -153,7 +193,7 @@ pub fn cycle_with(
 
 /// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
 /// "noise" analysis) use every core.
-pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, SolverError> {
+pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, EngineError> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     run_with(scene, scene_json, threads, &|_, _| {})
 }
@@ -165,7 +205,7 @@ pub fn run_with(
     scene_json: serde_json::Value,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Report, SolverError> {
+) -> Result<Report, EngineError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
@@ -176,7 +216,7 @@ pub fn run_with(
             let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
             let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
             let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
-            Some(cycle_with(scene, &drr, o, keep, stable)?)
+            Some(cycle_with(scene, &drr, o, keep, stable).map_err(failed(&drr, "cycle"))?)
         }
         None => None,
     };
@@ -192,8 +232,8 @@ pub fn run_with(
             max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
             ..defaults
         };
-        let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial)?;
-        let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(|e| diagnose(&drr, e))?;
+        let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial).map_err(failed(&drr, "shooting"))?;
+        let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(failed(&drr, "shooting"))?;
         if cycle_report.is_none() {
             (integrator_name, tables) = (integ.name().to_string(), shooting_tables);
         }
@@ -213,16 +253,16 @@ pub fn run_with(
         (None, None)
     };
     if shooting_report.as_ref().is_some_and(|r| !r.is_finite()) {
-        return Err(non_finite("shooting"));
+        return Err(non_finite("shooting", "shooting"));
     }
     if continuation_report.as_ref().is_some_and(|r| !r.is_finite()) {
-        return Err(non_finite("continuation"));
+        return Err(non_finite("continuation", "continuation"));
     }
     if linear.as_ref().is_some_and(|h| !h.is_finite()) {
-        return Err(non_finite("hopf"));
+        return Err(non_finite("hopf", "hopf"));
     }
     if cycle_report.as_ref().is_some_and(|c| !c.is_finite()) {
-        return Err(non_finite("cycle"));
+        return Err(non_finite("cycle", "cycle"));
     }
     let asymptotics = match &a.asymptotics {
         Some(o) => {
@@ -230,19 +270,19 @@ pub fn run_with(
             let mut cycle_at = |drr: &Drr, start: [f64; 3], stable: bool| {
                 Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, stable)?.0)
             };
-            Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o)?)
+            Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o).map_err(failed(&drr, "asymptotics"))?)
         }
         None => None,
     };
     if let Some(path) = asymptotics.as_ref().and_then(|r| finite::first_non_finite(r, "asymptotics")) {
-        return Err(non_finite(&path));
+        return Err(non_finite(&path, "asymptotics"));
     }
     let lyapunov = match &a.lyapunov {
-        Some(o) => Some(lyapunov::analyse(&scene.params, &scene.solver, &mut |drr, spec, y0| variational_integrator(drr, spec, y0), cycle_report.as_ref(), o)?),
+        Some(o) => Some(lyapunov::analyse(&scene.params, &scene.solver, &mut |drr, spec, y0| variational_integrator(drr, spec, y0), cycle_report.as_ref(), o).map_err(failed(&drr, "lyapunov"))?),
         None => None,
     };
     if let Some(path) = lyapunov.as_ref().and_then(|r| finite::first_non_finite(r, "lyapunov")) {
-        return Err(non_finite(&path));
+        return Err(non_finite(&path, "lyapunov"));
     }
     // The trajectory recorded only for the analyses above is not reported.
     if a.trajectory_cycles.is_none() {
@@ -260,7 +300,7 @@ pub fn run_with(
         slip_duration: v.slip_duration * u.time_scale,
     });
     if physical.as_ref().is_some_and(|p| ![p.period, p.t0, p.slip_duration].iter().chain(&p.slip_half_width).all(|v| v.is_finite())) {
-        return Err(non_finite("physical"));
+        return Err(non_finite("physical", "physical"));
     }
     let paper = match (&linear, a.paper) {
         (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
@@ -270,9 +310,9 @@ pub fn run_with(
         Some(options) => {
             let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
             let model = NoiseModel::Drr { system: drr, amplitudes };
-            let report = noise::run(&model, &scene.initial, options, threads, progress).map_err(|e| diagnose(&drr, e))?;
+            let report = noise::run(&model, &scene.initial, options, threads, progress).map_err(failed(&drr, "noise"))?;
             if !report.is_finite() {
-                return Err(non_finite("noise"));
+                return Err(non_finite("noise", "noise"));
             }
             Some(report)
         }
@@ -328,4 +368,34 @@ fn variational_integrator_with_tables(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]
     atol.extend([spec.rtol; 9]);
     let z0 = Variational::<Drr, 3>::initial(y0);
     integrator_for(Variational::<Drr, 3>::new(drr), &drr, spec, &z0, Tolerance::PerComponent(atol))
+}
+
+/// Runs a saddle-node or van der Pol scene (the noise analysis alone) on `threads` threads;
+/// `progress(done, total)` after each realisation.
+pub fn run_other(
+    scene: &OtherScene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelReport, EngineError> {
+    let started = std::time::Instant::now();
+    let a = &scene.noise.amplitudes;
+    let (model, initial) = match &scene.model {
+        OtherModel::SaddleNode { params, x0 } => (NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] }, vec![*x0]),
+        OtherModel::VanDerPol { params, initial } => {
+            (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
+        }
+    };
+    let noise = noise::run(&model, &initial, &scene.noise, threads, progress).map_err(|e| EngineError::new("noise", e))?;
+    if !noise.is_finite() {
+        return Err(EngineError::new("noise", AnalysisError::NonFinite { path: "noise".into() }));
+    }
+    Ok(ModelReport {
+        stickslip_version: env!("CARGO_PKG_VERSION"),
+        name: scene.name.clone(),
+        scene: scene_json,
+        model: scene.model.clone(),
+        noise,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
 }

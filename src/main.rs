@@ -5,9 +5,10 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::io::IsTerminal;
+use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
-use stickslip::model::robertson::{self, ExampleRun};
+use stickslip::robertson_examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
 
 #[derive(Parser)]
@@ -185,6 +186,12 @@ fn robertson_command() -> Result<(), String> {
 /// A failure and its exit code: 2 for bad input, 1 for a failed computation.
 struct Failure(u8, String);
 
+/// A failed run of the scene `name`: exit code 2 when an option does not fit the computed
+/// orbit (bad input, the field named), 1 otherwise.
+fn failed(name: &str, error: engine::EngineError) -> Failure {
+    Failure(if error.is_bad_input() { 2 } else { 1 }, format!("scene {name}: {error}"))
+}
+
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
 fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads: Option<usize>) -> Result<(), Failure> {
@@ -202,11 +209,11 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads:
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
-            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
         scene::AnyScene::Other(scene) => {
-            let report = noise_report::run_scene(scene, echo, threads, &update).map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))?;
+            let report = engine::run_other(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
     };
@@ -518,14 +525,14 @@ fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Res
         }
     }
     let rows: Vec<_> = summary.rows().collect();
-    let count = |v: &str| rows.iter().filter(|r| r.verdict == v).count();
+    let count = |v: Verdict| rows.iter().filter(|r| r.verdict == v).count();
     println!(
         "claims: {} agree, {} roughly, {} disagree, {} hold, {} do not hold; not yet reproduced: {}",
-        count("agrees"),
-        count("roughly"),
-        count("disagrees"),
-        count("holds"),
-        count("does not hold"),
+        count(Verdict::Agrees),
+        count(Verdict::Roughly),
+        count(Verdict::Disagrees),
+        count(Verdict::Holds),
+        count(Verdict::DoesNotHold),
         if summary.pending.is_empty() { "none".to_string() } else { summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ") }
     );
     println!("summary: {} and summary.html ({:.1} s)", out.join("summary.md").display(), summary.wall_time_s);

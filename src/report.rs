@@ -7,9 +7,9 @@ use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
-use crate::analysis::paper::Claim;
+use crate::analysis::claims::Claim;
 use crate::integrate::Stats;
-use crate::scene::{Dimensional, Method, Units};
+use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -252,7 +252,8 @@ impl Report {
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";
             for c in claims {
-                s += &format!("  {:<9} {} — paper {}, ours {:.6} ({:+.1} %)\n", c.verdict, c.claim, c.paper, c.ours, 100.0 * c.relative_difference);
+                let relative = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+                s += &format!("  {:<9} {} — paper {}, ours {:.6}{relative}\n", c.verdict, c.claim, c.reference, c.ours);
             }
         }
         s
@@ -275,4 +276,37 @@ pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// The report of a saddle-node or van der Pol scene.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelReport {
+    /// stickslip version.
+    pub stickslip_version: &'static str,
+    /// Scene name.
+    pub name: String,
+    /// The scene as given.
+    pub scene: serde_json::Value,
+    /// The model and its start.
+    pub model: OtherModel,
+    /// The noise analysis.
+    pub noise: NoiseReport,
+    /// Wall-clock time of the computation (seconds).
+    pub wall_time_s: f64,
+}
+
+impl ModelReport {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+
+    /// A readable summary for the terminal.
+    pub fn summary(&self) -> String {
+        let model = match &self.model {
+            OtherModel::SaddleNode { params, x0 } => format!("saddle-node, μ0 = {}, r = {}, x(0) = {x0}", params.mu0, params.r),
+            OtherModel::VanDerPol { params, initial } => format!("van der Pol, β = {}, a = {}, start {initial:?}", params.beta, params.a),
+        };
+        format!("scene {}: {model}; {:.3} s\n{}", self.name, self.wall_time_s, self.noise.summary())
+    }
 }

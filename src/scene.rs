@@ -702,12 +702,12 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
             }
             "asymptotics" => {
                 let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of("asymptotics")?)
-                    .map_err(|(sub, message)| err(&format!("{field}.asymptotics{sub}"), message))?;
+                    .map_err(|e| err(&e.path_below(&format!("{field}.asymptotics")), e.message))?;
                 out.asymptotics = Some(o);
             }
             "lyapunov" => {
                 let o = crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
-                    .map_err(|(sub, message)| err(&format!("{field}.lyapunov{sub}"), message))?;
+                    .map_err(|e| err(&e.path_below(&format!("{field}.lyapunov")), e.message))?;
                 out.lyapunov = Some(o);
             }
             "shooting" => {
@@ -771,7 +771,7 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                     err(&format!("{field}.noise{sub}"), e.into_inner().to_string())
                 })?;
                 let (kind, dim, gamma2) = model;
-                noise_options::validate(&o, dim, kind, gamma2).map_err(|(f, m)| err(&format!("{field}.noise.{f}"), m))?;
+                noise_options::validate(&o, dim, kind, gamma2).map_err(|e| err(&e.path_below(&format!("{field}.noise")), e.message))?;
                 out.noise = Some(o);
             }
             other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),

@@ -186,6 +186,13 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     Ok(Built { integrator, tables })
 }
 
+/// [`build_ode`] with the method's defaults (no Butcher table; the system is not assumed
+/// autonomous): the integrator alone. How the analyses that fix their own method (noise,
+/// the slow flow, the fast system) get theirs.
+pub fn build_default<'s, S: OdeSystem + 's>(method: Method, system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Box<dyn Integrator + 's>, SolverError> {
+    Ok(build_ode(method, &MethodSettings::default(), system, t0, y0, options)?.integrator)
+}
+
 /// ARKStep's settings for every ARKStep method (see [`build`]).
 fn ark_settings() -> ArkSettings {
     ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() }

@@ -10,13 +10,10 @@
 //! a periodic orbit their periods must agree within 1e3·rtol.
 
 use crate::analysis::cycle::CycleStatus;
-use crate::engine;
-use crate::integrate::ErrorKind;
+use crate::{engine, parallel};
 use crate::scene::{self, Method};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// One cell of the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -227,7 +224,7 @@ pub fn run_cell(cell: &Cell) -> Outcome {
     let text = scene_text(cell);
     let outcome = std::panic::catch_unwind(|| {
         let scene = scene::parse(&text, "stress").map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
-        engine::run(&scene, serde_json::Value::Null).map_err(|e| (format!("{:?}", e.kind), e.to_string()))
+        engine::run(&scene, serde_json::Value::Null).map_err(|e| (e.kind.label(), e.to_string()))
     });
     match outcome {
         Ok(Ok(report)) => {
@@ -279,22 +276,7 @@ pub struct Summary {
 
 /// Runs the grid on `threads` threads; `progress` is called after each cell.
 pub fn run(cells: &[Cell], threads: usize, progress: &(dyn Fn(usize, usize) + Sync)) -> (Vec<Outcome>, Summary) {
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Outcome>>> = Mutex::new(vec![None; cells.len()]);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(cell) = cells.get(i) else { break };
-                let outcome = run_cell(cell);
-                results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(outcome);
-                progress(done.fetch_add(1, Ordering::Relaxed) + 1, cells.len());
-            });
-        }
-    });
-    let outcomes: Vec<Outcome> =
-        results.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|o| o.expect("every cell ran")).collect();
+    let outcomes = parallel::map(cells.len(), threads, progress, |i| run_cell(&cells[i]));
     let summary = summarise(cells, &outcomes);
     (outcomes, summary)
 }
@@ -343,7 +325,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
                 }
             }
             Outcome::Error { kind, message } => {
-                if kind == &format!("{:?}", ErrorKind::Other) && message.contains("non-finite") {
+                if kind == "NonFinite" {
                     s.nan += 1;
                     s.defects.push(format!("{cell:?}: {message}"));
                 }

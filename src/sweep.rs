@@ -7,13 +7,12 @@
 //! of an uninterrupted one. Rows are appended as points finish (one write per line); `merge`
 //! sorts them by index and checks that none is missing.
 
-use crate::engine;
+use crate::{engine, parallel};
 use crate::scene;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// One swept parameter: NAME=START:STOP:COUNT[:log].
@@ -202,30 +201,15 @@ pub fn run(
         .filter(|(i, _)| shard.is_none_or(|s| i % s.n == s.k - 1) && !done.contains(i))
         .collect();
     let file = Mutex::new(std::fs::OpenOptions::new().append(true).create(true).open(out)?);
-    let next = AtomicUsize::new(0);
-    let finished = AtomicUsize::new(0);
-    let failure: Mutex<Option<std::io::Error>> = Mutex::new(None);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some((index, params)) = todo.get(i) else { break };
-                let row = run_point(base, *index, params);
-                let line = serde_json::to_string(&row).expect("a row serialises") + "\n";
-                let mut f = file.lock().unwrap_or_else(|e| e.into_inner());
-                if let Err(e) = f.write_all(line.as_bytes()).and_then(|_| f.flush()) {
-                    *failure.lock().unwrap_or_else(|e| e.into_inner()) = Some(e);
-                    break;
-                }
-                drop(f);
-                progress(finished.fetch_add(1, Ordering::Relaxed) + 1, todo.len());
-            });
-        }
-    });
-    match failure.into_inner().unwrap_or_else(|e| e.into_inner()) {
-        Some(e) => Err(e),
-        None => Ok(todo.len()),
-    }
+    // Each row is written as soon as its point finishes (what --resume reads back).
+    parallel::try_map(todo.len(), threads, progress, |i| {
+        let (index, params) = &todo[i];
+        let row = run_point(base, *index, params);
+        let line = serde_json::to_string(&row).expect("a row serialises") + "\n";
+        let mut f = file.lock().unwrap_or_else(|e| e.into_inner());
+        f.write_all(line.as_bytes()).and_then(|_| f.flush())
+    })?;
+    Ok(todo.len())
 }
 
 /// Merges shard outputs: rows sorted by index, duplicates dropped (they are identical), and

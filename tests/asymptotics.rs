@@ -16,7 +16,7 @@ fn run_file(name: &str) -> Report {
 }
 
 fn verdict(a: &AsymptoticsReport, start: &str) -> &'static str {
-    a.claims.iter().find(|c| c.claim.starts_with(start)).unwrap_or_else(|| panic!("no claim \"{start}\"")).verdict
+    a.claims.iter().find(|c| c.claim.starts_with(start)).unwrap_or_else(|| panic!("no claim \"{start}\"")).verdict.as_str()
 }
 
 /// Non-decreasing, and increasing overall (in the slip arrest at γ = 1e8, steps of 1e-17

@@ -232,7 +232,7 @@ fn shipped_noise_scenes_run_in_reduced_form() {
         let text = json.to_string();
         let report = match scene::parse_any(&text, &path).unwrap() {
             AnyScene::Drr(s) => serde_json::to_value(stickslip::engine::run_with(&s, json.clone(), 2, &|_, _| {}).unwrap()).unwrap(),
-            AnyScene::Other(s) => serde_json::to_value(noise::report::run_scene(&s, json.clone(), 2, &|_, _| {}).unwrap()).unwrap(),
+            AnyScene::Other(s) => serde_json::to_value(stickslip::engine::run_other(&s, json.clone(), 2, &|_, _| {}).unwrap()).unwrap(),
         };
         let points = report["noise"]["correlation_time"].as_array().unwrap();
         assert_eq!(points.len(), 12, "{name}");

@@ -4,7 +4,8 @@
 use stickslip::integrate::{
     ErrorKind, ImexSystem, JacobianMatrix, OdeSystem, Options, Roots, StepEvent, Task, Tolerance,
 };
-use stickslip::model::robertson::{self, Robertson};
+use stickslip::model::robertson::Robertson;
+use stickslip::robertson_examples as robertson;
 use stickslip::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
 
 mod common;

@@ -1,7 +1,8 @@
 //! Claims set beside our numbers: {claim, reference (the paper's value or a prediction), ours,
-//! difference, verdict}, with the criterion stated in the claim itself. Used by the
-//! "asymptotics" and "lyapunov" analyses. Nothing is tuned to a reference: a criterion is fixed
-//! by what the claim says (e.g. "about", "→", "γ-independent"), never by our result.
+//! difference, verdict}, with the criterion stated in the claim itself. The one claim type of
+//! the crate: the "paper" comparison, the "asymptotics" and "lyapunov" analyses and
+//! `reproduce`'s summary use it. Nothing is tuned to a reference: a criterion is fixed by what
+//! the claim says (e.g. "about", "→", "γ-independent"), never by our result.
 
 use serde::Serialize;
 
@@ -16,6 +17,57 @@ pub enum Source {
     Prediction,
     /// A consistency check between two independent computations of ours.
     Check,
+}
+
+/// How our value stands against a claim. Serialised (and displayed) as "agrees", "roughly",
+/// "disagrees", "holds" and "does not hold".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+pub enum Verdict {
+    /// Within the claim's tolerance.
+    #[serde(rename = "agrees")]
+    Agrees,
+    /// Within four times the tolerance.
+    #[serde(rename = "roughly")]
+    Roughly,
+    /// Beyond it (or the wrong sign or side).
+    #[serde(rename = "disagrees")]
+    Disagrees,
+    /// A qualitative claim that holds.
+    #[serde(rename = "holds")]
+    Holds,
+    /// A qualitative claim that does not hold.
+    #[serde(rename = "does not hold")]
+    DoesNotHold,
+}
+
+impl Verdict {
+    /// The verdict in words, as serialised.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Agrees => "agrees",
+            Verdict::Roughly => "roughly",
+            Verdict::Disagrees => "disagrees",
+            Verdict::Holds => "holds",
+            Verdict::DoesNotHold => "does not hold",
+        }
+    }
+
+    /// A qualitative claim's verdict.
+    pub fn holds(holds: bool) -> Self {
+        if holds { Verdict::Holds } else { Verdict::DoesNotHold }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for Verdict {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
 }
 
 /// One claim and our value for it.
@@ -35,14 +87,14 @@ pub struct Claim {
     pub relative_difference: Option<f64>,
     /// The rule behind the verdict, in words.
     pub criterion: String,
-    /// "agrees", "roughly" or "disagrees".
-    pub verdict: &'static str,
+    /// Agrees, roughly or disagrees.
+    pub verdict: Verdict,
     /// What our number is and how it was obtained (finite-γ corrections, caveats).
     pub note: String,
 }
 
 impl Claim {
-    fn new(claim: &str, source: Source, reference: f64, ours: f64, criterion: String, verdict: &'static str, note: String) -> Self {
+    fn new(claim: &str, source: Source, reference: f64, ours: f64, criterion: String, verdict: Verdict, note: String) -> Self {
         let difference = ours - reference;
         let relative_difference = (reference != 0.0).then(|| difference / reference.abs());
         Claim { claim: claim.into(), source, reference, ours, difference, relative_difference, criterion, verdict, note }
@@ -66,13 +118,13 @@ impl Claim {
 
     /// A sign claim: agrees if ours < 0 (reference 0), disagrees otherwise.
     pub fn negative(claim: &str, source: Source, ours: f64, note: String) -> Self {
-        let verdict = if ours < 0.0 { "agrees" } else { "disagrees" };
+        let verdict = if ours < 0.0 { Verdict::Agrees } else { Verdict::Disagrees };
         Self::new(claim, source, 0.0, ours, "agrees if ours < 0".into(), verdict, note)
     }
 
     /// A lower bound: agrees if ours ≥ reference, disagrees otherwise.
     pub fn at_least(claim: &str, source: Source, reference: f64, ours: f64, note: String) -> Self {
-        let verdict = if ours >= reference { "agrees" } else { "disagrees" };
+        let verdict = if ours >= reference { Verdict::Agrees } else { Verdict::Disagrees };
         Self::new(claim, source, reference, ours, "agrees if ours ≥ reference".into(), verdict, note)
     }
 
@@ -82,13 +134,13 @@ impl Claim {
     }
 }
 
-fn grade(deviation: f64, tol: f64) -> &'static str {
+fn grade(deviation: f64, tol: f64) -> Verdict {
     if deviation <= tol {
-        "agrees"
+        Verdict::Agrees
     } else if deviation <= 4.0 * tol {
-        "roughly"
+        Verdict::Roughly
     } else {
-        "disagrees"
+        Verdict::Disagrees
     }
 }
 
@@ -136,7 +188,7 @@ mod tests {
         assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.3, 0.1, "test", String::new()).verdict, "roughly");
         assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.5, 0.1, "test", String::new()).verdict, "disagrees");
         let n = Claim::negative("c < 0", Source::Paper, -0.2, String::new());
-        assert_eq!((n.verdict, n.relative_difference), ("agrees", None));
+        assert_eq!((n.verdict.as_str(), n.relative_difference), ("agrees", None));
         assert_eq!(Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict, "disagrees");
         assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict, "agrees");
         assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict, "disagrees");

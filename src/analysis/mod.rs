@@ -2,6 +2,7 @@
 
 pub mod continuation;
 pub mod cycle;
+pub mod error;
 pub mod events;
 pub mod hopf;
 pub mod noise;
@@ -15,3 +16,5 @@ pub mod orbit;
 pub mod series;
 pub mod period_map;
 pub mod shooting;
+
+pub use error::{AnalysisError, InvalidOption};

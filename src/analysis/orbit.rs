@@ -7,6 +7,7 @@
 //! on the slow manifold to the solver's accuracy.
 
 use super::cycle::{CycleReport, CycleStatus};
+use super::AnalysisError;
 
 /// One period of the cycle; samples in time order (non-decreasing: in the slip arrest at
 /// γ ≳ 1e7 steps of 1e-17 fall below the recorded clock's resolution and neighbours can share
@@ -32,21 +33,23 @@ pub struct Orbit {
 }
 
 impl Orbit {
-    /// The last recorded cycle of a periodic cycle analysis; Err says why there is none.
-    pub fn from_cycle(cycle: &CycleReport) -> Result<Self, String> {
+    /// The last recorded cycle of a periodic cycle analysis; [`AnalysisError::NoLimitCycle`]
+    /// says why there is none.
+    pub fn from_cycle(cycle: &CycleReport) -> Result<Self, AnalysisError> {
+        let none = |reason: String| AnalysisError::NoLimitCycle { reason };
         if cycle.status != CycleStatus::Periodic {
-            return Err(format!("the cycle analysis found no period-1 limit cycle (status {:?})", cycle.status));
+            return Err(none(format!("the cycle analysis found no period-1 limit cycle (status {:?})", cycle.status)));
         }
-        let tr = cycle.trajectory.last().ok_or("the cycle analysis recorded no trajectory")?;
+        let tr = cycle.trajectory.last().ok_or_else(|| none("the cycle analysis recorded no trajectory".into()))?;
         let n = tr.t.len();
         if n < 8 || tr.v.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
-            return Err(format!("the recorded cycle has {n} samples or a velocity that is not positive and finite"));
+            return Err(none(format!("the recorded cycle has {n} samples or a velocity that is not positive and finite")));
         }
         let period = tr.t[n - 1];
         let argmax = (0..n).fold(0, |b, i| if tr.v[i] > tr.v[b] { i } else { b });
         let argmin = (0..n).fold(0, |b, i| if tr.v[i] < tr.v[b] { i } else { b });
         if argmin <= argmax {
-            return Err("the v minimum does not follow the slip in the recorded cycle".into());
+            return Err(none("the v minimum does not follow the slip in the recorded cycle".into()));
         }
         // From the v minimum to the end of the cycle, then the start of the cycle (one period
         // later) up to the v minimum; t = 0 and t = period are the same state. Times from the
@@ -62,8 +65,14 @@ impl Orbit {
         let peak = n - argmin + argmax - 1;
         // The cycle ends at its upward crossing of v = 1 (a located event, t = period).
         let up = n - 1 - argmin;
-        let down = (peak..s.len()).find(|&k| w[k] < 0.0).ok_or("no downward crossing of v = 1 after the peak")?;
+        let down = (peak..s.len()).find(|&k| w[k] < 0.0).ok_or_else(|| none("no downward crossing of v = 1 after the peak".into()))?;
         Ok(Orbit { period, s, u, w, theta, peak, up, down })
+    }
+
+    /// [`Orbit::from_cycle`] of the scene's cycle analysis, if it ran one.
+    pub fn of_scene(cycle: Option<&CycleReport>) -> Result<Self, AnalysisError> {
+        let none = AnalysisError::NoLimitCycle { reason: "the scene ran no cycle analysis".into() };
+        cycle.ok_or(none).and_then(Self::from_cycle)
     }
 
     /// Number of samples.

@@ -6,35 +6,13 @@
 
 use super::cycle::CycleValues;
 use super::hopf::HopfReport;
+use super::claims::{Claim, Source};
 use crate::model::{DrrParams, Friction};
-use serde::Serialize;
 
-/// One claim of the paper and our value for it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Claim {
-    /// The claim, in words.
-    pub claim: String,
-    /// The paper's value.
-    pub paper: f64,
-    /// Ours, for this scene.
-    pub ours: f64,
-    /// (ours − paper)/paper.
-    pub relative_difference: f64,
-    /// "agrees" (within 5 %), "roughly" (within 20 %) or "disagrees".
-    pub verdict: &'static str,
-    /// What our number is and how it was obtained.
-    pub note: String,
-}
-
-/// A claim with its verdict: "agrees" within 5 %, "roughly" within 20 %, else "disagrees".
+/// A claim of the paper with its verdict: agrees within 5 %, roughly within 20 %, else
+/// disagrees.
 pub fn claim(claim: &str, paper: f64, ours: f64, note: String) -> Claim {
-    let relative_difference = (ours - paper) / paper;
-    let verdict = match relative_difference.abs() {
-        d if d <= 0.05 => "agrees",
-        d if d <= 0.20 => "roughly",
-        _ => "disagrees",
-    };
-    Claim { claim: claim.into(), paper, ours, relative_difference, verdict, note }
+    Claim::relative(claim, Source::Paper, paper, ours, 0.05, note)
 }
 
 /// The claims that one scene can test.

@@ -12,8 +12,7 @@ pub mod trajectory;
 pub use input::{read_user_data, Trajectory, UserCycle, UserData};
 pub use trajectory::{against_trajectory, CompareError, TrajectoryComparison, Verdict};
 
-use crate::engine;
-use crate::integrate::SolverError;
+use crate::engine::{self, EngineError};
 use crate::report::Report;
 use crate::scene::{Method, Scene, SolverSpec};
 use serde::Serialize;
@@ -160,7 +159,7 @@ pub struct ReportComparison {
 }
 
 /// Compares the `cycle` keys a user's report has with the reference run of the scene.
-pub fn against_report(scene: &Scene, user: &UserCycle, tolerance: f64) -> Result<ReportComparison, SolverError> {
+pub fn against_report(scene: &Scene, user: &UserCycle, tolerance: f64) -> Result<ReportComparison, EngineError> {
     let mut s = scene.clone();
     s.solver.method = Method::CvodeBdf;
     s.solver.table = None;

@@ -8,8 +8,6 @@ use crate::report::Report;
 use crate::{engine, scene};
 use serde::Serialize;
 use serde_json::{json, Value};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// data/scenes/fig1.json: γ = 1e3, ξ = 0.7, ε = 0.72.
 pub const FIG1: &str = include_str!("../../data/scenes/fig1.json");
@@ -54,26 +52,12 @@ pub fn variant(base: &Value, name: &str, params: &[(&str, f64)], log_friction: b
 pub fn run_scene(scene_json: &Value) -> Result<Report, ReproduceError> {
     let name = scene_json["name"].as_str().unwrap_or("?").to_string();
     let s = scene::parse(&scene_json.to_string(), &name).map_err(|e| ReproduceError::Scene(e.to_string()))?;
-    engine::run(&s, scene_json.clone()).map_err(|source| ReproduceError::Solver { case: name, source })
+    engine::run(&s, scene_json.clone()).map_err(|source| ReproduceError::Run { case: name, source })
 }
 
 /// Runs `jobs` on `threads` worker threads, results in input order, reporting progress.
 pub fn parallel<T: Sync, R: Send>(ctx: &Context, jobs: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<R>>> = Mutex::new((0..jobs.len()).map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..ctx.threads.clamp(1, jobs.len().max(1)) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(job) = jobs.get(i) else { break };
-                let r = f(job);
-                results.lock().unwrap_or_else(|e| e.into_inner())[i] = Some(r);
-                ctx.progress.points(done.fetch_add(1, Ordering::Relaxed) + 1, jobs.len());
-            });
-        }
-    });
-    results.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|r| r.expect("every job ran")).collect()
+    crate::parallel::map(jobs.len(), ctx.threads, &|done, total| ctx.progress.points(done, total), |i| f(&jobs[i]))
 }
 
 /// Runs several scenes in parallel; every one must succeed.

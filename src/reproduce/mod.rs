@@ -22,7 +22,7 @@ pub mod noise_cases;
 pub mod summary;
 
 use crate::figure::FigureError;
-use crate::integrate::SolverError;
+use crate::engine::EngineError;
 use std::path::{Path, PathBuf};
 pub use summary::{Row, Summary};
 
@@ -34,11 +34,11 @@ pub enum ReproduceError {
     Scene(String),
     /// A run failed.
     #[error("scene {case}: {source}")]
-    Solver {
+    Run {
         /// The scene's name.
         case: String,
-        /// The typed solver error.
-        source: SolverError,
+        /// The engine's error.
+        source: EngineError,
     },
     /// A run ended without what the figure needs (e.g. no periodic cycle).
     #[error("{0}")]

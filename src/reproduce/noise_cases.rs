@@ -2,7 +2,7 @@
 //! `stickslip run` would, with fewer realisations in the reduced (test) version.
 
 use super::{Context, ReproduceError};
-use crate::analysis::noise::{self, CorrelationPoint, NoiseReport};
+use crate::analysis::noise::{CorrelationPoint, NoiseReport};
 use crate::scene::{self, AnyScene};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};
@@ -49,7 +49,7 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
         return Ok(done.clone());
     }
     let name = json["name"].as_str().unwrap_or("?").to_string();
-    let failed = |source| ReproduceError::Solver { case: name.clone(), source };
+    let failed = |source| ReproduceError::Run { case: name.clone(), source };
     let progress = |done, total| ctx.progress.points(done, total);
     let (report, noise) = match scene::parse_any(&json.to_string(), &name).map_err(|e| ReproduceError::Scene(e.to_string()))? {
         AnyScene::Drr(s) => {
@@ -58,7 +58,7 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
             (serde_json::to_value(&r).expect("a report serialises"), n)
         }
         AnyScene::Other(s) => {
-            let r = noise::report::run_scene(&s, json.clone(), ctx.threads, &progress).map_err(failed)?;
+            let r = crate::engine::run_other(&s, json.clone(), ctx.threads, &progress).map_err(failed)?;
             (serde_json::to_value(&r).expect("a report serialises"), r.noise)
         }
     };

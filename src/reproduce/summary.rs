@@ -2,7 +2,8 @@
 //! its value, ours and a verdict; the figures not yet reproduced. As JSON, Markdown and HTML.
 
 use super::{Entry, Output, Pending, ReproduceError, PENDING};
-use crate::analysis::paper::{self, Claim};
+use crate::analysis::claims::{Claim, Source, Verdict};
+use crate::analysis::paper;
 use crate::figure::svg::escape;
 use serde::Serialize;
 
@@ -17,22 +18,24 @@ pub struct Row {
     pub paper: String,
     /// Ours.
     pub ours: String,
-    /// "agrees" (within 5 %), "roughly" (within 20 %), "disagrees"; "holds" or "does not
-    /// hold" for a qualitative claim.
-    pub verdict: String,
+    /// Agrees (within 5 %), roughly (within 20 %), disagrees; holds or does not hold for a
+    /// qualitative claim.
+    pub verdict: Verdict,
     /// How our value was obtained.
     pub note: String,
 }
 
 impl Row {
-    /// A row from one of [`crate::analysis::paper`]'s claims.
+    /// A row from one of [`crate::analysis::paper`]'s claims (its value to four decimals and
+    /// the relative difference; the criterion, 5 %, is the summary's).
     pub fn from_claim(figure: &str, c: &Claim) -> Self {
+        let rel = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
         Self {
             figure: figure.into(),
             claim: c.claim.clone(),
-            paper: short(c.paper),
-            ours: format!("{:.4} ({:+.1} %)", c.ours, 100.0 * c.relative_difference),
-            verdict: c.verdict.into(),
+            paper: short(c.reference),
+            ours: format!("{:.4}{rel}", c.ours),
+            verdict: c.verdict,
             note: c.note.clone(),
         }
     }
@@ -40,8 +43,7 @@ impl Row {
     /// A row from a claim of the "asymptotics" or "lyapunov" analyses
     /// ([`crate::analysis::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
     /// and criterion (in the note).
-    pub fn from_analysis(figure: &str, c: &crate::analysis::claims::Claim) -> Self {
-        use crate::analysis::claims::Source;
+    pub fn from_analysis(figure: &str, c: &Claim) -> Self {
         let source = match c.source {
             Source::Paper => "",
             Source::Prediction => " (predicted)",
@@ -53,7 +55,7 @@ impl Row {
             claim: c.claim.clone(),
             paper: format!("{}{source}", short_or_sci(c.reference)),
             ours: format!("{}{rel}", short_or_sci(c.ours)),
-            verdict: c.verdict.into(),
+            verdict: c.verdict,
             note: format!("{} Criterion: {}.", c.note, c.criterion),
         }
     }
@@ -70,7 +72,7 @@ impl Row {
             claim: claim.into(),
             paper: paper.into(),
             ours,
-            verdict: if holds { "holds" } else { "does not hold" }.into(),
+            verdict: Verdict::holds(holds),
             note,
         }
     }
@@ -235,8 +237,8 @@ impl Summary {
                 escape(&r.claim),
                 escape(&r.paper),
                 escape(&r.ours),
-                r.verdict.replace(' ', "-"),
-                escape(&r.verdict),
+                r.verdict.as_str().replace(' ', "-"),
+                escape(r.verdict.as_str()),
                 escape(&r.note)
             );
         }

@@ -8,7 +8,9 @@ use super::slow_run::{self, SlowRun};
 use super::AsymptoticsOptions;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
-use crate::integrate::{Options, Radau5, SolverError, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Options, Tolerance};
+use crate::solver::{self, Method};
 use crate::model::slow_manifold::SlowFlow;
 use crate::model::DrrParams;
 use serde::Serialize;
@@ -126,14 +128,14 @@ fn first_exceeding(orbit: &Orbit, gamma: f64, range: std::ops::Range<usize>, thr
 }
 
 /// The manifold analysis of one cycle.
-pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, SolverError> {
+pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, AnalysisError> {
     let gamma = params.gamma;
     let flow = SlowFlow::new(*params);
     let (rtol, atol) = (options.rtol, options.rtol * 1e-2);
     let y0 = [orbit.s[0], orbit.u[0], orbit.theta[0]];
-    let mut integ = Radau5::new(flow, 0.0, &y0, &Options::new(rtol, Tolerance::Scalar(atol)))?;
+    let mut integ = solver::build_default(Method::Radau5, flow, 0.0, &y0, &Options::new(rtol, Tolerance::Scalar(atol)))?;
     let probes = &orbit.s[..=orbit.peak];
-    let run: SlowRun = slow_run::run(&mut integ, &flow, 2.0 * orbit.period, probes)?;
+    let run: SlowRun = slow_run::run(integ.as_mut(), &flow, 2.0 * orbit.period, probes)?;
 
     let diff = |k: usize| run.probes[k].map(|p| [orbit.u[k] - p[0], orbit.theta[k] - p[1], orbit.w[k] - p[2]]);
     let mut dev = StickDeviation { samples: 0, max_abs_ln_v: 0.0, max_abs_u: 0.0, max_abs_theta: 0.0, max_abs_ln_v_times_gamma2: 0.0 };

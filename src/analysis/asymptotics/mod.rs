@@ -25,7 +25,7 @@ pub mod verdicts;
 use crate::analysis::claims::Claim;
 use crate::analysis::cycle::CycleReport;
 use crate::analysis::orbit::Orbit;
-use crate::integrate::SolverError;
+use crate::analysis::{AnalysisError, InvalidOption};
 use crate::model::{Drr, DrrParams};
 use serde::{Deserialize, Serialize};
 
@@ -80,10 +80,10 @@ struct RawOptions {
 }
 
 impl AsymptoticsOptions {
-    /// Parses and validates the options object; Err is (sub-field, what is wrong and what
-    /// would be valid).
-    pub fn from_json(value: serde_json::Value) -> Result<Self, (String, String)> {
-        let raw: RawOptions = serde_json::from_value(value).map_err(|e| (String::new(), e.to_string()))?;
+    /// Parses and validates the options object; the error names the field (empty: the
+    /// object) and what would be valid.
+    pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
+        let raw: RawOptions = serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
         let d = Self::default();
         let o = Self {
             gammas: raw.gammas.unwrap_or(d.gammas),
@@ -95,7 +95,7 @@ impl AsymptoticsOptions {
             series_points: raw.series_points.unwrap_or(d.series_points),
             rtol: raw.rtol.unwrap_or(d.rtol),
         };
-        let bad = |field: &str, message: String| Err((format!(".{field}"), message));
+        let bad = |field: &str, message: String| Err(InvalidOption::new(field, message));
         if o.gammas.is_empty() || o.gammas.len() > 100 {
             return bad("gammas", format!("has {} values; give 1 to 100 values of γ, e.g. [1e2, 1e4, 1e6, 1e8]", o.gammas.len()));
         }
@@ -155,7 +155,7 @@ pub struct AsymptoticsReport {
 /// Runs the brute-force "cycle" analysis (the scene's solver and cycle options, recording no
 /// trajectory) on a DRR system from a start, given the Hopf verdict "fixed point stable" (the
 /// engine's `cycle_with`).
-pub type CycleAt<'a> = dyn FnMut(&Drr, [f64; 3], bool) -> Result<CycleReport, SolverError> + 'a;
+pub type CycleAt<'a> = dyn FnMut(&Drr, [f64; 3], bool) -> Result<CycleReport, AnalysisError> + 'a;
 
 /// Runs the analysis on the model `params`, started at `initial`, whose "cycle" analysis
 /// produced `cycle`; the γ scan runs its cycles by `cycle_at`.
@@ -165,15 +165,15 @@ pub fn analyse(
     cycle_at: &mut CycleAt<'_>,
     cycle: Option<&CycleReport>,
     options: &AsymptoticsOptions,
-) -> Result<AsymptoticsReport, SolverError> {
-    let orbit = cycle.ok_or_else(|| "the scene ran no cycle analysis".to_string()).and_then(Orbit::from_cycle);
+) -> Result<AsymptoticsReport, AnalysisError> {
+    let orbit = Orbit::of_scene(cycle);
     let (manifold, matching, note) = match &orbit {
         Ok(o) => {
             let m = manifold::analyse(o, params, options)?;
             let mt = matching::analyse(o, params, options, &m.slow_samples);
             (Some(m), Some(mt), None)
         }
-        Err(why) => (None, None, Some(why.clone())),
+        Err(why) => (None, None, Some(why.clone().into_note()?)),
     };
     let scan = scan::run(params, initial, &options.gammas, cycle_at);
     let all = scan::usable(&scan, 0.0);

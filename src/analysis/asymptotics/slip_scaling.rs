@@ -17,7 +17,9 @@ use crate::analysis::events::{self, Knot};
 use crate::analysis::fit::{least_squares, power_limit, Fit, PowerLimit};
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
-use crate::integrate::{Integrator, Options, Radau5, SolverError, Task, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Integrator, Options, SolverError, Task, Tolerance};
+use crate::solver::{self, Method};
 use crate::model::fast_slip::{shifts, FastSlip};
 use crate::model::DrrParams;
 use serde::Serialize;
@@ -159,18 +161,21 @@ fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), k: u32, g: &dy
     Ok(0.5 * (a + b))
 }
 
-fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, half_width_3d: Option<f64>, spread_3d: [f64; 2]) -> Result<Result<FastCheck, String>, SolverError> {
+/// The fast system on the scene's cycle; [`AnalysisError::NotApplicable`] when it cannot be
+/// started or finds no peak (a note in the report).
+fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, half_width_3d: Option<f64>, spread_3d: [f64; 2]) -> Result<FastCheck, AnalysisError> {
+    let not_applicable = |reason: String| AnalysisError::NotApplicable { reason };
     let Some(fast) = FastSlip::new(params) else {
-        return Ok(Err(format!("the fast system needs f = ln v; this scene's friction is {}", params.friction.label())));
+        return Err(not_applicable(format!("the fast system needs f = ln v; this scene's friction is {}", params.friction.label())));
     };
     let gamma = params.gamma;
     let level = (options.fast_start * gamma).ln();
     let Some(k0) = (orbit.up..orbit.peak).find(|&k| orbit.w[k] >= level) else {
-        return Ok(Err(format!("the rise has no step end with v/γ ≥ {} before the peak", options.fast_start)));
+        return Err(not_applicable(format!("the rise has no step end with v/γ ≥ {} before the peak", options.fast_start)));
     };
     let z0 = fast.to_fast(gamma, &orbit.state(k0));
     let t0 = gamma * orbit.s[k0];
-    let mut integ = Radau5::new(fast, t0, &z0, &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)))?;
+    let mut integ = solver::build_default(Method::Radau5, fast, t0, &z0, &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)))?;
     let mut d0 = [0.0; 3];
     crate::integrate::OdeSystem::rhs(&fast, t0, &z0, &mut d0);
     let mut knots = vec![Knot { t: t0, x: z0[1], dx: d0[1] }];
@@ -185,7 +190,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
         let d = integ.dense(step.t, 1)?[1];
         knots.push(Knot { t: step.t, x: z[1], dx: d });
         if peak.is_none() && prev_d > 0.0 && d <= 0.0 {
-            let tp = bisect(&mut integ, (prev_t, step.t), 1, &|x| x[1])?;
+            let tp = bisect(integ.as_mut(), (prev_t, step.t), 1, &|x| x[1])?;
             let zp = integ.dense(tp, 0)?;
             peak = Some((tp, [zp[0], zp[1], zp[2]]));
         }
@@ -193,7 +198,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
             let half = zp[1] - std::f64::consts::LN_2;
             if half_fall.is_none() && z[1] < half {
                 let a = prev_t.max(tp);
-                half_fall = Some(bisect(&mut integ, (a, step.t), 0, &|x| x[1] - half)?);
+                half_fall = Some(bisect(integ.as_mut(), (a, step.t), 0, &|x| x[1] - half)?);
             }
             if z[1] < zp[1] - 20f64.ln() {
                 break;
@@ -203,7 +208,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
         prev_d = d;
     }
     let Some((_, zp)) = peak else {
-        return Ok(Err("the fast system reached no V maximum within T = 200".into()));
+        return Err(not_applicable("the fast system reached no V maximum within T = 200".into()));
     };
     // The rising half-maximum crossing, located between stored step ends (the peak was
     // unknown then) on the cubic Hermite interpolant of W, as the cycle analysis does.
@@ -218,7 +223,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
     let tf: Vec<f64> = knots.iter().map(|k| k.t).collect();
     let vf: Vec<f64> = knots.iter().map(|k| k.x.exp()).collect();
     let keepf = decimate(&tf, &[&vf], options.series_points);
-    Ok(Ok(FastCheck {
+    Ok(FastCheck {
         start_v_over_gamma: orbit.w[k0].exp() / gamma,
         start_time_before_tc: -orbit.s[k0],
         neglected_drive: (-orbit.w[k0]).exp(),
@@ -231,7 +236,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
         u_theta_at_v_max_3d: [orbit.u[orbit.peak] - cu * l, orbit.theta[orbit.peak] - ct * l],
         steps,
         fig4: Fig4 { t_3d: pick(&t3, &keep3), v_3d: pick(&v3, &keep3), t_fast: pick(&tf, &keepf), v_fast: pick(&vf, &keepf) },
-    }))
+    })
 }
 
 /// The slip-scaling analysis: fits over the scan's periodic points with γ ≥ fit_min_gamma
@@ -244,12 +249,12 @@ pub fn analyse(
     options: &AsymptoticsOptions,
     half_width_3d: Option<f64>,
     spread_3d: [f64; 2],
-) -> Result<SlipScalingReport, SolverError> {
+) -> Result<SlipScalingReport, AnalysisError> {
     let (c_u, c_theta) = shifts(params.xi, params.epsilon);
     let (fast_system, fast_system_note) = match orbit {
-        Some(o) => match fast_check(o, params, options, half_width_3d, spread_3d)? {
+        Some(o) => match fast_check(o, params, options, half_width_3d, spread_3d) {
             Ok(f) => (Some(f), None),
-            Err(why) => (None, Some(why)),
+            Err(why) => (None, Some(why.into_note()?)),
         },
         None => (None, Some("no periodic cycle of the scene".into())),
     };

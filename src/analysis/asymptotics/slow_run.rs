@@ -2,7 +2,8 @@
 //! a point of S to its finite-time blow-up, locating the upward crossing of v = 1 and
 //! evaluating the flow at given times (the 3D samples) from the integrator's dense output.
 
-use crate::integrate::{ErrorKind, Integrator, SolverError, Task};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Integrator, SolverError, Task};
 use crate::model::slow_manifold::{SlowFlow, T, THETA, U};
 
 /// The outcome of one run of the 2D flow.
@@ -49,7 +50,7 @@ fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), g: &dyn Fn(&[f
 /// t(). Stops at the blow-up — when v > 1e6 and the remaining time, bounded by
 /// 1/(v · d ln v/ds) (d ln v/ds grows on the blow-up), is below 1e-16 of |t| — or after
 /// `max_time` of t. `probe_times` must be increasing.
-pub fn run(integ: &mut dyn Integrator, flow: &SlowFlow, max_time: f64, probe_times: &[f64]) -> Result<SlowRun, SolverError> {
+pub fn run(integ: &mut dyn Integrator, flow: &SlowFlow, max_time: f64, probe_times: &[f64]) -> Result<SlowRun, AnalysisError> {
     let y = integ.state().to_vec();
     let t_start = y[T];
     let mut prev = (integ.t(), y);
@@ -63,13 +64,11 @@ pub fn run(integ: &mut dyn Integrator, flow: &SlowFlow, max_time: f64, probe_tim
         let y = integ.state().to_vec();
         let w = w_of(flow, &y);
         if !(w.is_finite() && y.iter().all(|x| x.is_finite())) {
-            return Err(SolverError {
-                solver: integ.name(),
-                kind: ErrorKind::RhsFailure,
+            return Err(AnalysisError::Failed {
+                analysis: "the 2D slow flow",
                 t: y[T],
                 state: y,
-                flag: 0,
-                message: "the 2D slow flow left the slow manifold's domain (no v with f(v) = −(ξu + θ))".into(),
+                message: "it left the slow manifold's domain (no v with f(v) = −(ξu + θ))".into(),
             });
         }
         let span = (prev.0, step.t);

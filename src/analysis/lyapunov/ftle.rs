@@ -36,7 +36,8 @@ use crate::analysis::events;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
-use crate::integrate::{Clock, ErrorKind, SolverError, Time};
+use crate::analysis::AnalysisError;
+use crate::integrate::{Clock, Time};
 use crate::model::drr::{Drr, W};
 use crate::model::Variational;
 use crate::model::DrrParams;
@@ -155,7 +156,7 @@ pub fn analyse(
     orbit: &Orbit,
     periods: usize,
     series_points: usize,
-) -> Result<FtleReport, SolverError> {
+) -> Result<FtleReport, AnalysisError> {
     let drr = Drr::new(p);
     let start = orbit.state(orbit.peak);
     let spec = SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..solver.clone() };
@@ -186,12 +187,10 @@ pub fn analyse(
         let (_, vfp) = p.friction.eval(w);
         vfp * (-w).exp()
     };
-    let failure = |clock: &Clock, kind, message: String| SolverError {
-        solver: clock.name(),
-        kind,
+    let failure = |clock: &Clock, message: String| AnalysisError::Failed {
+        analysis: "the FTLE integration",
         t: clock.now().to_f64(),
         state: clock.state()[..3].to_vec(),
-        flag: 0,
         message,
     };
     while per_period.len() < periods {
@@ -202,10 +201,10 @@ pub fn analyse(
         let y = first3(&z);
         let d = first3(clock.integrator().dense(step.t, 1)?);
         if z.iter().chain(&d).any(|x| !x.is_finite()) {
-            return Err(failure(&clock, ErrorKind::RhsFailure, "the state, the tangent frame or dy/dt became non-finite".into()));
+            return Err(failure(&clock, "the state, the tangent frame or dy/dt became non-finite".into()));
         }
         if steps > 20_000_000 {
-            return Err(failure(&clock, ErrorKind::TooMuchWork, "2e7 steps without completing the FTLE periods".into()));
+            return Err(failure(&clock, "2e7 steps without completing the FTLE periods".into()));
         }
         let mid = clock.integrator().dense(0.5 * (prev.t + step.t), 0)?[W];
         quad += (step.t - prev.t) / 6.0 * (fprime(prev.y[W]) + 4.0 * fprime(mid) + fprime(y[W]));
@@ -273,9 +272,9 @@ pub fn analyse(
     let r11: Vec<f64> = series.iter().map(|(_, l)| l[0]).collect();
     let r22: Vec<f64> = series.iter().map(|(_, l)| l[1]).collect();
     let keep = decimate(&t, &[&r11, &r22], series_points);
-    let (floquet, floquet_note) = match floquet_link(solver, variational, &drr, orbit, &per_period, &exponents)? {
+    let (floquet, floquet_note) = match floquet_link(solver, variational, &drr, orbit, &per_period, &exponents) {
         Ok(f) => (Some(f), None),
-        Err(why) => (None, Some(why)),
+        Err(why) => (None, Some(why.into_note()?)),
     };
     Ok(FtleReport {
         method: "radau5".into(),
@@ -291,6 +290,8 @@ pub fn analyse(
     })
 }
 
+/// The Floquet multipliers by shooting from the orbit, set beside the FTLE
+/// ([`AnalysisError::NotConverged`] when shooting does not converge: a note in the report).
 fn floquet_link(
     solver: &SolverSpec,
     variational: &mut VariationalFactory<'_>,
@@ -298,21 +299,21 @@ fn floquet_link(
     orbit: &Orbit,
     per_period: &[PeriodLogs],
     exponents: &[f64; 3],
-) -> Result<Result<FloquetLink, String>, SolverError> {
+) -> Result<FloquetLink, AnalysisError> {
     let settings = ShootingSettings::defaults(solver.rtol, solver.atol[1]);
     let y0 = orbit.state(orbit.up);
     let mut integ = variational(*drr, solver, &y0)?;
     let report = shooting::analyse(integ.as_mut(), drr, y0, &settings)?;
     let Some(o) = report.orbit else {
-        return Ok(Err(format!("shooting did not converge: {}", report.failure.unwrap_or_default())));
+        return Err(AnalysisError::NotConverged { what: "shooting", reason: report.failure.unwrap_or_default() });
     };
     let last = per_period.last().copied().unwrap_or(PeriodLogs { time: 0.0, ln_r: [0.0; 2], trace_integral: 0.0 });
-    Ok(Ok(FloquetLink {
+    Ok(FloquetLink {
         source: "shooting",
         ln_abs_nontrivial: o.nontrivial().iter().map(|m| (m.modulus > 0.0).then(|| m.modulus.ln()).filter(|x| x.is_finite())).collect(),
         trivial_multiplier_error: o.trivial_multiplier_error,
         ftle_times_period: exponents.map(|l| l * o.period),
         last_period_logs: [last.ln_r[0], last.ln_r[1], last.trace_integral - last.ln_r[0] - last.ln_r[1]],
         period: o.period,
-    }))
+    })
 }

@@ -16,6 +16,7 @@ use crate::analysis::claims::{Claim, Source};
 use crate::analysis::cycle::CycleReport;
 use crate::analysis::orbit::Orbit;
 use crate::analysis::series::{decimate, pick};
+use crate::analysis::{AnalysisError, InvalidOption};
 use crate::integrate::{Integrator, SolverError};
 use crate::model::{Drr, DrrParams, Friction};
 use crate::solver::SolverSpec;
@@ -45,16 +46,17 @@ struct RawOptions {
 }
 
 impl LyapunovOptions {
-    /// Parses and validates the options object; Err is (sub-field, message).
-    pub fn from_json(value: serde_json::Value) -> Result<Self, (String, String)> {
-        let raw: RawOptions = serde_json::from_value(value).map_err(|e| (String::new(), e.to_string()))?;
+    /// Parses and validates the options object; the error names the field (empty: the
+    /// object).
+    pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
+        let raw: RawOptions = serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
         let d = Self::default();
         let o = Self { ftle_periods: raw.ftle_periods.unwrap_or(d.ftle_periods), series_points: raw.series_points.unwrap_or(d.series_points) };
         if o.ftle_periods > 1000 {
-            return Err((".ftle_periods".into(), format!("{} must be between 0 (no FTLE) and 1000", o.ftle_periods)));
+            return Err(InvalidOption::new("ftle_periods", format!("{} must be between 0 (no FTLE) and 1000", o.ftle_periods)));
         }
         if !(10..=1_000_000).contains(&o.series_points) {
-            return Err((".series_points".into(), format!("{} must be between 10 and 1000000", o.series_points)));
+            return Err(InvalidOption::new("series_points", format!("{} must be between 10 and 1000000", o.series_points)));
         }
         Ok(o)
     }
@@ -175,10 +177,10 @@ pub fn analyse(
     variational: &mut VariationalFactory<'_>,
     cycle: Option<&CycleReport>,
     options: &LyapunovOptions,
-) -> Result<LyapunovReport, SolverError> {
-    let orbit = match cycle.ok_or_else(|| "the scene ran no cycle analysis".to_string()).and_then(Orbit::from_cycle) {
+) -> Result<LyapunovReport, AnalysisError> {
+    let orbit = match Orbit::of_scene(cycle) {
         Ok(o) => o,
-        Err(why) => return Ok(empty(options, why)),
+        Err(why) => return Ok(empty(options, why.into_note()?)),
     };
     let p = params;
     let n = orbit.peak + 1;

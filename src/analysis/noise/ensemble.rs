@@ -1,4 +1,4 @@
-//! Ensembles of realisations in parallel over cores (std::thread::scope, one Rodas5P per
+//! Ensembles of realisations in parallel over cores ([`crate::parallel`], one Rodas5P per
 //! realisation). Realisation i draws from the random stream (seed, i) and writes only its own
 //! slot; reductions run afterwards in index order. Results are therefore bit-identical for any
 //! number of threads.
@@ -6,12 +6,12 @@
 use super::models::{EventKind, NoiseModel};
 use super::rng::Rng;
 use super::scheme::{self, Path, SchemeSettings, Start};
-use crate::integrate::{OdeSystem, SolverError, Stats};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Mutex;
+use crate::analysis::AnalysisError;
+use crate::parallel;
+use crate::integrate::{ErrorKind, OdeSystem, Stats};
 
 /// One realisation's results: event time, samples, solver statistics, noise nodes.
-type Slot = Mutex<Option<(f64, Vec<f64>, Stats, usize)>>;
+type Realisation = (f64, Vec<f64>, Stats, usize);
 
 /// What each realisation records: its observables at given times relative to its own event
 /// (or at fixed times), after the run.
@@ -58,7 +58,7 @@ pub struct EnsembleSpec<'a> {
 }
 
 /// Reads realisation `path`'s observables at the sampling times into `out` ([observable][k]).
-fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), String> {
+fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), AnalysisError> {
     let reference = sampling.fixed_reference.unwrap_or(path.t_event);
     let k_n = sampling.s.len();
     let mut x = vec![0.0; model.dim()];
@@ -67,7 +67,16 @@ fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f
         for (i, xi) in x.iter_mut().enumerate() {
             *xi = path.value(t, i).ok_or_else(|| {
                 let (a, b) = path.span();
-                format!("the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span [{a:e}, {b:e}]")
+                AnalysisError::Failed {
+                    analysis: "noise",
+                    t: path.t_event,
+                    state: vec![],
+                    message: format!(
+                        "the time t_ref + s = {t:e} (t_ref = {reference:e}, s = {s:e}) is outside the realisation's recorded span \
+                         [{a:e}, {b:e}]: the event moved too far from the deterministic one (lower the amplitudes or raise \
+                         start_before_event)"
+                    ),
+                }
             })?;
         }
         for (o, (_, obs)) in model.observables().iter().enumerate() {
@@ -86,78 +95,34 @@ pub fn run(
     count: usize,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<EnsembleData, SolverError> {
+) -> Result<EnsembleData, AnalysisError> {
     let per = spec.model.observables().len() * sampling.s.len();
-    let slots: Vec<Slot> = (0..count).map(|_| Mutex::new(None)).collect();
-    let failures: Mutex<Vec<(usize, SolverError)>> = Mutex::new(Vec::new());
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    std::thread::scope(|scope| {
-        for _ in 0..threads.max(1) {
-            scope.spawn(|| {
-                let mut path = Path::default();
-                loop {
-                    if stop.load(Ordering::Relaxed) {
-                        break;
-                    }
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    if i >= count {
-                        break;
-                    }
-                    let mut rng = Rng::for_realisation(spec.seed, i as u64);
-                    let outcome = scheme::realisation(
-                        spec.model,
-                        spec.start,
-                        spec.scheme,
-                        spec.event,
-                        spec.record_until,
-                        spec.t_max,
-                        &mut rng,
-                        &mut path,
-                    )
-                    .and_then(|()| {
-                        let mut out = vec![0.0; per];
-                        sample(spec.model, &path, sampling, &mut out).map_err(|message| SolverError {
-                            solver: "stickslip noise",
-                            kind: crate::integrate::ErrorKind::Other,
-                            t: path.t_event,
-                            state: vec![],
-                            flag: 0,
-                            message: format!(
-                                "{message}: the event moved too far from the deterministic one \
-                                 (lower the amplitudes or raise start_before_event)"
-                            ),
-                        })?;
-                        Ok(out)
-                    });
-                    match outcome {
-                        Ok(out) => *slots[i].lock().unwrap_or_else(|e| e.into_inner()) = Some((path.t_event, out, path.stats, path.nodes())),
-                        Err(mut e) => {
-                            let hint = if e.kind == crate::integrate::ErrorKind::ErrorTestFailures {
-                                " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
-                            } else {
-                                ""
-                            };
-                            e.message = format!("realisation {i}: {}{hint}", e.message);
-                            failures.lock().unwrap_or_else(|e| e.into_inner()).push((i, e));
-                            // Indices are handed out in order, so every index below a failure
-                            // is already running or done: the lowest failure is always found.
-                            stop.store(true, Ordering::Relaxed);
-                        }
-                    }
-                    progress(done.fetch_add(1, Ordering::Relaxed) + 1, count);
-                }
+    let realisation = |i: usize| -> Result<Realisation, AnalysisError> {
+        let mut path = Path::default();
+        let mut rng = Rng::for_realisation(spec.seed, i as u64);
+        let outcome = scheme::realisation(spec.model, spec.start, spec.scheme, spec.event, spec.record_until, spec.t_max, &mut rng, &mut path)
+            .and_then(|()| {
+                let mut out = vec![0.0; per];
+                sample(spec.model, &path, sampling, &mut out)?;
+                Ok(out)
             });
+        match outcome {
+            Ok(out) => Ok((path.t_event, out, path.stats, path.nodes())),
+            Err(mut e) => {
+                let hint = if matches!(&e, AnalysisError::Solver(s) if s.kind == ErrorKind::ErrorTestFailures) {
+                    " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
+                } else {
+                    ""
+                };
+                if let Some(message) = e.message_mut() {
+                    *message = format!("realisation {i}: {message}{hint}");
+                }
+                Err(e)
+            }
         }
-    });
-    let mut failures = failures.into_inner().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, e)) = failures.drain(..).min_by_key(|(i, _)| *i) {
-        return Err(e);
-    }
+    };
     let mut data = EnsembleData { realisations: count, samples: Vec::with_capacity(count * per), ..Default::default() };
-    for slot in slots {
-        let (t, out, stats, nodes) = slot.into_inner().unwrap_or_else(|e| e.into_inner()).expect("every realisation ran");
+    for (t, out, stats, nodes) in parallel::try_map(count, threads, progress, realisation)? {
         data.event_times.push(t);
         data.nodes += nodes as u64;
         data.samples.extend_from_slice(&out);

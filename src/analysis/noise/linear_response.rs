@@ -27,7 +27,9 @@
 //! e.g. (0, v, 0) for v = e^w).
 
 use super::models::{EventKind, NoiseModel};
-use crate::integrate::{ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, SolverError, Task, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::solver::{self, Method};
+use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, Tolerance};
 
 /// Largest augmented dimension (2 × the DRR's 3).
 const MAX_BIG: usize = 6;
@@ -52,13 +54,13 @@ impl Orbit {
             ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
         };
         let n = model.dim();
-        let mut integ = Rodas5p::new(*model, t0, x0, &options)?;
+        let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
         let mut f0 = vec![0.0; n];
         model.rhs(t0, x0, &mut f0);
         let mut orbit = Self { n, t: vec![t0], x: x0.to_vec(), f: f0 };
         while integ.t() < t1 {
             let step = integ.advance(t1, Task::OneStep)?;
-            let slope = Integrator::dense(&mut integ, step.t, 1)?.to_vec();
+            let slope = integ.dense(step.t, 1)?.to_vec();
             orbit.t.push(step.t);
             orbit.x.extend_from_slice(integ.state());
             orbit.f.extend_from_slice(&slope);
@@ -220,8 +222,8 @@ pub struct LinearResponse {
     rtol: f64,
 }
 
-fn failure(t: f64, message: String) -> SolverError {
-    SolverError { solver: "stickslip linear response", kind: ErrorKind::Other, t, state: vec![], flag: 0, message }
+fn failure(t: f64, message: String) -> AnalysisError {
+    AnalysisError::Failed { analysis: "the linear response", t, state: vec![], message }
 }
 
 /// μ_k = Φ(t_j, t_k)ᵀ μ_j for k = j, j−1, …, 0 (backwards along the orbit).
@@ -232,7 +234,7 @@ fn adjoint_sweep(model: &NoiseModel, orbit: &Orbit, tau: f64, times: &[f64], j: 
         ..Options::new(rtol, Tolerance::PerComponent(vec![1e-12 * scale; mu_j.len()]))
     };
     let sys = Adjoint { model, orbit, tau };
-    let mut integ = Radau5::new(sys, times[j], mu_j, &options)?;
+    let mut integ = solver::build_default(Method::Radau5, sys, times[j], mu_j, &options)?;
     let mut out = vec![Vec::new(); j + 1];
     out[j] = mu_j.to_vec();
     for k in (0..j).rev() {
@@ -257,7 +259,7 @@ pub fn compute(
     tau: f64,
     rtol: f64,
     atol_x: &[f64],
-) -> Result<LinearResponse, SolverError> {
+) -> Result<LinearResponse, AnalysisError> {
     let n = model.dim();
     let nn = 2 * n;
     if model.amplitudes().iter().all(|a| *a == 0.0) {
@@ -286,7 +288,7 @@ pub fn compute(
         let atol: Vec<f64> = (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
         let pass_rtol = if pass == 0 { rtol.max(1e-4) } else { rtol };
         let options = Options { max_steps: Some(1_000_000), ..Options::new(pass_rtol, Tolerance::PerComponent(atol)) };
-        let mut integ = Radau5::new(sys, t_start, &c0, &options)?;
+        let mut integ = solver::build_default(Method::Radau5, sys, t_start, &c0, &options)?;
         covariance.clear();
         let mut max_var = vec![0.0f64; nn];
         for &t in times {

@@ -1,7 +1,7 @@
 //! The "noise" analysis: the response of a relaxation oscillation to weak coloured noise, from
 //! ensembles of realisations and from the linear (small-noise) response, aligned on the event.
 //!
-//! Pipeline ([`run`]):
+//! Pipeline ([`run`], one function per step, plus the settings resolved on the orbit):
 //! 1. the deterministic orbit (Rodas5P, rtol 1e-10): for periodic models (DRR, van der Pol) the
 //!    converged limit cycle, the start `start_before_event` before an event, the deterministic
 //!    event time t_c and (DRR) t0, the time from v = 1 to t_c; for the saddle-node the passage
@@ -26,7 +26,8 @@ pub mod rng;
 pub mod scheme;
 pub mod statistics;
 
-use crate::integrate::{ErrorKind, OdeSystem, SolverError};
+use crate::analysis::{AnalysisError, InvalidOption};
+use crate::integrate::{OdeSystem, SolverError};
 use models::{EventKind, NoiseModel};
 use options::{Alignment, NoiseOptions};
 use scheme::{SchemeSettings, Start};
@@ -258,15 +259,19 @@ pub struct NoiseReport {
     pub work: Work,
 }
 
-fn invalid(message: String) -> SolverError {
-    SolverError { solver: "stickslip noise", kind: ErrorKind::InvalidInput, t: 0.0, state: vec![], flag: 0, message }
+fn invalid(field: &str, message: String) -> AnalysisError {
+    InvalidOption::new(field, message).into()
+}
+
+fn not_applicable(reason: &str) -> AnalysisError {
+    AnalysisError::NotApplicable { reason: reason.into() }
 }
 
 /// The converged limit cycle of a periodic model: (period, state at an event, events used).
 /// Converged when three successive periods and the event states agree to 1e-8 (relative;
 /// absolute below 1): a decaying oscillation, whose period converges but whose amplitude does
 /// not, never qualifies.
-fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), SolverError> {
+fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), AnalysisError> {
     let mut x = initial.to_vec();
     let mut periods: Vec<f64> = Vec::new();
     let mut states: Vec<Vec<f64>> = Vec::new();
@@ -285,29 +290,93 @@ fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f6
             }
         }
     }
-    Err(SolverError {
-        solver: "stickslip noise",
-        kind: ErrorKind::Other,
-        t: 0.0,
-        state: x,
-        flag: 0,
-        message: format!("the deterministic orbit did not settle on a limit cycle in 2000 events (last periods {:?})", &periods[periods.len().saturating_sub(3)..]),
+    Err(AnalysisError::NoLimitCycle {
+        reason: format!(
+            "the deterministic orbit did not settle on a limit cycle in 2000 events (last periods {:?}, last state at an event {x:?})",
+            &periods[periods.len().saturating_sub(3)..]
+        ),
     })
+}
+
+/// Step 1's result: the deterministic orbit and the realisations' start.
+struct Orbit {
+    /// The event the orbit is converged on (before arming at the DRR's slip).
+    burn_in_event: EventKind,
+    periodic: bool,
+    period: Option<f64>,
+    burn_in_events: usize,
+    /// start_before_event as used.
+    before: f64,
+    start: Start,
+    /// The deterministic event t_c and the state there.
+    t_event: f64,
+    x_event: Vec<f64>,
+    /// DRR: t0, from v = 1 to t_c.
+    t0: Option<f64>,
+}
+
+/// The settings resolved against the orbit, and the grid of times s = t − t_c.
+struct Plan {
+    tau: f64,
+    steps_per_tau: f64,
+    h: f64,
+    window: [f64; 2],
+    curves_at: Vec<f64>,
+    alignment: Alignment,
+    grid_points: usize,
+    report_count: usize,
+    report_times: Vec<f64>,
+    rtol: f64,
+    realisations: usize,
+    seed: u64,
+    want_linear: bool,
+    growth_points: Vec<f64>,
+    /// The grid s.
+    s: Vec<f64>,
+    /// The event each realisation is aligned on (armed for the DRR).
+    event: EventKind,
+    event_words: String,
+    /// t_c + s.
+    times: Vec<f64>,
+}
+
+/// Step 2's result: the ensemble and the scheme's own error.
+struct Realisations {
+    data: ensemble::EnsembleData,
+    atol: Vec<f64>,
+    event_time_without_noise: f64,
+    wall_time_s: f64,
 }
 
 /// Runs the noise analysis on `model` (with its amplitudes) from the deterministic initial
 /// state `initial` (the orbit converges from there; saddle-node: x at t = 0), on `threads`
-/// threads; `progress(done, total)` after each realisation.
+/// threads; `progress(done, total)` after each realisation. The steps of the module's
+/// pipeline, in the order their data need: the deterministic orbit, the settings on it, the
+/// linear response (it sets the default absolute tolerances), the realisations, the
+/// statistics.
 pub fn run(
     model: &NoiseModel,
     initial: &[f64],
     options: &NoiseOptions,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<NoiseReport, SolverError> {
-    let n = model.dim();
-    let det_atol = vec![1e-12; n];
-    // 1. The deterministic orbit.
+) -> Result<NoiseReport, AnalysisError> {
+    let det_atol = vec![1e-12; model.dim()];
+    let orbit = deterministic_orbit(model, initial, options, &det_atol)?;
+    let plan = plan(model, options, &orbit)?;
+    let linear = if plan.want_linear {
+        Some(linear_response::compute(model, orbit.start.t, &orbit.start.x, &plan.times, plan.event, plan.tau, LR_RTOL, &det_atol)?)
+    } else {
+        None
+    };
+    let realisations = realisations(model, options, &orbit, &plan, linear.as_ref(), threads, progress)?;
+    statistics(model, &orbit, plan, realisations, linear, &det_atol)
+}
+
+/// Step 1, the deterministic orbit: for periodic models the converged limit cycle, the start
+/// `start_before_event` before an event, t_c and (DRR) t0; for the saddle-node the passage
+/// from t = 0.
+fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptions, det_atol: &[f64]) -> Result<Orbit, AnalysisError> {
     let (event_for_burn_in, periodic) = match model {
         NoiseModel::Drr { .. } => (EventKind::Maximum { component: 1, arm: 0.0, drop: std::f64::consts::LN_2 }, true),
         NoiseModel::VanDerPol { .. } => (EventKind::CrossDown { component: 0, level: 0.0, arm: 1.0 }, true),
@@ -316,45 +385,60 @@ pub fn run(
             (EventKind::CrossDown { component: 0, level, arm: 0.0 }, false)
         }
         NoiseModel::Linear { .. } => {
-            return Err(invalid("the linear validation model has no event to align on; it serves the scheme's tests".into()));
+            return Err(not_applicable("the linear validation model has no event to align on; it serves the scheme's tests"));
         }
     };
     if let NoiseModel::Drr { system, .. } = model {
         if crate::analysis::hopf::analyse(system).max_real_part < 0.0 {
-            return Err(invalid("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on".into()));
+            return Err(not_applicable("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on"));
         }
     }
     let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
-        let (period, x_event, events) = limit_cycle(model, initial, event_for_burn_in, &det_atol)?;
+        let (period, x_event, events) = limit_cycle(model, initial, event_for_burn_in, det_atol)?;
         let before = options.start_before_event.unwrap_or(match model {
             NoiseModel::Drr { .. } => (0.8 * period).min(6.0),
             _ => 0.45 * period,
         });
         if before >= period {
-            return Err(invalid(format!("start_before_event = {before} must be shorter than the period {period}")));
+            return Err(invalid("start_before_event", format!("{before} must be shorter than the period {period}")));
         }
-        let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, &det_atol)?;
-        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, &det_atol)?;
+        let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
+        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, det_atol)?;
         (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
     } else {
-        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, &det_atol)?;
+        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, det_atol)?;
         let before = options.start_before_event.unwrap_or(tc);
         if before > tc {
-            return Err(invalid(format!("start_before_event = {before} exceeds the time {tc} from t = 0 to the escape")));
+            return Err(invalid("start_before_event", format!("{before} exceeds the time {tc} from t = 0 to the escape")));
         }
-        let x_start = scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, &det_atol)?;
+        let x_start = scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, det_atol)?;
         (None, 0, before, Start { t: tc - before, x: x_start }, tc, xc)
     };
     let t0 = match model {
         NoiseModel::Drr { .. } => {
             let up = EventKind::CrossUp { component: 1, level: 0.0, arm: 0.0 };
-            scheme::deterministic_event(model, start.t, &start.x, up, t_event_det, DET_RTOL, &det_atol)
+            scheme::deterministic_event(model, start.t, &start.x, up, t_event_det, DET_RTOL, det_atol)
                 .ok()
                 .map(|(t, _, _)| t_event_det - t)
         }
         _ => None,
     };
-    // 2. Resolved settings.
+    Ok(Orbit {
+        burn_in_event: event_for_burn_in,
+        periodic,
+        period,
+        burn_in_events,
+        before,
+        start,
+        t_event: t_event_det,
+        x_event: x_event_det,
+        t0,
+    })
+}
+
+/// The settings resolved on the orbit (defaults, checks against the period) and the grid.
+fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &Orbit) -> Result<Plan, AnalysisError> {
+    let before = orbit.before;
     let tau = options.correlation_time.unwrap_or(match model {
         NoiseModel::Drr { system, .. } => 2.5 / system.params().gamma,
         NoiseModel::SaddleNode { system, .. } => 0.05 / system.params().mu0.sqrt(),
@@ -369,14 +453,14 @@ pub fn run(
     });
     let far = (1.0 - GRID_MARGIN) * before;
     if window[0] > far {
-        return Err(invalid(format!("window starts {} before the event, before the grid's first time {far} (raise start_before_event)", window[0])));
+        return Err(invalid("window", format!("starts {} before the event, before the grid's first time {far} (raise start_before_event)", window[0])));
     }
     let curves_at = options.correlation_curves_at.clone().unwrap_or(match model {
         NoiseModel::Drr { system, .. } => vec![2.3, 1.0, 30.0 / system.params().gamma],
         _ => vec![window[0], (window[0] * window[1]).sqrt(), window[1]],
     });
     if let Some(t) = curves_at.iter().find(|t| **t > far) {
-        return Err(invalid(format!("correlation_curves_at: {t} is before the grid's first time {far} before the event")));
+        return Err(invalid("correlation_curves_at", format!("{t} is before the grid's first time {far} before the event")));
     }
     let alignment = options.alignment.unwrap_or(Alignment::OwnEvent);
     let grid_points = options.grid_points.unwrap_or(1000);
@@ -387,11 +471,7 @@ pub fn run(
             (window[0].ln() + f * (window[1].ln() - window[0].ln())).exp()
         })
         .collect();
-    let rtol = options.rtol.unwrap_or(1e-6);
-    let realisations = options.realisations.unwrap_or(1000);
-    let seed = options.seed.unwrap_or(1);
-    let want_linear = options.linear_response.unwrap_or(true);
-    let growth_points = match (model, t0) {
+    let growth_points = match (model, orbit.t0) {
         (NoiseModel::Drr { .. }, Some(t0)) if 0.1 + t0 <= far => vec![-0.1, -(0.1 + t0)],
         _ => vec![],
     };
@@ -399,32 +479,60 @@ pub fn run(
     extra.extend(curves_at.iter().map(|t| -t));
     extra.extend(&growth_points);
     let s = statistics::grid(far, window[1] / 3.0, grid_points, grid_points / 5, &extra);
-    let k_n = s.len();
-    let event = match (model, event_for_burn_in) {
+    let event = match (model, orbit.burn_in_event) {
         // Armed at half of ln v_max: noise wiggles of ln v on the stick never count.
         (NoiseModel::Drr { .. }, EventKind::Maximum { component, drop, .. }) => {
-            EventKind::Maximum { component, arm: 0.5 * x_event_det[component], drop }
+            EventKind::Maximum { component, arm: 0.5 * orbit.x_event[component], drop }
         }
         (_, e) => e,
     };
     let event_words = match event {
         EventKind::Maximum { .. } => "the maximum of v (slip peak)".to_string(),
-        EventKind::CrossDown { level, .. } if periodic => format!("the downward crossing of x = {level} (jump off the fold x = 1)"),
+        EventKind::CrossDown { level, .. } if orbit.periodic => format!("the downward crossing of x = {level} (jump off the fold x = 1)"),
         EventKind::CrossDown { level, .. } => format!("the downward crossing of x = {level} (escape)"),
         EventKind::CrossUp { level, .. } => format!("the upward crossing of level {level}"),
     };
-    // The linear response (before the ensemble: it sets the default absolute tolerances).
-    let times: Vec<f64> = s.iter().map(|v| t_event_det + v).collect();
-    let linear = if want_linear {
-        Some(linear_response::compute(model, start.t, &start.x, &times, event, tau, LR_RTOL, &det_atol)?)
-    } else {
-        None
-    };
+    let times: Vec<f64> = s.iter().map(|v| orbit.t_event + v).collect();
+    Ok(Plan {
+        tau,
+        steps_per_tau,
+        h,
+        window,
+        curves_at,
+        alignment,
+        grid_points,
+        report_count,
+        report_times,
+        rtol: options.rtol.unwrap_or(1e-6),
+        realisations: options.realisations.unwrap_or(1000),
+        seed: options.seed.unwrap_or(1),
+        want_linear: options.linear_response.unwrap_or(true),
+        growth_points,
+        s,
+        event,
+        event_words,
+        times,
+    })
+}
+
+/// Step 2, the realisations: the scheme's deterministic error (one realisation with zero
+/// amplitudes), then the ensemble, from the orbit's start.
+fn realisations(
+    model: &NoiseModel,
+    options: &NoiseOptions,
+    orbit: &Orbit,
+    plan: &Plan,
+    linear: Option<&linear_response::LinearResponse>,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Realisations, AnalysisError> {
+    let n = model.dim();
+    let start = &orbit.start;
     // Default atol: 1e-3 of each component's typical (median) linear-response σ, within
     // [1e-14, 1e-6]; 1e-6 without the linear response. (Much tighter values can be out of
     // reach: a stiff component driven by the noise lags its quasi-static value by ~ḟ/λ, and
     // Rosenbrock methods get that lag right only to a fraction of it, whatever the step.)
-    let atol = options.atol.clone().unwrap_or_else(|| match &linear {
+    let atol = options.atol.clone().unwrap_or_else(|| match linear {
         Some(l) => (0..n)
             .map(|i| {
                 let mut sig: Vec<f64> = l.covariance.iter().map(|c| c[i * l.big + i].max(0.0).sqrt()).collect();
@@ -434,45 +542,58 @@ pub fn run(
             .collect(),
         None => vec![1e-6; n],
     });
-    let scheme_settings = SchemeSettings { h, tau, rtol, atol: atol.clone() };
+    let scheme_settings = SchemeSettings { h: plan.h, tau: plan.tau, rtol: plan.rtol, atol: atol.clone() };
     // The scheme's deterministic error: one realisation with zero amplitudes.
     let quiet = model.scaled(0.0);
-    let t_max = start.t + 2.0 * before + 10.0 * tau;
+    let t_max = start.t + 2.0 * orbit.before + 10.0 * plan.tau;
     let mut path = scheme::Path::default();
-    let mut rng = rng::Rng::for_realisation(seed, u64::MAX);
-    scheme::realisation(&quiet, &start, &scheme_settings, Some(event), start.t, t_max, &mut rng, &mut path)?;
+    let mut rng = rng::Rng::for_realisation(plan.seed, u64::MAX);
+    scheme::realisation(&quiet, start, &scheme_settings, Some(plan.event), start.t, t_max, &mut rng, &mut path)?;
     let event_time_without_noise = path.t_event;
-
-    // 3. The ensemble.
-    let record_until = match alignment {
+    let record_until = match plan.alignment {
         Alignment::OwnEvent => start.t,
-        Alignment::Deterministic => t_event_det + h,
+        Alignment::Deterministic => orbit.t_event + plan.h,
     };
-    let spec = ensemble::EnsembleSpec { model, start: &start, scheme: &scheme_settings, event: Some(event), record_until, t_max, seed };
-    let fixed_reference = (alignment == Alignment::Deterministic).then_some(t_event_det);
-    let sampling = ensemble::Sampling { s: &s, fixed_reference };
+    let spec = ensemble::EnsembleSpec { model, start, scheme: &scheme_settings, event: Some(plan.event), record_until, t_max, seed: plan.seed };
+    let fixed_reference = (plan.alignment == Alignment::Deterministic).then_some(orbit.t_event);
+    let sampling = ensemble::Sampling { s: &plan.s, fixed_reference };
     let started = std::time::Instant::now();
-    let data = ensemble::run(&spec, &sampling, realisations, threads, progress)?;
-    let ensemble_wall_time_s = started.elapsed().as_secs_f64();
+    let data = ensemble::run(&spec, &sampling, plan.realisations, threads, progress)?;
+    Ok(Realisations { data, atol, event_time_without_noise, wall_time_s: started.elapsed().as_secs_f64() })
+}
 
-    // 4. Statistics.
-    let orbit = scheme::deterministic_states(model, start.t, &start.x, &times, DET_RTOL, &det_atol)?;
+/// Step 3, the statistics of the realisations on the grid, beside the linear response (step
+/// 4) and where the two agree; the report.
+fn statistics(
+    model: &NoiseModel,
+    orbit: &Orbit,
+    plan: Plan,
+    realisations: Realisations,
+    linear: Option<linear_response::LinearResponse>,
+    det_atol: &[f64],
+) -> Result<NoiseReport, AnalysisError> {
+    let n = model.dim();
+    let (start, t_event_det) = (&orbit.start, orbit.t_event);
+    let (s, times, realisations_n) = (&plan.s, &plan.times, plan.realisations);
+    let k_n = s.len();
+    let data = &realisations.data;
+    let own = plan.alignment == Alignment::OwnEvent;
+    let path_orbit = scheme::deterministic_states(model, start.t, &start.x, times, DET_RTOL, det_atol)?;
     let observables = model.observables();
     let stride = observables.len() * k_n;
-    let report_rows: Vec<usize> = report_times.iter().map(|t| statistics::nearest(&s, -t)).collect();
-    let curve_rows: Vec<usize> = curves_at.iter().map(|t| statistics::nearest(&s, -t)).collect();
+    let report_rows: Vec<usize> = plan.report_times.iter().map(|t| statistics::nearest(s, -t)).collect();
+    let curve_rows: Vec<usize> = plan.curves_at.iter().map(|t| statistics::nearest(s, -t)).collect();
     let mut rows: Vec<usize> = report_rows.iter().chain(&curve_rows).copied().collect();
     rows.sort_unstable();
     rows.dedup();
-    let own = alignment == Alignment::OwnEvent;
     let mut linear_steps = linear.as_ref().map_or(0, |l| l.steps);
     let mut series = Vec::new();
     let mut by_variable = Vec::new();
     let mut agreement = Vec::new();
     let mut curves = Vec::new();
     for (o, (name, obs)) in observables.iter().enumerate() {
-        let m = Moments::from_samples(&data.samples, realisations, stride, o * k_n, k_n, &rows);
-        let deterministic: Vec<f64> = orbit.iter().map(|x| obs.value(x)).collect();
+        let m = Moments::from_samples(&data.samples, realisations_n, stride, o * k_n, k_n, &rows);
+        let deterministic: Vec<f64> = path_orbit.iter().map(|x| obs.value(x)).collect();
         // The linear response of the observable: δo = o'(x̄) δx_i.
         let lin = linear.as_ref().map(|l| {
             let grads: Vec<Vec<f64>> = l
@@ -499,7 +620,7 @@ pub fn run(
         let row_of = |m: &Moments, j: usize| -> Vec<f64> {
             m.rows.iter().find(|(r, _)| *r == j).map(|(_, row)| row.clone()).expect("a requested row")
         };
-        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, &s, j, width);
+        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, s, j, width);
         let sigma = m.sigma();
         let sigma_lin = lin.as_ref().map(|l| l.sigma());
         let points: Vec<CorrelationPoint> = report_rows
@@ -513,34 +634,7 @@ pub fn run(
             })
             .collect();
         if let Some(sl) = &sigma_lin {
-            let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
-            let mut max_rel = 0.0f64;
-            let mut disagree = Vec::new();
-            for &j in &report_rows {
-                if sl[j] > 0.0 {
-                    let rel = sigma[j] / sl[j] - 1.0;
-                    max_rel = max_rel.max(rel.abs());
-                    if rel.abs() > 4.0 * se {
-                        disagree.push(-s[j]);
-                    }
-                }
-            }
-            let mut rels: Vec<f64> = points
-                .iter()
-                .filter_map(|p| match (p.tau, p.tau_linear_response) {
-                    (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
-                    _ => None,
-                })
-                .collect();
-            rels.sort_by(|a, b| a.total_cmp(b));
-            agreement.push(Agreement {
-                name,
-                sigma_standard_error: se,
-                sigma_max_relative_difference: max_rel,
-                sigma_disagree_at: disagree,
-                tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
-                tau_max_relative_difference: rels.last().copied(),
-            });
+            agreement.push(agreement_of(name, &sigma, sl, &points, &report_rows, s, realisations_n));
         }
         if o == 0 {
             for &j in &curve_rows {
@@ -554,28 +648,8 @@ pub fn run(
         series.push(Series { name, mean: m.mean.clone(), deterministic, sigma, sigma_linear_response: sigma_lin });
     }
     let correlation_functions = curves;
-    let growth = match (model, t0) {
-        (NoiseModel::Drr { .. }, Some(t0)) if !growth_points.is_empty() => {
-            let (jf, j0) = (statistics::nearest(&s, -0.1), statistics::nearest(&s, -(0.1 + t0)));
-            let v = &series[1];
-            let v_growth = v.mean[jf] / v.mean[j0];
-            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
-            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
-            Some(Growth {
-                t_f_before_event: 0.1,
-                interval: t0,
-                v_growth,
-                sigma_v_growth,
-                ratio: sigma_v_growth / v_growth,
-                log10_ratio: (sigma_v_growth / v_growth).log10(),
-                v_growth_linear_response: lin.map(|l| l.0),
-                sigma_v_growth_linear_response: lin.map(|l| l.1),
-                ratio_linear_response: lin.map(|l| l.1 / l.0),
-            })
-        }
-        _ => None,
-    };
-    let r_n = realisations as f64;
+    let growth = growth(model, orbit, &plan, &series);
+    let r_n = realisations_n as f64;
     let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event_det).collect();
     let mean_shift = shifts.iter().sum::<f64>() / r_n;
     let std = (shifts.iter().map(|d| (d - mean_shift).powi(2)).sum::<f64>() / (r_n - 1.0)).sqrt();
@@ -583,34 +657,34 @@ pub fn run(
         model: model.kind(),
         settings: Settings {
             amplitudes: model.amplitudes(),
-            correlation_time: tau,
-            noise_step: h,
-            steps_per_correlation_time: steps_per_tau,
-            realisations,
-            seed,
-            start_before_event: before,
-            window,
-            alignment,
-            grid_points,
-            report_points: report_count,
-            rtol,
-            atol,
-            linear_response: want_linear,
-            correlation_curves_at: curves_at,
-            event: event_words,
+            correlation_time: plan.tau,
+            noise_step: plan.h,
+            steps_per_correlation_time: plan.steps_per_tau,
+            realisations: realisations_n,
+            seed: plan.seed,
+            start_before_event: orbit.before,
+            window: plan.window,
+            alignment: plan.alignment,
+            grid_points: plan.grid_points,
+            report_points: plan.report_count,
+            rtol: plan.rtol,
+            atol: realisations.atol,
+            linear_response: plan.want_linear,
+            correlation_curves_at: plan.curves_at,
+            event: plan.event_words,
         },
         scheme: SCHEME,
         deterministic: Deterministic {
-            period,
-            burn_in_events,
-            t0,
+            period: orbit.period,
+            burn_in_events: orbit.burn_in_events,
+            t0: orbit.t0,
             start_time: start.t,
             start_state: start.x.clone(),
             components: model.component_names().to_vec(),
             event_time: t_event_det,
-            event_state: x_event_det,
-            event_time_without_noise,
-            scheme_event_time_error: event_time_without_noise - t_event_det,
+            event_state: orbit.x_event.clone(),
+            event_time_without_noise: realisations.event_time_without_noise,
+            scheme_event_time_error: realisations.event_time_without_noise - t_event_det,
         },
         events: Events { mean_shift, std, std_linear_response: linear.as_ref().map(|l| l.event_time_std) },
         t_before_event: s.iter().map(|v| -v).collect(),
@@ -628,8 +702,66 @@ pub fn run(
             jac_evals: data.stats.jac_evals,
             nodes_per_realisation: data.nodes as f64 / r_n,
             linear_response_steps: linear.as_ref().map(|_| linear_steps),
-            ensemble_wall_time_s,
+            ensemble_wall_time_s: realisations.wall_time_s,
         },
     };
     Ok(report)
+}
+
+/// Ensemble against linear response for one observable over the report rows: σ's largest
+/// relative difference and where it exceeds 4 standard errors, τ's median and largest.
+fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[CorrelationPoint], report_rows: &[usize], s: &[f64], realisations: usize) -> Agreement {
+    let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
+    let mut max_rel = 0.0f64;
+    let mut disagree = Vec::new();
+    for &j in report_rows {
+        if sigma_lin[j] > 0.0 {
+            let rel = sigma[j] / sigma_lin[j] - 1.0;
+            max_rel = max_rel.max(rel.abs());
+            if rel.abs() > 4.0 * se {
+                disagree.push(-s[j]);
+            }
+        }
+    }
+    let mut rels: Vec<f64> = points
+        .iter()
+        .filter_map(|p| match (p.tau, p.tau_linear_response) {
+            (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
+            _ => None,
+        })
+        .collect();
+    rels.sort_by(|a, b| a.total_cmp(b));
+    Agreement {
+        name,
+        sigma_standard_error: se,
+        sigma_max_relative_difference: max_rel,
+        sigma_disagree_at: disagree,
+        tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
+        tau_max_relative_difference: rels.last().copied(),
+    }
+}
+
+/// DRR: the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1, from the series.
+fn growth(model: &NoiseModel, orbit: &Orbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
+    match (model, orbit.t0) {
+        (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
+            let (jf, j0) = (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));
+            let v = &series[1];
+            let v_growth = v.mean[jf] / v.mean[j0];
+            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
+            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
+            Some(Growth {
+                t_f_before_event: 0.1,
+                interval: t0,
+                v_growth,
+                sigma_v_growth,
+                ratio: sigma_v_growth / v_growth,
+                log10_ratio: (sigma_v_growth / v_growth).log10(),
+                v_growth_linear_response: lin.map(|l| l.0),
+                sigma_v_growth_linear_response: lin.map(|l| l.1),
+                ratio_linear_response: lin.map(|l| l.1 / l.0),
+            })
+        }
+        _ => None,
+    }
 }

@@ -1,6 +1,7 @@
 //! The scene's `{"noise": {...}}` options: parsing and validation (errors name the field and
 //! the fix). Defaults that depend on the model are resolved in [`super::run`].
 
+use crate::analysis::InvalidOption;
 use serde::{Deserialize, Serialize};
 
 /// How ensemble statistics are aligned in time.
@@ -73,9 +74,9 @@ pub struct NoiseOptions {
 }
 
 /// Validates the options for a model with `dim` components; `gamma2` is γ² for the DRR (the
-/// amplitudes must stay below it). Errors are (field suffix, message).
-pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -> Result<(), (String, String)> {
-    let bad = |field: &str, message: String| Err((field.to_string(), message));
+/// amplitudes must stay below it). The error names the field.
+pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -> Result<(), InvalidOption> {
+    let bad = |field: &str, message: String| Err(InvalidOption::new(field, message));
     let names = match kind {
         "drr" => "(η_u, η_v, η_θ)",
         "saddle_node" => "(η_x)",
@@ -97,9 +98,9 @@ pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -
     if o.amplitudes.iter().all(|a| *a == 0.0) {
         return bad("amplitudes", "are all zero; give at least one positive amplitude".into());
     }
-    let positive = |field: &str, v: Option<f64>, hint: &str| -> Result<(), (String, String)> {
+    let positive = |field: &str, v: Option<f64>, hint: &str| -> Result<(), InvalidOption> {
         match v {
-            Some(x) if !(x.is_finite() && x > 0.0) => Err((field.to_string(), format!("{x} must be a finite number > 0 ({hint})"))),
+            Some(x) if !(x.is_finite() && x > 0.0) => Err(InvalidOption::new(field, format!("{x} must be a finite number > 0 ({hint})"))),
             _ => Ok(()),
         }
     };

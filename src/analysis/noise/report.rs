@@ -1,11 +1,7 @@
-//! The noise section's checks and summary, and the report of a saddle-node or van der Pol
-//! scene (which runs the noise analysis alone).
+//! The noise section's checks and summary, and the correlation-time curves of several reports
+//! in one document.
 
-use super::models::NoiseModel;
 use super::NoiseReport;
-use crate::integrate::SolverError;
-use crate::model::{SaddleNode, VanDerPol};
-use crate::scene::{OtherModel, OtherScene};
 use serde::Serialize;
 
 impl NoiseReport {
@@ -107,75 +103,6 @@ impl NoiseReport {
         }
         s
     }
-}
-
-/// The report of a saddle-node or van der Pol scene.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ModelReport {
-    /// stickslip version.
-    pub stickslip_version: &'static str,
-    /// Scene name.
-    pub name: String,
-    /// The scene as given.
-    pub scene: serde_json::Value,
-    /// The model and its start.
-    pub model: OtherModel,
-    /// The noise analysis.
-    pub noise: NoiseReport,
-    /// Wall-clock time of the computation (seconds).
-    pub wall_time_s: f64,
-}
-
-impl ModelReport {
-    /// Pretty JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("a report always serialises")
-    }
-
-    /// A readable summary for the terminal.
-    pub fn summary(&self) -> String {
-        let model = match &self.model {
-            OtherModel::SaddleNode { params, x0 } => format!("saddle-node, μ0 = {}, r = {}, x(0) = {x0}", params.mu0, params.r),
-            OtherModel::VanDerPol { params, initial } => format!("van der Pol, β = {}, a = {}, start {initial:?}", params.beta, params.a),
-        };
-        format!("scene {}: {model}; {:.3} s\n{}", self.name, self.wall_time_s, self.noise.summary())
-    }
-}
-
-/// Runs a saddle-node or van der Pol scene (the noise analysis) on `threads` threads.
-pub fn run_scene(
-    scene: &OtherScene,
-    scene_json: serde_json::Value,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<ModelReport, SolverError> {
-    let started = std::time::Instant::now();
-    let a = &scene.noise.amplitudes;
-    let (model, initial) = match &scene.model {
-        OtherModel::SaddleNode { params, x0 } => (NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] }, vec![*x0]),
-        OtherModel::VanDerPol { params, initial } => {
-            (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
-        }
-    };
-    let noise = super::run(&model, &initial, &scene.noise, threads, progress)?;
-    if !noise.is_finite() {
-        return Err(SolverError {
-            solver: "stickslip",
-            kind: crate::integrate::ErrorKind::Other,
-            t: 0.0,
-            state: vec![],
-            flag: 0,
-            message: "the noise section contains a non-finite number; refusing to report it".into(),
-        });
-    }
-    Ok(ModelReport {
-        stickslip_version: env!("CARGO_PKG_VERSION"),
-        name: scene.name.clone(),
-        scene: scene_json,
-        model: scene.model.clone(),
-        noise,
-        wall_time_s: started.elapsed().as_secs_f64(),
-    })
 }
 
 /// One model's correlation-time curve in a combined report.

@@ -30,7 +30,9 @@
 use super::models::{EventKind, NoiseModel, MAX_DIM};
 use super::ou::{self, OuStep};
 use super::rng::Rng;
-use crate::integrate::{ErrorKind, JacobianMatrix, OdeSystem, Options, Rodas5p, SolverError, Stats, Task, Tolerance};
+use crate::analysis::AnalysisError;
+use crate::solver::{self, Method};
+use crate::integrate::{JacobianMatrix, OdeSystem, Options, Rodas5p, SolverError, Stats, Task, Tolerance};
 use std::cell::Cell;
 
 /// The OU values around the current interval [t_k, t_{k+1}]: η_{k−1}, η_k, η_{k+1}, η_{k+2}.
@@ -237,8 +239,8 @@ pub struct Start {
     pub x: Vec<f64>,
 }
 
-fn no_event(t: f64, x: &[f64], what: String) -> SolverError {
-    SolverError { solver: "stickslip noise", kind: ErrorKind::Other, t, state: x.to_vec(), flag: 0, message: what }
+fn no_event(t: f64, x: &[f64], what: String) -> AnalysisError {
+    AnalysisError::Failed { analysis: "noise", t, state: x.to_vec(), message: what }
 }
 
 /// Runs one realisation from `start` until its event has been located and `record_until` is
@@ -254,9 +256,11 @@ pub fn realisation(
     t_max: f64,
     rng: &mut Rng,
     path: &mut Path,
-) -> Result<(), SolverError> {
+) -> Result<(), AnalysisError> {
     let n = model.dim();
     let forced = Forced { model, segment: Cell::new(Segment::default()) };
+    // Rodas5P itself, not solver::build_default: the noise of each interval is set on the
+    // integrator's own system (`system().segment`), which a boxed integrator does not expose.
     let mut integ = Rodas5p::new(forced, start.t, &start.x, &settings.options())?;
     let ou_step = OuStep::new(settings.h, settings.tau);
     // The path η_{−1}, η_0, η_1, η_2 (η_{−1} stationary), then one node further per interval.
@@ -353,13 +357,13 @@ pub fn deterministic_event(
     t_max: f64,
     rtol: f64,
     atol: &[f64],
-) -> Result<(f64, Vec<f64>, Stats), SolverError> {
+) -> Result<(f64, Vec<f64>, Stats), AnalysisError> {
     let options = Options {
         max_steps: Some(10_000_000),
         max_err_test_fails: Some(20),
         ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
     };
-    let mut integ = Rodas5p::new(*model, t0, x0, &options)?;
+    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
     let mut prev_x = x0.to_vec();
     // The sign of d x_c/dt is read on the integrator's interpolant (never on the right-hand
     // side, which on the DRR's slow manifold is solver noise times γ²).
@@ -439,7 +443,7 @@ pub fn deterministic_states(model: &NoiseModel, t0: f64, x0: &[f64], times: &[f6
         max_err_test_fails: Some(20),
         ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
     };
-    let mut integ = Rodas5p::new(*model, t0, x0, &options)?;
+    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
     let mut out = Vec::with_capacity(times.len());
     for &t in times {
         if t > integ.t() {
@@ -457,7 +461,7 @@ pub fn deterministic_state(model: &NoiseModel, t0: f64, x0: &[f64], t1: f64, rto
         max_err_test_fails: Some(20),
         ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
     };
-    let mut integ = Rodas5p::new(*model, t0, x0, &options)?;
+    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
     if t1 > t0 {
         integ.advance(t1, Task::Normal)?;
     }

@@ -1,0 +1,123 @@
+//! The analysis layer's errors: one enum for every analysis. An integrator's own failure is
+//! wrapped unchanged ([`AnalysisError::Solver`]); everything else says what the analysis found
+//! (an option that does not fit the orbit, no limit cycle, an event that never came, a
+//! non-finite result) and, where there is one, where (t and the state).
+
+use crate::integrate::SolverError;
+
+/// An option outside its valid range: the field, relative to the analysis's options object
+/// (empty for the object itself), and what is wrong and what would be valid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct InvalidOption {
+    /// The field, e.g. "gammas" or "amplitudes[1]" (empty: the whole object).
+    pub field: String,
+    /// What is wrong and what would be valid.
+    pub message: String,
+}
+
+impl InvalidOption {
+    /// The error for `field`.
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
+        Self { field: field.into(), message: message.into() }
+    }
+
+    /// The field's full path below `base` (e.g. "analyses[2].noise"), as a scene names it.
+    pub fn path_below(&self, base: &str) -> String {
+        if self.field.is_empty() { base.to_string() } else { format!("{base}.{}", self.field) }
+    }
+}
+
+/// Why an analysis failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnalysisError {
+    /// An integration failed (the integrator's error, unchanged).
+    #[error(transparent)]
+    Solver(#[from] SolverError),
+    /// An option does not fit this model or orbit (e.g. a window longer than the period).
+    #[error(transparent)]
+    InvalidOption(#[from] InvalidOption),
+    /// The analysis does not apply here (e.g. a stable fixed point has no event to align on).
+    #[error("{reason}")]
+    NotApplicable {
+        /// Why, and what would apply.
+        reason: String,
+    },
+    /// There is no (usable) limit cycle to work on.
+    #[error("{reason}")]
+    NoLimitCycle {
+        /// Why.
+        reason: String,
+    },
+    /// An iteration that the analysis builds on did not converge (e.g. shooting).
+    #[error("{what} did not converge: {reason}")]
+    NotConverged {
+        /// The iteration, e.g. "shooting".
+        what: &'static str,
+        /// Its own account of the failure.
+        reason: String,
+    },
+    /// The analysis's computation failed at a point of an orbit (an event that never came, a
+    /// flow that left its domain, a tangent frame that overflowed).
+    #[error("{analysis} failed at t = {t:e} (state {state:?}): {message}")]
+    Failed {
+        /// The analysis or its part, e.g. "noise" or "the 2D slow flow".
+        analysis: &'static str,
+        /// The time reached.
+        t: f64,
+        /// The state there (empty when none applies).
+        state: Vec<f64>,
+        /// What happened and, where known, what to change.
+        message: String,
+    },
+    /// A result contains a NaN or an infinity; it is not reported.
+    #[error("the {path} section contains a non-finite number; refusing to report it")]
+    NonFinite {
+        /// Path of the first non-finite number, or the section.
+        path: String,
+    },
+}
+
+impl AnalysisError {
+    /// The state where the failure happened, when known (empty otherwise).
+    pub fn state(&self) -> &[f64] {
+        match self {
+            Self::Solver(e) => &e.state,
+            Self::Failed { state, .. } => state,
+            _ => &[],
+        }
+    }
+
+    /// The message of a failure at a point (an integrator's or the analysis's), to append a
+    /// cause to; None for the other variants.
+    pub fn message_mut(&mut self) -> Option<&mut String> {
+        match self {
+            Self::Solver(e) => Some(&mut e.message),
+            Self::Failed { message, .. } => Some(message),
+            _ => None,
+        }
+    }
+
+    /// The variant in one word, or the integrator's error kind for a failed integration
+    /// (e.g. "TooMuchWork", "NonFinite"): what the stress grid counts by.
+    pub fn label(&self) -> String {
+        match self {
+            Self::Solver(e) => format!("{:?}", e.kind),
+            Self::InvalidOption(_) => "InvalidOption".into(),
+            Self::NotApplicable { .. } => "NotApplicable".into(),
+            Self::NoLimitCycle { .. } => "NoLimitCycle".into(),
+            Self::NotConverged { .. } => "NotConverged".into(),
+            Self::Failed { .. } => "Failed".into(),
+            Self::NonFinite { .. } => "NonFinite".into(),
+        }
+    }
+
+    /// A part of a report that cannot be computed here becomes a note (Ok: the note's text):
+    /// no limit cycle, not applicable or not converged. Failures stay errors.
+    pub fn into_note(self) -> Result<String, AnalysisError> {
+        match self {
+            Self::NotApplicable { .. } | Self::NoLimitCycle { .. } | Self::NotConverged { .. } => Ok(self.to_string()),
+            other => Err(other),
+        }
+    }
+}
