@@ -64,6 +64,15 @@ fn stability_boundary(nj: &[f64], k: usize) -> f64 {
     -inside
 }
 
+/// The Euclidean norm of `x` without overflow in its squares: max|x_i| · ‖x/max|x_i|‖₂.
+fn scaled_norm(x: impl Iterator<Item = f64> + Clone) -> f64 {
+    let m = x.clone().fold(0.0, |m: f64, v| m.max(v.abs()));
+    if m == 0.0 || !m.is_finite() {
+        return m;
+    }
+    m * x.map(|v| (v / m) * (v / m)).sum::<f64>().sqrt()
+}
+
 impl<S: OdeSystem> Extrapolation<S> {
     /// Row j of the modified midpoint tableau (ODEX's MIDEX).
     pub(super) fn row_explicit(&mut self, j: usize) -> Result<(), Failure> {
@@ -103,7 +112,19 @@ impl<S: OdeSystem> Extrapolation<S> {
                 // ODEX's ‖f(y0 + h_j f0) − f0‖ > 2‖f0‖, with the increments h_j·f floored at
                 // the tolerance scale (as SEULEX's max(1, ‖Δ0‖)): f0 = 0 is no instability.
                 let h2 = hj * hj;
-                let stable = h2 * del2 <= 4.0 * (h2 * del1).max(1.0);
+                let stable = if del1.is_finite() && del2.is_finite() {
+                    h2 * del2 <= 4.0 * (h2 * del1).max(1.0)
+                } else {
+                    // The sums of squares overflowed: the same test on the norms. On a deep
+                    // arrest floor of the DRR (ln v ≈ −318 at γ = 1e10, rate γ²/(ξv) ≈ 1e158)
+                    // f reaches 1e155, inf ≤ inf passed every attempt as stable, the secant
+                    // estimate (which skips an overflowed sum) saw no stiffness either, and
+                    // the midpoint scheme ran stability-limited at steps of 1e-158 until
+                    // max_steps. Failing the check here counts as stiff and switches.
+                    let norm_f0 = scaled_norm((0..n).map(|i| self.core.f0[i] / self.scal[i]));
+                    let norm_df = scaled_norm((0..n).map(|i| (w.dy[i] - self.core.f0[i]) / self.scal[i]));
+                    hj * norm_df <= 2.0 * (hj * norm_f0).max(1.0)
+                };
                 if !stable {
                     return Err(Failure::Unstable);
                 }
@@ -131,7 +152,8 @@ impl<S: OdeSystem> Extrapolation<S> {
                 den += ((w.yh2[i] - w.prev_raw[i]) / s).powi(2);
             }
             if den > 0.0 && num.is_finite() {
-                self.rho = self.rho.max((num / den).sqrt());
+                let rho = (num / den).sqrt();
+                self.rho = Some(self.rho.map_or(rho, |r| r.max(rho)));
             }
         }
         w.prev_raw.copy_from_slice(&w.yh2);

@@ -176,8 +176,8 @@ pub struct Extrapolation<S: OdeSystem> {
     theta: f64,
     caljac: bool,
     rho_jac: f64,
-    /// Explicit attempt's eigenvalue estimate.
-    rho: f64,
+    /// Explicit attempt's eigenvalue estimate; None when no pair of rows gave one.
+    rho: Option<f64>,
     /// Outcomes of the last stiffness tests (bit set: the test asks for a switch).
     history: u32,
     switches: u64,
@@ -273,7 +273,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             theta: 2.0 * thet,
             caljac: false,
             rho_jac: f64::INFINITY,
-            rho: 0.0,
+            rho: None,
             history: 0,
             switches: 0,
             degree: 0,
@@ -485,7 +485,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             self.caljac = true;
         }
         self.core.stats.step_attempts += 1;
-        self.rho = 0.0;
+        self.rho = None;
         self.last_row = 0;
         Ok((planned, last))
     }

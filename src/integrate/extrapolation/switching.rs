@@ -76,13 +76,21 @@ impl<S: OdeSystem> Extrapolation<S> {
         self.enter(mode);
     }
 
-    /// The explicit → implicit test after an explicit attempt of size `h_used`.
+    /// The explicit → implicit test after an explicit attempt of size `h_used`. An attempt
+    /// that was not unstable and gave no eigenvalue estimate (every pair of rows ended at the
+    /// same point, or the f-differences overflowed) is no evidence either way and is not
+    /// recorded: on the DRR's deep arrest floor at γ = 1e11 (ln v ≈ −340, rate 1e170) steps of
+    /// 1e-13 leave the state unchanged to the last bit, and counting them as non-stiff
+    /// between the unstable attempts kept the midpoint scheme there for 2e6 steps.
     pub(super) fn stiffness_test(&mut self, h_used: f64, unstable: bool) {
         if self.forced.is_some() || self.mode != Mode::Explicit {
             return;
         }
-        let k = self.last_row.clamp(1, self.exp.km);
-        let stiff = unstable || h_used.abs() * self.rho > STIFF_FRACTION * self.lsb[k];
+        let stiff = match self.rho {
+            _ if unstable => true,
+            Some(rho) => h_used.abs() * rho > STIFF_FRACTION * self.lsb[self.last_row.clamp(1, self.exp.km)],
+            None => return,
+        };
         if self.record(stiff) {
             self.switch_to(Mode::Implicit);
         }
