@@ -81,7 +81,6 @@
 //! Error flags ([`SolverError::flag`]): −1 invalid input, −2 too many steps, −3 step size too
 //! small, −4 matrix repeatedly singular, −5 repeated row failures (stability checks), −6
 //! right-hand-side failure, −7 repeated error-test failures.
-
 //!
 //! Layout: [`tableau`] holds what both schemes share (sequences, work model, work arrays, the
 //! extrapolation tableau with its convergence monitor and order and step-size selection),
