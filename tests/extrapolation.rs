@@ -644,3 +644,30 @@ fn two_constructions_integrate_identically() {
     assert_eq!(first, second);
     assert!(first.2 > 0, "the run must switch schemes, so that the boundaries are used: {first:?}");
 }
+
+/// The cycle of a physical-grid cell (`stickslip stress --grid physical`'s scene) with
+/// extrapolation at rtol 1e-10.
+fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
+    let text = format!(
+        r#"{{"name": "deep-floor", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
+            "solver": {{"method": "extrapolation", "rtol": 1e-10, "atol": 1e-12}},
+            "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 3e4, "max_steps": 2000000}}}}]}}"#
+    );
+    let scene = stickslip::scene::parse(&text, "deep-floor").unwrap();
+    let report = stickslip::engine::run(&scene, serde_json::Value::Null).unwrap_or_else(|e| panic!("{e}"));
+    let cycle = report.cycle.expect("the scene asks for the cycle");
+    cycle.values.expect("a converged cycle").period
+}
+
+/// The arrest floor ln v = −(ξu + θ) at −318 (γ = 1e10) and −340 (γ = 1e11), rates γ²/(ξv) of
+/// 1e158 … 1e170: the midpoint scheme's stability check overflowed there (and at γ = 1e11 its
+/// steps left the state unchanged, so no eigenvalue estimate) and it never switched back to the
+/// linearly implicit scheme, ending in TooMuchWork after 2e6 steps. Periods: radau5 at rtol
+/// 1e-10 (docs/robustness.md), within 1e3·rtol.
+#[test]
+fn deep_arrest_floor_switches_to_the_implicit_scheme() {
+    for (gamma, reference) in [(1e10, 1268.799694186796), (1e11, 1363.868100581532)] {
+        let period = deep_floor_period(gamma, 0.5, 10.0);
+        assert!((period - reference).abs() <= 1e-7 * reference, "γ = {gamma:e}: period {period} against {reference}");
+    }
+}
