@@ -256,8 +256,13 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     );
     eprintln!(
         "earthquake: clock re-bases {} ({} automatic: last step below 1e4 ulps of the local time), \
-         retries after a step underflow {}, escapes {}",
-        f["clock_rebases"], f["clock_rebases_automatic"], f["underflow_retries"], f["fixed_point_escapes"]
+         retries after a step underflow {}, escapes {} (max step {}, escape step {})",
+        f["clock_rebases"],
+        f["clock_rebases_automatic"],
+        f["underflow_retries"],
+        f["fixed_point_escapes"],
+        s.limits[0],
+        s.limits[1]
     );
     let c_time: f64 = f["time_integrated"].parse().expect("time_integrated");
     assert_eq!(
