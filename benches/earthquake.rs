@@ -61,6 +61,8 @@ struct Setup {
     stable: bool,
     settings: cycle::CycleSettings,
     cycles: usize,
+    /// The C program's arguments after N: the engine's max step and `EscapeStep::near`.
+    limits: [String; 2],
 }
 
 fn setup() -> Setup {
@@ -106,15 +108,34 @@ fn setup() -> Setup {
         no_overrides,
         "the scene overrides cycle settings; replicate them here and in the C program"
     );
+    let drr = Drr::new(scene.params);
+    let linear = hopf::analyse(&drr);
+    let stable = linear.max_real_part < 0.0;
+    // The C program leaves out the fixed-point test that only runs at a linearly stable fixed
+    // point.
+    assert!(
+        !stable,
+        "the earthquake scene's fixed point became stable; replicate the fixed-point test in C"
+    );
+    // engine::cycle_with's settings: the engine's max step (engine::max_step, 1/8 of the
+    // linear period, which engine::integrator sets) and the EscapeStep limits.
+    let max_step = linear.period_c / 8.0;
+    let escape = cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step))
+        .expect("an unstable fixed point has an escape step");
     let settings = cycle::CycleSettings {
         trajectory_cycles: 0,
+        escape: Some(escape),
         ..cycle::CycleSettings::defaults(s.rtol, s.atol[1])
     };
-    let drr = Drr::new(scene.params);
-    let stable = hopf::analyse(&drr).max_real_part < 0.0;
+    let limits = [format!("{max_step:e}"), format!("{:e}", escape.near)];
     let report = engine::run(&scene, json.clone()).expect("the earthquake scene runs");
     let c = report.cycle.as_ref().expect("cycle section");
     assert!(c.converged, "the earthquake scene no longer converges");
+    assert_eq!(
+        (c.deep_sticks, c.fixed_point_escapes),
+        (0, 0),
+        "the C program replicates neither deep sticks nor the escape's step limits in action"
+    );
     let cycles = c.cycles_computed;
     Setup {
         scene,
@@ -123,6 +144,7 @@ fn setup() -> Setup {
         stable,
         settings,
         cycles,
+        limits,
     }
 }
 
@@ -162,7 +184,8 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         "the listing run must integrate exactly like the default one"
     );
 
-    let out = common::run_c(binary, &["check", &s.cycles.to_string()]);
+    let n = s.cycles.to_string();
+    let out = common::run_c(binary, &["check", &n, &s.limits[0], &s.limits[1]]);
     // "cycle k steps S period P t0 T ln_v_max A ln_v_min B slip C slip_half_width H"
     let c_cycles: Vec<std::collections::HashMap<String, String>> = out
         .lines()
@@ -212,6 +235,35 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     }
     let f = fields(&out);
     common::assert_counters(&f, "Rust engine", &stats, ("reinits", stats.reinits));
+    // The C program ran with the engine's limits, and like the engine met no "t + h = t" (so
+    // the Clock's retry after a step underflow never fired) and no escape.
+    for (name, value) in [("max_step", &s.limits[0]), ("escape_near", &s.limits[1])] {
+        let rust: f64 = value.parse().expect(name);
+        let c: f64 = f[name].parse().expect(name);
+        assert_eq!(
+            rust.to_bits(),
+            c.to_bits(),
+            "{name}: Rust {rust:e}, C {c:e}"
+        );
+    }
+    assert_eq!(
+        (stats.step_underflow_warnings, listed.fixed_point_escapes),
+        (
+            common::counter(&f, "step_underflows"),
+            common::counter(&f, "fixed_point_escapes")
+        ),
+        "step underflows and escapes: Rust engine vs plain C"
+    );
+    eprintln!(
+        "earthquake: clock re-bases {} ({} automatic: last step below 1e4 ulps of the local time), \
+         retries after a step underflow {}, escapes {} (max step {}, escape step {})",
+        f["clock_rebases"],
+        f["clock_rebases_automatic"],
+        f["underflow_retries"],
+        f["fixed_point_escapes"],
+        s.limits[0],
+        s.limits[1]
+    );
     let c_time: f64 = f["time_integrated"].parse().expect("time_integrated");
     assert_eq!(
         listed.time_integrated.to_bits(),
@@ -222,8 +274,9 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
 }
 
 /// `earthquake_cvode R N`: total nanoseconds of R runs of N cycles, checking the step count.
-fn c_total(binary: &Path, iters: u64, cycles: usize, steps_per_run: u64) -> Duration {
-    let out = common::run_c(binary, &[&iters.to_string(), &cycles.to_string()]);
+fn c_total(binary: &Path, s: &Setup, iters: u64, steps_per_run: u64) -> Duration {
+    let (r, n) = (iters.to_string(), s.cycles.to_string());
+    let out = common::run_c(binary, &[&r, &n, &s.limits[0], &s.limits[1]]);
     let f = fields(&out);
     let steps: u64 = f["steps"].parse().expect("steps");
     assert_eq!(steps, iters * steps_per_run, "C steps changed between runs");
@@ -243,7 +296,13 @@ fn independent(binary: &Path, s: &Setup) -> (Vec<Duration>, Vec<Duration>, Vec<D
         || {
             common::c_singles(
                 binary,
-                &[&ROUND_RUNS.to_string(), "each", &s.cycles.to_string()],
+                &[
+                    &ROUND_RUNS.to_string(),
+                    "each",
+                    &s.cycles.to_string(),
+                    &s.limits[0],
+                    &s.limits[1],
+                ],
             )
         },
         |_| {},
@@ -299,7 +358,7 @@ fn main() {
             .measurement_time(Duration::from_secs(8));
         group.bench_function("rust_engine", |b| b.iter(|| rust_cycles(&s, &s.settings)));
         group.bench_function("plain_c", |b| {
-            b.iter_custom(|iters| c_total(&binary, iters, n, steps))
+            b.iter_custom(|iters| c_total(&binary, &s, iters, steps))
         });
         group.finish();
     }
