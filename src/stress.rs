@@ -339,7 +339,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
     }
     for (point, found) in periods {
         let rtol: f64 = point.split("rtol=").nth(1).and_then(|r| r.split(' ').next()).and_then(|r| r.parse().ok()).unwrap_or(1e-8);
-        let allowed = (1e3 * rtol).clamp(1e-6, 0.05);
+        let allowed = (1e3 * rtol).clamp(1e-7, 0.05);
         let (lo, hi) = found.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| (lo.min(*p), hi.max(*p)));
         if found.len() > 1 && (hi - lo) > allowed * hi {
             s.inconsistent += 1;
