@@ -35,15 +35,13 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_real};
-use super::stepper::{self, all_finite, Core, Stepper};
+use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task,
+    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
 const NAME: &str = "Radau5";
-/// Unit roundoff as in RADAU5 (WORK(1) default).
-const UROUND: f64 = 1e-16;
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// Jacobian reuse threshold on the Newton contraction θ.
@@ -465,29 +463,8 @@ impl<S: OdeSystem> Radau5<S> {
     /// Jacobian at (x, y) into `work.jac`: analytic, or forward differences (RADAU5's
     /// increments √(u·max(1e-5, |y_i|))). False if not finite.
     fn compute_jacobian(&mut self) -> bool {
-        let n = self.n;
-        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
-        if self.system.has_jacobian() {
-            w.jac.iter_mut().for_each(|v| *v = 0.0);
-            let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.core.x, &self.core.y, &mut m);
-        } else {
-            w.tmp.copy_from_slice(&self.core.y);
-            for j in 0..n {
-                let ysafe = w.tmp[j];
-                let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
-                w.tmp[j] = ysafe + delt;
-                let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
-                self.core.stats.rhs_evals_jacobian += 1;
-                for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
-                }
-                w.tmp[j] = ysafe;
-            }
-        }
-        all_finite(&w.jac)
+        stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew)
     }
 
     /// LU factors of γ/h − J and (α + iβ)/h − J. False if either is singular.

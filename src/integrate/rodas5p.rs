@@ -43,15 +43,13 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_refined};
-use super::stepper::{self, all_finite, Core, Stepper};
+use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, Task,
+    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
 const NAME: &str = "Rodas5P";
-/// Unit roundoff as in RODAS (WORK(1) default).
-const UROUND: f64 = 1e-16;
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// 1/FAC1 ≤ h_new/h ≤ 1/FAC2 (RODAS's WORK(3) = 0.2, WORK(4) = 6).
@@ -320,34 +318,14 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// with RODAS's increment √(u·max(1e-5, |t|)) (backward if f is not finite ahead). False if
     /// either is not finite.
     fn compute_jacobian(&mut self) -> bool {
-        let n = self.n;
-        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
-        if self.system.has_jacobian() {
-            w.jac.iter_mut().for_each(|v| *v = 0.0);
-            let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.core.x, &self.core.y, &mut m);
-        } else {
-            w.tmp.copy_from_slice(&self.core.y);
-            for j in 0..n {
-                let ysafe = w.tmp[j];
-                let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
-                w.tmp[j] = ysafe + delt;
-                let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
-                self.core.stats.rhs_evals_jacobian += 1;
-                for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
-                }
-                w.tmp[j] = ysafe;
-            }
-        }
-        if !all_finite(&w.jac) {
+        if !stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew) {
             return false;
         }
         if self.autonomous {
             return true;
         }
+        let n = self.n;
         let delt = (UROUND * self.core.x.abs().max(1e-5)).sqrt();
         for direction in [self.core.posneg, -self.core.posneg] {
             let xd = self.core.x + direction * delt;

@@ -6,10 +6,11 @@
 //!
 //! [`Integrator::advance`]: super::Integrator::advance
 
-use super::{ErrorKind, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
+use super::{ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
 
-/// Unit roundoff of the step-underflow test (as in RADAU5, RODAS, SEULEX and ODEX).
-const UROUND: f64 = 1e-16;
+/// The unit roundoff of RADAU5, RODAS, SEULEX and ODEX (step-underflow test, difference
+/// increments, tolerance floors).
+pub(super) const UROUND: f64 = 1e-16;
 /// Consecutive non-finite right-hand sides in one step before giving up.
 const MAX_NONFINITE: u32 = 10;
 
@@ -453,6 +454,35 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
     m.interpolate(t, k, &mut out);
     m.core_mut().dense = out;
     Ok(&m.core().dense)
+}
+
+/// The Jacobian at the internal point (`c.x`, `c.y`) into `jac` (n×n, column j from j·n):
+/// the system's analytic one, or forward differences with RADAU5's increments
+/// √(u·max(1e-5, |y_j|)) against `c.f0` (valid), with `tmp` and `fnew` as scratch. Counts the
+/// evaluations. False if an entry is not finite.
+pub(super) fn jacobian<S: OdeSystem>(system: &S, c: &mut Core, jac: &mut [f64], tmp: &mut [f64], fnew: &mut [f64]) -> bool {
+    let n = c.y.len();
+    c.stats.jac_evals += 1;
+    if system.has_jacobian() {
+        jac.iter_mut().for_each(|v| *v = 0.0);
+        let mut m = JacobianMatrix::new(jac, n);
+        system.jacobian(c.x, &c.y, &mut m);
+    } else {
+        tmp.copy_from_slice(&c.y);
+        for j in 0..n {
+            let ysafe = tmp[j];
+            let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
+            tmp[j] = ysafe + delt;
+            let delt = tmp[j] - ysafe;
+            system.rhs(c.x, tmp, fnew);
+            c.stats.rhs_evals_jacobian += 1;
+            for i in 0..n {
+                jac[j * n + i] = (fnew[i] - c.f0[i]) / delt;
+            }
+            tmp[j] = ysafe;
+        }
+    }
+    all_finite(jac)
 }
 
 /// `impl Integrator` for a method implementing [`Stepper`] (with an inherent `reinit`).

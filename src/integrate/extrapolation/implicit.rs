@@ -2,11 +2,11 @@
 //! rows of the tableau with their stability check, and SEULEX's continuous output.
 
 use super::switching::jacobian_bound;
-use super::tableau::{Failure, UROUND};
+use super::tableau::Failure;
 use super::Extrapolation;
 use crate::integrate::linalg::{lu_real, solve_real, solve_refined};
-use crate::integrate::stepper::all_finite;
-use crate::integrate::{JacobianMatrix, OdeSystem};
+use crate::integrate::stepper::{self, all_finite};
+use crate::integrate::OdeSystem;
 
 /// SEULEX's dense-output parameter λ.
 const DENSE_LAMBDA: usize = 1;
@@ -25,30 +25,9 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// Jacobian at (x, y) into `work.jac`: analytic, or forward differences (SEULEX's increments
     /// √(u·max(1e-5, |y_i|))). False if not finite.
     pub(super) fn compute_jacobian(&mut self) -> bool {
-        let n = self.n;
-        self.core.stats.jac_evals += 1;
         let w = &mut self.work;
-        if self.system.has_jacobian() {
-            w.jac.iter_mut().for_each(|v| *v = 0.0);
-            let mut m = JacobianMatrix::new(&mut w.jac, n);
-            self.system.jacobian(self.core.x, &self.core.y, &mut m);
-        } else {
-            w.tmp.copy_from_slice(&self.core.y);
-            for j in 0..n {
-                let ysafe = w.tmp[j];
-                let delt = (UROUND * ysafe.abs().max(1e-5)).sqrt();
-                w.tmp[j] = ysafe + delt;
-                let delt = w.tmp[j] - ysafe;
-                self.system.rhs(self.core.x, &w.tmp, &mut w.fnew);
-                self.core.stats.rhs_evals_jacobian += 1;
-                for i in 0..n {
-                    w.jac[j * n + i] = (w.fnew[i] - self.core.f0[i]) / delt;
-                }
-                w.tmp[j] = ysafe;
-            }
-        }
-        let ok = all_finite(&w.jac);
-        self.rho_jac = if ok { jacobian_bound(&w.jac, &self.scal, n) } else { f64::INFINITY };
+        let ok = stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew);
+        self.rho_jac = if ok { jacobian_bound(&w.jac, &self.scal, self.n) } else { f64::INFINITY };
         ok
     }
 

@@ -94,10 +94,10 @@ mod switching;
 mod tableau;
 
 use super::linalg::rms;
-use super::stepper::{self, all_finite, Core, Stepper};
+use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 use explicit::stability_boundaries;
-use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT, UROUND};
+use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
 const NAME: &str = "Extrapolation";
 /// Consecutive singular iteration matrices before giving up.

@@ -5,10 +5,9 @@
 //! after an accepted step.
 
 use super::{Extrapolation, Mode};
+use crate::integrate::stepper::UROUND;
 use crate::integrate::OdeSystem;
 
-/// Unit roundoff as in SEULEX and ODEX.
-pub(super) const UROUND: f64 = 1e-16;
 /// Maximal tableau sizes (SEULEX: 12 columns, ODEX: 9).
 pub(super) const KM_IMPLICIT: usize = 12;
 pub(super) const KM_EXPLICIT: usize = 9;
