@@ -326,6 +326,7 @@ pub fn run_with(
         scene: scene_json,
         model: ModelSection {
             gamma: scene.params.gamma,
+            inertia: scene.params.inertia,
             xi: scene.params.xi,
             epsilon: scene.params.epsilon,
             friction: scene.params.friction.label(),

@@ -17,8 +17,11 @@ use std::path::Path;
 /// Model parameters as used (dimensionless).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ModelSection {
-    /// γ.
+    /// γ; +∞ without inertia (the quasi-dynamic model is the γ → ∞ limit), which JSON writes
+    /// as null.
     pub gamma: f64,
+    /// Whether the block has inertia (false: the quasi-dynamic model).
+    pub inertia: bool,
     /// ξ.
     pub xi: f64,
     /// ε.
@@ -129,9 +132,9 @@ impl Report {
         let mut s = String::new();
         let m = &self.model;
         s += &format!(
-            "scene {}: γ = {:e}, ξ = {}, ε = {}, friction {}, {} law{}\n",
+            "scene {}: {}, ξ = {}, ε = {}, friction {}, {} law{}\n",
             self.name,
-            m.gamma,
+            if m.inertia { format!("γ = {:e}", m.gamma) } else { "quasi-dynamic (no inertia)".into() },
             m.xi,
             m.epsilon,
             m.friction,
@@ -169,8 +172,10 @@ impl Report {
                         c.spread.map_or(0.0, |s| s.period)
                     );
                     s += &format!("  period          {:.10}\n  t0              {:.10}\n", v.period, v.t0);
-                    if let Some(w) = v.slip_half_width {
-                        s += &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma);
+                    match v.slip_half_width {
+                        Some(w) if m.inertia => s += &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma),
+                        Some(w) => s += &format!("  slip half-width {:.6e}\n", w),
+                        None => {}
                     }
                     s += &format!(
                         "  v_max           {:.6e} (ln {:.9})\n  v_min           {:.6e}\n  u, θ at v_max   {:.9}, {:.9}\n  slip            {:.9}\n",

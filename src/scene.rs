@@ -50,6 +50,9 @@ struct RawModel {
     /// Radiation damping η (dimensionless, ≥ 0).
     #[serde(default)]
     radiation_damping: Option<f64>,
+    /// false: the quasi-dynamic model (no inertia; needs η > 0, takes no γ). Default true.
+    #[serde(default)]
+    inertia: Option<bool>,
     /// "drr" (default), "saddle_node" or "van_der_pol".
     #[serde(default)]
     kind: Option<String>,
@@ -77,8 +80,9 @@ struct RawModel {
 pub struct Dimensional {
     /// Spring stiffness k.
     pub k: f64,
-    /// Block mass M.
-    pub mass: f64,
+    /// Block mass M (absent in a quasi-dynamic scene, which has no inertia).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
     /// Direct-effect coefficient A.
     pub a: f64,
     /// State-effect coefficient B.
@@ -341,6 +345,7 @@ fn only_model_keys(m: &RawModel, kind: &str, allowed: &[&str], err: &impl Fn(&st
         ("friction", m.friction.is_some()),
         ("state_law", m.state_law.is_some()),
         ("radiation_damping", m.radiation_damping.is_some()),
+        ("inertia", m.inertia.is_some()),
         ("mu0", m.mu0.is_some()),
         ("r", m.r.is_some()),
         ("x0", m.x0.is_some()),
@@ -429,27 +434,41 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         return Err(err("name", "must not be empty".into()));
     }
     let m = &raw.model;
-    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction", "state_law", "radiation_damping"], err)?;
+    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction", "state_law", "radiation_damping", "inertia"], err)?;
+    let inertia = m.inertia.unwrap_or(true);
+    if !inertia {
+        no_inertial_keys(m, err)?;
+    }
     let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
         (Some(d), None, None, None) => {
-            for (name, v) in [("k", d.k), ("mass", d.mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
+            let mass = if inertia {
+                d.mass.ok_or_else(|| err("model.dimensional.mass", "missing: the block mass M (per unit area), or \"inertia\": false for the quasi-dynamic model".into()))?
+            } else {
+                1.0
+            };
+            for (name, v) in [("k", d.k), ("mass", mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
                 positive(&format!("model.dimensional.{name}"), v, "a physical parameter", err)?;
             }
-            ((d.d_c / d.v0) * (d.k / d.mass).sqrt(), d.k * d.d_c / d.a, (d.b - d.a) / d.a)
+            let gamma = if inertia { (d.d_c / d.v0) * (d.k / mass).sqrt() } else { f64::INFINITY };
+            (gamma, d.k * d.d_c / d.a, (d.b - d.a) / d.a)
         }
         (Some(_), ..) => {
             return Err(err("model", "give either gamma/xi/epsilon or dimensional, not both".into()));
         }
+        (None, None, Some(x), Some(e)) if !inertia => (f64::INFINITY, x, e),
         (None, Some(g), Some(x), Some(e)) => (g, x, e),
         (None, g, x, e) => {
+            let g = if inertia { g } else { Some(f64::INFINITY) };
             let missing: Vec<&str> =
                 [("gamma", g), ("xi", x), ("epsilon", e)].iter().filter(|(_, v)| v.is_none()).map(|(n, _)| *n).collect();
             return Err(err("model", format!("missing {} (or give \"dimensional\": {{k, mass, a, b, d_c, v0}})", missing.join(", "))));
         }
     };
-    let gamma = positive("model.gamma", gamma, "γ = (D_c/v0)·√(k/M), e.g. 1e3", err)?;
-    if !(1e-100..=1e100).contains(&gamma) {
-        return Err(err("model.gamma", format!("{gamma:e} is outside 1e-100 … 1e100 (γ² must be a normal double)")));
+    if inertia {
+        let gamma = positive("model.gamma", gamma, "γ = (D_c/v0)·√(k/M), e.g. 1e3", err)?;
+        if !(1e-100..=1e100).contains(&gamma) {
+            return Err(err("model.gamma", format!("{gamma:e} is outside 1e-100 … 1e100 (γ² must be a normal double)")));
+        }
     }
     let xi = positive("model.xi", xi, "ξ = k·D_c/A, of order one, e.g. 0.7", err)?;
     let epsilon = finite("model.epsilon", epsilon, err)?;
@@ -468,7 +487,13 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         })?,
     };
     let eta = radiation_damping(m, err)?;
-    let params = DrrParams { gamma, xi, epsilon, friction, state_law, eta };
+    if !inertia && eta == 0.0 {
+        return Err(err(
+            "model.radiation_damping",
+            "the quasi-dynamic model (\"inertia\": false) needs radiation damping η > 0: without it the force balance u + (θ + f(v))/ξ = 0 has no solution once the stress outruns f, and v blows up in finite time; give radiation_damping > 0 (e.g. 0.05) or dimensional.shear_modulus and shear_wave_speed".into(),
+        ));
+    }
+    let params = DrrParams { gamma, xi, epsilon, friction, state_law, eta, inertia };
     let drr = Drr::new(params);
 
     let units = match raw.units.clone() {
@@ -489,6 +514,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let solver = solver_spec(raw.solver.as_ref(), err)?;
     let analyses = analyses(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
     papers_model_only(&params, &analyses, err)?;
+    if !inertia {
+        quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
+    }
     Ok(Scene { name: raw.name, description: raw.description, params, dimensional: m.dimensional, units, initial, solver, analyses })
 }
 
@@ -523,6 +551,32 @@ fn radiation_damping(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) ->
     Ok(eta)
 }
 
+/// Rejects the keys that only the inertial model takes when `"inertia": false`: γ (and the
+/// mass that defines it) mean nothing without inertia (a scene asks only for what it needs).
+fn no_inertial_keys(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+    let why = "the quasi-dynamic model (\"inertia\": false) has no inertia, so no γ = (D_c/v0)·√(k/M): it is the γ → ∞ limit";
+    if m.gamma.is_some() {
+        return Err(err("model.gamma", format!("{why}; drop \"gamma\" (or drop \"inertia\": false for the inertial model)")));
+    }
+    if m.dimensional.is_some_and(|d| d.mass.is_some()) {
+        return Err(err("model.dimensional.mass", format!("{why}; drop \"mass\" (or drop \"inertia\": false for the inertial model)")));
+    }
+    Ok(())
+}
+
+/// Continuation of a quasi-dynamic scene: not in γ (it has none), and in η only towards η > 0.
+fn quasi_dynamic_continuation(c: Option<&ContinuationOptions>, raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+    use crate::analysis::continuation::Parameter;
+    let Some(c) = c else { return Ok(()) };
+    let index = raw.iter().position(|a| matches!(a, RawAnalysis::WithOptions(m) if m.contains_key("continuation"))).unwrap_or(0);
+    let field = format!("analyses[{index}].continuation");
+    match c.parameter {
+        Parameter::Gamma => Err(err(&format!("{field}.parameter"), "the quasi-dynamic model (\"inertia\": false) has no γ to continue; use \"epsilon\", \"xi\" or \"radiation_damping\"".into())),
+        Parameter::Eta if c.to <= 0.0 => Err(err(&format!("{field}.to"), format!("{}: the quasi-dynamic model needs radiation damping η > 0 (at η = 0 v blows up in finite time)", c.to))),
+        _ => Ok(()),
+    }
+}
+
 /// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when
 /// the scene has another state law or radiation damping.
 fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
@@ -537,6 +591,9 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
     ];
     for (asked, name, why) in slip_only {
         if asked {
+            if !params.inertia {
+                return Err(err("model.inertia", format!("the \"{name}\" analysis needs the inertial slip-law model without radiation damping ({why}); the quasi-dynamic model (\"inertia\": false) cannot run it: drop \"{name}\"")));
+            }
             let field = if params.state_law != StateLaw::Slip { "model.state_law" } else { "model.radiation_damping" };
             return Err(err(
                 field,
@@ -556,6 +613,9 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
 fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String) -> SceneError) -> Result<[f64; 3], SceneError> {
     let theta_star = drr.fixed_point()[2];
     let (u, v, theta) = raw.map_or((None, None, None), |r| (r.u, r.v, r.theta));
+    if !drr.params().inertia && u.is_some() && v.is_some() {
+        return Err(err("initial.v", "the quasi-dynamic model (\"inertia\": false) has no inertia: the force balance u + (θ + f(v) + ηv)/ξ = 0 gives v from u and θ (and u from v and θ); give u or v, not both".into()));
+    }
     let theta = finite("initial.theta", theta.unwrap_or(theta_star), err)?;
     let w = match v {
         Some(v) => positive("initial.v", v, "a velocity in units of v0, e.g. 0.5", err)?.ln(),

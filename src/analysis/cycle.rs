@@ -418,7 +418,7 @@ impl<'a> Tracker<'a> {
                     tr.push(0.0, &y);
                 }
                 self.open = Some(c);
-                self.rebase_in_rise = self.drr.params().gamma * t > 1.0 / (1e3 * f64::EPSILON);
+                self.rebase_in_rise = self.drr.slip_speed_scale() * t > 1.0 / (1e3 * f64::EPSILON);
             }
             Event::Down => {
                 if let Some(c) = &mut self.open {
@@ -632,12 +632,12 @@ impl<'a> Tracker<'a> {
 
 /// Whether a restart (time re-base) at y is safe: the model's dw/dt there, whose error is the
 /// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, times ∂G/∂w) amplified by
-/// γ² e^{−w}, is resolved to 1e-3 of `rate`, the scale of dw/dt in the current rise.
+/// |∂(dw/dt)/∂G| (γ² e^{−w} with inertia), is resolved to 1e-3 of `rate`, the scale of dw/dt in
+/// the current rise.
 pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
-    let p = drr.params();
     let (rtol, atol) = w_tolerance;
     let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y[W]);
-    p.gamma * p.gamma * (-y[W]).exp() * error_g <= 1e-3 * rate
+    drr.offset_feedback(y[W]).abs() * error_g <= 1e-3 * rate
 }
 
 /// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or

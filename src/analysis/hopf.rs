@@ -19,6 +19,17 @@
 //! ω_c² → κξ/(f₁ + η): damping raises the threshold by η/f₁ and slows the oscillation
 //! (derivation: docs/state-laws.md).
 //!
+//! **Quasi-dynamic model** (no inertia, [`crate::model::quasi_dynamic`]): on the force balance
+//! G = 0 the linearisation in (u, θ) has λ² + bλ + c with F = f₁ + η,
+//!
+//! ```text
+//! b = (ξ + κ (η − ε f₁))/F,   c = κ ξ/F,
+//! ```
+//!
+//! the γ → ∞ limit of a₁/a₂ and a₀/a₂: ε_c = (ξ/κ + η)/f₁ and ω_c² = κξ/(f₁ + η) exactly (the
+//! inertial formulas' limits). Its stabilised w equation adds the eigenvalue −κ_G (the
+//! relaxation of G), which is not a property of the model and is not reported.
+//!
 //! The eigenvalues are computed from the polynomial, not from the 3×3 matrix: at γ = 1e8 its
 //! entries reach 1e16 and a matrix eigen-solver would lose the O(1) real part of the slow pair.
 //! The large real root is found by Newton's method from the left of all roots, then deflated
@@ -33,7 +44,7 @@ pub struct HopfReport {
     /// Fixed point (u, v, θ) (dimensionless).
     pub fixed_point: [f64; 3],
     /// Eigenvalues of the Jacobian at the fixed point, as [re, im] (1/time unit), fast real
-    /// one first.
+    /// one first; without inertia the two of the quasi-dynamic model (see the module docs).
     pub eigenvalues: Vec<[f64; 2]>,
     /// Threshold ε_c (dimensionless; ξγ²/(ξ + γ²) for f = ln v without damping).
     pub epsilon_c: f64,
@@ -57,7 +68,8 @@ impl HopfReport {
     }
 }
 
-/// Coefficients (a₂, a₁, a₀) of the characteristic polynomial at the fixed point.
+/// Coefficients (a₂, a₁, a₀) of the inertial model's characteristic polynomial at the fixed
+/// point.
 pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
     let p = drr.params();
     let g = p.gamma * p.gamma;
@@ -66,14 +78,42 @@ pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
     (kappa + g * (f1 + p.eta) / p.xi, g * (1.0 + kappa * (p.eta - p.epsilon * f1) / p.xi), g * kappa)
 }
 
-/// The threshold ε_c at the parameters' γ, ξ, η, friction and state law (their ε is ignored).
-pub fn epsilon_c(drr: &Drr) -> f64 {
+/// Coefficients (b, c) of the quasi-dynamic model's characteristic polynomial λ² + bλ + c at
+/// the fixed point, on the force balance (see the module docs).
+pub fn quasi_dynamic_polynomial(drr: &Drr) -> (f64, f64) {
     let p = drr.params();
-    let g = p.gamma * p.gamma;
     let (_, f1) = p.friction.eval(0.0);
     let kappa = p.state_law.steady_rate();
     let e = f1 + p.eta;
+    ((p.xi + kappa * (p.eta - p.epsilon * f1)) / e, kappa * p.xi / e)
+}
+
+/// The threshold ε_c at the parameters' γ, ξ, η, friction and state law (their ε is ignored);
+/// without inertia, its γ → ∞ limit (ξ/κ + η)/f₁.
+pub fn epsilon_c(drr: &Drr) -> f64 {
+    let p = drr.params();
+    let (_, f1) = p.friction.eval(0.0);
+    let kappa = p.state_law.steady_rate();
+    if !p.inertia {
+        return (p.xi / kappa + p.eta) / f1;
+    }
+    let g = p.gamma * p.gamma;
+    let e = f1 + p.eta;
     (p.eta + p.xi * g * e / (kappa * (kappa * p.xi + g * e))) / f1
+}
+
+/// Roots of λ² + bλ + c as [re, im].
+fn quadratic_roots(b: f64, c: f64) -> Vec<[f64; 2]> {
+    let disc = b * b - 4.0 * c;
+    if disc >= 0.0 {
+        // Stable quadratic formula.
+        let s = -0.5 * (b + b.signum() * disc.sqrt());
+        let (r1, r2) = if s != 0.0 { (s, c / s) } else { (0.0, 0.0) };
+        vec![[r1, 0.0], [r2, 0.0]]
+    } else {
+        let im = 0.5 * (-disc).sqrt();
+        vec![[-0.5 * b, im], [-0.5 * b, -im]]
+    }
 }
 
 /// Roots of λ³ + a₂λ² + a₁λ + a₀ as [re, im], the real root found by Newton first.
@@ -96,29 +136,23 @@ pub fn cubic_roots(a2: f64, a1: f64, a0: f64) -> Vec<[f64; 2]> {
     // Deflate: (λ − r)(λ² + bλ + c) with c = −a₀/r, b = (c − a₁)/r.
     let c = -a0 / real;
     let b = (c - a1) / real;
-    let disc = b * b - 4.0 * c;
     let mut roots = vec![[real, 0.0]];
-    if disc >= 0.0 {
-        // Stable quadratic formula.
-        let s = -0.5 * (b + b.signum() * disc.sqrt());
-        let (r1, r2) = if s != 0.0 { (s, c / s) } else { (0.0, 0.0) };
-        roots.push([r1, 0.0]);
-        roots.push([r2, 0.0]);
-    } else {
-        let im = 0.5 * (-disc).sqrt();
-        roots.push([-0.5 * b, im]);
-        roots.push([-0.5 * b, -im]);
-    }
+    roots.extend(quadratic_roots(b, c));
     roots
 }
 
 /// The Hopf analysis.
 pub fn analyse(drr: &Drr) -> HopfReport {
     let params = drr.params();
-    let (a2, a1, a0) = characteristic_polynomial(drr);
-    let eigenvalues = cubic_roots(a2, a1, a0);
+    let (eigenvalues, omega_c) = if params.inertia {
+        let (a2, a1, a0) = characteristic_polynomial(drr);
+        (cubic_roots(a2, a1, a0), (a0 / a2).sqrt())
+    } else {
+        let (b, c) = quasi_dynamic_polynomial(drr);
+        // ω_c² = c at b = 0, where c does not depend on ε.
+        (quadratic_roots(b, c), c.sqrt())
+    };
     let epsilon_c = epsilon_c(drr);
-    let omega_c = (a0 / a2).sqrt();
     let fp = drr.fixed_point();
     HopfReport {
         fixed_point: [fp[0], fp[1].exp(), fp[2]],
@@ -248,6 +282,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The quasi-dynamic threshold against the eigenvalues of its stabilised Jacobian (the
+    /// model's pair and the stabilisation's −κ_G): ε_c by bisection on the largest real part,
+    /// ω_c there, for every friction law, state law and η; and the inertial threshold tends to
+    /// it as γ grows.
+    #[test]
+    fn quasi_dynamic_threshold_matches_the_eigenvalues_of_its_linearisation() {
+        use crate::model::quasi_dynamic::CONSTRAINT_RELAXATION_RATE;
+        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
+        for friction in frictions() {
+            for (_, state_law) in StateLaw::ALL {
+                for eta in [0.01, 0.1, 1.0] {
+                    let base = DrrParams { state_law, ..DrrParams::quasi_dynamic(0.7, 0.0, eta, friction) };
+                    let derived = analyse(&Drr::new(base));
+                    // Eigenvalues at ε = 1.3: the reported pair and −κ_G.
+                    let at = DrrParams { epsilon: 1.3, ..base };
+                    let mut reference = matrix_eigenvalues(&Drr::new(at));
+                    let mut ours = analyse(&Drr::new(at)).eigenvalues;
+                    ours.push([-CONSTRAINT_RELAXATION_RATE, 0.0]);
+                    let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
+                    reference.sort_by(key);
+                    ours.sort_by(key);
+                    for (a, b) in ours.iter().zip(&reference) {
+                        assert!((a[0] - b[0]).abs() < 1e-10 && (a[1] - b[1]).abs() < 1e-10, "{friction:?} {state_law:?} η={eta}: {ours:?} vs {reference:?}");
+                    }
+                    let (mut lo, mut hi) = (0.0, 20.0);
+                    assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
+                    }
+                    let eps = 0.5 * (lo + hi);
+                    assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{friction:?} {state_law:?} η={eta}: {eps} vs {}", derived.epsilon_c);
+                    let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
+                    assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{friction:?} {state_law:?} η={eta}: ω {omega} vs {}", derived.omega_c);
+                    // The inertial threshold at γ = 1e6 is the quasi-dynamic one to O(1/γ²).
+                    let inertial = analyse(&Drr::new(DrrParams { gamma: 1e6, inertia: true, ..base }));
+                    assert!((inertial.epsilon_c - derived.epsilon_c).abs() < 1e-10 && (inertial.omega_c - derived.omega_c).abs() < 1e-10, "{friction:?} {state_law:?} η={eta}: {inertial:?} vs {derived:?}");
+                }
+            }
+        }
+        let qd = analyse(&Drr::new(DrrParams::quasi_dynamic(0.8, 1.0, 0.05, Friction::Log)));
+        assert!((qd.epsilon_c - 0.85).abs() < 1e-15 && (qd.omega_c - (0.8f64 / 1.05).sqrt()).abs() < 1e-15 && qd.above_threshold, "{qd:?}");
     }
 
     #[test]

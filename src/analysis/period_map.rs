@@ -7,7 +7,8 @@
 //! and the fundamental matrix at fixed time, Φ = f τᵀ + Ψ (τ: how the start shifts the timing),
 //! grows with f: the O(1) part Ψ that survives the slip is lost to cancellation (at γ = 1e8 the
 //! trivial multiplier came out as 0.98 with Radau5 and 29 with CVODE at rtol 1e-10). So the
-//! return is cut at the crossings of w = ½ ln γ (up and down) and of w = 0 (down): at each cut
+//! return is cut at the crossings of w = ½ ln γ (up and down; ½ ln(1/η) without inertia, where
+//! radiation damping caps v near 1/η) and of w = 0 (down): at each cut
 //! the segment's Φ is projected onto the section (which removes the timing part) and Φ
 //! restarts from I. The Jacobian of the map is the product of the segments' section
 //! Jacobians; the fixed-time monodromy is the product of the segments' Φ. A cut happens only
@@ -119,7 +120,7 @@ pub fn flow_to_section(
     let mut rebase_pending = false;
     let mut rise_rate: f64 = 0.0;
     let mut ln_v_min = start[W];
-    let cut_level = 0.5 * drr.params().gamma.ln();
+    let cut_level = 0.5 * drr.slip_speed_scale().ln();
     let mut fundamental = Matrix3::identity();
     let mut section_jacobian = Matrix2::identity();
     // Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.

@@ -13,17 +13,21 @@
 //!
 //! Working in w keeps v > 0 automatically and lets v span 1e-30 … 1e10.
 //!
+//! Without inertia (`inertia: false`, the quasi-dynamic limit γ → ∞ at fixed η > 0) the w
+//! equation is the stabilised force balance of [`super::quasi_dynamic`] instead.
+//!
 //! Reference: Pomeau & Le Berre, "Critical speed-up vs critical slow-down" (eqs. DR1–DR3
 //! rescaled); Rice & Tse (1986); Dieterich (1979); Ruina (1983); Perrin, Rice & Zheng (1995).
 
 use super::friction::Friction;
+use super::quasi_dynamic::{self, CONSTRAINT_RELAXATION_RATE};
 use super::state_law::StateLaw;
 use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem};
 
 /// Parameters of the dimensionless DRR model.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DrrParams {
-    /// γ = (D_c/v0)·√(k/M) > 0, the stiffness parameter.
+    /// γ = (D_c/v0)·√(k/M) > 0, the stiffness parameter; +∞ without inertia.
     pub gamma: f64,
     /// ξ = k·D_c/A > 0.
     pub xi: f64,
@@ -35,18 +39,27 @@ pub struct DrrParams {
     pub state_law: StateLaw,
     /// Radiation damping η = η_dim·v0/A ≥ 0 (dimensionless; η_dim = G/(2c_s)).
     pub eta: f64,
+    /// Whether the block has inertia. Without it (the quasi-dynamic model, η > 0) the force
+    /// balance determines v ([`super::quasi_dynamic`]) and `gamma` is +∞, the limit it is.
+    pub inertia: bool,
 }
 
 impl DrrParams {
     /// The paper's model: the slip law without radiation damping.
     pub fn new(gamma: f64, xi: f64, epsilon: f64, friction: Friction) -> Self {
-        Self { gamma, xi, epsilon, friction, state_law: StateLaw::Slip, eta: 0.0 }
+        Self { gamma, xi, epsilon, friction, state_law: StateLaw::Slip, eta: 0.0, inertia: true }
+    }
+
+    /// The quasi-dynamic model (no inertia) with radiation damping η > 0 and the slip law;
+    /// γ is +∞, the limit this model is.
+    pub fn quasi_dynamic(xi: f64, epsilon: f64, eta: f64, friction: Friction) -> Self {
+        Self { eta, inertia: false, ..Self::new(f64::INFINITY, xi, epsilon, friction) }
     }
 
     /// Whether this is the paper's model (slip law, η = 0), for which the paper-specific
     /// analyses are derived.
     pub fn is_papers_model(&self) -> bool {
-        self.state_law == StateLaw::Slip && self.eta == 0.0
+        self.state_law == StateLaw::Slip && self.eta == 0.0 && self.inertia
     }
 }
 
@@ -78,12 +91,13 @@ pub struct Drr {
 }
 
 /// The velocity-dependent part of the force balance, f(v) + η v, at w = ln v: its value, its
-/// w-derivative v f'(v) + η v and the w-derivative of that.
+/// w-derivative v f'(v) + η v and the next two w-derivatives.
 #[derive(Debug, Clone, Copy)]
 struct Resistance {
     value: f64,
     slope: f64,
     curvature: f64,
+    curvature_slope: f64,
 }
 
 impl Drr {
@@ -101,11 +115,12 @@ impl Drr {
         let p = &self.params;
         let (f, vfp) = p.friction.eval(w);
         let h = p.friction.d_vfprime_dw(w);
+        let h1 = p.friction.d2_vfprime_dw2(w);
         if p.eta == 0.0 {
-            return Resistance { value: f, slope: vfp, curvature: h };
+            return Resistance { value: f, slope: vfp, curvature: h, curvature_slope: h1 };
         }
         let ev = p.eta * w.exp();
-        Resistance { value: f + ev, slope: vfp + ev, curvature: h + ev }
+        Resistance { value: f + ev, slope: vfp + ev, curvature: h + ev, curvature_slope: h1 + ev }
     }
 
     /// The fixed point (u*, w* = 0, θ*): v = 1, θ* = (1+ε)(x* − f(1)) with x* the state law's
@@ -181,6 +196,24 @@ impl Drr {
         (y[THETA] / (1.0 + p.epsilon) + f, vfp, p.friction.d_vfprime_dw(y[W]))
     }
 
+    /// dθ/dt = R = (1+ε) v F(x) with its first and second derivatives in (w, θ), using
+    /// s = v f'(v), h = ds/dw: ∂R/∂w = c (vF + vF' s), ∂R/∂θ = vF', ∂²R/∂w² =
+    /// c (vF + 2vF' s + vF'' s² + vF' h), ∂²R/∂θ∂w = vF' + vF'' s, ∂²R/∂θ² = vF''/c.
+    fn state_rate(&self, y: &[f64]) -> StateRate {
+        let p = &self.params;
+        let c = 1.0 + p.epsilon;
+        let (x, s, h) = self.law_argument(y);
+        let law = p.state_law.terms(y[W], x);
+        StateRate {
+            value: c * law.f,
+            w: c * (law.f + law.d1 * s),
+            theta: law.d1,
+            ww: c * (law.f + 2.0 * law.d1 * s + law.d2 * s * s + law.d1 * h),
+            w_theta: law.d1 + law.d2 * s,
+            theta_theta: law.d2 / c,
+        }
+    }
+
     /// The arrest rate γ²e^(−w) (held below [`ARREST_RATE_HELD_BELOW`] under logarithmic
     /// friction) and whether it depends on w there.
     fn arrest_rate(&self, w: f64) -> (f64, bool) {
@@ -191,14 +224,58 @@ impl Drr {
         }
     }
 
+    /// The quasi-dynamic dw/dt = −(ξ(v − 1) + R + κ_G ξG)/S with its gradient and Hessian in
+    /// (u, w, θ) ([`quasi_dynamic`]).
+    fn force_balance_rate(&self, y: &[f64]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
+        let p = &self.params;
+        let k = CONSTRAINT_RELAXATION_RATE;
+        let w = y[W];
+        let v = w.exp();
+        let r = self.resistance(w);
+        let g = y[U] + (y[THETA] + r.value) / p.xi;
+        let law = self.state_rate(y);
+        let n = p.xi * w.exp_m1() + law.value + k * p.xi * g;
+        let n_grad = [k * p.xi, p.xi * v + law.w + k * r.slope, law.theta + k];
+        let mut n_hess = [[0.0; 3]; 3];
+        n_hess[W][W] = p.xi * v + law.ww + k * r.curvature;
+        n_hess[W][THETA] = law.w_theta;
+        n_hess[THETA][W] = law.w_theta;
+        n_hess[THETA][THETA] = law.theta_theta;
+        quasi_dynamic::quotient(n, n_grad, n_hess, (r.slope, r.curvature, r.curvature_slope))
+    }
+
+    /// ∂(dw/dt)/∂G, how an error in the distance G to the force balance shows in dw/dt:
+    /// −γ²e^(−w) with inertia, −κ_G ξ/S without (S = v f'(v) + η v).
+    pub fn offset_feedback(&self, w: f64) -> f64 {
+        if self.params.inertia {
+            -self.arrest_rate(w).0
+        } else {
+            -CONSTRAINT_RELAXATION_RATE * self.params.xi / self.resistance(w).slope
+        }
+    }
+
+    /// The scale of v in a slip, which sets the fastest time scale 1/scale: γ with inertia,
+    /// 1/η without (radiation damping caps v near 1/η).
+    pub fn slip_speed_scale(&self) -> f64 {
+        if self.params.inertia { self.params.gamma } else { 1.0 / self.params.eta }
+    }
+
     fn split(&self, y: &[f64]) -> (f64, f64, f64) {
         let w = y[W];
-        let g = self.manifold_offset(y);
-        let dw = -self.arrest_rate(w).0 * g;
-        let (x, _, _) = self.law_argument(y);
-        let dtheta = (1.0 + self.params.epsilon) * self.params.state_law.terms(w, x).f;
-        (w.exp_m1(), dw, dtheta)
+        let dw = if self.params.inertia { -self.arrest_rate(w).0 * self.manifold_offset(y) } else { self.force_balance_rate(y).0 };
+        (w.exp_m1(), dw, self.state_rate(y).value)
     }
+}
+
+/// dθ/dt and its derivatives in (w, θ) ([`Drr::state_rate`]).
+#[derive(Debug, Clone, Copy)]
+struct StateRate {
+    value: f64,
+    w: f64,
+    theta: f64,
+    ww: f64,
+    w_theta: f64,
+    theta_theta: f64,
 }
 
 impl OdeSystem for Drr {
@@ -220,20 +297,24 @@ impl OdeSystem for Drr {
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
         let p = &self.params;
         let w = y[W];
-        let r = self.resistance(w);
-        let g = y[U] + (y[THETA] + r.value) / p.xi;
-        let (a, varies) = self.arrest_rate(w);
-        let da = if varies { a } else { 0.0 };
-        let c = 1.0 + p.epsilon;
-        let (x, s, _) = self.law_argument(y);
-        let law = p.state_law.terms(w, x);
+        let law = self.state_rate(y);
         jac.set(U, W, w.exp());
-        jac.set(W, U, -a);
-        jac.set(W, W, da * g - a * r.slope / p.xi);
-        jac.set(W, THETA, -a / p.xi);
-        // R = c v F(x): ∂R/∂w = c (vF + vF' s), ∂R/∂θ = vF'.
-        jac.set(THETA, W, c * (law.f + law.d1 * s));
-        jac.set(THETA, THETA, law.d1);
+        if p.inertia {
+            let r = self.resistance(w);
+            let g = y[U] + (y[THETA] + r.value) / p.xi;
+            let (a, varies) = self.arrest_rate(w);
+            let da = if varies { a } else { 0.0 };
+            jac.set(W, U, -a);
+            jac.set(W, W, da * g - a * r.slope / p.xi);
+            jac.set(W, THETA, -a / p.xi);
+        } else {
+            let (_, grad, _) = self.force_balance_rate(y);
+            for k in [U, W, THETA] {
+                jac.set(W, k, grad[k]);
+            }
+        }
+        jac.set(THETA, W, law.w);
+        jac.set(THETA, THETA, law.theta);
     }
 
     fn has_jacobian_derivative(&self) -> bool {
@@ -243,30 +324,38 @@ impl OdeSystem for Drr {
     fn jacobian_derivative(&self, _t: f64, y: &[f64], k: usize, out: &mut JacobianMatrix<'_>) {
         let p = &self.params;
         let w = y[W];
+        let law = self.state_rate(y);
+        match k {
+            U => {}
+            THETA => {
+                out.set(THETA, W, law.w_theta);
+                out.set(THETA, THETA, law.theta_theta);
+            }
+            _ => {
+                out.set(U, W, w.exp());
+                out.set(THETA, W, law.ww);
+                out.set(THETA, THETA, law.w_theta);
+            }
+        }
+        if !p.inertia {
+            let (_, _, hess) = self.force_balance_rate(y);
+            for j in [U, W, THETA] {
+                out.set(W, j, hess[j][k]);
+            }
+            return;
+        }
         let r = self.resistance(w);
         let g = y[U] + (y[THETA] + r.value) / p.xi;
         let (a, varies) = self.arrest_rate(w);
         // da/dw = −a where the rate varies, 0 where it is held.
         let da = if varies { a } else { 0.0 };
-        let c = 1.0 + p.epsilon;
-        let (x, s, h) = self.law_argument(y);
-        let law = p.state_law.terms(w, x);
         match k {
             U => out.set(W, W, da),
-            THETA => {
-                out.set(W, W, da / p.xi);
-                // ∂²R/∂θ∂w = vF' + vF'' s, ∂²R/∂θ² = vF''/c.
-                out.set(THETA, W, law.d1 + law.d2 * s);
-                out.set(THETA, THETA, law.d2 / c);
-            }
+            THETA => out.set(W, W, da / p.xi),
             _ => {
-                out.set(U, W, w.exp());
                 out.set(W, U, da);
                 out.set(W, W, -da * g + 2.0 * da * r.slope / p.xi - a * r.curvature / p.xi);
                 out.set(W, THETA, da / p.xi);
-                // ∂²R/∂w² = c (vF + 2vF' s + vF'' s² + vF' h).
-                out.set(THETA, W, c * (law.f + 2.0 * law.d1 * s + law.d2 * s * s + law.d1 * h));
-                out.set(THETA, THETA, law.d1 + law.d2 * s);
             }
         }
     }
@@ -309,7 +398,7 @@ mod tests {
         [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }]
     }
 
-    /// Every friction law × state law, without and with radiation damping.
+    /// Every friction law × state law, without and with radiation damping, and quasi-dynamic.
     fn models(gamma: f64, xi: f64, epsilon: f64) -> Vec<Drr> {
         let mut out = Vec::new();
         for friction in frictions() {
@@ -317,6 +406,7 @@ mod tests {
                 for eta in [0.0, 0.37] {
                     out.push(Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, xi, epsilon, friction) }));
                 }
+                out.push(Drr::new(DrrParams { state_law, ..DrrParams::quasi_dynamic(xi, epsilon, 0.37, friction) }));
             }
         }
         out
@@ -429,6 +519,23 @@ mod tests {
         // Outside the range of f + ηv (asinh: f + ηv > 0): no point of the manifold.
         let asinh = Drr::new(DrrParams { eta: 0.5, ..DrrParams::new(1e3, 0.7, 0.72, Friction::Asinh) });
         assert_eq!(asinh.manifold_w(1.0, 0.0), None);
+    }
+
+    /// Without inertia the force-balance residual G relaxes exactly at the rate κ_G:
+    /// dG/dt = ∂G/∂y · dy/dt = −κ_G G, on and off the manifold.
+    #[test]
+    fn quasi_dynamic_force_balance_relaxes_at_the_constraint_rate() {
+        for drr in models(1.0, 0.7, 0.72).into_iter().filter(|d| !d.params().inertia) {
+            let p = drr.params();
+            for y in STATES.into_iter().chain([[drr.manifold_u(1.5, 0.2), 1.5, 0.2]]) {
+                let mut d = [0.0; 3];
+                drr.rhs(0.0, &y, &mut d);
+                let g = drr.manifold_offset(&y);
+                let dg = d[U] + d[THETA] / p.xi + drr.manifold_offset_slope(y[W]) * d[W];
+                let scale = d[U].abs() + (d[THETA] / p.xi).abs() + (drr.manifold_offset_slope(y[W]) * d[W]).abs();
+                assert!((dg + CONSTRAINT_RELAXATION_RATE * g).abs() <= 1e-14 * scale.max(1.0), "{p:?} y={y:?}: dG/dt {dg} vs G {g}");
+            }
+        }
     }
 
     #[test]

@@ -59,6 +59,25 @@ impl Friction {
         }
     }
 
+    /// d²(v f'(v))/dw², needed by the w-derivative of the quasi-dynamic model's Jacobian.
+    pub fn d2_vfprime_dw2(self, w: f64) -> f64 {
+        match self {
+            Friction::Log => 0.0,
+            Friction::Asinh => {
+                // v (v²+1)^{−3/2} differentiated in w: v (1 − 2v²)/(v²+1)^{5/2}; for v > 1 in
+                // r = 1/v: r² (r² − 2)/(1 + r²)^{5/2}.
+                if w > 0.0 {
+                    let r2 = (-2.0 * w).exp();
+                    r2 * (r2 - 2.0) / (1.0 + r2).powf(2.5)
+                } else {
+                    let v = w.exp();
+                    v * (1.0 - 2.0 * v * v) / (v * v + 1.0).powf(2.5)
+                }
+            }
+            Friction::Power { alpha } => alpha * alpha * (alpha * w).exp(),
+        }
+    }
+
     /// A short label, e.g. "log", "asinh", "power(alpha=0.31)".
     pub fn label(self) -> String {
         match self {

@@ -4,6 +4,7 @@ pub mod deep_stick;
 pub mod drr;
 pub mod fast_slip;
 pub mod friction;
+pub mod quasi_dynamic;
 pub mod robertson;
 pub mod slow_manifold;
 pub mod state_law;
