@@ -140,8 +140,9 @@ fn diagnose<E: Into<AnalysisError>>(drr: &Drr, error: E) -> AnalysisError {
             let g = drr.manifold_offset(&[u, w, theta]);
             let floor = drr.manifold_w(u, theta);
             if w < -10.0 && g > 0.0 && floor.is_none() {
+                let pull = if drr.params().inertia { "dv/dt = −γ²G with G" } else { "the quasi-dynamic force balance is off by G" };
                 Some(format!(
-                    " [v = {:.3e} is falling to 0 in finite time (dv/dt = −γ²G with G = {g:.3e} > 0 and no slow manifold \
+                    " [v = {:.3e} is falling to 0 in finite time ({pull} = {g:.3e} > 0 and no slow manifold \
                      below it): the block stops, which the integration in ln v cannot pass]",
                     w.exp()
                 ))
