@@ -245,7 +245,7 @@ pub fn run_with(
                     let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
                     continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
                 }
-                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.clone().unwrap_or_default()),
+                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
             }
         });
         (a.shooting.is_some().then_some(report), curve)
