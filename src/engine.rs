@@ -2,7 +2,7 @@
 
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
 use crate::analysis::noise::{self, models::NoiseModel};
-use crate::analysis::shooting::{self, ShootingSettings};
+use crate::analysis::shooting;
 use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
@@ -10,7 +10,8 @@ use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
-use crate::scene::{CycleOptions, Method, OtherModel, OtherScene, Scene, SolverSpec};
+use crate::analysis::cycle::CycleOptions;
+use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -188,16 +189,10 @@ pub fn cycle_with(
     trajectory_cycles: usize,
     linear: &HopfReport,
 ) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
-    let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
     let settings = cycle::CycleSettings {
-        tolerance: o.tolerance.unwrap_or(defaults.tolerance),
-        settle: o.settle.unwrap_or(defaults.settle),
-        max_cycles: o.max_cycles.unwrap_or(defaults.max_cycles),
-        max_time: o.max_time.unwrap_or(defaults.max_time),
-        max_steps: o.max_steps.unwrap_or(defaults.max_steps),
         trajectory_cycles,
         escape: cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step(linear))),
-        ..defaults
+        ..o.settings(scene.solver.rtol, scene.solver.atol[1])
     };
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
     let (mut integ, tables) = integrator_with_max_step(*drr, max_step(linear), &scene.solver, &scene.initial, atol)?;
@@ -239,13 +234,7 @@ pub fn run_with(
         None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
     };
     let (shooting_report, continuation_report) = if a.shooting.is_some() || a.continuation.is_some() {
-        let defaults = ShootingSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
-        let o = a.shooting.clone().unwrap_or_default();
-        let settings = ShootingSettings {
-            tolerance: o.tolerance.unwrap_or(defaults.tolerance),
-            max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
-            ..defaults
-        };
+        let settings = a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
         let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial).map_err(failed(&drr, "shooting"))?;
         let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(failed(&drr, "shooting"))?;
         if cycle_report.is_none() {

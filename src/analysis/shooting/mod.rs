@@ -16,6 +16,10 @@
 //! Reference: R. Seydel, *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer
 //! 2010, §7.3 (shooting) and §7.4 (Floquet multipliers).
 
+mod options;
+
+pub use options::ShootingOptions;
+
 use super::period_map::{self, Limits, Return};
 use super::AnalysisError;
 use crate::integrate::Integrator;

@@ -30,6 +30,10 @@
 //! linearly stable fixed point, a cycle whose w range falls below 1e-9 (or shrinks steadily)
 //! means the oscillation died out.
 
+mod options;
+
+pub use options::CycleOptions;
+
 use super::events::{self, Knot};
 use super::AnalysisError;
 use crate::integrate::{Clock, Integrator, OdeSystem, SolverError, Time};
