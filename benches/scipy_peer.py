@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scipy's solve_ivp (LSODA, Radau, BDF) on stickslip's work-precision problem.
 
-Part of the work-precision benchmark (benches/work_precision, docs/work-precision.md).
+Part of the work-precision runner (examples/work_precision, docs/work-precision.md).
 
 Usage:
 

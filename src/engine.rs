@@ -2,14 +2,16 @@
 
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
 use crate::analysis::noise::{self, models::NoiseModel};
-use crate::analysis::shooting::{self, ShootingSettings};
-use crate::analysis::{asymptotics, cycle, finite, hopf, lyapunov, paper, AnalysisError};
+use crate::analysis::shooting;
+use crate::analysis::hopf::{self, HopfReport};
+use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
-use crate::scene::{CycleOptions, Method, OtherModel, OtherScene, Scene, SolverSpec};
+use crate::analysis::cycle::CycleOptions;
+use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -18,6 +20,7 @@ use crate::sundials;
 pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     integrator_for(drr, &drr, spec, y0, Tolerance::PerComponent(spec.atol.to_vec()))
 }
+
 
 /// Builds the scene's integrator on any system derived from `drr` (e.g. its variational
 /// equations), starting at (0, y0) with absolute tolerances `atol`. Also returns the Butcher
@@ -29,7 +32,17 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     y0: &[f64],
     atol: Tolerance,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    let max_step = max_step(drr);
+    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol)
+}
+
+/// [`integrator_for`] with the largest step `max_step`.
+fn integrator_with_max_step<S: ImexSystem + 'static>(
+    system: S,
+    max_step: f64,
+    spec: &SolverSpec,
+    y0: &[f64],
+    atol: Tolerance,
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
     // rtol 1e-11 (ARKStep).
@@ -79,8 +92,8 @@ pub fn integrator_for<S: ImexSystem + 'static>(
 /// right half-plane), and a start within 1e-10 of it then never grows; where the run comes to
 /// rest within round-off of it the cycle analysis limits the steps further
 /// ([`cycle::EscapeStep`]).
-fn max_step(drr: &Drr) -> f64 {
-    hopf::analyse(drr).period_c / 8.0
+fn max_step(linear: &HopfReport) -> f64 {
+    linear.period_c / 8.0
 }
 
 /// Why a run failed: the analysis at fault, its typed error, and where it happened.
@@ -166,28 +179,25 @@ fn diagnose<E: Into<AnalysisError>>(drr: &Drr, error: E) -> AnalysisError {
 
 /// Runs the "cycle" analysis with the scene's solver, start and cycle options on `drr`'s
 /// parameters (which may differ from the scene's, e.g. in a γ scan), keeping the trajectory of
-/// the last `trajectory_cycles` cycles. `stable` is the Hopf verdict on the fixed point.
-/// Returns the report, the integrator's name, its Butcher tables and statistics; a failure
-/// carries its physical cause where one is known.
+/// the last `trajectory_cycles` cycles. `linear` is `drr`'s Hopf analysis (the fixed point's
+/// stability, the largest step and the escape limits come from it). Returns the report, the
+/// integrator's name, its Butcher tables and statistics; a failure carries its physical cause
+/// where one is known.
 pub fn cycle_with(
     scene: &Scene,
     drr: &Drr,
     o: &CycleOptions,
     trajectory_cycles: usize,
-    stable: bool,
+    linear: &HopfReport,
 ) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
-    let defaults = cycle::CycleSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
     let settings = cycle::CycleSettings {
-        tolerance: o.tolerance.unwrap_or(defaults.tolerance),
-        settle: o.settle.unwrap_or(defaults.settle),
-        max_cycles: o.max_cycles.unwrap_or(defaults.max_cycles),
-        max_time: o.max_time.unwrap_or(defaults.max_time),
-        max_steps: o.max_steps.unwrap_or(defaults.max_steps),
         trajectory_cycles,
-        escape: cycle::EscapeStep::for_eigenvalues(&hopf::analyse(drr).eigenvalues, Some(max_step(drr))),
-        ..defaults
+        escape: cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step(linear))),
+        ..o.settings(scene.solver.rtol, scene.solver.atol[1])
     };
-    let (mut integ, tables) = integrator(*drr, &scene.solver, &scene.initial)?;
+    let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
+    let (mut integ, tables) = integrator_with_max_step(*drr, max_step(linear), &scene.solver, &scene.initial, atol)?;
+    let stable = linear.max_real_part < 0.0;
     let report = cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
     Ok((report, integ.name().to_string(), tables, integ.stats()))
 }
@@ -211,28 +221,21 @@ pub fn run_with(
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
-    let cycle_run = match &a.cycle {
-        Some(o) => {
+    let cycle_run = match (&a.cycle, &linear) {
+        (Some(o), Some(linear)) => {
             // The asymptotic and Lyapunov analyses work on one recorded cycle.
             let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
             let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
-            let stable = linear.as_ref().is_some_and(|h| h.max_real_part < 0.0);
-            Some(cycle_with(scene, &drr, o, keep, stable).map_err(failed(&drr, "cycle"))?)
+            Some(cycle_with(scene, &drr, o, keep, linear).map_err(failed(&drr, "cycle"))?)
         }
-        None => None,
+        _ => None,
     };
     let (mut cycle_report, mut integrator_name, mut tables, mut stats) = match cycle_run {
         Some((r, name, tables, stats)) => (Some(r), name, tables, stats),
         None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
     };
     let (shooting_report, continuation_report) = if a.shooting.is_some() || a.continuation.is_some() {
-        let defaults = ShootingSettings::defaults(scene.solver.rtol, scene.solver.atol[1]);
-        let o = a.shooting.clone().unwrap_or_default();
-        let settings = ShootingSettings {
-            tolerance: o.tolerance.unwrap_or(defaults.tolerance),
-            max_iterations: o.max_iterations.unwrap_or(defaults.max_iterations),
-            ..defaults
-        };
+        let settings = a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
         let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial).map_err(failed(&drr, "shooting"))?;
         let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(failed(&drr, "shooting"))?;
         if cycle_report.is_none() {
@@ -246,7 +249,7 @@ pub fn run_with(
                     let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
                     continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
                 }
-                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.clone().unwrap_or_default()),
+                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
             }
         });
         (a.shooting.is_some().then_some(report), curve)
@@ -268,8 +271,8 @@ pub fn run_with(
     let asymptotics = match &a.asymptotics {
         Some(o) => {
             let options = a.cycle.clone().unwrap_or_default();
-            let mut cycle_at = |drr: &Drr, start: [f64; 3], stable: bool| {
-                Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, stable)?.0)
+            let mut cycle_at = |drr: &Drr, start: [f64; 3]| {
+                Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, &hopf::analyse(drr))?.0)
             };
             Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o).map_err(failed(&drr, "asymptotics"))?)
         }

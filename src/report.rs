@@ -220,7 +220,7 @@ impl Report {
                         if o.stable { "stable" } else { "unstable" }
                     );
                 }
-                None => s += &format!("shooting: NOT converged: {}\n", r.failure.as_deref().unwrap_or("?")),
+                None => s += &format!("shooting: NOT converged: {}\n", r.failure.as_ref().map_or("?".to_string(), ToString::to_string)),
             }
             if let Some(pd) = &r.period_doubling {
                 s += &format!("  period doubling: multiplier {:.6}; {}\n", pd.multiplier, match &pd.doubled {

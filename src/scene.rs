@@ -2,7 +2,9 @@
 //! path); validation rejects values outside the model's domain (naming the field and what
 //! would be valid). The schema is documented in docs/scenes.md.
 
+use crate::analysis::cycle::CycleOptions;
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
+use crate::analysis::shooting::ShootingOptions;
 use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
 use serde::{Deserialize, Serialize};
 pub use crate::solver::{Method, SolverSpec};
@@ -157,23 +159,6 @@ enum RawAnalysis {
     WithOptions(std::collections::BTreeMap<String, serde_json::Value>),
 }
 
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct RawCycleOptions {
-    tolerance: Option<f64>,
-    settle: Option<usize>,
-    max_cycles: Option<usize>,
-    max_time: Option<f64>,
-    max_steps: Option<u64>,
-}
-
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct RawShootingOptions {
-    tolerance: Option<f64>,
-    max_iterations: Option<usize>,
-}
-
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawContinuation {
@@ -188,31 +173,6 @@ struct RawContinuation {
 #[serde(deny_unknown_fields)]
 struct RawTrajectory {
     cycles: usize,
-}
-
-/// Options of the "cycle" analysis (None = default, see [`crate::analysis::cycle`]).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct CycleOptions {
-    /// Relative tolerance of the convergence rule.
-    pub tolerance: Option<f64>,
-    /// Consecutive agreeing cycle pairs required.
-    pub settle: Option<usize>,
-    /// Maximum number of cycles.
-    pub max_cycles: Option<usize>,
-    /// Maximum dimensionless time.
-    pub max_time: Option<f64>,
-    /// Maximum total integrator steps.
-    pub max_steps: Option<u64>,
-}
-
-/// Options of the "shooting" analysis (None = default, see
-/// [`crate::analysis::shooting::ShootingSettings`]).
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct ShootingOptions {
-    /// Newton convergence tolerance (relative residual).
-    pub tolerance: Option<f64>,
-    /// Newton iterations at most.
-    pub max_iterations: Option<usize>,
 }
 
 /// The "continuation" analysis: from the scene's value of `parameter` to `to`.
@@ -721,33 +681,9 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
             "hopf" => out.hopf = true,
             "paper" => out.paper = true,
             "cycle" => {
-                let o: RawCycleOptions = serde_json::from_value(options_of("cycle")?)
-                    .map_err(|e| err(&format!("{field}.cycle"), e.to_string()))?;
-                if let Some(t) = o.tolerance {
-                    if !(t > 0.0 && t <= 0.1) {
-                        return Err(err(&format!("{field}.cycle.tolerance"), format!("{t} must be in (0, 0.1], e.g. 1e-7")));
-                    }
-                }
-                if let Some(t) = o.max_time {
-                    if !(t.is_finite() && t >= 1.0) {
-                        return Err(err(&format!("{field}.cycle.max_time"), format!("{t} must be a finite time ≥ 1, e.g. 1e5")));
-                    }
-                }
-                let bounds = [("settle", o.settle.map(|v| v as u64), 1000), ("max_cycles", o.max_cycles.map(|v| v as u64), 10_000_000), ("max_steps", o.max_steps, u64::MAX)];
-                for (name, value, max) in bounds {
-                    if let Some(v) = value {
-                        if v == 0 || v > max {
-                            return Err(err(&format!("{field}.cycle.{name}"), format!("{v} must be between 1 and {max}")));
-                        }
-                    }
-                }
-                out.cycle = Some(CycleOptions {
-                    tolerance: o.tolerance,
-                    settle: o.settle,
-                    max_cycles: o.max_cycles,
-                    max_time: o.max_time,
-                    max_steps: o.max_steps,
-                });
+                let o = CycleOptions::from_json(options_of("cycle")?)
+                    .map_err(|e| err(&e.path_below(&format!("{field}.cycle")), e.message))?;
+                out.cycle = Some(o);
             }
             "trajectory" => {
                 let Some(v) = options.clone() else {
@@ -771,19 +707,9 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 out.lyapunov = Some(o);
             }
             "shooting" => {
-                let o: RawShootingOptions = serde_json::from_value(options_of("shooting")?)
-                    .map_err(|e| err(&format!("{field}.shooting"), e.to_string()))?;
-                if let Some(t) = o.tolerance {
-                    if !(t > 0.0 && t <= 0.1) {
-                        return Err(err(&format!("{field}.shooting.tolerance"), format!("{t} must be in (0, 0.1], e.g. 1e-8")));
-                    }
-                }
-                if let Some(n) = o.max_iterations {
-                    if n == 0 || n > 1000 {
-                        return Err(err(&format!("{field}.shooting.max_iterations"), format!("{n} must be between 1 and 1000")));
-                    }
-                }
-                out.shooting = Some(ShootingOptions { tolerance: o.tolerance, max_iterations: o.max_iterations });
+                let o = ShootingOptions::from_json(options_of("shooting")?)
+                    .map_err(|e| err(&e.path_below(&format!("{field}.shooting")), e.message))?;
+                out.shooting = Some(o);
             }
             "continuation" => {
                 use crate::analysis::continuation::Parameter;

@@ -1,7 +1,8 @@
 //! The `Integrator` contract, written once and run over every method through the one
 //! constructor (`solver::build`): output times, the stop time, restarts, typed errors.
-//! Method-specific behaviour (orders, fixed steps, Jacobian counts) stays in each method's
-//! own tests (tests/radau5.rs, rodas5p.rs, extrapolation.rs, wrappers.rs).
+//! Method-specific behaviour (orders, fixed steps, Jacobian counts, the highest derivative of
+//! the dense output, failures that need a method's own knobs) stays in each method's own tests
+//! (tests/radau5.rs, rodas5p.rs, extrapolation.rs, wrappers.rs).
 
 use stickslip::integrate::{ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, Step, StepEvent, Task, Tolerance};
 use stickslip::solver::{self, Method, MethodSettings};
@@ -42,6 +43,28 @@ impl ImexSystem for Oscillator {
     }
 }
 
+/// y' = −y, with NaN once t passes `from`. All of it implicit in the IMEX split.
+#[derive(Clone, Copy)]
+struct NanAfter(f64);
+
+impl OdeSystem for NanAfter {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = if t > self.0 { f64::NAN } else { -y[0] };
+    }
+}
+
+impl ImexSystem for NanAfter {
+    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
+        dydt.fill(0.0);
+    }
+    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.rhs(t, y, dydt);
+    }
+}
+
 fn methods() -> impl Iterator<Item = Method> {
     Method::ALL.iter().map(|(_, m)| *m)
 }
@@ -73,6 +96,71 @@ fn normal_task_returns_the_state_at_tout() {
         assert!((0..2).all(|i| (integ.state()[i] - end[i]).abs() <= 1e-14), "{method}");
         assert_eq!(integ.advance(f64::NAN, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
         assert_eq!(integ.dense(one.t + 1.0, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        // An output time inside the last step takes no new step.
+        let steps = integ.stats().steps;
+        let inside = 0.5 * (1.0 + one.t);
+        assert_eq!(integ.advance(inside, Task::Normal).unwrap(), Step { t: inside, event: StepEvent::Reached }, "{method}");
+        assert_eq!(integ.stats().steps, steps, "{method}");
+        // An output time behind the last step is refused.
+        assert_eq!(integ.advance(0.5, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+    }
+}
+
+/// The SUNDIALS methods, whose wrappers do not yet hold the parts of the contract checked by
+/// [`check_interpolation`] (found by it; src/sundials/ is someone else's work in progress):
+/// CVODE and ARKStep return NaN, not an error, for dense output at t = NaN; before any step
+/// CVODE returns NaN at t0 and ARKStep crashes (SIGSEGV); after an interpolated return, their
+/// OneStep returns the step end already computed instead of taking a step.
+/// `cargo test --release --test contract -- --ignored` runs them.
+fn sundials(method: Method) -> bool {
+    matches!(method, Method::CvodeBdf | Method::CvodeAdams | Method::ArkodeDirk | Method::ArkodeImex | Method::ArkodeErk)
+}
+
+/// Dense output holds the last step only (before any step, or since a restart, only the
+/// initial point) and refuses a non-finite time; OneStep takes exactly one step.
+fn check_interpolation(method: Method) {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    let mut integ = build(method, &options);
+    assert_eq!(integ.dense(0.0, 0).unwrap(), &[0.0, 1.0], "{method}");
+    assert_eq!(integ.dense(0.0, 1).unwrap(), &[1.0, 0.0], "{method}");
+    assert_eq!(integ.dense(0.1, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+    integ.advance(1.0, Task::Normal).unwrap();
+    assert_eq!(integ.dense(f64::NAN, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+    // OneStep continues from the internal step end (beyond tout), one step per call.
+    let steps = integ.stats().steps;
+    let one = integ.advance(10.0, Task::OneStep).unwrap();
+    assert!(one.t > 1.0 && integ.stats().steps == steps + 1, "{method}: {one:?}");
+    integ.reinit(0.0, &[0.0, 1.0]).unwrap();
+    assert_eq!(integ.dense(0.5, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}: no step since the restart");
+}
+
+#[test]
+fn dense_output_holds_the_last_step_only() {
+    methods().filter(|m| !sundials(*m)).for_each(check_interpolation);
+}
+
+#[test]
+#[ignore = "the SUNDIALS wrappers' known defects (see `sundials`); ARKStep crashes the process"]
+fn dense_output_holds_the_last_step_only_sundials() {
+    methods().filter(|m| sundials(*m)).for_each(check_interpolation);
+}
+
+#[test]
+fn the_stop_time_and_max_step_options_and_backward_integration() {
+    for method in methods() {
+        // Options set at construction, as set_stop_time / set_max_step set them later.
+        let options = Options { stop_time: Some(0.75), max_step: Some(0.05), ..Options::new(1e-8, Tolerance::Scalar(1e-10)) };
+        let mut integ = build(method, &options);
+        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 0.75, event: StepEvent::StopTime }, "{method}");
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
+        assert!(integ.stats().last_step <= 0.05 * (1.0 + 1e-12), "{method}: {:?}", integ.stats());
+        assert_eq!(integ.advance(1.0, Task::Normal).unwrap().event, StepEvent::Reached, "{method}");
+        // Backward in time: the same solution for t < 0.
+        let mut backward = build(method, &Options::new(1e-8, Tolerance::Scalar(1e-10)));
+        assert_eq!(backward.advance(-1.0, Task::Normal).unwrap(), Step { t: -1.0, event: StepEvent::Reached }, "{method}");
+        assert!(error_at(backward.as_ref()) < 1e-6, "{method}: error {:e}", error_at(backward.as_ref()));
+        let end = backward.advance(-5.0, Task::OneStep).unwrap().t;
+        assert!(end < -1.0 && backward.dense(end, 0).is_ok(), "{method}: {end}");
     }
 }
 
@@ -156,6 +244,27 @@ fn failures_are_typed_errors_with_time_and_state() {
         let e = integ.advance(100.0, Task::Normal).unwrap_err();
         assert_eq!(e.kind, ErrorKind::TooMuchWork, "{method}: {e}");
         assert!(e.t > 0.0 && e.t < 100.0 && e.state.len() == 2 && e.state.iter().all(|x| x.is_finite()), "{method}: {e}");
+        assert_eq!(integ.stats().steps, 10, "{method}");
+        assert_eq!((integ.t(), integ.state()), (e.t, &e.state[..]), "{method}: the integrator stays where it failed");
+        // The budget is per call: the next call goes on.
+        integ.advance(1.1 * e.t, Task::Normal).unwrap_or_else(|e| panic!("{method}: {e}"));
+        // A right-hand side that is NaN from t = 0.5 on: smaller steps do not cure it.
+        let nan = |from: f64| {
+            solver::build(method, &MethodSettings::default(), NanAfter(from), 0.0, &[1.0], &options).unwrap_or_else(|e| panic!("{method}: {e}")).integrator
+        };
+        let mut integ = nan(0.5);
+        let e = integ.advance(1.0, Task::Normal).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::RhsFailure, "{method}: {e}");
+        assert!(e.t > 0.4 && e.state.len() == 1 && e.state[0].is_finite(), "{method}: {e}");
+        assert_eq!((integ.t(), integ.state()), (e.t, &e.state[..]), "{method}");
+        // Where it failed: the last good point, before the NaN (ARKStep's ERK reports the
+        // failed step's end, t = 0.506, with the state of the last accepted step: a known
+        // defect of the wrapper, run by `-- --ignored`).
+        if method != Method::ArkodeErk {
+            assert!(e.t <= 0.5 && (e.state[0] - (-e.t).exp()).abs() < 1e-6, "{method}: {e}");
+        }
+        // NaN at the initial point.
+        assert_eq!(nan(-1.0).advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::RhsFailure, "{method}");
         // Invalid input at construction.
         let bad = |y0: &[f64], t0: f64, options: &Options| {
             solver::build(method, &MethodSettings::default(), Oscillator, t0, y0, options).map(|_| ()).unwrap_err().kind
@@ -165,4 +274,13 @@ fn failures_are_typed_errors_with_time_and_state() {
         assert_eq!(bad(&[0.0, 0.0], f64::INFINITY, &options), ErrorKind::InvalidInput, "{method}");
         assert_eq!(bad(&[0.0, 0.0], 0.0, &Options::new(-1.0, Tolerance::Scalar(1e-8))), ErrorKind::InvalidInput, "{method}");
     }
+}
+
+#[test]
+#[ignore = "ARKStep ERK's known defect: a right-hand-side failure located at the failed step's end"]
+fn a_failure_is_located_at_the_last_good_point_arkode_erk() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    let mut integ = solver::build(Method::ArkodeErk, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+    let e = integ.advance(1.0, Task::Normal).unwrap_err();
+    assert!(e.t <= 0.5 && (e.state[0] - (-e.t).exp()).abs() < 1e-6, "{e}");
 }

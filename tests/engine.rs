@@ -2,6 +2,7 @@
 //! defaults, independent integrators agree, and the report holds what the scene asked for.
 
 use stickslip::analysis::cycle::CycleStatus;
+use stickslip::analysis::AnalysisError;
 use stickslip::report::Report;
 use stickslip::{engine, scene};
 
@@ -139,6 +140,23 @@ fn an_unsettled_run_lists_its_cycles_and_averages_nothing() {
     assert_eq!(c.last_cycles.len(), 3);
     let json: serde_json::Value = serde_json::to_value(&c).unwrap();
     assert!(json["period"].is_null(), "no single number for an unsettled orbit");
+}
+
+#[test]
+fn the_cycle_step_budget_is_the_analysis_error_naming_its_option() {
+    // The integrator did not fail: the cycle analysis's own budget ran out. The error says so,
+    // names the option to raise, and carries the global time and the state reached.
+    let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.2},
+                   "analyses": [{"cycle": {"max_steps": 500}}]}"#;
+    let s = scene::parse(text, "test").unwrap();
+    let error = engine::run(&s, serde_json::Value::Null).unwrap_err();
+    let AnalysisError::Budget { analysis, t, .. } = &*error.kind else { panic!("{error:?}") };
+    assert_eq!(*analysis, "cycle");
+    assert!(*t > 0.0 && t.is_finite(), "{t}");
+    assert_eq!(error.kind.label(), "TooMuchWork", "counted with the integrators' step budgets");
+    assert!(error.message.contains("cycle.max_steps = 500") && error.message.contains("501 "), "{error}");
+    assert!(!error.is_bad_input());
+    assert_eq!(error.state.len(), 3);
 }
 
 #[test]

@@ -25,6 +25,32 @@ fn the_shipped_scenes_are_valid() {
 }
 
 #[test]
+fn cycle_and_shooting_options_name_the_field_and_what_is_valid() {
+    let model = r#""model": {"gamma": 10, "xi": 0.7, "epsilon": 1}"#;
+    let with = |analysis: &str| format!(r#"{{"name": "t", {model}, "analyses": ["hopf", {analysis}]}}"#);
+    let cases = [
+        (with(r#"{"cycle": {"tolerance": 0.5}}"#), "analyses[1].cycle.tolerance", "(0, 0.1]"),
+        (with(r#"{"cycle": {"max_time": 0.5}}"#), "analyses[1].cycle.max_time", "≥ 1"),
+        (with(r#"{"cycle": {"settle": 0}}"#), "analyses[1].cycle.settle", "between 1 and 1000"),
+        (with(r#"{"cycle": {"max_cycles": 0}}"#), "analyses[1].cycle.max_cycles", "between 1 and 10000000"),
+        (with(r#"{"cycle": {"max_steps": 0}}"#), "analyses[1].cycle.max_steps", "between 1 and"),
+        (with(r#"{"cycle": {"tolerence": 1e-7}}"#), "analyses[1].cycle", "unknown field `tolerence`"),
+        (with(r#"{"shooting": {"tolerance": 0}}"#), "analyses[1].shooting.tolerance", "(0, 0.1]"),
+        (with(r#"{"shooting": {"max_iterations": 1001}}"#), "analyses[1].shooting.max_iterations", "between 1 and 1000"),
+        (with(r#"{"shooting": {"iterations": 3}}"#), "analyses[1].shooting", "unknown field `iterations`"),
+    ];
+    for (text, field, hint) in cases {
+        let e = error_of(&text);
+        assert_eq!(e.field, field, "{e}");
+        assert!(e.message.contains(hint), "{e} should mention {hint}");
+    }
+    let ok = scene::parse(&with(r#"{"cycle": {"tolerance": 1e-6, "settle": 4}}"#), "test").unwrap();
+    let cycle = ok.analyses.cycle.unwrap();
+    let settings = cycle.settings(1e-10, 1e-12);
+    assert_eq!((settings.tolerance, settings.settle, settings.max_cycles), (1e-6, 4, 1000), "given, given, default");
+}
+
+#[test]
 fn domain_errors_name_the_field_and_what_is_valid() {
     let cases = [
         (scene_with(r#"{"gamma": -1, "xi": 0.7, "epsilon": 0.7}"#, ""), "model.gamma", "> 0"),

@@ -13,7 +13,8 @@
 //! SIAM 2003, ch. 1–2 (natural-parameter continuation with step control).
 
 use super::hopf;
-use super::shooting::{self, Orbit, ShootingSettings};
+use super::shooting::{self, NoOrbit, Orbit, ShootingSettings};
+use super::AnalysisError;
 use crate::integrate::{Integrator, SolverError};
 use crate::model::{Drr, DrrParams};
 use serde::Serialize;
@@ -146,9 +147,11 @@ pub struct ContinuationReport {
 }
 
 impl ContinuationReport {
-    /// The report of a continuation that could not start: no orbit at the scene's parameters.
-    pub fn not_started(settings: &ContinuationSettings, base: &DrrParams, why: String) -> Self {
+    /// The report of a continuation that could not start: no orbit at the scene's parameters,
+    /// for the reason shooting gave (`why`).
+    pub fn not_started(settings: &ContinuationSettings, base: &DrrParams, why: Option<&NoOrbit>) -> Self {
         let from = settings.parameter.get(base);
+        let why = why.map_or(String::new(), ToString::to_string);
         ContinuationReport {
             parameter: settings.parameter,
             from,
@@ -182,15 +185,37 @@ fn grid(from: f64, to: f64, points: usize, log: bool) -> Vec<f64> {
         .collect()
 }
 
+/// Why a corrector attempt was rejected (its text goes into the report's `stopped.reason`
+/// when the sub-step can shrink no further).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum Rejected {
+    /// Building the integrator or integrating failed.
+    #[error(transparent)]
+    Failed(#[from] AnalysisError),
+    /// Newton found no orbit.
+    #[error(transparent)]
+    NoOrbit(#[from] NoOrbit),
+    /// The corrected orbit is not the continuation of the last one: a period change above 10 %
+    /// or an ln v range change above 10 % in one sub-step means the corrector jumped to
+    /// another branch (or the branch turns: a fold, a canard explosion).
+    #[error(
+        "the orbit changes abruptly (period {:.6} → {:.6}, ln v range {:.4} → {:.4}): the branch ends or turns here (fold of cycles or canard explosion)",
+        .period.0, .period.1, .range.0, .range.1
+    )]
+    Jump {
+        /// The period before and after.
+        period: (f64, f64),
+        /// The ln v range before and after.
+        range: (f64, f64),
+    },
+}
+
 /// One corrector attempt at `value` from the predicted section point.
-fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationSettings, value: f64, x: [f64; 2]) -> Result<Orbit, String> {
+fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationSettings, value: f64, x: [f64; 2]) -> Result<Orbit, Rejected> {
     let drr = Drr::new(settings.parameter.set(base, value));
     let y0 = [x[0], 0.0, x[1]];
-    let mut integ = factory(drr, y0).map_err(|e| e.to_string())?;
-    match shooting::newton(integ.as_mut(), &drr, x, 1, &settings.shooting) {
-        Ok(n) => n.orbit,
-        Err(e) => Err(e.to_string()),
-    }
+    let mut integ = factory(drr, y0).map_err(AnalysisError::from)?;
+    Ok(shooting::newton(integ.as_mut(), &drr, x, 1, &settings.shooting)?.orbit?)
 }
 
 /// Runs the continuation from `start`, the orbit at the scene's parameters `base`.
@@ -281,22 +306,12 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: 
     }
 }
 
-/// Why a corrected orbit is not the continuation of the last one: a period change above 10 %
-/// or an ln v range change above 10 % in one sub-step means the corrector jumped to another
-/// branch (or the branch turns: a fold, a canard explosion).
-fn jump(last: &Orbit, next: &Orbit) -> Option<String> {
+/// [`Rejected::Jump`] when `next` is not the continuation of `last`.
+fn jump(last: &Orbit, next: &Orbit) -> Option<Rejected> {
     let range = |o: &Orbit| o.ln_v_max - o.ln_v_min;
     let dt = (next.period - last.period).abs() / last.period;
     let dr = (range(next) - range(last)).abs() / range(last);
-    (dt > 0.1 || dr > 0.1).then(|| {
-        format!(
-            "the orbit changes abruptly (period {:.6} → {:.6}, ln v range {:.4} → {:.4}): the branch ends or turns here (fold of cycles or canard explosion)",
-            last.period,
-            next.period,
-            range(last),
-            range(next)
-        )
-    })
+    (dt > 0.1 || dr > 0.1).then(|| Rejected::Jump { period: (last.period, next.period), range: (range(last), range(next)) })
 }
 
 /// Least-squares slope of period against log10 γ.

@@ -3,7 +3,7 @@
 //! (an option that does not fit the orbit, no limit cycle, an event that never came, a
 //! non-finite result) and, where there is one, where (t and the state).
 
-use crate::integrate::SolverError;
+use crate::integrate::{Clock, SolverError};
 
 /// An option outside its valid range: the field, relative to the analysis's options object
 /// (empty for the object itself), and what is wrong and what would be valid.
@@ -70,6 +70,20 @@ pub enum AnalysisError {
         /// What happened and, where known, what to change.
         message: String,
     },
+    /// The analysis's own budget (its step or time limit, an option named in the message) ran
+    /// out before the integration reached what the analysis integrates for (a settled cycle, a
+    /// return to the section). The integrator itself did not fail.
+    #[error("{analysis} ran out of its budget at t = {t:e} (state {state:?}): {message}")]
+    Budget {
+        /// The analysis or its part, e.g. "cycle" or "the return to the section v = 1".
+        analysis: &'static str,
+        /// The time reached.
+        t: f64,
+        /// The state there.
+        state: Vec<f64>,
+        /// Which limit, its value, and what to raise.
+        message: String,
+    },
     /// A result contains a NaN or an infinity; it is not reported.
     #[error("the {path} section contains a non-finite number; refusing to report it")]
     NonFinite {
@@ -83,7 +97,7 @@ impl AnalysisError {
     pub fn state(&self) -> &[f64] {
         match self {
             Self::Solver(e) => &e.state,
-            Self::Failed { state, .. } => state,
+            Self::Failed { state, .. } | Self::Budget { state, .. } => state,
             _ => &[],
         }
     }
@@ -93,13 +107,15 @@ impl AnalysisError {
     pub fn message_mut(&mut self) -> Option<&mut String> {
         match self {
             Self::Solver(e) => Some(&mut e.message),
-            Self::Failed { message, .. } => Some(message),
+            Self::Failed { message, .. } | Self::Budget { message, .. } => Some(message),
             _ => None,
         }
     }
 
     /// The variant in one word, or the integrator's error kind for a failed integration
-    /// (e.g. "TooMuchWork", "NonFinite"): what the stress grid counts by.
+    /// (e.g. "TooMuchWork", "NonFinite"): what the stress grid counts by. An analysis's
+    /// [`Budget`](Self::Budget) counts as "TooMuchWork", the integrator's own step budget: the
+    /// same cause (steps ran out), whichever limit stopped it.
     pub fn label(&self) -> String {
         match self {
             Self::Solver(e) => format!("{:?}", e.kind),
@@ -108,7 +124,17 @@ impl AnalysisError {
             Self::NoLimitCycle { .. } => "NoLimitCycle".into(),
             Self::NotConverged { .. } => "NotConverged".into(),
             Self::Failed { .. } => "Failed".into(),
+            Self::Budget { .. } => "TooMuchWork".into(),
             Self::NonFinite { .. } => "NonFinite".into(),
+        }
+    }
+
+    /// An integrator's failure re-dated to `clock`'s global time (the integrator reports its
+    /// local time); the analysis's own errors carry the global time already.
+    pub fn at_global(self, clock: &Clock<'_>) -> Self {
+        match self {
+            Self::Solver(e) => Self::Solver(clock.at_global(e)),
+            other => other,
         }
     }
 

@@ -23,7 +23,8 @@
 
 use super::cycle::restart_safe;
 use super::events;
-use crate::integrate::{Clock, ErrorKind, Integrator, SolverError, Time};
+use super::AnalysisError;
+use crate::integrate::{Clock, Integrator, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::Variational;
 use nalgebra::{Matrix2, Matrix3};
@@ -90,18 +91,10 @@ pub fn flow_to_section(
     start: [f64; 3],
     on_section: bool,
     limits: &Limits,
-) -> Result<Return, SolverError> {
+) -> Result<Return, AnalysisError> {
     integ.reinit(0.0, &Variational::<Drr, 3>::initial(&start))?;
     // Global time 0 at the start; the clock re-bases when its steps outrun it.
     let mut clock = Clock::new(integ, Time::new(0.0));
-    let failure = |clock: &Clock, kind, message: String| SolverError {
-        solver: clock.name(),
-        kind,
-        t: clock.now().to_f64(),
-        state: clock.state()[..3].to_vec(),
-        flag: 0,
-        message,
-    };
     // A failure of the integrator: the global time, the state without Φ.
     let with_context = |clock: &Clock, e: SolverError| {
         let mut e = clock.at_global(e);
@@ -133,7 +126,15 @@ pub fn flow_to_section(
         let d = first3(&clock.integrator().dense(step.t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
         let next = Sample { t: step.t, y, d };
         if clock.state().iter().chain(&d).any(|v| !v.is_finite()) {
-            return Err(failure(&clock, ErrorKind::RhsFailure, "the state, Φ or dy/dt became non-finite".into()));
+            return Err(AnalysisError::Failed {
+                analysis: "the return to the section v = 1",
+                t: clock.now().to_f64(),
+                state: y.to_vec(),
+                message: format!(
+                    "{} accepted a step to a non-finite state, Φ or dy/dt (dy/dt = {d:?}); the model or its variational equations have left the range of doubles",
+                    clock.name()
+                ),
+            });
         }
         rise_rate = rise_rate.max(d[W].abs());
         ln_v_min = ln_v_min.min(y[W]);
@@ -171,12 +172,15 @@ pub fn flow_to_section(
                 steps,
             });
         }
-        if clock.global(next.t).to_f64() > limits.max_time || steps > limits.max_steps {
-            let message = format!(
-                "no return to the section v = 1 within t = {:e} and {} steps (the orbit may have decayed to the fixed point)",
-                limits.max_time, limits.max_steps
-            );
-            return Err(failure(&clock, ErrorKind::TooMuchWork, message));
+        let out_of_time = clock.global(next.t).to_f64() > limits.max_time;
+        if out_of_time || steps > limits.max_steps {
+            let limit = if out_of_time { format!("t = {:e}", limits.max_time) } else { format!("{} steps", limits.max_steps) };
+            return Err(AnalysisError::Budget {
+                analysis: "the return to the section v = 1",
+                t: clock.now().to_f64(),
+                state: y.to_vec(),
+                message: format!("no return within {limit} (the orbit may have decayed to the fixed point)"),
+            });
         }
         // A cut: the first crossing in this step of w = ½ ln γ (either way) or of w = 0
         // downward (the latter only once a v maximum has been seen).

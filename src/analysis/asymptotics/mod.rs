@@ -153,9 +153,9 @@ pub struct AsymptoticsReport {
 }
 
 /// Runs the brute-force "cycle" analysis (the scene's solver and cycle options, recording no
-/// trajectory) on a DRR system from a start, given the Hopf verdict "fixed point stable" (the
-/// engine's `cycle_with`).
-pub type CycleAt<'a> = dyn FnMut(&Drr, [f64; 3], bool) -> Result<CycleReport, AnalysisError> + 'a;
+/// trajectory) on a DRR system from a start (the engine's `cycle_with`, with the system's own
+/// Hopf analysis).
+pub type CycleAt<'a> = dyn FnMut(&Drr, [f64; 3]) -> Result<CycleReport, AnalysisError> + 'a;
 
 /// Runs the analysis on the model `params`, started at `initial`, whose "cycle" analysis
 /// produced `cycle`; the γ scan runs its cycles by `cycle_at`.

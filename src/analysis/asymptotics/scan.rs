@@ -8,7 +8,6 @@
 
 use super::CycleAt;
 use crate::analysis::cycle::{CycleStatus, CycleValues};
-use crate::analysis::hopf;
 use crate::model::{Drr, DrrParams};
 use serde::Serialize;
 
@@ -84,8 +83,7 @@ pub fn run(params: &DrrParams, initial: [f64; 3], gammas: &[f64], cycle_at: &mut
         .iter()
         .map(|&gamma| {
             let drr = Drr::new(DrrParams { gamma, ..*params });
-            let stable = hopf::analyse(&drr).max_real_part < 0.0;
-            match cycle_at(&drr, start, stable) {
+            match cycle_at(&drr, start) {
                 Ok(report) => {
                     let status = serde_json::to_value(report.status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
                     let values = report.values.filter(|_| report.status == CycleStatus::Periodic).map(|c| ScanValues::of(&c, gamma));

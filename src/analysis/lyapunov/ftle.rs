@@ -305,7 +305,7 @@ fn floquet_link(
     let mut integ = variational(*drr, solver, &y0)?;
     let report = shooting::analyse(integ.as_mut(), drr, y0, &settings)?;
     let Some(o) = report.orbit else {
-        return Err(AnalysisError::NotConverged { what: "shooting", reason: report.failure.unwrap_or_default() });
+        return Err(AnalysisError::NotConverged { what: "shooting", reason: report.failure.map_or(String::new(), |why| why.to_string()) });
     };
     let last = per_period.last().copied().unwrap_or(PeriodLogs { time: 0.0, ln_r: [0.0; 2], trace_integral: 0.0 });
     Ok(FloquetLink {

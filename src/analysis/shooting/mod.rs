@@ -16,8 +16,13 @@
 //! Reference: R. Seydel, *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer
 //! 2010, §7.3 (shooting) and §7.4 (Floquet multipliers).
 
+mod options;
+
+pub use options::ShootingOptions;
+
 use super::period_map::{self, Limits, Return};
-use crate::integrate::{Integrator, SolverError};
+use super::AnalysisError;
+use crate::integrate::Integrator;
 use crate::model::drr::{Drr, THETA, U, W};
 use nalgebra::{Matrix2, Matrix3};
 use serde::Serialize;
@@ -155,7 +160,8 @@ pub struct ShootingReport {
     /// The periodic orbit (when converged).
     pub orbit: Option<Orbit>,
     /// Why it did not converge.
-    pub failure: Option<String>,
+    #[serde(serialize_with = "display")]
+    pub failure: Option<NoOrbit>,
     /// The Newton iterations.
     pub iterations: Vec<Iteration>,
     /// Period doubling, when a multiplier is below −1.
@@ -175,13 +181,51 @@ impl ShootingReport {
     }
 }
 
+/// Why Newton's iteration found no periodic orbit (its text is the report's `failure`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NoOrbit {
+    /// The iteration converged onto the fixed point (a trivial solution on the section).
+    #[error("converged onto the fixed point (ln v range {amplitude:.3e} below the noise floor {floor:.1e})")]
+    FixedPoint {
+        /// The ln v range of the converged returns.
+        amplitude: f64,
+        /// The integration noise floor on ln v.
+        floor: f64,
+    },
+    /// The iteration budget ran out.
+    #[error("Newton did not converge in {iterations} iterations (residual {residual:.3e})")]
+    MaxIterations {
+        /// The budget (`max_iterations`).
+        iterations: usize,
+        /// The last residual.
+        residual: f64,
+    },
+    /// DP − I is singular: a multiplier 1.
+    #[error("the linearised Poincaré map has a multiplier 1 (DP − I is singular): a bifurcation point")]
+    Singular,
+    /// Eight halvings of the Newton step did not reduce the residual.
+    #[error("Newton stalled at residual {residual:.3e} (no decrease after 8 step halvings)")]
+    Stalled {
+        /// The residual that did not decrease.
+        residual: f64,
+    },
+}
+
 /// The outcome of Newton's iteration: an orbit, or why not (integration failures are errors).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Newton {
     /// The orbit, when converged.
-    pub orbit: Result<Orbit, String>,
+    pub orbit: Result<Orbit, NoOrbit>,
     /// The iterations.
     pub iterations: Vec<Iteration>,
+}
+
+/// Serialises why not as its text (the report's `failure`: a string or null).
+fn display<S: serde::Serializer>(why: &Option<NoOrbit>, serializer: S) -> Result<S::Ok, S::Error> {
+    match why {
+        Some(why) => serializer.collect_str(why),
+        None => serializer.serialize_none(),
+    }
 }
 
 fn section(x: [f64; 2]) -> [f64; 3] {
@@ -208,7 +252,7 @@ fn distance_from_fixed_point(drr: &Drr, x: [f64; 2]) -> f64 {
 }
 
 /// `returns` successive returns from the section point x.
-fn returns(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], count: usize, limits: &Limits) -> Result<Vec<Return>, SolverError> {
+fn returns(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], count: usize, limits: &Limits) -> Result<Vec<Return>, AnalysisError> {
     let mut out: Vec<Return> = Vec::with_capacity(count);
     let mut start = section(x);
     for _ in 0..count {
@@ -279,7 +323,7 @@ pub fn newton(
     x0: [f64; 2],
     count: usize,
     settings: &ShootingSettings,
-) -> Result<Newton, SolverError> {
+) -> Result<Newton, AnalysisError> {
     let mut x = x0;
     let mut rs = returns(integ, drr, x, count, &settings.limits)?;
     let (mut r, mut res) = residual(drr, x, &rs[count - 1].end);
@@ -305,20 +349,18 @@ pub fn newton(
             let amplitude = rs.iter().map(|ret| ret.peak[W]).fold(0.0, f64::max) - rs.iter().map(|ret| ret.ln_v_min).fold(0.0, f64::min);
             let floor = 1e-9f64.max(1e3 * (settings.limits.w_tolerance.0 + settings.limits.w_tolerance.1));
             if amplitude < floor {
-                let why = format!("converged onto the fixed point (ln v range {amplitude:.3e} below the noise floor {floor:.1e})");
-                return Ok(Newton { orbit: Err(why), iterations });
+                return Ok(Newton { orbit: Err(NoOrbit::FixedPoint { amplitude, floor }), iterations });
             }
             let orbit = orbit_from(x, &rs, iterations.len(), res);
             return Ok(Newton { orbit: Ok(orbit), iterations });
         }
         if iterations.len() - warmup >= settings.max_iterations {
-            let why = format!("Newton did not converge in {} iterations (residual {res:.3e})", settings.max_iterations);
+            let why = NoOrbit::MaxIterations { iterations: settings.max_iterations, residual: res };
             return Ok(Newton { orbit: Err(why), iterations });
         }
         let dp = map_jacobian(&rs);
         let Some(delta) = (dp - Matrix2::identity()).lu().solve(&nalgebra::Vector2::new(-r[0], -r[1])) else {
-            let why = "the linearised Poincaré map has a multiplier 1 (DP − I is singular): a bifurcation point".to_string();
-            return Ok(Newton { orbit: Err(why), iterations });
+            return Ok(Newton { orbit: Err(NoOrbit::Singular), iterations });
         };
         let period: f64 = rs.iter().map(|ret| ret.period).sum();
         let mut lambda = 1.0;
@@ -342,8 +384,7 @@ pub fn newton(
         iterations.push(Iteration { residual: res, period, halvings });
         if let Some((trial, trs, tr, tres)) = accepted {
             if tres >= res {
-                let why = format!("Newton stalled at residual {res:.3e} (no decrease after 8 step halvings)");
-                return Ok(Newton { orbit: Err(why), iterations });
+                return Ok(Newton { orbit: Err(NoOrbit::Stalled { residual: res }), iterations });
             }
             (x, rs, r, res) = (trial, trs, tr, tres);
         }
@@ -351,7 +392,7 @@ pub fn newton(
 }
 
 /// Reaches the section from `y0` (the first upward crossing of v = 1).
-pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits: &Limits) -> Result<[f64; 2], SolverError> {
+pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits: &Limits) -> Result<[f64; 2], AnalysisError> {
     let r = period_map::flow_to_section(integ, drr, y0, false, limits)?;
     Ok([r.end[U], r.end[THETA]])
 }
@@ -368,7 +409,7 @@ fn flip_direction(rs: &[Return], mu: f64) -> [f64; 2] {
 
 /// Shooting from the integrator's scene start `y0`: reach the section, Newton, multipliers,
 /// and the doubled orbit when the period-1 orbit has a multiplier below −1.
-pub fn analyse(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], settings: &ShootingSettings) -> Result<ShootingReport, SolverError> {
+pub fn analyse(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], settings: &ShootingSettings) -> Result<ShootingReport, AnalysisError> {
     let x0 = reach_section(integ, drr, y0, &settings.limits)?;
     let result = newton(integ, drr, x0, 1, settings)?;
     let mut report = ShootingReport {
@@ -399,7 +440,7 @@ fn period_doubling(
     drr: &Drr,
     orbit: &Orbit,
     settings: &ShootingSettings,
-) -> Result<Option<PeriodDoubling>, SolverError> {
+) -> Result<Option<PeriodDoubling>, AnalysisError> {
     let Some(mu) = flip_multiplier(orbit) else { return Ok(None) };
     let x = [orbit.section_point[0], orbit.section_point[2]];
     let rs = returns(integ, drr, x, 1, &settings.limits)?;
@@ -409,12 +450,8 @@ fn period_doubling(
         for sign in [1.0, -1.0] {
             let scale = size * (1.0 + x[0].abs().max(x[1].abs()));
             let start = [x[0] + sign * scale * e[0], x[1] + sign * scale * e[1]];
-            let attempt = match newton(integ, drr, start, 2, settings) {
-                Ok(n) => n.orbit,
-                Err(err) => Err(err.to_string()),
-            };
-            match attempt {
-                Ok(doubled) => {
+            match newton(integ, drr, start, 2, settings).map(|n| n.orbit) {
+                Ok(Ok(doubled)) => {
                     let p = [doubled.section_point[0], doubled.section_point[2]];
                     let distinct = (p[0] - x[0]).abs().max((p[1] - x[1]).abs()) > 1e3 * settings.tolerance * (1.0 + x[0].abs().max(x[1].abs()));
                     if distinct {
@@ -423,7 +460,8 @@ fn period_doubling(
                     }
                     notes.push(format!("displacement {:+e}: converged back to the period-1 orbit", sign * scale));
                 }
-                Err(why) => notes.push(format!("displacement {:+e}: {why}", sign * scale)),
+                Ok(Err(why)) => notes.push(format!("displacement {:+e}: {why}", sign * scale)),
+                Err(failure) => notes.push(format!("displacement {:+e}: {failure}", sign * scale)),
             }
         }
     }

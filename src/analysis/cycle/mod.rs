@@ -30,8 +30,13 @@
 //! linearly stable fixed point, a cycle whose w range falls below 1e-9 (or shrinks steadily)
 //! means the oscillation died out.
 
+mod options;
+
+pub use options::CycleOptions;
+
 use super::events::{self, Knot};
-use crate::integrate::{Clock, ErrorKind, Integrator, OdeSystem, SolverError, Time};
+use super::AnalysisError;
+use crate::integrate::{Clock, Integrator, OdeSystem, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::DeepStick;
 use serde::Serialize;
@@ -322,16 +327,6 @@ fn first_sample(drr: &Drr, t: f64, y: [f64; 3]) -> Sample {
 }
 
 impl<'a> Tracker<'a> {
-    fn failure(&self, kind: ErrorKind, message: String) -> SolverError {
-        SolverError {
-            solver: self.clock.name(),
-            kind,
-            t: self.clock.now().to_f64(),
-            state: self.clock.state().to_vec(),
-            flag: 0,
-            message,
-        }
-    }
 
     fn state_at(&mut self, t: f64) -> Result<[f64; 3], SolverError> {
         let y = self.clock.integrator().dense(t, 0)?;
@@ -581,9 +576,11 @@ impl<'a> Tracker<'a> {
         Ok(())
     }
 
-    fn step(&mut self) -> Result<(), SolverError> {
+    /// One integrator step (or one deep stick crossed) and its events. An integrator's failure
+    /// carries its local time (see [`AnalysisError::at_global`]).
+    fn step(&mut self) -> Result<(), AnalysisError> {
         if let Some(stick) = self.drr.deep_stick(&self.prev.y) {
-            return self.cross(stick);
+            return Ok(self.cross(stick)?);
         }
         let step = self.clock.step()?;
         if step.start != self.prev.t {
@@ -596,7 +593,16 @@ impl<'a> Tracker<'a> {
         let d = self.clock.integrator().dense(step.t, 1)?;
         let next = Sample { t: step.t, y, d: [d[0], d[1], d[2]] };
         if y.iter().chain(&next.d).any(|v| !v.is_finite()) {
-            return Err(self.failure(ErrorKind::RhsFailure, "the state or its derivative became non-finite".into()));
+            return Err(AnalysisError::Failed {
+                analysis: "cycle",
+                t: self.clock.now().to_f64(),
+                state: y.to_vec(),
+                message: format!(
+                    "{} accepted a step to a non-finite state or derivative (dy/dt = {:?}); the model has left the range of doubles",
+                    self.clock.name(),
+                    next.d
+                ),
+            });
         }
         self.rise_rate = self.rise_rate.max(next.d[W].abs());
         let mut after_peak = false;
@@ -746,7 +752,7 @@ pub fn analyse(
     drr: &Drr,
     settings: &CycleSettings,
     linearly_stable: bool,
-) -> Result<CycleReport, SolverError> {
+) -> Result<CycleReport, AnalysisError> {
     let y = integ.state();
     let start = first_sample(drr, integ.t(), [y[0], y[1], y[2]]);
     let t_start = Time::new(integ.t());
@@ -771,14 +777,23 @@ pub fn analyse(
     let mut seen = 0;
     let outcome = loop {
         if let Err(e) = tracker.step() {
-            return Err(tracker.clock.at_global(e));
+            return Err(e.at_global(&tracker.clock));
         }
         if let Some(escape) = settings.escape {
             tracker.escape(escape).map_err(|e| tracker.clock.at_global(e))?;
         }
         if tracker.steps > settings.max_steps {
-            let message = format!("{} steps without settling on a cycle (cycle.max_steps)", settings.max_steps);
-            return Err(tracker.failure(ErrorKind::TooMuchWork, message));
+            return Err(AnalysisError::Budget {
+                analysis: "cycle",
+                t: tracker.clock.now().to_f64(),
+                state: tracker.clock.state().to_vec(),
+                message: format!(
+                    "{} {} steps without settling on a cycle (cycle.max_steps = {}; raise it)",
+                    tracker.steps,
+                    tracker.clock.name(),
+                    settings.max_steps
+                ),
+            });
         }
         let time = tracker.clock.now().since(t_start);
         if tracker.closed.len() > seen {

@@ -1,25 +1,26 @@
-//! Work–precision benchmark (issues #6 and #7): run time per settled limit cycle against the
+//! Work–precision runner (issues #6 and #7): run time per settled limit cycle against the
 //! relative error in period, t0 and ln v_max, for every stickslip method and for the peers a
 //! user would otherwise pick — the plain-C CVODE replica of the engine, diffsol (BDF,
 //! ESDIRK34, TR-BDF2), differential-equations (Radau5, BDF) and scipy's solve_ivp (LSODA,
 //! Radau, BDF) — on the same problem: the DRR spring-slider at ξ = 0.8, ε = 1,
 //! γ ∈ {1e1, 1e3, 1e5, 1e8}, rtol 1e-3 … 1e-12 (atol = rtol·1e-2 on u, ln v and θ).
 //!
-//! Run (about an hour on 2 shared cores; writes docs/work-precision/results.json, the SVG
-//! diagrams there and docs/work-precision.md, keeping that file's hand-written notes):
+//! A tool, not a benchmark: it rewrites committed documentation, as examples/reference_table
+//! rewrites data/reference/. Run (about an hour on 2 shared cores; writes
+//! docs/work-precision/results.json, the SVG diagrams there and docs/work-precision.md, keeping
+//! that file's hand-written notes):
 //!
-//!     cargo bench --bench work_precision
-//!     cargo bench --bench work_precision -- --quick           # 2 γ × 3 tolerances
-//!     cargo bench --bench work_precision -- --gammas 1e8 --rtols 1e-6,1e-8 --only radau5,scipy-lsoda --no-write
+//!     cargo run --release --example work_precision
+//!     cargo run --release --example work_precision -- --quick           # 2 γ × 3 tolerances
+//!     cargo run --release --example work_precision -- --gammas 1e8 --rtols 1e-6,1e-8 --only radau5,scipy-lsoda --no-write
 //!
 //! Options: `--gammas LIST`, `--rtols LIST`, `--only METHODS` (names as in the tables),
 //! `--runs N` (timed runs per cell, default 5), `--budget S` (seconds of timed runs per cell,
 //! default 2), `--limit S` (time limit of one peer process, default 900), `--no-peers`,
 //! `--no-write` (print, write nothing), `--reanalyse` (tables and diagrams again from the
 //! committed results.json, no measurement), `--wrapper` (the same after measuring the wrapper
-//! against plain C anew, into docs/work-precision/wrapper.json). Without `--bench`, or with `--test` (`cargo test --benches`,
-//! `cargo bench -- --test`), it runs one small cell of our side as a smoke test and writes
-//! nothing.
+//! against plain C anew, into docs/work-precision/wrapper.json), `--smoke` (one small cell of
+//! our side, nothing written: a check that the runner works).
 //!
 //! What is measured (protocol.rs): every method starts from the same state on the settled
 //! cycle, 2 % of a period before an upward crossing of v = 1, and integrates through 3 cycles;
@@ -29,7 +30,7 @@
 //! their difference is the reference's accuracy, reported). Failures are rows with their
 //! reason, never dropped.
 
-#[path = "../common/mod.rs"]
+#[path = "../../benches/common/mod.rs"]
 #[allow(dead_code)]
 mod common;
 mod peers;
@@ -216,8 +217,7 @@ fn parse_args() -> Args {
         limit_s: 900,
         peers: true,
         write: true,
-        // As criterion does: a real measurement only under `cargo bench` without `--test`.
-        smoke: !common::benchmarking(),
+        smoke: false,
         reanalyse: false,
         wrapper_only: false,
         cell: None,
@@ -239,6 +239,7 @@ fn parse_args() -> Args {
             "--limit" => a.limit_s = value().parse().expect("--limit S"),
             "--no-peers" => a.peers = false,
             "--no-write" => a.write = false,
+            "--smoke" => a.smoke = true,
             "--reanalyse" => a.reanalyse = true,
             "--cell" => {
                 let mut num = || value().parse::<f64>().expect("--cell GAMMA RTOL U0 W0 THETA0 RUNS");
@@ -251,8 +252,7 @@ fn parse_args() -> Args {
                 a.reanalyse = true;
                 a.wrapper_only = true;
             }
-            // cargo's own flags (`--bench`, criterion-style filters) are ignored.
-            _ => {}
+            other => panic!("unknown option {other} (see the options at the top of examples/work_precision/main.rs)"),
         }
     }
     a
@@ -350,7 +350,7 @@ fn print_row(r: &Row) {
 fn main() {
     let args = parse_args();
     if args.smoke {
-        // `cargo test --benches`: one cell of our side, nothing written.
+        // `--smoke`: one cell of our side, nothing written.
         let start = protocol::settle(1e3).expect("settling at γ = 1e3");
         let row = run_ours("radau5", Method::Radau5, 1e3, 1e-6, &start, &Args { runs: 1, ..args });
         assert!(row.ok, "{:?}", row.error);
@@ -398,7 +398,7 @@ fn main() {
                 }
             }
             let measured = serde_json::json!({
-                "command": "cargo bench --bench work_precision -- --wrapper",
+                "command": "cargo run --release --example work_precision -- --wrapper",
                 "commit": report::machine()["stickslip_commit"],
                 "date_utc": report::machine()["date_utc"],
                 "load_average_end": report::load_average(),
@@ -483,11 +483,11 @@ fn main() {
     }
     machine["load_average_end"] = serde_json::json!(report::load_average());
     machine["wall_time_s"] = serde_json::json!(started.elapsed().as_secs_f64());
-    let extra: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let extra: Vec<String> = std::env::args().skip(1).collect();
     let command = if extra.is_empty() {
-        "cargo bench --bench work_precision".to_string()
+        "cargo run --release --example work_precision".to_string()
     } else {
-        format!("cargo bench --bench work_precision -- {}", extra.join(" "))
+        format!("cargo run --release --example work_precision -- {}", extra.join(" "))
     };
     let results = report::Results { machine, command, runs: args.runs, budget_s: args.budget_s, references, rows, wrapper };
     let analysis = report::analyse(&results);
