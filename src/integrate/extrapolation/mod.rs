@@ -90,6 +90,7 @@
 
 mod explicit;
 mod implicit;
+mod rounding;
 mod switching;
 mod tableau;
 
@@ -189,6 +190,8 @@ pub struct Extrapolation<S: OdeSystem> {
     kmit_next: isize,
     /// ODEX's bound on the next step from the dense output's error estimate.
     hoptde: f64,
+    /// The bound on the next step from the rounding test of the last implicit step.
+    h_rounding: f64,
     /// Point, last step, returned state, step-sequence options and statistics.
     core: Core,
     work: Work,
@@ -280,6 +283,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             kmit: -1,
             kmit_next: -1,
             hoptde: f64::INFINITY,
+            h_rounding: f64::INFINITY,
             core,
             work,
         };
@@ -443,6 +447,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                     if self.mode == Mode::Explicit && !self.explicit_end_holds(xph, kc, h_used, &mut failures)? {
                         continue;
                     }
+                    if self.mode == Mode::Implicit {
+                        if !self.rounding_holds(kc, h_used, &mut failures.rejections)? {
+                            continue;
+                        }
+                        self.add_increment();
+                    }
                     self.complete_step(xph, kc, h_used, planned, last);
                     return Ok(last);
                 }
@@ -536,6 +546,9 @@ impl<S: OdeSystem> Extrapolation<S> {
             if self.fixed.is_none() {
                 self.core.h = planned;
             }
+        }
+        if !explicit && self.h_rounding < self.core.h.abs() {
+            self.core.h = self.core.posneg * self.h_rounding.max(self.core.hmin);
         }
         if explicit {
             self.stiffness_test(h_used, false);
