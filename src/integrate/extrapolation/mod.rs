@@ -15,6 +15,12 @@
 //!   0.93, at most 12 columns, and only as many as keep the extrapolation's roundoff below rtol
 //!   (Λ_k·u ≤ rtol, Λ_k the sum of the moduli of the Aitken–Neville weights; an addition to
 //!   SEULEX: beyond it the error estimate is roundoff and the step size collapses);
+//! - the rows hold increments T_j − y (extrapolated as such, y added once the step is
+//!   accepted), and a rounding test (see [`rounding`], an addition to SEULEX): the rows'
+//!   rounding errors in f, carried by the solves and amplified by the extrapolation weights,
+//!   must stay below the absolute tolerance, or the step is retried with a smaller H. The error
+//!   estimate cannot see them, and linear invariants of f keep them for ever (E5's mass
+//!   balance, docs/test-set.md);
 //! - Jacobian reuse: a new Jacobian only when the last stability-check ratio θ exceeded
 //!   THET = min(1e-4, rtol), or after a rejection;
 //! - the stability check (rows 1–2, after their first step: θ = ‖(I − h_jJ)⁻¹(h_j f(y_1) −
@@ -84,8 +90,8 @@
 //!
 //! Layout: [`tableau`] holds what both schemes share (sequences, work model, work arrays, the
 //! extrapolation tableau with its convergence monitor and order and step-size selection),
-//! [`implicit`] the linearly implicit Euler scheme, [`explicit`] the modified midpoint scheme,
-//! [`switching`] the stiffness tests; this file the integrator: construction, the step loop
+//! [`implicit`] the linearly implicit Euler scheme, [`rounding`] its rounding test,
+//! [`explicit`] the modified midpoint scheme, [`switching`] the stiffness tests; this file the integrator: construction, the step loop
 //! and the [`Integrator`] contract.
 
 mod explicit;
@@ -140,7 +146,7 @@ enum Mode {
 /// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
 /// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
 /// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
-/// rejections in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
+/// rejections by the error test or the rounding test in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
 /// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
 /// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
 pub struct Extrapolation<S: OdeSystem> {
