@@ -15,6 +15,12 @@
 //!   0.93, at most 12 columns, and only as many as keep the extrapolation's roundoff below rtol
 //!   (Λ_k·u ≤ rtol, Λ_k the sum of the moduli of the Aitken–Neville weights; an addition to
 //!   SEULEX: beyond it the error estimate is roundoff and the step size collapses);
+//! - the rows hold increments T_j − y (extrapolated as such, y added once the step is
+//!   accepted), and a rounding test (see [`rounding`], an addition to SEULEX): the rows'
+//!   rounding errors in f, carried by the solves and amplified by the extrapolation weights,
+//!   must stay below the absolute tolerance, or the step is retried with a smaller H. The error
+//!   estimate cannot see them, and linear invariants of f keep them for ever (E5's mass
+//!   balance, docs/test-set.md);
 //! - Jacobian reuse: a new Jacobian only when the last stability-check ratio θ exceeded
 //!   THET = min(1e-4, rtol), or after a rejection;
 //! - the stability check (rows 1–2, after their first step: θ = ‖(I − h_jJ)⁻¹(h_j f(y_1) −
@@ -84,12 +90,13 @@
 //!
 //! Layout: [`tableau`] holds what both schemes share (sequences, work model, work arrays, the
 //! extrapolation tableau with its convergence monitor and order and step-size selection),
-//! [`implicit`] the linearly implicit Euler scheme, [`explicit`] the modified midpoint scheme,
-//! [`switching`] the stiffness tests; this file the integrator: construction, the step loop
+//! [`implicit`] the linearly implicit Euler scheme, [`rounding`] its rounding test,
+//! [`explicit`] the modified midpoint scheme, [`switching`] the stiffness tests; this file the integrator: construction, the step loop
 //! and the [`Integrator`] contract.
 
 mod explicit;
 mod implicit;
+mod rounding;
 mod switching;
 mod tableau;
 
@@ -139,7 +146,7 @@ enum Mode {
 /// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
 /// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
 /// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
-/// rejections in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
+/// rejections by the error test or the rounding test in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
 /// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
 /// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
 pub struct Extrapolation<S: OdeSystem> {
@@ -189,6 +196,8 @@ pub struct Extrapolation<S: OdeSystem> {
     kmit_next: isize,
     /// ODEX's bound on the next step from the dense output's error estimate.
     hoptde: f64,
+    /// The bound on the next step from the rounding test of the last implicit step.
+    h_rounding: f64,
     /// Point, last step, returned state, step-sequence options and statistics.
     core: Core,
     work: Work,
@@ -280,6 +289,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             kmit: -1,
             kmit_next: -1,
             hoptde: f64::INFINITY,
+            h_rounding: f64::INFINITY,
             core,
             work,
         };
@@ -443,6 +453,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                     if self.mode == Mode::Explicit && !self.explicit_end_holds(xph, kc, h_used, &mut failures)? {
                         continue;
                     }
+                    if self.mode == Mode::Implicit {
+                        if !self.rounding_holds(kc, h_used, &mut failures.rejections)? {
+                            continue;
+                        }
+                        self.add_increment();
+                    }
                     self.complete_step(xph, kc, h_used, planned, last);
                     return Ok(last);
                 }
@@ -536,6 +552,9 @@ impl<S: OdeSystem> Extrapolation<S> {
             if self.fixed.is_none() {
                 self.core.h = planned;
             }
+        }
+        if !explicit && self.h_rounding < self.core.h.abs() {
+            self.core.h = self.core.posneg * self.h_rounding.max(self.core.hmin);
         }
         if explicit {
             self.stiffness_test(h_used, false);

@@ -43,6 +43,9 @@ pub(super) struct Control {
     pub(super) safe2: f64,
     /// Step reduction after a row failure.
     pub(super) safe3: f64,
+    /// weights[k] = [`weight_moduli`] of column k (the linearly implicit scheme only; empty
+    /// for the explicit one).
+    pub(super) weights: Vec<Vec<f64>>,
 }
 
 fn offsets(nj: &[f64]) -> Vec<usize> {
@@ -53,6 +56,17 @@ fn offsets(nj: &[f64]) -> Vec<usize> {
     off
 }
 
+/// The moduli of the Aitken–Neville weights of T_{k,k} in h_j = H/n_j: |c_i| for the rows
+/// i = 1..=k (index 0 unused), T_{k,k} = Σ c_i T_i. Their sum is Λ_k, the amplification of
+/// the rows' rounding errors by the extrapolation.
+pub(super) fn weight_moduli(nj: &[f64], k: usize) -> Vec<f64> {
+    let mut c = vec![0.0; k + 1];
+    for (i, ci) in c.iter_mut().enumerate().skip(1) {
+        *ci = (1..=k).filter(|&l| l != i).map(|l| (1.0 / nj[l]) / (1.0 / nj[l] - 1.0 / nj[i])).product::<f64>().abs();
+    }
+    c
+}
+
 /// The number of columns (at least 4, at most `km`) whose extrapolation amplifies roundoff
 /// by less than rtol/u: Λ_k·u ≤ rtol, with Λ_k = Σ_i |c_i| the sum of the Aitken–Neville
 /// weights of T_{k,k} in h_j = H/n_j (Λ_k = 3, 9, 28, …, 1.3e5 at k = 11 for the harmonic
@@ -60,11 +74,7 @@ fn offsets(nj: &[f64]) -> Vec<usize> {
 /// and SEULEX's control, asking for ever smaller steps, ends in a step underflow (measured
 /// with 2, 3, 4, … at rtol 1e-12 on the DRR model at γ = 1e3 and 1e8).
 fn roundoff_columns(nj: &[f64], km: usize, rtol: f64) -> usize {
-    let amplification = |k: usize| -> f64 {
-        (1..=k)
-            .map(|i| (1..=k).filter(|&l| l != i).map(|l| (1.0 / nj[l]) / (1.0 / nj[l] - 1.0 / nj[i])).product::<f64>().abs())
-            .sum()
-    };
+    let amplification = |k: usize| -> f64 { weight_moduli(nj, k).iter().sum() };
     let mut k = km.min(4);
     while k < km && amplification(k + 1) * UROUND <= rtol {
         k += 1;
@@ -84,8 +94,9 @@ impl Control {
             a[j] = a[j - 1] + (nj[j] - 1.0) * WK_ROW + WK_DEC;
         }
         let off = offsets(&nj);
+        let weights = (0..=km).map(|k| weight_moduli(&nj, k)).collect();
         let km = roundoff_columns(&nj, km, rtol);
-        Self { km, nj, off, a, fac1: 0.1, fac2: 4.0, fac3: 0.7, fac4: 0.9, safe1: 0.6, safe2: 0.93, safe3: 0.5 }
+        Self { km, nj, off, a, fac1: 0.1, fac2: 4.0, fac3: 0.7, fac4: 0.9, safe1: 0.6, safe2: 0.93, safe3: 0.5, weights }
     }
 
     /// ODEX with the sequence 2, 6, 10, … (its NSEQU = 3, required by its dense output).
@@ -97,7 +108,7 @@ impl Control {
             a[j] = a[j - 1] + nj[j];
         }
         let off = offsets(&nj);
-        Self { km, nj, off, a, fac1: 0.02, fac2: 4.0, fac3: 0.8, fac4: 0.9, safe1: 0.65, safe2: 0.94, safe3: 0.5 }
+        Self { km, nj, off, a, fac1: 0.02, fac2: 4.0, fac3: 0.8, fac4: 0.9, safe1: 0.65, safe2: 0.94, safe3: 0.5, weights: Vec::new() }
     }
 }
 
@@ -130,6 +141,8 @@ pub(super) struct Work {
     pub(super) prev_fend: Vec<f64>,
     /// The linearly implicit rows' increments: row j, step i at j(j−1)/2 + i.
     pub(super) incr: Vec<Vec<f64>>,
+    /// The linearly implicit rows' rounding noise (rows 1..=km, see `rounding`).
+    pub(super) noise: Vec<Vec<f64>>,
     /// The midpoint rows' f-values f_1..f_{n_j} (row j from Σ_{i<j} n_i) and their values at
     /// the step's midpoint (ODEX's FSAFE and YSAFE).
     pub(super) fsafe: Vec<Vec<f64>>,
@@ -162,6 +175,7 @@ impl Work {
             prev_raw: v(),
             prev_fend: v(),
             incr: (0..incr).map(|_| v()).collect(),
+            noise: (0..=km).map(|_| v()).collect(),
             fsafe: (0..fsafe).map(|_| v()).collect(),
             ysafe: (0..=km).map(|_| v()).collect(),
             nev: (0..=km).map(|_| v()).collect(),
