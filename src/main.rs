@@ -62,7 +62,7 @@ enum Command {
     Sweep {
         /// Scene file (model given as gamma/xi/epsilon).
         scene: PathBuf,
-        /// NAME=START:STOP:COUNT[:log] for gamma, xi, epsilon or alpha; repeat for a grid.
+        /// NAME=START:STOP:COUNT[:log] for gamma, xi, epsilon, radiation_damping or alpha; repeat for a grid.
         #[arg(long = "param", required = true)]
         params: Vec<String>,
         /// Output file (JSON Lines).

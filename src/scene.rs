@@ -547,7 +547,6 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
         (a.paper, "paper", "the paper's values are for its model"),
         (a.asymptotics.is_some(), "asymptotics", "the slow flow, matching and slip scaling are derived for the slip law"),
         (a.lyapunov.is_some(), "lyapunov", "its quasi-static formula and the paper's claims are derived for the slip law"),
-        (a.noise.is_some(), "noise", "its drift is written for the slip law"),
     ];
     for (asked, name, why) in slip_only {
         if asked {

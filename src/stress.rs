@@ -1,5 +1,6 @@
 //! The numerical stress suite: a grid of γ, ξ, ε (below and above threshold), tolerances,
-//! starts far off the cycle and every method.
+//! starts far off the cycle, every method, and the state laws with and without radiation
+//! damping.
 //!
 //! Each cell has an [`Expectation`]. In the physical region (clearly above threshold, a stiff
 //! method, rtol 1e-4 … 1e-12, any start) the equations have a limit cycle, so the cell must
@@ -10,6 +11,8 @@
 //! a periodic orbit their periods must agree within 1e3·rtol.
 
 use crate::analysis::cycle::CycleStatus;
+use crate::analysis::hopf;
+use crate::model::{Drr, DrrParams, Friction, StateLaw};
 use crate::{engine, parallel};
 use crate::scene::{self, Method};
 use serde::Serialize;
@@ -30,6 +33,10 @@ pub struct Cell {
     pub start: Option<[f64; 3]>,
     /// The method.
     pub method: Method,
+    /// The state law.
+    pub state_law: StateLaw,
+    /// Radiation damping η.
+    pub eta: f64,
 }
 
 /// What a cell must give.
@@ -48,7 +55,8 @@ pub enum Expectation {
 impl Cell {
     /// What this cell must give (see the module documentation).
     pub fn expectation(&self) -> Expectation {
-        let eps_c = self.xi * self.gamma * self.gamma / (self.gamma * self.gamma + self.xi);
+        let params = DrrParams { state_law: self.state_law, eta: self.eta, ..DrrParams::new(self.gamma, self.xi, self.epsilon, Friction::Log) };
+        let eps_c = hopf::epsilon_c(&Drr::new(params));
         if !self.method.is_stiff() {
             Expectation::Limit("explicit method: its steps are stability-limited to ~1/γ², too much work at large γ")
         } else if self.method == Method::ArkodeImex {
@@ -68,10 +76,16 @@ impl Cell {
 }
 
 impl Cell {
-    /// A one-line key naming the cell, as in a known-failures file.
+    /// A one-line key naming the cell, as in a known-failures file (the state law and η are
+    /// named only when they are not the paper's slip law without damping).
     pub fn key(&self) -> String {
         let start = self.start.map_or("manifold".to_string(), |[u, v, t]| format!("u={u:e},v={v:e},theta={t:e}"));
-        format!("gamma={:e} xi={} epsilon={} rtol={:e} start={start} method={}", self.gamma, self.xi, self.epsilon, self.rtol, self.method.name())
+        format!("gamma={:e} xi={} epsilon={} rtol={:e} start={start} method={}{}", self.gamma, self.xi, self.epsilon, self.rtol, self.method.name(), self.law_key())
+    }
+
+    /// " state_law=… eta=…" for a model other than the paper's, "" otherwise.
+    fn law_key(&self) -> String {
+        if self.state_law == StateLaw::Slip && self.eta == 0.0 { String::new() } else { format!(" state_law={} eta={:e}", self.state_law.name(), self.eta) }
     }
 }
 
@@ -138,12 +152,24 @@ pub enum Grid {
     /// The physical region of issue #13: every stiff method from the default start at rtol
     /// 1e-6, 1e-8, 1e-10 over γ = 10 … 1e12 and (ξ, ε) with 1.05 ξ < ε ≤ 25 ξ.
     Physical,
+    /// The physical region under the ageing and PRZ laws, without and with radiation damping
+    /// (η = 0.1): the stiff methods of `physical` from the default start at rtol 1e-6 and
+    /// 1e-10 over γ = 10, 1e2, 1e4, … 1e12 and (ξ, ε) with ξ ∈ {0.2, 0.7, 2}, ε ∈ {1, 2, 3, 5,
+    /// 10}, ε above 1.05 ε_c(η) and at most 25 ξ.
+    Laws,
 }
+
+/// The stiff methods the physical region guarantees (issue #13).
+const PHYSICAL_METHODS: [Method; 5] = [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
+/// The models besides the paper's that the `laws` grid and the quick grid cover: (state law, η).
+const OTHER_LAWS: [(StateLaw, f64); 4] = [(StateLaw::Ageing, 0.0), (StateLaw::Ageing, 0.1), (StateLaw::Prz, 0.0), (StateLaw::Prz, 0.1)];
 
 /// The cells of a grid.
 pub fn grid(kind: Grid) -> Vec<Cell> {
-    if kind == Grid::Physical {
-        return physical_grid();
+    match kind {
+        Grid::Physical => return physical_grid(),
+        Grid::Laws => return laws_grid(),
+        Grid::Quick | Grid::Full => {}
     }
     let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = if kind == Grid::Quick {
         (vec![1.0, 1e4, 1e8], vec![0.2, 2.0], vec![0.1, 3.0, 5.0], vec![1e-4, 1e-10])
@@ -163,7 +189,52 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
                 for &rtol in &rtols {
                     for start in &starts {
                         for (_, method) in Method::ALL {
-                            cells.push(Cell { gamma, xi, epsilon, rtol, start: *start, method });
+                            cells.push(Cell { gamma, xi, epsilon, rtol, start: *start, method, state_law: StateLaw::Slip, eta: 0.0 });
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if kind == Grid::Quick {
+        cells.extend(quick_law_cells());
+    }
+    cells
+}
+
+/// The quick grid's other laws: ageing and PRZ, η = 0 and 0.1, at γ = 1e4 and 1e8 and two
+/// points far above threshold, from the slow manifold and from v = 1e30, with cvode-bdf,
+/// radau5 and rodas5p at rtol 1e-6 (every one a physical cell).
+fn quick_law_cells() -> Vec<Cell> {
+    let mut cells = Vec::new();
+    for (state_law, eta) in OTHER_LAWS {
+        for gamma in [1e4, 1e8] {
+            for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
+                for start in [None, Some([0.0, 1e30, 0.0])] {
+                    for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
+                        cells.push(Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law, eta });
+                    }
+                }
+            }
+        }
+    }
+    cells
+}
+
+/// The `laws` grid (see [`Grid::Laws`]).
+fn laws_grid() -> Vec<Cell> {
+    let mut cells = Vec::new();
+    for (state_law, eta) in OTHER_LAWS {
+        for k in [1, 2, 4, 6, 8, 10, 12] {
+            let gamma = 10f64.powi(k);
+            for xi in [0.2, 0.7, 2.0] {
+                for epsilon in [1.0, 2.0, 3.0, 5.0, 10.0] {
+                    for rtol in [1e-6, 1e-10] {
+                        for method in PHYSICAL_METHODS {
+                            let cell = Cell { gamma, xi, epsilon, rtol, start: None, method, state_law, eta };
+                            if epsilon <= 25.0 * xi && cell.expectation() == Expectation::Cycle {
+                                cells.push(cell);
+                            }
                         }
                     }
                 }
@@ -175,7 +246,6 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
 
 /// The physical-region grid (see [`Grid::Physical`]).
 fn physical_grid() -> Vec<Cell> {
-    let methods = [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
     let mut cells = Vec::new();
     for k in 1..=12 {
         let gamma = 10f64.powi(k);
@@ -185,8 +255,8 @@ fn physical_grid() -> Vec<Cell> {
                     continue;
                 }
                 for rtol in [1e-6, 1e-8, 1e-10] {
-                    for method in methods {
-                        cells.push(Cell { gamma, xi, epsilon, rtol, start: None, method });
+                    for method in PHYSICAL_METHODS {
+                        cells.push(Cell { gamma, xi, epsilon, rtol, start: None, method, state_law: StateLaw::Slip, eta: 0.0 });
                     }
                 }
             }
@@ -207,12 +277,14 @@ fn scene_text(cell: &Cell) -> String {
         format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
     });
     format!(
-        r#"{{"name": "stress", "model": {{"gamma": {:e}, "xi": {}, "epsilon": {}}}, {initial}
+        r#"{{"name": "stress", "model": {{"gamma": {:e}, "xi": {}, "epsilon": {}, "state_law": "{}", "radiation_damping": {:e}}}, {initial}
             "solver": {{"method": "{}", "rtol": {:e}, "atol": {:e}}},
             "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": {max_time:e}, "max_steps": {max_steps}}}}}]}}"#,
         cell.gamma,
         cell.xi,
         cell.epsilon,
+        cell.state_law.name(),
+        cell.eta,
         cell.method.name(),
         cell.rtol,
         cell.rtol * 1e-2
@@ -320,7 +392,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
             Outcome::Ok { period, .. } => {
                 s.ok += 1;
                 if let Some(p) = period {
-                    let key = format!("γ={:e} ξ={} ε={} rtol={:e} start={:?}", cell.gamma, cell.xi, cell.epsilon, cell.rtol, cell.start);
+                    let key = format!("γ={:e} ξ={} ε={} rtol={:e} start={:?}{}", cell.gamma, cell.xi, cell.epsilon, cell.rtol, cell.start, cell.law_key());
                     periods.entry(key).or_default().push((cell.method, *p));
                 }
             }
@@ -350,7 +422,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
 }
 
 /// The full table as Markdown: outcomes per γ and method (ok cells by cycle status, typed
-/// errors by kind), then per start, then the summary.
+/// errors by kind), then per start and per state law (with η), then the summary.
 pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String {
     let label = |o: &Outcome| match o {
         Outcome::Ok { status, .. } => format!("ok:{}", serde_json::to_value(status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()),
@@ -373,16 +445,9 @@ pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String 
         let cells: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
         out += &format!("| {:e} | {} | {} |\n", f64::from_bits(key.0), Method::ALL[key.1].0, cells.join(" | "));
     }
-    let mut by_start: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
-    for (cell, outcome) in cells.iter().zip(outcomes) {
-        let start = cell.start.map_or("on the slow manifold (v = 0.5)".to_string(), |[u, v, t]| format!("u = {u:e}, v = {v:e}, θ = {t:e}"));
-        *by_start.entry(start).or_default().entry(label(outcome)).or_default() += 1;
-    }
-    out += &format!("\n| start | {} |\n|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
-    for (start, counts) in by_start {
-        let cells: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
-        out += &format!("| {start} | {} |\n", cells.join(" | "));
-    }
+    let start_of = |cell: &Cell| cell.start.map_or("on the slow manifold (v = 0.5)".to_string(), |[u, v, t]| format!("u = {u:e}, v = {v:e}, θ = {t:e}"));
+    out += &counts_by("start", cells, outcomes, &columns, &label, start_of);
+    out += &counts_by("state law", cells, outcomes, &columns, &label, |cell| format!("{}, η = {}", cell.state_law.name(), cell.eta));
     out += &format!(
         "\nCells {}, ok {}, typed errors {:?}, panics {}, non-finite {}, inconsistent {}.\n\
          Physical region: {} cells, {} converged cycles, {} failures. Below threshold: {} failures.\n",
@@ -400,6 +465,20 @@ pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String 
     out += "\n| expected limit | cells | typed errors |\n|---|---|---|\n";
     for (reason, (n, errors)) in &summary.limits {
         out += &format!("| {reason} | {n} | {errors} |\n");
+    }
+    out
+}
+
+/// A Markdown table of outcome counts (columns) per group of cells (`group_of`, rows).
+fn counts_by(title: &str, cells: &[Cell], outcomes: &[Outcome], columns: &[String], label: &impl Fn(&Outcome) -> String, group_of: impl Fn(&Cell) -> String) -> String {
+    let mut groups: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    for (cell, outcome) in cells.iter().zip(outcomes) {
+        *groups.entry(group_of(cell)).or_default().entry(label(outcome)).or_default() += 1;
+    }
+    let mut out = format!("\n| {title} | {} |\n|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
+    for (group, counts) in groups {
+        let row: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
+        out += &format!("| {group} | {} |\n", row.join(" | "));
     }
     out
 }

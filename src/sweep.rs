@@ -18,7 +18,7 @@ use std::sync::Mutex;
 /// One swept parameter: NAME=START:STOP:COUNT[:log].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
-    /// Scene field: gamma, xi, epsilon or alpha (power-law exponent).
+    /// Scene field: gamma, xi, epsilon, radiation_damping (η) or alpha (power-law exponent).
     pub name: String,
     /// The values, in order.
     pub values: Vec<f64>,
@@ -28,8 +28,8 @@ pub struct Axis {
 pub fn parse_axis(spec: &str) -> Result<Axis, String> {
     let usage = "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
     let (name, range) = spec.split_once('=').ok_or_else(|| format!("--param {spec:?}: {usage}"))?;
-    if !["gamma", "xi", "epsilon", "alpha"].contains(&name) {
-        return Err(format!("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon or alpha"));
+    if !["gamma", "xi", "epsilon", "radiation_damping", "alpha"].contains(&name) {
+        return Err(format!("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon, radiation_damping or alpha"));
     }
     let parts: Vec<&str> = range.split(':').collect();
     let log = match parts.get(3) {
@@ -104,7 +104,7 @@ pub fn parse_shard(spec: &str) -> Result<Shard, String> {
 }
 
 /// The scene JSON with the point's parameters set (model.gamma, model.xi, model.epsilon,
-/// model.friction.power.alpha); parsing it again re-validates everything and recomputes the
+/// model.radiation_damping, model.friction.power.alpha); parsing it again re-validates everything and recomputes the
 /// default start on the slow manifold.
 fn scene_at(base: &serde_json::Value, params: &BTreeMap<String, f64>) -> serde_json::Value {
     let mut s = base.clone();
@@ -121,7 +121,7 @@ fn scene_at(base: &serde_json::Value, params: &BTreeMap<String, f64>) -> serde_j
 /// Checks that a scene can be swept over these axes; the error says why not.
 pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), String> {
     if base["model"].get("dimensional").is_some() {
-        return Err("sweeps set gamma/xi/epsilon: give the scene's model as gamma, xi, epsilon, not dimensional".into());
+        return Err("sweeps set gamma/xi/epsilon/radiation_damping: give the scene's model as gamma, xi, epsilon, not dimensional".into());
     }
     if axes.iter().any(|a| a.name == "alpha") && base["model"]["friction"].get("power").is_none() {
         return Err("--param alpha needs a scene with \"friction\": {\"power\": {\"alpha\": ...}}".into());

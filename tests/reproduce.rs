@@ -28,7 +28,7 @@ fn reduced_reproduce_writes_well_formed_figures_reports_and_summary() {
     }
 
     // Panels per figure: each has its own clip path.
-    let panels = [("fig1", 6), ("fig2", 4), ("fig3", 3), ("fig4", 2), ("fig5", 3), ("fig6", 2), ("fig7", 3), ("fig8", 4), ("fig9", 1)];
+    let panels = [("fig1", 6), ("fig2", 4), ("fig3", 3), ("fig4", 2), ("fig5", 3), ("fig6", 2), ("fig7", 3), ("fig8", 4), ("fig9", 1), ("laws", 2)];
     assert_eq!(panels.len(), FIGURES.len());
     for (id, n) in panels {
         let svg = std::fs::read_to_string(out.join(format!("{id}.svg"))).unwrap();
@@ -64,6 +64,12 @@ fn reduced_reproduce_writes_well_formed_figures_reports_and_summary() {
         }
     }
     assert!(claims >= 10, "{claims} claims");
+    // The state-law comparison: our periods match both reference tables and the three laws
+    // share ε_c and ω_c (every claim agrees).
+    let laws = figures.iter().find(|f| f["id"] == "laws").unwrap();
+    let law_claims = laws["claims"].as_array().unwrap();
+    assert!(law_claims.len() >= 2 * 3 + 2, "{laws}");
+    assert!(law_claims.iter().all(|c| c["verdict"] == "agrees"), "{laws}");
 
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     let html = std::fs::read_to_string(out.join("summary.html")).unwrap();

@@ -105,6 +105,33 @@ fn shards_merge_into_the_full_sweep() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// A sweep over the radiation damping η under the ageing law: each row's Hopf threshold is
+/// ε_c(η) = η + ξγ²(1 + η)/(ξ + γ²(1 + η)) (docs/state-laws.md, f = ln v, κ = 1).
+#[test]
+fn a_sweep_over_the_radiation_damping_sets_eta() {
+    let d = dir("eta");
+    let s = d.join("scene.json");
+    std::fs::write(&s, r#"{"name": "eta", "model": {"gamma": 100, "xi": 0.7, "epsilon": 1.2, "state_law": "ageing"}, "analyses": ["hopf"]}"#).unwrap();
+    let out = d.join("eta.jsonl");
+    let r = Command::new(EXE)
+        .args(["sweep", s.to_str().unwrap(), "--param", "radiation_damping=0:0.2:3", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let rows: Vec<serde_json::Value> = std::fs::read_to_string(&out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(rows.len(), 3);
+    let (gamma, xi) = (100.0f64, 0.7f64);
+    let g = gamma * gamma;
+    for row in &rows {
+        let text = row.to_string();
+        let eta = row["params"]["radiation_damping"].as_f64().unwrap_or_else(|| panic!("{text}"));
+        let eps_c = row["report"]["hopf"]["epsilon_c"].as_f64().unwrap_or_else(|| panic!("{text}"));
+        let expected = eta + xi * g * (1.0 + eta) / (xi + g * (1.0 + eta));
+        assert!((eps_c - expected).abs() < 1e-12, "η = {eta}: ε_c {eps_c} vs {expected}");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
+
 #[test]
 fn bad_sweep_arguments_exit_2() {
     let d = dir("bad");

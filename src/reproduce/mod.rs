@@ -18,6 +18,7 @@ pub mod fig6;
 pub mod fig7;
 pub mod fig8;
 pub mod fig9;
+pub mod laws;
 pub mod noise_cases;
 pub mod summary;
 
@@ -130,8 +131,8 @@ pub struct Entry {
     pub make: fn(&Context) -> Result<Output, ReproduceError>,
 }
 
-/// The figures made today, in the paper's order.
-pub const FIGURES: [Entry; 9] = [
+/// The figures made today, in the paper's order, then the comparisons beyond the paper.
+pub const FIGURES: [Entry; 10] = [
     Entry { id: "fig1", what: "Fig. 1: the limit cycle at γ = 10³, ξ = 0.7, ε = 0.72 (a); its period against ε (b) and against log₁₀ γ (c)", make: fig1::make },
     Entry { id: "fig2", what: "Fig. 2: the slip in fast units T = γ(t − t_c), V = v/γ, for several γ", make: fig2::make },
     Entry { id: "fig3", what: "Fig. 3: v/γ of the 2D flow on the slow manifold and of the 3D flow near t_c (a, b); the (u, θ) plane with the cycle, the 2D flow, the matching curves, the zero-acceleration lines and the adiabatic limit (c)", make: fig3::make },
@@ -141,6 +142,7 @@ pub const FIGURES: [Entry; 9] = [
     Entry { id: "fig7", what: "Fig. 7: correlation time before the event: saddle-node (slowing-down), stick-slip (speed-up), van der Pol", make: fig7::make },
     Entry { id: "fig8", what: "Fig. 8: power-law friction g_α(v) = (v^α − 1)/α against ln v", make: fig8::make },
     Entry { id: "fig9", what: "Fig. 9: correlation time before the event with power-law friction (α = 0.15, γ = 10³, ε = 0.78, ξ = 0.7)", make: fig9::make },
+    Entry { id: "laws", what: "Beyond the paper: the slip, ageing and PRZ state laws: period against γ (ξ = 0.8, ε = 1) with the reference tables, and one cycle of each", make: laws::make },
 ];
 
 /// A figure of the paper not reproduced yet, and what it waits for.

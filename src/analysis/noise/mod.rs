@@ -25,14 +25,14 @@ pub mod report;
 pub mod rng;
 pub mod scheme;
 pub mod statistics;
+mod summary;
 
 use crate::analysis::{AnalysisError, InvalidOption};
-use crate::integrate::{OdeSystem, SolverError};
+use crate::integrate::OdeSystem;
 use models::{EventKind, NoiseModel};
 use options::{Alignment, NoiseOptions};
 use scheme::{SchemeSettings, Start};
 use serde::Serialize;
-use statistics::{Moments, Width};
 
 /// How the scheme works, in one paragraph (echoed in reports).
 pub const SCHEME: &str = "Each realisation is a random ODE dx/dt = F(t,x) + B(x)η(t): the OU noises η (unit \
@@ -370,7 +370,7 @@ pub fn run(
         None
     };
     let realisations = realisations(model, options, &orbit, &plan, linear.as_ref(), threads, progress)?;
-    statistics(model, &orbit, plan, realisations, linear, &det_atol)
+    summary::statistics(model, &orbit, plan, realisations, linear, &det_atol)
 }
 
 /// Step 1, the deterministic orbit: for periodic models the converged limit cycle, the start
@@ -560,208 +560,4 @@ fn realisations(
     let started = std::time::Instant::now();
     let data = ensemble::run(&spec, &sampling, plan.realisations, threads, progress)?;
     Ok(Realisations { data, atol, event_time_without_noise, wall_time_s: started.elapsed().as_secs_f64() })
-}
-
-/// Step 3, the statistics of the realisations on the grid, beside the linear response (step
-/// 4) and where the two agree; the report.
-fn statistics(
-    model: &NoiseModel,
-    orbit: &Orbit,
-    plan: Plan,
-    realisations: Realisations,
-    linear: Option<linear_response::LinearResponse>,
-    det_atol: &[f64],
-) -> Result<NoiseReport, AnalysisError> {
-    let n = model.dim();
-    let (start, t_event_det) = (&orbit.start, orbit.t_event);
-    let (s, times, realisations_n) = (&plan.s, &plan.times, plan.realisations);
-    let k_n = s.len();
-    let data = &realisations.data;
-    let own = plan.alignment == Alignment::OwnEvent;
-    let path_orbit = scheme::deterministic_states(model, start.t, &start.x, times, DET_RTOL, det_atol)?;
-    let observables = model.observables();
-    let stride = observables.len() * k_n;
-    let report_rows: Vec<usize> = plan.report_times.iter().map(|t| statistics::nearest(s, -t)).collect();
-    let curve_rows: Vec<usize> = plan.curves_at.iter().map(|t| statistics::nearest(s, -t)).collect();
-    let mut rows: Vec<usize> = report_rows.iter().chain(&curve_rows).copied().collect();
-    rows.sort_unstable();
-    rows.dedup();
-    let mut linear_steps = linear.as_ref().map_or(0, |l| l.steps);
-    let mut series = Vec::new();
-    let mut by_variable = Vec::new();
-    let mut agreement = Vec::new();
-    let mut curves = Vec::new();
-    for (o, (name, obs)) in observables.iter().enumerate() {
-        let m = Moments::from_samples(&data.samples, realisations_n, stride, o * k_n, k_n, &rows);
-        let deterministic: Vec<f64> = path_orbit.iter().map(|x| obs.value(x)).collect();
-        // The linear response of the observable: δo = o'(x̄) δx_i.
-        let lin = linear.as_ref().map(|l| {
-            let grads: Vec<Vec<f64>> = l
-                .orbit
-                .iter()
-                .map(|x| {
-                    let mut g = vec![0.0; l.big];
-                    obs.gradient(x, &mut g[..n]);
-                    g
-                })
-                .collect();
-            let var = l.variances(&grads, own);
-            let rows = rows
-                .iter()
-                .map(|&j| {
-                    let (row, steps) = l.row(&grads, own, j)?;
-                    linear_steps += steps;
-                    Ok((j, row))
-                })
-                .collect::<Result<Vec<(usize, Vec<f64>)>, SolverError>>()?;
-            Ok::<Moments, SolverError>(Moments { mean: deterministic.clone(), var, rows })
-        });
-        let lin = lin.transpose()?;
-        let row_of = |m: &Moments, j: usize| -> Vec<f64> {
-            m.rows.iter().find(|(r, _)| *r == j).map(|(_, row)| row.clone()).expect("a requested row")
-        };
-        let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, s, j, width);
-        let sigma = m.sigma();
-        let sigma_lin = lin.as_ref().map(|l| l.sigma());
-        let points: Vec<CorrelationPoint> = report_rows
-            .iter()
-            .map(|&j| CorrelationPoint {
-                t_before_event: -s[j],
-                tau: tau_of(&m, j, Width::HalfHeight),
-                tau_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::HalfHeight)),
-                tau_coefficient: tau_of(&m, j, Width::Coefficient),
-                tau_coefficient_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::Coefficient)),
-            })
-            .collect();
-        if let Some(sl) = &sigma_lin {
-            agreement.push(agreement_of(name, &sigma, sl, &points, &report_rows, s, realisations_n));
-        }
-        if o == 0 {
-            for &j in &curve_rows {
-                let lag: Vec<f64> = (0..=j).rev().map(|k| s[j] - s[k]).collect();
-                let gamma: Vec<f64> = row_of(&m, j).into_iter().rev().collect();
-                let gamma_linear_response = lin.as_ref().map(|l| row_of(l, j).into_iter().rev().collect());
-                curves.push(CorrelationCurve { t_before_event: -s[j], lag, gamma, gamma_linear_response });
-            }
-        }
-        by_variable.push((name.to_string(), points));
-        series.push(Series { name, mean: m.mean.clone(), deterministic, sigma, sigma_linear_response: sigma_lin });
-    }
-    let correlation_functions = curves;
-    let growth = growth(model, orbit, &plan, &series);
-    let r_n = realisations_n as f64;
-    let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event_det).collect();
-    let mean_shift = shifts.iter().sum::<f64>() / r_n;
-    let std = (shifts.iter().map(|d| (d - mean_shift).powi(2)).sum::<f64>() / (r_n - 1.0)).sqrt();
-    let report = NoiseReport {
-        model: model.kind(),
-        settings: Settings {
-            amplitudes: model.amplitudes(),
-            correlation_time: plan.tau,
-            noise_step: plan.h,
-            steps_per_correlation_time: plan.steps_per_tau,
-            realisations: realisations_n,
-            seed: plan.seed,
-            start_before_event: orbit.before,
-            window: plan.window,
-            alignment: plan.alignment,
-            grid_points: plan.grid_points,
-            report_points: plan.report_count,
-            rtol: plan.rtol,
-            atol: realisations.atol,
-            linear_response: plan.want_linear,
-            correlation_curves_at: plan.curves_at,
-            event: plan.event_words,
-        },
-        scheme: SCHEME,
-        deterministic: Deterministic {
-            period: orbit.period,
-            burn_in_events: orbit.burn_in_events,
-            t0: orbit.t0,
-            start_time: start.t,
-            start_state: start.x.clone(),
-            components: model.component_names().to_vec(),
-            event_time: t_event_det,
-            event_state: orbit.x_event.clone(),
-            event_time_without_noise: realisations.event_time_without_noise,
-            scheme_event_time_error: realisations.event_time_without_noise - t_event_det,
-        },
-        events: Events { mean_shift, std, std_linear_response: linear.as_ref().map(|l| l.event_time_std) },
-        t_before_event: s.iter().map(|v| -v).collect(),
-        series,
-        correlation_variable: observables[0].0,
-        correlation_time: by_variable[0].1.clone(),
-        correlation_time_by_variable: by_variable,
-        correlation_functions,
-        growth,
-        agreement,
-        work: Work {
-            steps: data.stats.steps,
-            step_attempts: data.stats.step_attempts,
-            rhs_evals: data.stats.rhs_evals + data.stats.rhs_evals_jacobian,
-            jac_evals: data.stats.jac_evals,
-            nodes_per_realisation: data.nodes as f64 / r_n,
-            linear_response_steps: linear.as_ref().map(|_| linear_steps),
-            ensemble_wall_time_s: realisations.wall_time_s,
-        },
-    };
-    Ok(report)
-}
-
-/// Ensemble against linear response for one observable over the report rows: σ's largest
-/// relative difference and where it exceeds 4 standard errors, τ's median and largest.
-fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[CorrelationPoint], report_rows: &[usize], s: &[f64], realisations: usize) -> Agreement {
-    let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
-    let mut max_rel = 0.0f64;
-    let mut disagree = Vec::new();
-    for &j in report_rows {
-        if sigma_lin[j] > 0.0 {
-            let rel = sigma[j] / sigma_lin[j] - 1.0;
-            max_rel = max_rel.max(rel.abs());
-            if rel.abs() > 4.0 * se {
-                disagree.push(-s[j]);
-            }
-        }
-    }
-    let mut rels: Vec<f64> = points
-        .iter()
-        .filter_map(|p| match (p.tau, p.tau_linear_response) {
-            (Some(a), Some(b)) if b > 0.0 => Some((a / b - 1.0).abs()),
-            _ => None,
-        })
-        .collect();
-    rels.sort_by(|a, b| a.total_cmp(b));
-    Agreement {
-        name,
-        sigma_standard_error: se,
-        sigma_max_relative_difference: max_rel,
-        sigma_disagree_at: disagree,
-        tau_median_relative_difference: (!rels.is_empty()).then(|| rels[rels.len() / 2]),
-        tau_max_relative_difference: rels.last().copied(),
-    }
-}
-
-/// DRR: the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1, from the series.
-fn growth(model: &NoiseModel, orbit: &Orbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
-    match (model, orbit.t0) {
-        (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
-            let (jf, j0) = (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));
-            let v = &series[1];
-            let v_growth = v.mean[jf] / v.mean[j0];
-            let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
-            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
-            Some(Growth {
-                t_f_before_event: 0.1,
-                interval: t0,
-                v_growth,
-                sigma_v_growth,
-                ratio: sigma_v_growth / v_growth,
-                log10_ratio: (sigma_v_growth / v_growth).log10(),
-                v_growth_linear_response: lin.map(|l| l.0),
-                sigma_v_growth_linear_response: lin.map(|l| l.1),
-                ratio_linear_response: lin.map(|l| l.1 / l.0),
-            })
-        }
-        _ => None,
-    }
 }

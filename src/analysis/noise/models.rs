@@ -2,7 +2,8 @@
 //! independent OU noise η_i per state component and a diagonal B:
 //!
 //! - DRR in (u, w = ln v, θ): du/dt = v − 1 + η_u f_u, dv/dt = −γ²G + η_v f_v,
-//!   dθ/dt = −v(θ + (1+ε)f(v)) + η_θ f_θ. The noise on v enters w = ln v as η_v f_v e^{−w}: with
+//!   dθ/dt = (1+ε) v F(x) + η_θ f_θ, with [`Drr`]'s right-hand side (any state law F, any
+//!   radiation damping η in G). The noise on v enters w = ln v as η_v f_v e^{−w}: with
 //!   coloured (OU) noise every realisation is an ordinary differential equation, so ordinary
 //!   calculus applies (dw = dv/v; no Itô/Stratonovich correction).
 //! - saddle-node in x: dx/dt = μ0 − r t − x² + η_x f_x.
@@ -10,7 +11,7 @@
 
 use crate::integrate::{JacobianMatrix, OdeSystem};
 use crate::model::drr::{Drr, W};
-use crate::model::{Friction, SaddleNode, VanDerPol};
+use crate::model::{SaddleNode, VanDerPol};
 
 /// Largest state dimension of the models (the DRR's 3).
 pub const MAX_DIM: usize = 3;
@@ -205,30 +206,12 @@ impl NoiseModel {
         }
     }
 
-    /// dx/dt = F(t, x) + B(x) η into `out`. For the DRR one exponential serves drift and noise
-    /// (e^{−w} = 1/v, and v − 1 = expm1(w) only where |w| < 1/2, where v − 1 would cancel),
-    /// plus the friction law's own (none for ln v); otherwise F and Bη separately.
+    /// dx/dt = F(t, x) + B(x) η into `out`: the model's own right-hand side F (for the DRR,
+    /// [`Drr`]'s, with its state law and radiation damping: one definition of the dynamics)
+    /// plus the forcing.
     pub fn forced_rhs(&self, t: f64, x: &[f64], eta: &[f64], out: &mut [f64]) {
-        match self {
-            NoiseModel::Drr { system, amplitudes } => {
-                let p = system.params();
-                let (u, w, theta) = (x[0], x[W], x[2]);
-                let f = match p.friction {
-                    Friction::Log => w,
-                    law => law.eval(w).0,
-                };
-                let v = w.exp();
-                let inv_v = 1.0 / v;
-                let g = u + (theta + f) / p.xi;
-                out[0] = (if w.abs() < 0.5 { w.exp_m1() } else { v - 1.0 }) + amplitudes[0] * eta[0];
-                out[W] = inv_v * (amplitudes[1] * eta[W] - p.gamma * p.gamma * g);
-                out[2] = -v * (theta + (1.0 + p.epsilon) * f) + amplitudes[2] * eta[2];
-            }
-            _ => {
-                self.rhs(t, x, out);
-                self.add_forcing(x, eta, out);
-            }
-        }
+        self.rhs(t, x, out);
+        self.add_forcing(x, eta, out);
     }
 
     /// Adds ∂(B(x)η)/∂x to `jac` (only the DRR's w entry depends on x: −η_v e^{−w} η_w).
@@ -276,23 +259,45 @@ impl OdeSystem for NoiseModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::DrrParams;
+    use crate::model::{DrrParams, Friction, StateLaw};
 
+    /// The forced DRR against the closed forms of docs/state-laws.md (f = ln v), written out
+    /// here independently of [`Drr`]: du/dt = v − 1 + a_u η_u, dw/dt = (−γ²G + a_v η_v)/v with
+    /// G = u + (θ + ln v + ηv)/ξ, and dθ/dt = slip −v(θ + (1+ε) ln v), ageing
+    /// (1+ε)(e^{−θ/(1+ε)} − v), PRZ (1+ε)(e^{−θ/(1+ε)} − v² e^{θ/(1+ε)}/4), plus a_θ η_θ.
     #[test]
-    fn forced_rhs_is_drift_plus_forcing() {
-        for friction in [Friction::Log, Friction::Power { alpha: 0.15 }, Friction::Asinh] {
-            let m = NoiseModel::Drr {
-                system: Drr::new(DrrParams::new(1e3, 0.7, 0.72, friction)),
-                amplitudes: [0.1, 3e3, 0.2],
-            };
-            for x in [[0.3, -0.4, 0.2], [1.0, 0.1, -0.3], [-2.0, 5.0, 1.0]] {
-                let eta = [0.5, -1.2, 0.7];
-                let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
-                m.forced_rhs(0.0, &x, &eta, &mut a);
-                m.rhs(0.0, &x, &mut b);
-                m.add_forcing(&x, &eta, &mut b);
-                for i in 0..3 {
-                    assert!((a[i] - b[i]).abs() <= 1e-13 * (1.0 + b[i].abs()), "{friction:?} {x:?} {i}: {} vs {}", a[i], b[i]);
+    fn forced_drr_matches_the_closed_forms_for_every_state_law_and_damping() {
+        let (gamma, xi, epsilon) = (30.0, 0.7, 0.72);
+        let c = 1.0 + epsilon;
+        let amplitudes = [0.1, 3e3, 0.2];
+        for (name, state_law) in StateLaw::ALL {
+            for eta_damping in [0.0, 0.37] {
+                let params = DrrParams { state_law, eta: eta_damping, ..DrrParams::new(gamma, xi, epsilon, Friction::Log) };
+                let m = NoiseModel::Drr { system: Drr::new(params), amplitudes };
+                for x in [[0.3f64, -0.4, 0.2], [1.0, 0.1, -0.3], [-2.0, 2.0, 1.0]] {
+                    for noise in [[0.0; 3], [0.5, -1.2, 0.7]] {
+                        let (u, w, theta) = (x[0], x[1], x[2]);
+                        let v = w.exp();
+                        let g = u + (theta + w + eta_damping * v) / xi;
+                        let drift_theta = match state_law {
+                            StateLaw::Slip => -v * (theta + c * w),
+                            StateLaw::Ageing => c * ((-theta / c).exp() - v),
+                            StateLaw::Prz => c * ((-theta / c).exp() - v * v * (theta / c).exp() / 4.0),
+                        };
+                        let expected = [
+                            v - 1.0 + amplitudes[0] * noise[0],
+                            (-gamma * gamma * g + amplitudes[1] * noise[1]) / v,
+                            drift_theta + amplitudes[2] * noise[2],
+                        ];
+                        let mut got = [0.0; 3];
+                        m.forced_rhs(0.0, &x, &noise, &mut got);
+                        for i in 0..3 {
+                            // dw/dt is a difference of terms of size γ²(|u| + (|θ| + |ln v| + ηv)/ξ)/v.
+                            let terms = (gamma * gamma * (u.abs() + (theta.abs() + w.abs() + eta_damping * v) / xi) + amplitudes[1]) / v;
+                            let scale = 1.0 + expected[i].abs() + if i == 1 { terms } else { 0.0 };
+                            assert!((got[i] - expected[i]).abs() <= 1e-14 * scale, "{name} η = {eta_damping} {x:?} {noise:?} component {i}: {} vs {}", got[i], expected[i]);
+                        }
+                    }
                 }
             }
         }

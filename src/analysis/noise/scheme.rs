@@ -32,7 +32,7 @@ use super::ou::{self, OuStep};
 use super::rng::Rng;
 use crate::analysis::AnalysisError;
 use crate::solver::{self, Method};
-use crate::integrate::{JacobianMatrix, OdeSystem, Options, Rodas5p, SolverError, Stats, Task, Tolerance};
+use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Stats, Task, Tolerance};
 use std::cell::Cell;
 
 /// The OU values around the current interval [t_k, t_{k+1}]: η_{k−1}, η_k, η_{k+1}, η_{k+2}.
@@ -43,10 +43,12 @@ struct Segment {
     eta: [[f64; MAX_DIM]; 4],
 }
 
-/// The model with the noise of the current interval, a cubic in t.
+/// The model with the noise of the current interval, a cubic in t. The interval lives in a
+/// cell the caller keeps (and moves from node to node), so that the integrator can own the
+/// system behind the crate's solver selection ([`solver::build_default`]).
 struct Forced<'a> {
     model: &'a NoiseModel,
-    segment: Cell<Segment>,
+    segment: &'a Cell<Segment>,
 }
 
 impl Forced<'_> {
@@ -258,10 +260,9 @@ pub fn realisation(
     path: &mut Path,
 ) -> Result<(), AnalysisError> {
     let n = model.dim();
-    let forced = Forced { model, segment: Cell::new(Segment::default()) };
-    // Rodas5P itself, not solver::build_default: the noise of each interval is set on the
-    // integrator's own system (`system().segment`), which a boxed integrator does not expose.
-    let mut integ = Rodas5p::new(forced, start.t, &start.x, &settings.options())?;
+    let segment = Cell::new(Segment::default());
+    let forced = Forced { model, segment: &segment };
+    let mut integ = solver::build_default(Method::Rodas5p, forced, start.t, &start.x, &settings.options())?;
     let ou_step = OuStep::new(settings.h, settings.tau);
     // The path η_{−1}, η_0, η_1, η_2 (η_{−1} stationary), then one node further per interval.
     let mut eta = [[0.0; MAX_DIM]; 4];
@@ -292,7 +293,7 @@ pub fn realisation(
             let x = integ.state().to_vec();
             return Err(no_event(t0, &x, format!("no event before t = {t_max:e} (the noise is too strong, or the start is not before an event)")));
         }
-        integ.system().segment.set(Segment { t0, t1, eta });
+        segment.set(Segment { t0, t1, eta });
         integ.set_stop_time(t1)?;
         integ.advance(t1, Task::Normal)?;
         let x = integ.state();
