@@ -106,16 +106,6 @@ fn normal_task_returns_the_state_at_tout() {
     }
 }
 
-/// The SUNDIALS methods, whose wrappers do not yet hold the parts of the contract checked by
-/// [`check_interpolation`] (found by it; src/sundials/ is someone else's work in progress):
-/// CVODE and ARKStep return NaN, not an error, for dense output at t = NaN; before any step
-/// CVODE returns NaN at t0 and ARKStep crashes (SIGSEGV); after an interpolated return, their
-/// OneStep returns the step end already computed instead of taking a step.
-/// `cargo test --release --test contract -- --ignored` runs them.
-fn sundials(method: Method) -> bool {
-    matches!(method, Method::CvodeBdf | Method::CvodeAdams | Method::ArkodeDirk | Method::ArkodeImex | Method::ArkodeErk)
-}
-
 /// Dense output holds the last step only (before any step, or since a restart, only the
 /// initial point) and refuses a non-finite time; OneStep takes exactly one step.
 fn check_interpolation(method: Method) {
@@ -136,13 +126,7 @@ fn check_interpolation(method: Method) {
 
 #[test]
 fn dense_output_holds_the_last_step_only() {
-    methods().filter(|m| !sundials(*m)).for_each(check_interpolation);
-}
-
-#[test]
-#[ignore = "the SUNDIALS wrappers' known defects (see `sundials`); ARKStep crashes the process"]
-fn dense_output_holds_the_last_step_only_sundials() {
-    methods().filter(|m| sundials(*m)).for_each(check_interpolation);
+    methods().for_each(check_interpolation);
 }
 
 #[test]

@@ -402,7 +402,7 @@ impl<S: OdeSystem> Solver<S> {
         let implicit = matches!(method, ArkMethod::Dirk(_));
         let jacobian: ffi::CVLsJacFn =
             if implicit && system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: implicit, jacobian };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: implicit, jacobian, rhs: S::rhs };
         let f: ffi::ARKRhsFn = Some(callbacks::rhs::<S>);
         let (fe, fi) = if implicit { (None, f) } else { (f, None) };
         let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {
@@ -436,7 +436,7 @@ impl<S: ImexSystem> Solver<S> {
         dimension_error(system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn =
             if system.has_implicit_jacobian() { Some(callbacks::implicit_jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian, rhs: S::rhs };
         let (fe, fi): (ffi::ARKRhsFn, ffi::ARKRhsFn) =
             (Some(callbacks::rhs_explicit::<S>), Some(callbacks::rhs_implicit::<S>));
         let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {

@@ -151,7 +151,7 @@ impl<S: OdeSystem> Solver<S> {
         }
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian };
+        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian, rhs: S::rhs };
         let lmm = match settings.method {
             CvodeMethod::Bdf => ffi::CV_BDF,
             CvodeMethod::Adams => ffi::CV_ADAMS,

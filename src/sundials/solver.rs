@@ -78,6 +78,15 @@ pub struct Solver<S> {
     /// a `rebase` started with the step in progress.
     initial_step: f64,
     rebased: bool,
+    /// See [`Creation::rhs`].
+    rhs: fn(&S, f64, &[f64], &mut [f64]),
+    /// Whether a step was taken since construction or the last restart: before that, dense
+    /// output holds only (t0, y0, f(t0, y0)).
+    stepped: bool,
+    /// Whether the last return was the end of the last internal step. After an interpolated
+    /// return SUNDIALS' one-step mode returns that step's end without taking a step; the
+    /// contract's `OneStep` takes one.
+    at_step_end: bool,
     counters_before_reinit: Stats,
     reinits: u64,
     ctx: Context,
@@ -90,6 +99,9 @@ pub(crate) struct Creation<S> {
     pub y0: Vec<f64>,
     pub needs_linear_solver: bool,
     pub jacobian: ffi::CVLsJacFn,
+    /// The whole right-hand side f(t, y), for the derivative at t0 before any step (SUNDIALS'
+    /// dense output holds nothing then).
+    pub rhs: fn(&S, f64, &[f64], &mut [f64]),
 }
 
 impl<S> Solver<S> {
@@ -102,7 +114,7 @@ impl<S> Solver<S> {
         options: &Options,
         create: impl FnOnce(&SerialVector, &Context) -> Mem,
     ) -> Result<Self, SolverError> {
-        let Creation { system, t0, y0, needs_linear_solver, jacobian } = creation;
+        let Creation { system, t0, y0, needs_linear_solver, jacobian, rhs } = creation;
         let dim = y0.len();
         let invalid = |message: String| SolverError {
             solver: api.name,
@@ -155,6 +167,9 @@ impl<S> Solver<S> {
             fail_on_step_underflow: options.fail_on_step_underflow,
             initial_step: options.initial_step.unwrap_or(0.0),
             rebased: false,
+            rhs,
+            stepped: false,
+            at_step_end: true,
             counters_before_reinit: Stats::default(),
             reinits: 0,
             ctx,
@@ -309,11 +324,20 @@ impl<S> Solver<S> {
             Task::OneStep => 2,
         };
         self.shared_mut().diag.begin_call();
+        let t_before = self.t;
+        let steps_before = (task == Task::OneStep && !self.at_step_end).then(|| self.raw_stats().steps);
         let mut t = self.t;
         // SAFETY: live solver memory; `y` is a vector of the system's length owned by us;
         // callbacks reach `shared`, which outlives the call.
-        let flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        let mut flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        if flag == 0 && steps_before == Some(self.raw_stats().steps) {
+            // One-step mode after an interpolated return gave back the last step's end
+            // without a step: take the step the contract promises.
+            // SAFETY: as above.
+            flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        }
         self.t = t;
+        self.stepped |= t != t_before;
         self.shared_mut().diag.poll_warnings();
         let (nonfinite, underflows) = self.shared_mut().diag.since_call();
         if self.shared().diag.stopped_for_underflow {
@@ -359,6 +383,7 @@ impl<S> Solver<S> {
             }
             _ => StepEvent::Reached,
         };
+        self.at_step_end = task == Task::OneStep && !matches!(event, StepEvent::Root(_));
         Ok(Step { t, event })
     }
 
@@ -381,7 +406,31 @@ impl<S> Solver<S> {
 
     /// The k-th derivative of the interpolated solution at `t`, which must lie within the last
     /// internal step (dense output).
+    ///
+    /// Before any step (since construction or a restart) only t = t0 with k ≤ 1 is held: the
+    /// state and f(t0, y0). A non-finite `t` is invalid input.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
+        if !t.is_finite() {
+            return Err(self.error(ErrorKind::InvalidInput, 0, format!("dense output needs a finite t, got {t}")));
+        }
+        if !self.stepped {
+            if t != self.t || k > 1 {
+                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1, got t = {t:e}, k = {k}", self.t);
+                return Err(self.error(ErrorKind::InvalidInput, 0, message));
+            }
+            let mut value = self.y.as_slice().to_vec();
+            if k == 1 {
+                let mut f = vec![0.0; value.len()];
+                (self.rhs)(&self.shared().system, self.t, &value, &mut f);
+                if let Some(i) = f.iter().position(|v| !v.is_finite()) {
+                    let message = format!("the right-hand side is not finite at t0 (component {i}: {})", f[i]);
+                    return Err(self.error(ErrorKind::RhsFailure, 0, message));
+                }
+                value = f;
+            }
+            self.scratch.as_mut_slice().copy_from_slice(&value);
+            return Ok(self.scratch.as_slice());
+        }
         // SAFETY: live solver memory; `scratch` has the system's length.
         let f = unsafe { (self.api.get_dky)(self.mem.as_ptr(), t, k as c_int, self.scratch.raw()) };
         self.check(f)?;
@@ -472,6 +521,8 @@ impl<S> Solver<S> {
             self.counters_before_reinit.accumulate(&before);
         }
         self.t = t0;
+        self.stepped = false;
+        self.at_step_end = true;
         self.reinits += 1;
         if self.rebased {
             self.rebased = false;
