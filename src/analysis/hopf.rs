@@ -194,6 +194,37 @@ mod tests {
         matrix_at_fixed_point(d).complex_eigenvalues().iter().map(|z| [z.re, z.im]).collect()
     }
 
+    /// Two eigenvalue lists agree, once sorted, within `tolerance` × (1 + |λ|) (relative) or
+    /// `tolerance` (absolute, `relative` false).
+    fn assert_same_eigenvalues(mut ours: Vec<[f64; 2]>, mut reference: Vec<[f64; 2]>, tolerance: f64, relative: bool, what: &str) {
+        let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
+        reference.sort_by(key);
+        ours.sort_by(key);
+        for (a, b) in ours.iter().zip(&reference) {
+            let scale = if relative { 1.0 + b[0].hypot(b[1]) } else { 1.0 };
+            assert!((a[0] - b[0]).abs() < tolerance * scale && (a[1] - b[1]).abs() < tolerance * scale, "{what}: {ours:?} vs {reference:?}");
+        }
+    }
+
+    /// ε_c and ω_c of `base` (its ε ignored) against the analytic Jacobian: the ε where the
+    /// largest real part of its numerically computed eigenvalues crosses 0 (bisection) to 1e-9,
+    /// and the imaginary part there to 1e-7. Returns the derived report.
+    fn assert_threshold_matches_the_eigenvalues(base: DrrParams) -> HopfReport {
+        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
+        let derived = analyse(&Drr::new(base));
+        let (mut lo, mut hi) = (0.0, 20.0);
+        assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
+        }
+        let eps = 0.5 * (lo + hi);
+        assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{base:?}: {eps} vs {}", derived.epsilon_c);
+        let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
+        assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{base:?}: ω {omega} vs {}", derived.omega_c);
+        derived
+    }
+
     #[test]
     fn eigenvalues_agree_with_a_matrix_eigensolver_for_every_law_at_moderate_gamma() {
         for friction in frictions() {
@@ -201,18 +232,7 @@ mod tests {
                 for eta in [0.0, 0.05, 0.8] {
                     for gamma in [1.0, 3.0, 10.0, 100.0] {
                         let d = Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.72, friction) });
-                        let mut reference = matrix_eigenvalues(&d);
-                        let mut ours = analyse(&d).eigenvalues;
-                        let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
-                        reference.sort_by(key);
-                        ours.sort_by(key);
-                        for (a, b) in ours.iter().zip(&reference) {
-                            let scale = 1.0 + b[0].hypot(b[1]);
-                            assert!(
-                                (a[0] - b[0]).abs() < 1e-9 * scale && (a[1] - b[1]).abs() < 1e-9 * scale,
-                                "{friction:?} {state_law:?} η={eta} γ={gamma}: {ours:?} vs {reference:?}"
-                            );
-                        }
+                        assert_same_eigenvalues(analyse(&d).eigenvalues, matrix_eigenvalues(&d), 1e-9, true, &format!("{friction:?} {state_law:?} η={eta} γ={gamma}"));
                     }
                 }
             }
@@ -243,23 +263,11 @@ mod tests {
     /// matrix eigensolver is accurate.
     #[test]
     fn threshold_and_frequency_match_the_jacobians_eigenvalues_for_every_law_and_damping() {
-        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
         for friction in frictions() {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.0, 0.1, 1.0] {
                     for gamma in [2.0, 10.0, 50.0] {
-                        let base = DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.0, friction) };
-                        let derived = analyse(&Drr::new(base));
-                        let (mut lo, mut hi) = (0.0, 20.0);
-                        assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
-                        for _ in 0..60 {
-                            let mid = 0.5 * (lo + hi);
-                            if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
-                        }
-                        let eps = 0.5 * (lo + hi);
-                        assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{friction:?} {state_law:?} η={eta} γ={gamma}: {eps} vs {}", derived.epsilon_c);
-                        let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
-                        assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{friction:?} {state_law:?} η={eta} γ={gamma}: ω {omega} vs {}", derived.omega_c);
+                        assert_threshold_matches_the_eigenvalues(DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.0, friction) });
                     }
                 }
             }
@@ -291,33 +299,16 @@ mod tests {
     #[test]
     fn quasi_dynamic_threshold_matches_the_eigenvalues_of_its_linearisation() {
         use crate::model::quasi_dynamic::CONSTRAINT_RELAXATION_RATE;
-        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
         for friction in frictions() {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.01, 0.1, 1.0] {
                     let base = DrrParams { state_law, ..DrrParams::quasi_dynamic(0.7, 0.0, eta, friction) };
-                    let derived = analyse(&Drr::new(base));
                     // Eigenvalues at ε = 1.3: the reported pair and −κ_G.
-                    let at = DrrParams { epsilon: 1.3, ..base };
-                    let mut reference = matrix_eigenvalues(&Drr::new(at));
-                    let mut ours = analyse(&Drr::new(at)).eigenvalues;
+                    let at = Drr::new(DrrParams { epsilon: 1.3, ..base });
+                    let mut ours = analyse(&at).eigenvalues;
                     ours.push([-CONSTRAINT_RELAXATION_RATE, 0.0]);
-                    let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
-                    reference.sort_by(key);
-                    ours.sort_by(key);
-                    for (a, b) in ours.iter().zip(&reference) {
-                        assert!((a[0] - b[0]).abs() < 1e-10 && (a[1] - b[1]).abs() < 1e-10, "{friction:?} {state_law:?} η={eta}: {ours:?} vs {reference:?}");
-                    }
-                    let (mut lo, mut hi) = (0.0, 20.0);
-                    assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
-                    for _ in 0..60 {
-                        let mid = 0.5 * (lo + hi);
-                        if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
-                    }
-                    let eps = 0.5 * (lo + hi);
-                    assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{friction:?} {state_law:?} η={eta}: {eps} vs {}", derived.epsilon_c);
-                    let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
-                    assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{friction:?} {state_law:?} η={eta}: ω {omega} vs {}", derived.omega_c);
+                    assert_same_eigenvalues(ours, matrix_eigenvalues(&at), 1e-10, false, &format!("{friction:?} {state_law:?} η={eta}"));
+                    let derived = assert_threshold_matches_the_eigenvalues(base);
                     // The inertial threshold at γ = 1e6 is the quasi-dynamic one to O(1/γ²).
                     let inertial = analyse(&Drr::new(DrrParams { gamma: 1e6, inertia: true, ..base }));
                     assert!((inertial.epsilon_c - derived.epsilon_c).abs() < 1e-10 && (inertial.omega_c - derived.omega_c).abs() < 1e-10, "{friction:?} {state_law:?} η={eta}: {inertial:?} vs {derived:?}");
