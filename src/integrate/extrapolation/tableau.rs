@@ -377,3 +377,21 @@ impl<S: OdeSystem> Extrapolation<S> {
         self.core.h = self.core.posneg * habs.min(self.core.hmax).max(self.core.hmin);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Λ_k for 2, 3, 4, …: 5, 19, 68 as `roundoff_columns` says, and 236 at k = 5, the
+    /// amplification of the rows' rounding in docs/test-set.md's E5 section.
+    #[test]
+    fn weight_moduli_sum_to_the_documented_amplifications() {
+        let nj: Vec<f64> = (0..=6).map(|j| if j == 0 { 0.0 } else { (j + 1) as f64 }).collect();
+        let lambda = |k: usize| -> f64 { weight_moduli(&nj, k).iter().sum() };
+        let c = weight_moduli(&nj, 2);
+        assert!(c[0] == 0.0 && (c[1] - 2.0).abs() < 1e-12 && (c[2] - 3.0).abs() < 1e-12, "{c:?}");
+        for (k, expected) in [(2, 5.0), (3, 19.0), (4, 68.0), (5, 236.0)] {
+            assert!((lambda(k) - expected).abs() < 0.5, "Λ_{k} = {}", lambda(k));
+        }
+    }
+}
