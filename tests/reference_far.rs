@@ -107,3 +107,28 @@ fn check_against_table(method: &str, rtol: f64) {
     eprintln!("{method} rtol {rtol:e}: {checked} rows; worst relative deviations (period, ln v_max, t0): {:.1e}, {:.1e}, {:.1e}", worst[0], worst[1], worst[2]);
     assert!(failures.is_empty(), "{method} at rtol {rtol:e}: {} failures of {checked} rows:\n{}", failures.len(), failures.join("\n"));
 }
+
+/// Radau5 at rtol 1e-4 from v = 1e30 (γ = 1e8, ξ = 2, ε = 5; a cell of `stickslip stress
+/// --quick`) reaches the cycle that Rodas5P finds at rtol 1e-10 from the default start. It used
+/// to end in a typed right-hand-side failure: after the deep stick, a step collapsed below the
+/// clock's spacing with one non-finite Newton iterate among its rejections, and that step
+/// underflow was relabelled, so the Clock did not re-base and retry (docs/robustness.md).
+#[test]
+fn radau5_from_v_1e30_at_rtol_1e_4_reaches_the_cycle() {
+    let run = |method: &str, rtol: f64, initial: &str| {
+        let text = format!(
+            r#"{{"name": "far-start", "model": {{"gamma": 1e8, "xi": 2, "epsilon": 5}}, {initial}
+                "solver": {{"method": "{method}", "rtol": {rtol:e}, "atol": {:e}}},
+                "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 1e23, "max_steps": 2000000}}}}]}}"#,
+            rtol * 1e-2
+        );
+        let s = scene::parse(&text, "reference_far").unwrap();
+        let report = engine::run(&s, serde_json::Value::Null).unwrap_or_else(|e| panic!("{method}: {e} [{:?}]", e.kind));
+        let c = report.cycle.unwrap();
+        c.values.unwrap_or_else(|| panic!("{method}: {:?} after {} cycles", c.status, c.cycles_computed)).period
+    };
+    let reference = run("rodas5p", 1e-10, "");
+    let period = run("radau5", 1e-4, r#""initial": {"u": 0, "v": 1e30, "theta": 0},"#);
+    let rel = (period - reference).abs() / reference;
+    assert!(rel < 1e-3, "radau5 period {period} vs rodas5p {reference}: {rel:.1e}");
+}
