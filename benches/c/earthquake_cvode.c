@@ -28,10 +28,10 @@
  *   CVodeGetDky(t, 0); every duration a difference of global times (Time::since);
  * - the same rise buffer (kept across a wiggle in the rise), cubic-Hermite half-maximum
  *   crossing (the last one before the peak) and half-maximum fall inside the peak's step;
- * - the same restart policy: a re-base at the end of the step holding a new highest v maximum
- *   of the cycle (its peak), if the model's dw/dt is resolved there (restart_safe), and in the
- *   rise when the clock is too coarse (γ·t > 1/(1e3 ε) at the upward crossing of v = 1; never
- *   in this scene);
+ * - the same restart policy: no re-base at the slip peak (the engine re-bases there only
+ *   integrators whose re-base is an exact time shift, never CVODE), and one in the rise when
+ *   the clock is too coarse (γ·t > 1/(1e3 ε) at the upward crossing of v = 1; never in this
+ *   scene), at a point where the model's dw/dt is resolved (restart_safe);
  * - EscapeStep (given on the command line, as engine::cycle_with sets it): the steps limited
  *   while the state rests within the integration noise of the unstable fixed point (never in
  *   this scene).
@@ -844,7 +844,7 @@ static int step(Tracker *tr) {
     after_peak |= r;
   }
   if (after_peak && half_fall_in_peak_step(tr, &next)) return -1;
-  rebase = after_peak && restart_safe(next.y, tr->rise_rate);
+  rebase = 0; /* no re-base after the peak for a restarting integrator (cycle.rs) */
   clock_exhausted = next.t - tr->prev.t < 1e4 * DBL_EPSILON * next.t;
   if (tr->rebase_in_rise && (restart_safe(next.y, fabs(next.d[W])) || clock_exhausted)) {
     tr->rebase_in_rise = 0;
