@@ -540,6 +540,12 @@ fn quasi_dynamic_continuation(c: Option<&ContinuationOptions>, raw: &[RawAnalysi
 /// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when
 /// the scene has another state law or radiation damping.
 fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+    if !params.inertia && a.noise.is_some() {
+        return Err(err(
+            "model.inertia",
+            "the \"noise\" analysis forces the inertial equation of motion (its noise enters dv/dt); the quasi-dynamic model (\"inertia\": false) has no such equation: drop \"noise\" or use an inertial model".into(),
+        ));
+    }
     if params.is_papers_model() {
         return Ok(());
     }
