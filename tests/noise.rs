@@ -183,7 +183,7 @@ fn drr_ensemble_agrees_with_the_linear_response_at_small_noise() {
 /// right-hand side, so the realisations' drift is the law's), the ensemble agrees with the
 /// linear response, and the scene is accepted. With damping the slip peak is broad (v_max ≈ 1/η)
 /// and the linearised event time (p = −∇g/ġ) fails there (ensemble spread 5.9e-4 against
-/// 4.6e-3 linear: the noise term of dv/dt is larger than ġτ, docs/noise.md), so that case is
+/// 4.6e-3 linear; likely because the noise term of d ln v/dt exceeds ġτ, docs/noise.md), so that case is
 /// aligned on the deterministic event.
 #[test]
 fn drr_noise_runs_under_the_ageing_law_and_under_prz_with_damping() {
