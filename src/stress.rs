@@ -21,7 +21,7 @@ use std::collections::BTreeMap;
 /// One cell of the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Cell {
-    /// γ.
+    /// γ; +∞ for the quasi-dynamic model (no inertia, the limit γ → ∞ at fixed η > 0).
     pub gamma: f64,
     /// ξ.
     pub xi: f64,
@@ -55,7 +55,12 @@ pub enum Expectation {
 impl Cell {
     /// What this cell must give (see the module documentation).
     pub fn expectation(&self) -> Expectation {
-        let params = DrrParams { state_law: self.state_law, eta: self.eta, ..DrrParams::new(self.gamma, self.xi, self.epsilon, Friction::Log) };
+        let model = if self.is_quasi_dynamic() {
+            DrrParams::quasi_dynamic(self.xi, self.epsilon, self.eta, Friction::Log)
+        } else {
+            DrrParams::new(self.gamma, self.xi, self.epsilon, Friction::Log)
+        };
+        let params = DrrParams { state_law: self.state_law, eta: self.eta, ..model };
         let eps_c = hopf::epsilon_c(&Drr::new(params));
         if !self.method.is_stiff() {
             Expectation::Limit("explicit method: its steps are stability-limited to ~1/γ², too much work at large γ")
@@ -76,6 +81,11 @@ impl Cell {
 }
 
 impl Cell {
+    /// Whether the cell runs the quasi-dynamic model (γ = +∞).
+    pub fn is_quasi_dynamic(&self) -> bool {
+        self.gamma == f64::INFINITY
+    }
+
     /// A one-line key naming the cell, as in a known-failures file (the state law and η are
     /// named only when they are not the paper's slip law without damping).
     pub fn key(&self) -> String {
@@ -198,6 +208,7 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
     }
     if kind == Grid::Quick {
         cells.extend(quick_law_cells());
+        cells.extend(quick_quasi_dynamic_cells());
     }
     cells
 }
@@ -214,6 +225,25 @@ fn quick_law_cells() -> Vec<Cell> {
                     for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
                         cells.push(Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law, eta });
                     }
+                }
+            }
+        }
+    }
+    cells
+}
+
+/// The quick grid's quasi-dynamic cells (key `gamma=inf`): every state law with η = 0.1, two
+/// points far above threshold (ε_c = ξ + η), from the slow manifold and from v = 1e-30 (u then
+/// from the force balance: a stick of ~70/ξ time units), with cvode-bdf, radau5 and rodas5p at
+/// rtol 1e-6. Not from v = 1e30: the force balance would put u at −ηv/ξ ≈ −1e29, a transient
+/// of 1e29 time units.
+fn quick_quasi_dynamic_cells() -> Vec<Cell> {
+    let mut cells = Vec::new();
+    for state_law in [StateLaw::Slip, StateLaw::Ageing, StateLaw::Prz] {
+        for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
+            for start in [None, Some([0.0, 1e-30, 0.0])] {
+                for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
+                    cells.push(Cell { gamma: f64::INFINITY, xi, epsilon, rtol: 1e-6, start, method, state_law, eta: 0.1 });
                 }
             }
         }
@@ -274,13 +304,18 @@ fn scene_text(cell: &Cell) -> String {
     let transient = cell.start.map_or(0.0, |[u, v, _]| u.abs() + v / cell.gamma);
     let max_time = time + 10.0 * transient;
     let initial = cell.start.map_or(String::new(), |[u, v, theta]| {
-        format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
+        if cell.is_quasi_dynamic() {
+            // Without inertia the force balance gives u from v and θ.
+            format!(r#""initial": {{"v": {v:e}, "theta": {theta:e}}},"#)
+        } else {
+            format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
+        }
     });
+    let inertia = if cell.is_quasi_dynamic() { r#""inertia": false"#.to_string() } else { format!(r#""gamma": {:e}"#, cell.gamma) };
     format!(
-        r#"{{"name": "stress", "model": {{"gamma": {:e}, "xi": {}, "epsilon": {}, "state_law": "{}", "radiation_damping": {:e}}}, {initial}
+        r#"{{"name": "stress", "model": {{{inertia}, "xi": {}, "epsilon": {}, "state_law": "{}", "radiation_damping": {:e}}}, {initial}
             "solver": {{"method": "{}", "rtol": {:e}, "atol": {:e}}},
             "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": {max_time:e}, "max_steps": {max_steps}}}}}]}}"#,
-        cell.gamma,
         cell.xi,
         cell.epsilon,
         cell.state_law.name(),
@@ -481,4 +516,20 @@ fn counts_by(title: &str, cells: &[Cell], outcomes: &[Outcome], columns: &[Strin
         out += &format!("| {group} | {} |\n", row.join(" | "));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_cell_of_every_grid_is_a_valid_scene() {
+        for kind in [Grid::Quick, Grid::Full, Grid::Physical, Grid::Laws] {
+            for cell in grid(kind) {
+                let text = scene_text(&cell);
+                let scene = scene::parse(&text, "stress").unwrap_or_else(|e| panic!("{}: {e}\n{text}", cell.key()));
+                assert_eq!(scene.params.inertia, !cell.is_quasi_dynamic(), "{}", cell.key());
+            }
+        }
+    }
 }
