@@ -540,10 +540,14 @@ fn quasi_dynamic_continuation(c: Option<&ContinuationOptions>, raw: &[RawAnalysi
 /// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when
 /// the scene has another state law or radiation damping.
 fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
-    if !params.inertia && a.noise.is_some() {
+    let inertial_only = [
+        (a.noise.is_some(), "noise", "its forcing enters the inertial equation of motion"),
+        (a.lyapunov.is_some(), "lyapunov", "its eigenvalues are those of the inertial Jacobian in (u, v, θ)"),
+    ];
+    if let Some((_, name, why)) = inertial_only.iter().find(|(asked, ..)| *asked && !params.inertia) {
         return Err(err(
             "model.inertia",
-            "the \"noise\" analysis forces the inertial equation of motion (its noise enters dv/dt); the quasi-dynamic model (\"inertia\": false) has no such equation: drop \"noise\" or use an inertial model".into(),
+            format!("the \"{name}\" analysis needs the inertial model ({why}); the quasi-dynamic model (\"inertia\": false) has no inertia: drop \"{name}\" or use an inertial model"),
         ));
     }
     if params.is_papers_model() {
@@ -552,7 +556,6 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
     let slip_only = [
         (a.paper, "paper", "the paper's values are for its model"),
         (a.asymptotics.is_some(), "asymptotics", "the slow flow, matching and slip scaling are derived for the slip law"),
-        (a.lyapunov.is_some(), "lyapunov", "its quasi-static formula and the paper's claims are derived for the slip law"),
     ];
     for (asked, name, why) in slip_only {
         if asked {

@@ -139,9 +139,10 @@ fn scene_fields_are_validated_naming_the_field_and_the_valid_values() {
         (r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "ageing"}"#, "model.state_law"),
         (r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "radiation_damping": 0.1}"#, "model.radiation_damping"),
     ] {
-        // "noise" runs with every state law and damping (its drift is Drr's right-hand side;
-        // tests/noise.rs), so it is no longer refused here.
-        for analyses in [r#"["hopf", "cycle", "paper"]"#, r#"["cycle", "asymptotics"]"#, r#"["cycle", "lyapunov"]"#] {
+        // "noise" (its drift is Drr's right-hand side; tests/noise.rs) and "lyapunov" (the
+        // Jacobian of any law; `lyapunov_runs_with_every_state_law` below) run with every
+        // state law and damping, so they are no longer refused here.
+        for analyses in [r#"["hopf", "cycle", "paper"]"#, r#"["cycle", "asymptotics"]"#] {
             let e = parse_error(model, analyses);
             assert_eq!(e.field, field, "{analyses}: {e}");
             assert!(e.message.contains("slip law"), "{e}");
@@ -179,4 +180,27 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
     assert!((a - b).abs() < 1e-7 * b, "continued {a} vs direct {b}");
     // η v_max = O(1) at γ = 1e3 (v_max ≈ 8e3): the period drops from 26.99 to 19.41.
     assert!(b < 0.8 * c.points[0].orbit.period, "{b} vs {}", c.points[0].orbit.period);
+}
+
+/// The Lyapunov analysis under the ageing and PRZ laws with damping: the exact eigenvalues
+/// (the characteristic cubic of the Jacobian in (u, v, θ)) agree with a matrix eigensolver,
+/// the general quasi-static formula is their large-γ limit, and the paper's Fig. 5 claims are
+/// not applied outside the paper's model.
+#[test]
+fn lyapunov_runs_with_every_state_law() {
+    for (law, eta) in [("ageing", 0.0), ("prz", 1e-3)] {
+        let report = run(&format!(
+            r#"{{"name": "t", "model": {{"gamma": 1e3, "xi": 0.7, "epsilon": 0.72, "state_law": "{law}", "radiation_damping": {eta}}},
+                 "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle", {{"lyapunov": {{"ftle_periods": 1}}}}]}}"#
+        ));
+        let l = report.lyapunov.as_ref().unwrap();
+        assert!(l.note.is_none(), "{law}: {:?}", l.note);
+        let check = l.matrix_check.as_ref().and_then(|m| m.max_difference).unwrap();
+        assert!(check < 1e-6, "{law}: polynomial against matrix {check:e}");
+        let quasi = l.quasi_static.as_ref().unwrap().max_relative_difference_on_stick;
+        assert!(quasi < 0.01, "{law}: quasi-static formula {quasi:e}");
+        assert!(l.fast_eigenvalue_max.unwrap() < 0.0, "{law}");
+        assert!(l.claims.iter().all(|c| !c.claim.contains("Fig. 5")), "{law}: {:?}", l.claims);
+        assert!(l.ftle.is_some(), "{law}");
+    }
 }

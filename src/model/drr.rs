@@ -244,6 +244,15 @@ impl Drr {
         quasi_dynamic::quotient(n, n_grad, n_hess, (r.slope, r.curvature, r.curvature_slope))
     }
 
+    /// The slopes of the inertial model in the paper's coordinates (u, v, θ) at (u, ln v, θ),
+    /// for its local eigenvalues: [f'(v) + η, ∂θ̇/∂v, ∂θ̇/∂θ], i.e. the resistance's slope (the
+    /// velocity row is dv/dt = −γ²(u + (θ + f(v) + ηv)/ξ)) and the state law's.
+    pub fn velocity_slopes(&self, y: &[f64]) -> [f64; 3] {
+        let v_inverse = (-y[W]).exp();
+        let law = self.state_rate(y);
+        [self.resistance(y[W]).slope * v_inverse, law.w * v_inverse, law.theta]
+    }
+
     /// ∂(dw/dt)/∂G, how an error in the distance G to the force balance shows in dw/dt:
     /// −γ²e^(−w) with inertia, −κ_G ξ/S without (S = v f'(v) + η v).
     pub fn offset_feedback(&self, w: f64) -> f64 {

@@ -183,8 +183,9 @@ pub fn analyse(
         Err(why) => return Ok(empty(options, why.into_note()?)),
     };
     let p = params;
+    let drr = Drr::new(p.clone());
     let n = orbit.peak + 1;
-    let locals: Vec<local::Local> = (0..orbit.len()).map(|k| local::at(p, &orbit.state(k))).collect();
+    let locals: Vec<local::Local> = (0..orbit.len()).map(|k| local::at(&drr, &orbit.state(k))).collect();
     let stick = &locals[..n];
     let re_max: Vec<f64> = stick.iter().map(|l| l.slow_re[0]).collect();
     let disc: Vec<f64> = stick.iter().map(|l| l.slow_discriminant).collect();
@@ -204,7 +205,7 @@ pub fn analyse(
     let mut check = MatrixCheck { samples: 0, unresolvable: 0, max_difference: None };
     for (k, l) in locals.iter().enumerate() {
         let slow_scale = 1.0 + l.slow_re[0].abs().max(l.slow_re[1].abs()).max(l.slow_im);
-        let (fast, slow, amax) = local::matrix_eigenvalues(p, &orbit.state(k));
+        let (fast, slow, amax) = local::matrix_eigenvalues(&drr, &orbit.state(k));
         if 1e-16 * amax > 1e-10 * slow_scale || l.fast.abs() < 10.0 * slow_scale {
             check.unresolvable += 1;
             continue;
@@ -268,7 +269,7 @@ pub fn analyse(
 /// The paper's case this scene reproduces, if any: (γ, ξ, ε, friction) of Fig. 5 or of the
 /// power-law example.
 fn paper_case(p: &DrrParams) -> Option<(&'static str, Option<f64>, f64)> {
-    let base = p.gamma == 1e3 && p.xi == 0.7;
+    let base = p.is_papers_model() && p.gamma == 1e3 && p.xi == 0.7;
     match p.friction {
         Friction::Log if base && p.epsilon == 0.72 => Some(("Fig. 5 (γ = 1e3, ξ = 0.7, ε = 0.72)", Some(4.6), 2.3)),
         Friction::Power { .. } if base && p.epsilon == 0.78 => Some(("power law (γ = 1e3, ξ = 0.7, ε = 0.78; α not stated, Fig. 8 uses 0.15)", None, 2.45)),
@@ -329,7 +330,11 @@ fn claims(p: &DrrParams, r: &LyapunovReport) -> Vec<Claim> {
     }
     if let Some(q) = q {
         out.push(Claim::absolute(
-            "the quasi-static formula λ = −B ± √(B² − ξv²) gives the slow pair for large γ",
+            if p.is_papers_model() {
+                "the quasi-static formula λ = −B ± √(B² − ξv²) gives the slow pair for large γ"
+            } else {
+                "the quasi-static formula λ = −B ± √(B² − C) (the paper's, for this state law and η) gives the slow pair for large γ"
+            },
             Source::Paper,
             0.0,
             q.max_relative_difference_on_stick,
