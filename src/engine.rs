@@ -210,7 +210,9 @@ pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, Engin
 }
 
 /// [`run`] with `threads` worker threads for ensembles and `progress(done, total)` called
-/// after each realisation.
+/// after each realisation. The pipeline: the linear analysis, the cycle, shooting and
+/// continuation, the analyses of the recorded cycle (asymptotics, lyapunov), the paper's
+/// claims, noise; then one check that every number reported is finite.
 pub fn run_with(
     scene: &Scene,
     scene_json: serde_json::Value,
@@ -221,80 +223,17 @@ pub fn run_with(
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
-    let cycle_run = match (&a.cycle, &linear) {
-        (Some(o), Some(linear)) => {
-            // The asymptotic and Lyapunov analyses work on one recorded cycle.
-            let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
-            let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
-            Some(cycle_with(scene, &drr, o, keep, linear).map_err(failed(&drr, "cycle"))?)
-        }
-        _ => None,
-    };
-    let (mut cycle_report, mut integrator_name, mut tables, mut stats) = match cycle_run {
-        Some((r, name, tables, stats)) => (Some(r), name, tables, stats),
-        None => (None, "none (no integration asked for)".to_string(), Vec::new(), Default::default()),
-    };
-    let (shooting_report, continuation_report) = if a.shooting.is_some() || a.continuation.is_some() {
-        let settings = a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
-        let (mut integ, shooting_tables) = variational_integrator_with_tables(drr, &scene.solver, &scene.initial).map_err(failed(&drr, "shooting"))?;
-        let report = shooting::analyse(integ.as_mut(), &drr, scene.initial, &settings).map_err(failed(&drr, "shooting"))?;
-        if cycle_report.is_none() {
-            (integrator_name, tables) = (integ.name().to_string(), shooting_tables);
-        }
-        stats.accumulate(&integ.stats());
-        let curve = a.continuation.as_ref().map(|c| {
-            let cs = ContinuationSettings { parameter: c.parameter, to: c.to, points: c.points, log: c.log, shooting: settings };
-            match &report.orbit {
-                Some(orbit) => {
-                    let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
-                    continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
-                }
-                None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
-            }
-        });
-        (a.shooting.is_some().then_some(report), curve)
-    } else {
-        (None, None)
-    };
-    if shooting_report.as_ref().is_some_and(|r| !r.is_finite()) {
-        return Err(non_finite("shooting", "shooting"));
-    }
-    if continuation_report.as_ref().is_some_and(|r| !r.is_finite()) {
-        return Err(non_finite("continuation", "continuation"));
-    }
-    if linear.as_ref().is_some_and(|h| !h.is_finite()) {
-        return Err(non_finite("hopf", "hopf"));
-    }
-    if cycle_report.as_ref().is_some_and(|c| !c.is_finite()) {
-        return Err(non_finite("cycle", "cycle"));
-    }
-    let asymptotics = match &a.asymptotics {
-        Some(o) => {
-            let options = a.cycle.clone().unwrap_or_default();
-            let mut cycle_at = |drr: &Drr, start: [f64; 3]| {
-                Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, &hopf::analyse(drr))?.0)
-            };
-            Some(asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle_report.as_ref(), o).map_err(failed(&drr, "asymptotics"))?)
-        }
-        None => None,
-    };
-    if let Some(path) = asymptotics.as_ref().and_then(|r| finite::first_non_finite(r, "asymptotics")) {
-        return Err(non_finite(&path, "asymptotics"));
-    }
-    let lyapunov = match &a.lyapunov {
-        Some(o) => Some(lyapunov::analyse(&scene.params, &scene.solver, &mut |drr, spec, y0| variational_integrator(drr, spec, y0), cycle_report.as_ref(), o).map_err(failed(&drr, "lyapunov"))?),
-        None => None,
-    };
-    if let Some(path) = lyapunov.as_ref().and_then(|r| finite::first_non_finite(r, "lyapunov")) {
-        return Err(non_finite(&path, "lyapunov"));
-    }
+    let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref())?;
+    let (shooting, continuation) = shooting_step(scene, &drr, &mut integration, cycle.is_some())?;
+    let asymptotics = asymptotics_step(scene, &drr, cycle.as_ref())?;
+    let lyapunov = lyapunov_step(scene, &drr, cycle.as_ref())?;
     // The trajectory recorded only for the analyses above is not reported.
     if a.trajectory_cycles.is_none() {
-        if let Some(c) = &mut cycle_report {
+        if let Some(c) = &mut cycle {
             c.trajectory.clear();
         }
     }
-    let values = cycle_report.as_ref().and_then(|c| c.values);
+    let values = cycle.as_ref().and_then(|c| c.values);
     let physical = scene.units.as_ref().zip(values).map(|(u, v)| Physical {
         time_unit: u.time_unit.clone(),
         time_scale: u.time_scale,
@@ -303,27 +242,17 @@ pub fn run_with(
         slip_half_width: v.slip_half_width.map(|w| w * u.time_scale),
         slip_duration: v.slip_duration * u.time_scale,
     });
-    if physical.as_ref().is_some_and(|p| ![p.period, p.t0, p.slip_duration].iter().chain(&p.slip_half_width).all(|v| v.is_finite())) {
-        return Err(non_finite("physical", "physical"));
-    }
-    let paper = match (&linear, a.paper) {
-        (Some(h), true) => Some(paper::compare(&scene.params, h, values.as_ref())),
-        _ => None,
-    };
+    let paper = linear.as_ref().filter(|_| a.paper).map(|h| paper::compare(&scene.params, h, values.as_ref()));
     let noise = match &a.noise {
         Some(options) => {
             let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
             let model = NoiseModel::Drr { system: drr, amplitudes };
-            let report = noise::run(&model, &scene.initial, options, threads, progress).map_err(failed(&drr, "noise"))?;
-            if !report.is_finite() {
-                return Err(non_finite("noise", "noise"));
-            }
-            Some(report)
+            Some(noise::run(&model, &scene.initial, options, threads, progress).map_err(failed(&drr, "noise"))?)
         }
         None => None,
     };
     let y = scene.initial;
-    Ok(Report {
+    let report = Report {
         stickslip_version: env!("CARGO_PKG_VERSION"),
         sundials_version: sundials::version(),
         name: scene.name.clone(),
@@ -341,24 +270,115 @@ pub fn run_with(
         },
         solver: SolverSection {
             method: scene.solver.method,
-            integrator: integrator_name,
+            integrator: integration.name,
             rtol: scene.solver.rtol,
             atol: scene.solver.atol,
-            tables,
-            stats,
+            tables: integration.tables,
+            stats: integration.stats,
         },
         units: scene.units.clone(),
         hopf: linear.filter(|_| a.hopf),
-        cycle: cycle_report,
+        cycle,
         asymptotics,
         lyapunov,
         physical,
         paper,
-        shooting: shooting_report,
-        continuation: continuation_report,
+        shooting,
+        continuation,
         noise,
         wall_time_s: started.elapsed().as_secs_f64(),
-    })
+    };
+    refuse_non_finite(&report)?;
+    Ok(report)
+}
+
+/// The integrator a report names: the one of the first integrating analysis.
+struct Integration {
+    name: String,
+    tables: Vec<String>,
+    stats: Stats,
+}
+
+/// The "cycle" analysis, keeping one recorded cycle when asymptotics or lyapunov need it.
+fn cycle_step(scene: &Scene, drr: &Drr, linear: Option<&HopfReport>) -> Result<(Option<cycle::CycleReport>, Integration), EngineError> {
+    let a = &scene.analyses;
+    let (Some(options), Some(linear)) = (&a.cycle, linear) else {
+        let none = Integration { name: "none (no integration asked for)".to_string(), tables: Vec::new(), stats: Stats::default() };
+        return Ok((None, none));
+    };
+    let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
+    let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
+    let (report, name, tables, stats) = cycle_with(scene, drr, options, keep, linear).map_err(failed(drr, "cycle"))?;
+    Ok((Some(report), Integration { name, tables, stats }))
+}
+
+/// "shooting" and "continuation" (which starts from the shooting orbit); their integrator is
+/// the report's when no cycle was integrated before.
+fn shooting_step(
+    scene: &Scene,
+    drr: &Drr,
+    integration: &mut Integration,
+    cycle_ran: bool,
+) -> Result<(Option<shooting::ShootingReport>, Option<ContinuationReport>), EngineError> {
+    let a = &scene.analyses;
+    if a.shooting.is_none() && a.continuation.is_none() {
+        return Ok((None, None));
+    }
+    let settings = a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
+    let (mut integ, tables) = variational_integrator_with_tables(*drr, &scene.solver, &scene.initial).map_err(failed(drr, "shooting"))?;
+    let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings).map_err(failed(drr, "shooting"))?;
+    if !cycle_ran {
+        (integration.name, integration.tables) = (integ.name().to_string(), tables);
+    }
+    integration.stats.accumulate(&integ.stats());
+    let curve = a.continuation.as_ref().map(|c| {
+        let cs = ContinuationSettings { parameter: c.parameter, to: c.to, points: c.points, log: c.log, shooting: settings };
+        match &report.orbit {
+            Some(orbit) => {
+                let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
+                continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
+            }
+            None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
+        }
+    });
+    Ok((a.shooting.is_some().then_some(report), curve))
+}
+
+/// "asymptotics", with the γ scan's cycles run by [`cycle_with`] at the scene's options.
+fn asymptotics_step(scene: &Scene, drr: &Drr, cycle: Option<&cycle::CycleReport>) -> Result<Option<asymptotics::AsymptoticsReport>, EngineError> {
+    let Some(o) = &scene.analyses.asymptotics else { return Ok(None) };
+    let options = scene.analyses.cycle.clone().unwrap_or_default();
+    let mut cycle_at = |drr: &Drr, start: [f64; 3]| Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, &hopf::analyse(drr))?.0);
+    asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle, o).map(Some).map_err(failed(drr, "asymptotics"))
+}
+
+/// "lyapunov", with the variational equations integrated by the scene's method.
+fn lyapunov_step(scene: &Scene, drr: &Drr, cycle: Option<&cycle::CycleReport>) -> Result<Option<lyapunov::LyapunovReport>, EngineError> {
+    let Some(o) = &scene.analyses.lyapunov else { return Ok(None) };
+    let mut variational = |drr, spec: &SolverSpec, y0: &[f64; 3]| variational_integrator(drr, spec, y0);
+    lyapunov::analyse(&scene.params, &scene.solver, &mut variational, cycle, o).map(Some).map_err(failed(drr, "lyapunov"))
+}
+
+/// The one check that every number in the analyses' sections is finite (serde_json would
+/// write NaN and infinity as null): the error names the first one's path. The model section
+/// is not checked: its γ is +∞ for the quasi-dynamic model, written as null by design.
+fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
+    let sections: [(&'static str, Option<String>); 10] = [
+        ("hopf", r.hopf.as_ref().and_then(|x| finite::first_non_finite(x, "hopf"))),
+        ("cycle", r.cycle.as_ref().and_then(|x| finite::first_non_finite(x, "cycle"))),
+        ("shooting", r.shooting.as_ref().and_then(|x| finite::first_non_finite(x, "shooting"))),
+        ("continuation", r.continuation.as_ref().and_then(|x| finite::first_non_finite(x, "continuation"))),
+        ("asymptotics", r.asymptotics.as_ref().and_then(|x| finite::first_non_finite(x, "asymptotics"))),
+        ("lyapunov", r.lyapunov.as_ref().and_then(|x| finite::first_non_finite(x, "lyapunov"))),
+        ("physical", r.physical.as_ref().and_then(|x| finite::first_non_finite(x, "physical"))),
+        ("paper", r.paper.as_ref().and_then(|x| finite::first_non_finite(x, "paper"))),
+        ("noise", r.noise.as_ref().and_then(|x| finite::first_non_finite(x, "noise"))),
+        ("solver", finite::first_non_finite(&r.solver, "solver")),
+    ];
+    match sections.into_iter().find_map(|(section, path)| path.map(|p| (section, p))) {
+        Some((section, path)) => Err(non_finite(&path, section)),
+        None => Ok(()),
+    }
 }
 
 /// The scene's integrator on the DRR variational equations (state and fundamental matrix Φ),
@@ -392,8 +412,8 @@ pub fn run_other(
         }
     };
     let noise = noise::run(&model, &initial, &scene.noise, threads, progress).map_err(|e| EngineError::new("noise", e))?;
-    if !noise.is_finite() {
-        return Err(EngineError::new("noise", AnalysisError::NonFinite { path: "noise".into() }));
+    if let Some(path) = finite::first_non_finite(&noise, "noise") {
+        return Err(non_finite(&path, "noise"));
     }
     Ok(ModelReport {
         stickslip_version: env!("CARGO_PKG_VERSION"),

@@ -160,7 +160,7 @@ fn drr_ensemble_agrees_with_the_linear_response_at_small_noise() {
     let (model, initial) = fig1_drr([1e-3, 1e3, 1e-3]);
     let o = options(r#"{"amplitudes": [1e-3, 1e3, 1e-3], "realisations": 300, "start_before_event": 2.5, "window": [1.5, 0.03], "grid_points": 400}"#);
     let r = noise::run(&model, &initial, &o, 2, &|_, _| {}).unwrap();
-    assert!(r.is_finite());
+    assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None);
     assert_agreement(&r);
     // The event time of the deterministic start and of the scheme without noise agree.
     assert!(r.deterministic.scheme_event_time_error.abs() < 1e-6, "{:?}", r.deterministic);
@@ -197,7 +197,7 @@ fn drr_noise_runs_under_the_ageing_law_and_under_prz_with_damping() {
         ));
         let r = noise::run(&model, &[drr.manifold_u(w, theta), w, theta], &o, 2, &|_, _| {}).unwrap();
         let name = law.name();
-        assert!(r.is_finite(), "{name}");
+        assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None, "{name}");
         assert!(r.deterministic.scheme_event_time_error.abs() < 1e-6, "{name}: {:?}", r.deterministic);
         assert_agreement(&r);
         if alignment == "own_event" {

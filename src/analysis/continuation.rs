@@ -163,13 +163,6 @@ impl ContinuationReport {
             period_per_decade: Vec::new(),
         }
     }
-
-    /// Whether every number is finite.
-    pub fn is_finite(&self) -> bool {
-        self.points.iter().all(|p| p.value.is_finite() && p.orbit.is_finite())
-            && self.period_per_decade.iter().all(|s| s.slope.is_finite())
-            && self.stopped.as_ref().is_none_or(|s| s.last_value.is_finite() && s.failed_at.is_finite())
-    }
 }
 
 /// Builds an integrator of the variational equations for the given parameters.

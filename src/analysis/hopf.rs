@@ -60,14 +60,6 @@ pub struct HopfReport {
     pub max_real_part: f64,
 }
 
-impl HopfReport {
-    /// Whether every number in the section is finite.
-    pub fn is_finite(&self) -> bool {
-        let scalars = [self.epsilon_c, self.omega_c, self.period_c, self.period_c_large_gamma, self.max_real_part];
-        self.fixed_point.iter().chain(self.eigenvalues.iter().flatten()).chain(&scalars).all(|v| v.is_finite())
-    }
-}
-
 /// Coefficients (a₂, a₁, a₀) of the inertial model's characteristic polynomial at the fixed
 /// point.
 pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {

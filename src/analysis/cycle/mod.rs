@@ -150,29 +150,6 @@ pub struct CycleValues {
     pub steps: u64,
 }
 
-impl CycleValues {
-    /// Every real number of the cycle (to check that none is NaN or infinite).
-    pub fn numbers(&self) -> Vec<f64> {
-        let mut n = vec![
-            self.period, self.t0, self.v_max, self.ln_v_max, self.v_min, self.ln_v_min, self.u_at_v_max,
-            self.theta_at_v_max, self.u_min, self.u_max, self.theta_min, self.theta_max, self.slip,
-            self.slip_duration,
-        ];
-        n.extend(self.slip_half_width);
-        n
-    }
-}
-
-impl CycleReport {
-    /// Whether every number in the section is finite.
-    pub fn is_finite(&self) -> bool {
-        let cycles = self.values.iter().chain(&self.spread).chain(&self.orbit).chain(&self.last_cycles);
-        let trajectory = self.trajectory.iter().flat_map(|c| c.t.iter().chain(&c.u).chain(&c.v).chain(&c.theta));
-        cycles.flat_map(|c| c.numbers()).chain(trajectory.copied()).chain([self.time_integrated]).all(f64::is_finite)
-            && self.orbit_period.is_none_or(f64::is_finite)
-    }
-}
-
 /// What the integration settled to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

@@ -1,57 +1,10 @@
-//! The noise section's checks and summary, and the correlation-time curves of several reports
+//! The noise section's summary, and the correlation-time curves of several reports
 //! in one document.
 
 use super::NoiseReport;
 use serde::Serialize;
 
 impl NoiseReport {
-    /// Every number of the section (to check that none is NaN or infinite).
-    pub fn numbers(&self) -> Vec<f64> {
-        let st = &self.settings;
-        let mut n: Vec<f64> = st.amplitudes.clone();
-        n.extend([st.correlation_time, st.noise_step, st.steps_per_correlation_time, st.start_before_event, st.rtol]);
-        n.extend(st.window);
-        n.extend(&st.atol);
-        n.extend(&st.correlation_curves_at);
-        let d = &self.deterministic;
-        n.extend(d.period.iter().chain(&d.t0));
-        n.extend([d.start_time, d.event_time, d.event_time_without_noise, d.scheme_event_time_error]);
-        n.extend(d.start_state.iter().chain(&d.event_state));
-        let e = &self.events;
-        n.extend([e.mean_shift, e.std]);
-        n.extend(e.std_linear_response);
-        n.extend(&self.t_before_event);
-        for s in &self.series {
-            n.extend(s.mean.iter().chain(&s.deterministic).chain(&s.sigma));
-            n.extend(s.sigma_linear_response.iter().flatten());
-        }
-        for (_, points) in &self.correlation_time_by_variable {
-            for p in points {
-                n.push(p.t_before_event);
-                n.extend([p.tau, p.tau_linear_response, p.tau_coefficient, p.tau_coefficient_linear_response].into_iter().flatten());
-            }
-        }
-        for c in &self.correlation_functions {
-            n.push(c.t_before_event);
-            n.extend(c.lag.iter().chain(&c.gamma).chain(c.gamma_linear_response.iter().flatten()));
-        }
-        if let Some(g) = &self.growth {
-            n.extend([g.t_f_before_event, g.interval, g.v_growth, g.sigma_v_growth, g.ratio, g.log10_ratio]);
-            n.extend([g.v_growth_linear_response, g.sigma_v_growth_linear_response, g.ratio_linear_response].into_iter().flatten());
-        }
-        for a in &self.agreement {
-            n.extend([a.sigma_standard_error, a.sigma_max_relative_difference]);
-            n.extend(a.sigma_disagree_at.iter().chain(&a.tau_median_relative_difference).chain(&a.tau_max_relative_difference));
-        }
-        n.extend([self.work.nodes_per_realisation, self.work.ensemble_wall_time_s]);
-        n
-    }
-
-    /// Whether every number is finite.
-    pub fn is_finite(&self) -> bool {
-        self.numbers().iter().all(|v| v.is_finite())
-    }
-
     /// A readable summary for the terminal.
     pub fn summary(&self) -> String {
         let st = &self.settings;

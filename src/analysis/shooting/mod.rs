@@ -109,16 +109,6 @@ pub struct Orbit {
 }
 
 impl Orbit {
-    /// Whether every number is finite.
-    pub fn is_finite(&self) -> bool {
-        let scalars = [
-            self.period, self.t0, self.v_max, self.ln_v_max, self.ln_v_min, self.u_at_v_max, self.theta_at_v_max,
-            self.trivial_multiplier_error, self.residual,
-        ];
-        self.section_point.iter().chain(&self.return_times).chain(&scalars).all(|v| v.is_finite())
-            && self.multipliers.iter().all(|m| m.re.is_finite() && m.im.is_finite())
-    }
-
     /// The non-trivial multipliers.
     pub fn nontrivial(&self) -> &[Multiplier] {
         &self.multipliers[1..]
@@ -168,17 +158,6 @@ pub struct ShootingReport {
     pub period_doubling: Option<PeriodDoubling>,
     /// Convergence tolerance.
     pub tolerance: f64,
-}
-
-impl ShootingReport {
-    /// Whether every number is finite.
-    pub fn is_finite(&self) -> bool {
-        self.orbit.as_ref().is_none_or(Orbit::is_finite)
-            && self.iterations.iter().all(|i| i.residual.is_finite() && i.period.is_finite())
-            && self.period_doubling.as_ref().is_none_or(|p| {
-                p.multiplier.is_finite() && p.doubled.as_ref().is_none_or(Orbit::is_finite)
-            })
-    }
 }
 
 /// Why Newton's iteration found no periodic orbit (its text is the report's `failure`).
