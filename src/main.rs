@@ -278,7 +278,7 @@ fn compare_command(
         let verdict = match data {
             compare::UserData::Trajectory(t) => {
                 let c = compare::against_trajectory(&scene, &t, tolerance).map_err(|e| match e {
-                    compare::CompareError::Input(m) => Failure(2, format!("{}: {m}", file.display())),
+                    e @ (compare::CompareError::Input(_) | compare::CompareError::UnresolvedReference(_)) => Failure(2, format!("{}: {e}", file.display())),
                     other => Failure(1, other.to_string()),
                 })?;
                 if json {
@@ -391,9 +391,9 @@ fn sweep_command(
     let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
     let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e))?;
+    let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e.to_string()))?;
     sweep::check_base(&base, &axes).map_err(|e| Failure(2, format!("{}: {e}", path.display())))?;
-    let shard = shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e))?;
+    let shard = shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e.to_string()))?;
     let progress = Progress::new("sweep", "points");
     let ran = sweep::run(&base, &axes, &out, resume, shard, worker_threads(threads), &|d, t| progress.update(d, t))
         .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;

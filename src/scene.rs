@@ -607,7 +607,7 @@ fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String
 fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneError) -> Result<SolverSpec, SceneError> {
     let method = match raw.and_then(|r| r.method.as_deref()) {
         None => Method::CvodeBdf,
-        Some(name) => name.parse().map_err(|e| err("solver.method", e))?,
+        Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
     };
     let rtol = positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-8), "e.g. 1e-8", err)?;
     let atol = match raw.and_then(|r| r.atol.clone()) {

@@ -59,16 +59,53 @@ impl std::fmt::Display for Method {
 }
 
 impl std::str::FromStr for Method {
-    type Err = String;
+    type Err = MethodError;
 
     /// The method by its scene name (the one parser of method names: scenes and the CLI); the
     /// error names the valid ones.
-    fn from_str(name: &str) -> Result<Self, String> {
-        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| {
-            let names: Vec<&str> = Self::ALL.iter().map(|(n, _)| *n).collect();
-            format!("\"{name}\" is not a method; use one of {}", names.join(", "))
-        })
+    fn from_str(name: &str) -> Result<Self, MethodError> {
+        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| MethodError::UnknownMethod { name: name.into() })
     }
+}
+
+/// A method name or Butcher table that solver selection refuses; each message names the
+/// field at fault and lists what is accepted.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MethodError {
+    /// Not the scene name of any method.
+    #[error("\"{name}\" is not a method; use one of {}", Method::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "))]
+    UnknownMethod {
+        /// The name as given.
+        name: String,
+    },
+    /// `field` names no implicit (DIRK) table.
+    #[error("{field}: unknown implicit table \"{name}\"; available: {}", DirkTable::names().collect::<Vec<_>>().join(", "))]
+    UnknownImplicitTable {
+        /// The settings field: table.
+        field: &'static str,
+        /// The name as given.
+        name: String,
+    },
+    /// `field` names no explicit (ERK) table.
+    #[error("{field}: unknown explicit table \"{name}\"; available: {}", ErkTable::names().collect::<Vec<_>>().join(", "))]
+    UnknownExplicitTable {
+        /// The settings field: table or explicit_table.
+        field: &'static str,
+        /// The name as given.
+        name: String,
+    },
+    /// explicit_table for a method other than arkode-imex.
+    #[error("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name())]
+    NoExplicitTable {
+        /// The method.
+        method: Method,
+    },
+    /// table for a method that is not an ARKODE one.
+    #[error("table: {} takes no Butcher table (only the arkode methods do)", method.name())]
+    NoTable {
+        /// The method.
+        method: Method,
+    },
 }
 
 impl Method {
@@ -144,7 +181,7 @@ pub fn build<'s, S: ImexSystem + 's>(
     if method != Method::ArkodeImex {
         return build_ode(method, settings, system, t0, y0, options);
     }
-    let tables = check_tables(method, settings).map_err(|message| invalid(method, t0, y0, message))?;
+    let tables = check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let (default_i, default_e) = sundials::default_imex_tables();
     let (implicit, explicit) = (tables.implicit.unwrap_or(default_i), tables.explicit.unwrap_or(default_e));
     let integrator = Box::new(Solver::arkstep_imex(system, implicit, explicit, ark_settings(), t0, y0, options)?);
@@ -161,7 +198,7 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    let tables = check_tables(method, settings).map_err(|message| invalid(method, t0, y0, message))?;
+    let tables = check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
     let (dirk, erk) = (tables.implicit.unwrap_or_default(), tables.explicit.unwrap_or_default());
     let integrator: Box<dyn Integrator + 's> = match method {
@@ -212,16 +249,12 @@ struct Tables {
 /// Resolves the table names of `settings` for `method`; an unknown name, or a table for a
 /// method that takes none, is an error naming the field (made an
 /// [`ErrorKind::InvalidInput`] by [`build`]).
-fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, String> {
-    let dirk = |field: &str, name: &str| {
-        DirkTable::from_name(name).ok_or_else(|| format!("{field}: unknown implicit table \"{name}\"; available: {}", DirkTable::names().collect::<Vec<_>>().join(", ")))
-    };
-    let erk = |field: &str, name: &str| {
-        ErkTable::from_name(name).ok_or_else(|| format!("{field}: unknown explicit table \"{name}\"; available: {}", ErkTable::names().collect::<Vec<_>>().join(", ")))
-    };
+fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, MethodError> {
+    let dirk = |field: &'static str, name: &str| DirkTable::from_name(name).ok_or_else(|| MethodError::UnknownImplicitTable { field, name: name.into() });
+    let erk = |field: &'static str, name: &str| ErkTable::from_name(name).ok_or_else(|| MethodError::UnknownExplicitTable { field, name: name.into() });
     let (table, explicit_table) = (settings.table.as_deref(), settings.explicit_table.as_deref());
     if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(format!("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name()));
+        return Err(MethodError::NoExplicitTable { method });
     }
     match method {
         Method::ArkodeDirk => Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None }),
@@ -235,7 +268,7 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Str
             };
             Ok(Tables { implicit, explicit })
         }
-        _ if table.is_some() => Err(format!("table: {} takes no Butcher table (only the arkode methods do)", method.name())),
+        _ if table.is_some() => Err(MethodError::NoTable { method }),
         _ => Ok(Tables { implicit: None, explicit: None }),
     }
 }
@@ -291,7 +324,9 @@ mod tests {
 
     #[test]
     fn a_bad_method_name_lists_the_valid_ones() {
-        let message = "radau".parse::<Method>().unwrap_err();
+        let error = "radau".parse::<Method>().unwrap_err();
+        assert_eq!(error, MethodError::UnknownMethod { name: "radau".into() });
+        let message = error.to_string();
         assert!(Method::ALL.iter().all(|(n, _)| message.contains(n)), "{message}");
     }
 

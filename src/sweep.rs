@@ -24,27 +24,108 @@ pub struct Axis {
     pub values: Vec<f64>,
 }
 
+/// The usage of `--param`, quoted by the errors that reject one.
+const AXIS_USAGE: &str = "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
+
+/// Why a sweep's arguments or base scene are refused; each message names the argument
+/// (`--param`, `--shard`) or the scene field at fault and the fix.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SweepError {
+    /// `--param` is not `NAME=START:STOP:COUNT[:log]`.
+    #[error("--param {spec:?}: {usage}", usage = AXIS_USAGE)]
+    AxisSyntax {
+        /// The argument as given.
+        spec: String,
+    },
+    /// `--param` names a parameter that cannot be swept.
+    #[error("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon, radiation_damping or alpha")]
+    UnknownParameter {
+        /// The argument as given.
+        spec: String,
+        /// The parameter's name.
+        name: String,
+    },
+    /// The fourth part of `--param` is not `log`.
+    #[error("--param {spec:?}: {word:?} is not \"log\"; {usage}", usage = AXIS_USAGE)]
+    NotLog {
+        /// The argument as given.
+        spec: String,
+        /// The fourth part.
+        word: String,
+    },
+    /// START or STOP is not a finite number.
+    #[error("--param {spec:?}: {value:?} is not a finite number")]
+    NotFinite {
+        /// The argument as given.
+        spec: String,
+        /// The part that is not a finite number.
+        value: String,
+    },
+    /// COUNT is not an integer ≥ 1.
+    #[error("--param {spec:?}: COUNT {count:?} must be an integer ≥ 1")]
+    BadCount {
+        /// The argument as given.
+        spec: String,
+        /// The COUNT part.
+        count: String,
+    },
+    /// A log axis with START or STOP ≤ 0.
+    #[error("--param {spec:?}: a log axis needs START and STOP > 0")]
+    LogNotPositive {
+        /// The argument as given.
+        spec: String,
+    },
+    /// `--shard` is not `K/N`.
+    #[error("--shard {spec:?}: expected K/N, e.g. 3/8")]
+    ShardSyntax {
+        /// The argument as given.
+        spec: String,
+    },
+    /// K or N of `--shard` is not an integer.
+    #[error("--shard {spec:?}: {part} is not an integer")]
+    ShardNotInteger {
+        /// The argument as given.
+        spec: String,
+        /// "K" or "N".
+        part: &'static str,
+    },
+    /// `--shard` outside 1 ≤ K ≤ N.
+    #[error("--shard {spec:?}: need 1 ≤ K ≤ N")]
+    ShardRange {
+        /// The argument as given.
+        spec: String,
+    },
+    /// The base scene's model is dimensional.
+    #[error("sweeps set gamma/xi/epsilon/radiation_damping: give the scene's model as gamma, xi, epsilon, not dimensional")]
+    Dimensional,
+    /// `--param alpha` on a scene without power-law friction.
+    #[error("--param alpha needs a scene with \"friction\": {{\"power\": {{\"alpha\": ...}}}}")]
+    AlphaWithoutPower,
+    /// The base scene asks for the noise analysis.
+    #[error("sweeps do not run the \"noise\" analysis (its ensembles use every core for one point); remove it, or run `stickslip run` per parameter set")]
+    Noise,
+}
+
 /// Parses `NAME=START:STOP:COUNT[:log]`; the error says what is wrong.
-pub fn parse_axis(spec: &str) -> Result<Axis, String> {
-    let usage = "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
-    let (name, range) = spec.split_once('=').ok_or_else(|| format!("--param {spec:?}: {usage}"))?;
+pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
+    let (name, range) = spec.split_once('=').ok_or_else(|| SweepError::AxisSyntax { spec: spec.into() })?;
     if !["gamma", "xi", "epsilon", "radiation_damping", "alpha"].contains(&name) {
-        return Err(format!("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon, radiation_damping or alpha"));
+        return Err(SweepError::UnknownParameter { spec: spec.into(), name: name.into() });
     }
     let parts: Vec<&str> = range.split(':').collect();
     let log = match parts.get(3) {
         None => false,
         Some(&"log") => true,
-        Some(other) => return Err(format!("--param {spec:?}: {other:?} is not \"log\"; {usage}")),
+        Some(other) => return Err(SweepError::NotLog { spec: spec.into(), word: (*other).into() }),
     };
     if parts.len() < 3 || parts.len() > 4 {
-        return Err(format!("--param {spec:?}: {usage}"));
+        return Err(SweepError::AxisSyntax { spec: spec.into() });
     }
-    let number = |s: &str| s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("--param {spec:?}: {s:?} is not a finite number"));
+    let number = |s: &str| s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| SweepError::NotFinite { spec: spec.into(), value: s.into() });
     let (start, stop) = (number(parts[0])?, number(parts[1])?);
-    let count: usize = parts[2].parse().ok().filter(|&n| n >= 1).ok_or_else(|| format!("--param {spec:?}: COUNT {:?} must be an integer ≥ 1", parts[2]))?;
+    let count: usize = parts[2].parse().ok().filter(|&n| n >= 1).ok_or_else(|| SweepError::BadCount { spec: spec.into(), count: parts[2].into() })?;
     if log && (start <= 0.0 || stop <= 0.0) {
-        return Err(format!("--param {spec:?}: a log axis needs START and STOP > 0"));
+        return Err(SweepError::LogNotPositive { spec: spec.into() });
     }
     let values = (0..count)
         .map(|i| {
@@ -94,11 +175,12 @@ pub struct Shard {
 }
 
 /// Parses `K/N` with 1 ≤ K ≤ N.
-pub fn parse_shard(spec: &str) -> Result<Shard, String> {
-    let (k, n) = spec.split_once('/').ok_or_else(|| format!("--shard {spec:?}: expected K/N, e.g. 3/8"))?;
-    let (k, n): (usize, usize) = (k.parse().map_err(|_| format!("--shard {spec:?}: K is not an integer"))?, n.parse().map_err(|_| format!("--shard {spec:?}: N is not an integer"))?);
+pub fn parse_shard(spec: &str) -> Result<Shard, SweepError> {
+    let (k, n) = spec.split_once('/').ok_or_else(|| SweepError::ShardSyntax { spec: spec.into() })?;
+    let integer = |s: &str, part| s.parse::<usize>().map_err(|_| SweepError::ShardNotInteger { spec: spec.into(), part });
+    let (k, n) = (integer(k, "K")?, integer(n, "N")?);
     if n == 0 || k == 0 || k > n {
-        return Err(format!("--shard {spec:?}: need 1 ≤ K ≤ N"));
+        return Err(SweepError::ShardRange { spec: spec.into() });
     }
     Ok(Shard { k, n })
 }
@@ -119,16 +201,16 @@ fn scene_at(base: &serde_json::Value, params: &BTreeMap<String, f64>) -> serde_j
 }
 
 /// Checks that a scene can be swept over these axes; the error says why not.
-pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), String> {
+pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepError> {
     if base["model"].get("dimensional").is_some() {
-        return Err("sweeps set gamma/xi/epsilon/radiation_damping: give the scene's model as gamma, xi, epsilon, not dimensional".into());
+        return Err(SweepError::Dimensional);
     }
     if axes.iter().any(|a| a.name == "alpha") && base["model"]["friction"].get("power").is_none() {
-        return Err("--param alpha needs a scene with \"friction\": {\"power\": {\"alpha\": ...}}".into());
+        return Err(SweepError::AlphaWithoutPower);
     }
     let analyses = base["analyses"].as_array().map(Vec::as_slice).unwrap_or_default();
     if analyses.iter().any(|a| a.get("noise").is_some()) {
-        return Err("sweeps do not run the \"noise\" analysis (its ensembles use every core for one point); remove it, or run `stickslip run` per parameter set".into());
+        return Err(SweepError::Noise);
     }
     Ok(())
 }

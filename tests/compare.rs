@@ -134,16 +134,18 @@ fn an_accurate_ten_cycle_trajectory_agrees_and_a_one_percent_period_error_disagr
 
 #[test]
 fn user_files_are_validated() {
-    assert!(compare::read_user_data("t,u,v\n0,1,1\n").unwrap_err().contains("theta"));
-    let e = compare::read_user_data("# a comment\n\nt,u,v,theta\n0,1,1,0\n1,1,x,0\n").unwrap_err();
+    let e = compare::read_user_data("t,u,v\n0,1,1\n").unwrap_err();
+    assert_eq!(e, compare::InputError::MissingColumn { header: "t,u,v".into(), column: "theta" });
+    assert!(e.to_string().contains("theta"), "{e}");
+    let e = compare::read_user_data("# a comment\n\nt,u,v,theta\n0,1,1,0\n1,1,x,0\n").unwrap_err().to_string();
     assert!(e.contains("line 5: column v = \"x\""), "{e}");
-    let e = compare::read_user_data("t,u,v,theta\n1,1,1,0\n0,1,1,0\n").unwrap_err();
+    let e = compare::read_user_data("t,u,v,theta\n1,1,1,0\n0,1,1,0\n").unwrap_err().to_string();
     assert!(e.contains("line 3: column t = 0") && e.contains("increase"), "{e}");
-    let e = compare::read_user_data("t,u,v,theta\n# c\n0,1,1,0\n1,1,-0.3,0\n").unwrap_err();
+    let e = compare::read_user_data("t,u,v,theta\n# c\n0,1,1,0\n1,1,-0.3,0\n").unwrap_err().to_string();
     assert!(e.contains("line 4: column v = -0.3 must be finite and > 0"), "{e}");
     let json = r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0.6], "theta": [0, 0]}"#;
     assert!(matches!(compare::read_user_data(json).unwrap(), UserData::Trajectory(_)));
-    let e = compare::read_user_data(r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0], "theta": [0, 0]}"#).unwrap_err();
+    let e = compare::read_user_data(r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0], "theta": [0, 0]}"#).unwrap_err().to_string();
     assert!(e.contains("index 1: column v = 0"), "{e}");
 }
 
@@ -158,11 +160,11 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     let beyond: Vec<&str> = c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
     assert_eq!(beyond, vec!["period"]);
     assert_eq!(c.verdict, compare::Verdict::Disagrees);
-    let e = compare::read_user_data(r#"{"cycle": {"perod": 18.1}}"#).unwrap_err();
+    let e = compare::read_user_data(r#"{"cycle": {"perod": 18.1}}"#).unwrap_err().to_string();
     assert!(e.contains("perod"), "{e}");
-    let e = compare::read_user_data(r#"{"cycle": {"status": "periodic"}}"#).unwrap_err();
+    let e = compare::read_user_data(r#"{"cycle": {"status": "periodic"}}"#).unwrap_err().to_string();
     assert!(e.contains("none of the compared keys"), "{e}");
-    let e = compare::read_user_data(r#"{"cycle": {"period": "18.1"}}"#).unwrap_err();
+    let e = compare::read_user_data(r#"{"cycle": {"period": "18.1"}}"#).unwrap_err().to_string();
     assert!(e.contains("cycle.period"), "{e}");
     let dir = temp_dir("report");
     let file = dir.join("misspelled.json");

@@ -117,18 +117,132 @@ pub enum UserData {
     Report(UserCycle),
 }
 
+/// Why a user's file cannot be read; each message says where (file line for CSV, index or
+/// JSON path for JSON), the column and the value.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// The file starts like JSON but is not.
+    #[error("invalid JSON: {0}")]
+    Json(String),
+    /// A report whose `cycle` object does not match docs/reports.md.
+    #[error("report: {path}: {message} (the keys of docs/reports.md's cycle section)")]
+    ReportKey {
+        /// The JSON path, e.g. cycle.period.
+        path: String,
+        /// What is wrong there.
+        message: String,
+    },
+    /// A report's `cycle` with none of the compared keys.
+    #[error("report: cycle has none of the compared keys {} (all absent or null)", super::QUANTITIES.join(", "))]
+    NoComparedKey,
+    /// A JSON trajectory lacks one of the columns.
+    #[error("JSON trajectory: missing array \"{column}\" (need t, u, v, theta; or a report with \"cycle\")")]
+    MissingArray {
+        /// The column.
+        column: &'static str,
+    },
+    /// A JSON trajectory entry that is not a number.
+    #[error("JSON trajectory: {column}[{index}] = {value} is not a number")]
+    JsonNotNumber {
+        /// The column.
+        column: &'static str,
+        /// The index in it.
+        index: usize,
+        /// The entry, as JSON.
+        value: String,
+    },
+    /// A JSON trajectory's columns differ in length.
+    #[error("JSON trajectory: t, u, v and theta must have the same length (they have {}, {}, {}, {})", lengths[0], lengths[1], lengths[2], lengths[3])]
+    LengthMismatch {
+        /// The lengths of t, u, v and theta.
+        lengths: [usize; 4],
+    },
+    /// A CSV file without a header (only blank or comment lines).
+    #[error("empty file")]
+    Empty,
+    /// A CSV header without one of the columns.
+    #[error("CSV header {header:?} lacks column \"{column}\" (need t,u,v,theta)")]
+    MissingColumn {
+        /// The header line.
+        header: String,
+        /// The column.
+        column: &'static str,
+    },
+    /// A CSV line with too few cells.
+    #[error("line {line}: column {column} is missing ({cells} columns, header has {header})")]
+    MissingCell {
+        /// The file line (1-based).
+        line: usize,
+        /// The column.
+        column: &'static str,
+        /// The cells on the line.
+        cells: usize,
+        /// The columns of the header.
+        header: usize,
+    },
+    /// A CSV cell that is not a number.
+    #[error("line {line}: column {column} = {cell:?} is not a number")]
+    CsvNotNumber {
+        /// The file line (1-based).
+        line: usize,
+        /// The column.
+        column: &'static str,
+        /// The cell, trimmed.
+        cell: String,
+    },
+    /// Fewer than two samples.
+    #[error("a trajectory needs at least two samples (it has {0})")]
+    TooFewSamples(usize),
+    /// A time that is not finite.
+    #[error("{at}: column t = {t} must be finite")]
+    TimeNotFinite {
+        /// Where the sample is ("line 17", "index 16").
+        at: String,
+        /// The time.
+        t: f64,
+    },
+    /// A time not greater than the previous one.
+    #[error("{at}: column t = {t} must be greater than the previous sample's t = {previous} (times must increase)")]
+    TimeNotIncreasing {
+        /// Where the sample is.
+        at: String,
+        /// The time.
+        t: f64,
+        /// The previous sample's time.
+        previous: f64,
+    },
+    /// u or theta not finite.
+    #[error("{at}: column {column} = {value} must be finite")]
+    NotFinite {
+        /// Where the sample is.
+        at: String,
+        /// The column: u or theta.
+        column: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// v not finite and positive.
+    #[error("{at}: column v = {value} must be finite and > 0")]
+    VelocityNotPositive {
+        /// Where the sample is.
+        at: String,
+        /// The value.
+        value: f64,
+    },
+}
+
 /// Reads a user's CSV or JSON file; errors say what is wrong and where (file lines for CSV,
 /// JSON paths for JSON), naming the column and the value.
-pub fn read_user_data(text: &str) -> Result<UserData, String> {
+pub fn read_user_data(text: &str) -> Result<UserData, InputError> {
     if text.trim_start().starts_with('{') {
-        let json: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("invalid JSON: {e}"))?;
+        let json: serde_json::Value = serde_json::from_str(text).map_err(|e| InputError::Json(e.to_string()))?;
         if json.get("cycle").is_some() {
             let report: UserReport = serde_path_to_error::deserialize(&json).map_err(|e| {
                 let path = e.path().to_string();
-                format!("report: {path}: {} (the keys of docs/reports.md's cycle section)", e.into_inner())
+                InputError::ReportKey { path, message: e.into_inner().to_string() }
             })?;
             if super::QUANTITIES.iter().all(|k| report.cycle.get(k).is_none()) {
-                return Err(format!("report: cycle has none of the compared keys {} (all absent or null)", super::QUANTITIES.join(", ")));
+                return Err(InputError::NoComparedKey);
             }
             return Ok(UserData::Report(report.cycle));
         }
@@ -137,44 +251,38 @@ pub fn read_user_data(text: &str) -> Result<UserData, String> {
     read_csv(text).and_then(check).map(UserData::Trajectory)
 }
 
-fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, String> {
-    let column = |name: &str| -> Result<Vec<f64>, String> {
-        json.get(name)
+fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputError> {
+    let column = |column: &'static str| -> Result<Vec<f64>, InputError> {
+        json.get(column)
             .and_then(|c| c.as_array())
-            .ok_or_else(|| format!("JSON trajectory: missing array \"{name}\" (need t, u, v, theta; or a report with \"cycle\")"))?
+            .ok_or(InputError::MissingArray { column })?
             .iter()
             .enumerate()
-            .map(|(i, x)| x.as_f64().ok_or_else(|| format!("JSON trajectory: {name}[{i}] = {x} is not a number")))
+            .map(|(index, x)| x.as_f64().ok_or_else(|| InputError::JsonNotNumber { column, index, value: x.to_string() }))
             .collect()
     };
     let (t, u, v, theta) = (column("t")?, column("u")?, column("v")?, column("theta")?);
     if [u.len(), v.len(), theta.len()].iter().any(|&n| n != t.len()) {
-        return Err(format!(
-            "JSON trajectory: t, u, v and theta must have the same length (they have {}, {}, {}, {})",
-            t.len(),
-            u.len(),
-            v.len(),
-            theta.len()
-        ));
+        return Err(InputError::LengthMismatch { lengths: [t.len(), u.len(), v.len(), theta.len()] });
     }
     let y = (0..t.len()).map(|i| [u[i], v[i], theta[i]]).collect();
     Ok(Trajectory { t, y, origin: (0..u.len()).map(|i| format!("index {i}")).collect() })
 }
 
-fn read_csv(text: &str) -> Result<Trajectory, String> {
+fn read_csv(text: &str) -> Result<Trajectory, InputError> {
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let (_, header) = lines.next().ok_or("empty file")?;
+    let (_, header) = lines.next().ok_or(InputError::Empty)?;
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_lowercase()).collect();
-    let index = |name: &str| {
-        names.iter().position(|n| n == name).ok_or_else(|| format!("CSV header {header:?} lacks column \"{name}\" (need t,u,v,theta)"))
+    let index = |column: &'static str| {
+        names.iter().position(|n| n == column).ok_or_else(|| InputError::MissingColumn { header: header.into(), column })
     };
     let cols = [("t", index("t")?), ("u", index("u")?), ("v", index("v")?), ("theta", index("theta")?)];
     let mut trajectory = Trajectory { t: Vec::new(), y: Vec::new(), origin: Vec::new() };
     for (n, line) in lines {
         let cells: Vec<&str> = line.split(',').collect();
-        let value = |(name, c): (&str, usize)| -> Result<f64, String> {
-            let cell = cells.get(c).ok_or_else(|| format!("line {}: column {name} is missing ({} columns, header has {})", n + 1, cells.len(), names.len()))?;
-            cell.trim().parse::<f64>().map_err(|_| format!("line {}: column {name} = {:?} is not a number", n + 1, cell.trim()))
+        let value = |(column, c): (&'static str, usize)| -> Result<f64, InputError> {
+            let cell = cells.get(c).ok_or(InputError::MissingCell { line: n + 1, column, cells: cells.len(), header: names.len() })?;
+            cell.trim().parse::<f64>().map_err(|_| InputError::CsvNotNumber { line: n + 1, column, cell: cell.trim().into() })
         };
         trajectory.t.push(value(cols[0])?);
         trajectory.y.push([value(cols[1])?, value(cols[2])?, value(cols[3])?]);
@@ -183,26 +291,26 @@ fn read_csv(text: &str) -> Result<Trajectory, String> {
     Ok(trajectory)
 }
 
-fn check(trajectory: Trajectory) -> Result<Trajectory, String> {
+fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
     if trajectory.t.len() < 2 {
-        return Err(format!("a trajectory needs at least two samples (it has {})", trajectory.t.len()));
+        return Err(InputError::TooFewSamples(trajectory.t.len()));
     }
     let names = ["u", "v", "theta"];
-    for (i, (t, y)) in trajectory.t.iter().zip(&trajectory.y).enumerate() {
+    for (i, (&t, y)) in trajectory.t.iter().zip(&trajectory.y).enumerate() {
         let at = &trajectory.origin[i];
         if !t.is_finite() {
-            return Err(format!("{at}: column t = {t} must be finite"));
+            return Err(InputError::TimeNotFinite { at: at.clone(), t });
         }
-        if i > 0 && *t <= trajectory.t[i - 1] {
-            return Err(format!("{at}: column t = {t} must be greater than the previous sample's t = {} (times must increase)", trajectory.t[i - 1]));
+        if i > 0 && t <= trajectory.t[i - 1] {
+            return Err(InputError::TimeNotIncreasing { at: at.clone(), t, previous: trajectory.t[i - 1] });
         }
         for k in [0, 2] {
             if !y[k].is_finite() {
-                return Err(format!("{at}: column {} = {} must be finite", names[k], y[k]));
+                return Err(InputError::NotFinite { at: at.clone(), column: names[k], value: y[k] });
             }
         }
         if !(y[1].is_finite() && y[1] > 0.0) {
-            return Err(format!("{at}: column v = {} must be finite and > 0", y[1]));
+            return Err(InputError::VelocityNotPositive { at: at.clone(), value: y[1] });
         }
     }
     Ok(trajectory)

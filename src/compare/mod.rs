@@ -9,8 +9,8 @@
 pub mod input;
 pub mod trajectory;
 
-pub use input::{read_user_data, Trajectory, UserCycle, UserData};
-pub use trajectory::{against_trajectory, CompareError, TrajectoryComparison, Verdict};
+pub use input::{read_user_data, InputError, Trajectory, UserCycle, UserData};
+pub use trajectory::{against_trajectory, CompareError, SamplingError, TrajectoryComparison, Verdict};
 
 use crate::engine::{self, EngineError};
 use crate::report::Report;

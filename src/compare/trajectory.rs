@@ -199,20 +199,16 @@ fn reference_steps(drr: Drr, rtol: f64, start: f64, y0: [f64; 3], end: f64) -> R
 
 /// Linear interpolation of the time where w crosses `level` between samples i and i + 1;
 /// an error if the samples are too far apart in w to locate it.
-fn crossing(t: &[f64], w: &[f64], i: usize, level: f64, what: &str, origin: &[String]) -> Result<f64, String> {
+fn crossing(t: &[f64], w: &[f64], i: usize, level: f64, event: &'static str, origin: &[String]) -> Result<f64, SamplingError> {
     if (w[i + 1] - w[i]).abs() > MAX_EVENT_JUMP {
-        return Err(format!(
-            "{}–{}: ln v jumps from {:.3} to {:.3} across the {what}; sampled too coarsely to locate it \
-             (|Δ ln v| ≤ {MAX_EVENT_JUMP} is needed between the samples around each event)",
-            origin[i], origin[i + 1], w[i], w[i + 1]
-        ));
+        return Err(SamplingError::Event { from: origin[i].clone(), to: origin[i + 1].clone(), ln_v: [w[i], w[i + 1]], event });
     }
     Ok(t[i] + (level - w[i]) / (w[i + 1] - w[i]) * (t[i + 1] - t[i]))
 }
 
 /// The complete cycles of a sampled trajectory (t, w = ln v). `origin` names the samples for
 /// messages.
-pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<CycleEvents>, String> {
+pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<CycleEvents>, SamplingError> {
     let ups: Vec<usize> = (0..t.len() - 1).filter(|&i| w[i] < 0.0 && w[i + 1] >= 0.0).collect();
     let times = ups.iter().map(|&i| crossing(t, w, i, 0.0, "upward crossing of v = 1", origin)).collect::<Result<Vec<_>, _>>()?;
     let mut cycles = Vec::new();
@@ -220,13 +216,7 @@ pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<Cycle
         let (a, b) = (ups[k] + 1, ups[k + 1]);
         let j = (a..=b).max_by(|&x, &y| w[x].total_cmp(&w[y])).expect("a non-empty range");
         if j == 0 || j + 1 >= t.len() || w[j] - w[j - 1] > MAX_PEAK_DROP || w[j] - w[j + 1] > MAX_PEAK_DROP {
-            return Err(format!(
-                "{}: the v maximum of cycle {} (ln v = {:.3}) is sampled too coarsely to locate it \
-                 (ln v must be within {MAX_PEAK_DROP} of the maximum at the samples either side)",
-                origin[j],
-                k + 1,
-                w[j]
-            ));
+            return Err(SamplingError::Peak { at: origin[j].clone(), cycle: k + 1, ln_v: w[j] });
         }
         // The parabola through the three samples around the maximum.
         let (t1, t2, t3, w1, w2, w3) = (t[j - 1], t[j], t[j + 1], w[j - 1], w[j], w[j + 1]);
@@ -259,14 +249,58 @@ pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<Cycle
     Ok(cycles)
 }
 
+/// Why the events of a sampled trajectory cannot be located: the samples around one are too
+/// far apart; the message names the samples and the spacing needed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SamplingError {
+    /// ln v jumps too far across a crossing.
+    #[error(
+        "{from}–{to}: ln v jumps from {:.3} to {:.3} across the {event}; sampled too coarsely to locate it \
+         (|Δ ln v| ≤ {max} is needed between the samples around each event)",
+        ln_v[0],
+        ln_v[1],
+        max = MAX_EVENT_JUMP
+    )]
+    Event {
+        /// The sample before the event.
+        from: String,
+        /// The sample after it.
+        to: String,
+        /// ln v at the two samples.
+        ln_v: [f64; 2],
+        /// The event: "upward crossing of v = 1" or "half maximum".
+        event: &'static str,
+    },
+    /// The samples either side of a cycle's v maximum are too far below it.
+    #[error(
+        "{at}: the v maximum of cycle {cycle} (ln v = {ln_v:.3}) is sampled too coarsely to locate it \
+         (ln v must be within {max} of the maximum at the samples either side)",
+        max = MAX_PEAK_DROP
+    )]
+    Peak {
+        /// The sample at the maximum.
+        at: String,
+        /// The cycle (1-based).
+        cycle: usize,
+        /// ln v there.
+        ln_v: f64,
+    },
+}
+
 /// Why a comparison cannot be made: bad input (exit 2) or a failed reference (exit 1).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CompareError {
-    /// The user's data cannot be compared (e.g. sampled too coarsely); the message says why.
-    Input(String),
+    /// The user's data cannot be compared (sampled too coarsely); the message says why.
+    #[error("{0}")]
+    Input(SamplingError),
+    /// The reference's events cannot be located even on its own steps.
+    #[error("the reference could not be resolved: {0}")]
+    UnresolvedReference(SamplingError),
     /// The reference integration failed.
+    #[error("reference run failed: {0}")]
     Reference(SolverError),
     /// The reference's own accuracy (against Rodas5P at rtol/10) is not below tolerance/10.
+    #[error("the reference's own accuracy {accuracy:.1e} is not below tolerance/10 = {:.1e}, so no verdict; use a larger --tolerance", tolerance / 10.0)]
     InaccurateReference {
         /// Its accuracy.
         accuracy: f64,
@@ -274,22 +308,6 @@ pub enum CompareError {
         tolerance: f64,
     },
 }
-
-impl std::fmt::Display for CompareError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Input(m) => write!(f, "{m}"),
-            Self::Reference(e) => write!(f, "reference run failed: {e}"),
-            Self::InaccurateReference { accuracy, tolerance } => write!(
-                f,
-                "the reference's own accuracy {accuracy:.1e} is not below tolerance/10 = {:.1e}, so no verdict; use a larger --tolerance",
-                tolerance / 10.0
-            ),
-        }
-    }
-}
-
-impl std::error::Error for CompareError {}
 
 impl From<SolverError> for CompareError {
     fn from(e: SolverError) -> Self {
@@ -330,7 +348,7 @@ pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> R
             let (fine, states) = reference_steps(drr, rtol, start, y0, *user.t.last().expect("two samples"))?;
             let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
             let origin: Vec<String> = fine.iter().map(|t| format!("reference at t = {t}")).collect();
-            cycle_events(&fine, &w, &origin).map_err(|e| CompareError::Input(format!("the reference could not be resolved: {e}")))?
+            cycle_events(&fine, &w, &origin).map_err(CompareError::UnresolvedReference)?
         }
     };
     let mut reasons = Vec::new();
