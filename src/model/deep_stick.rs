@@ -32,6 +32,15 @@ use super::state_law::StateLaw;
 pub struct DeepStick {
     /// ln v on the slow manifold at the start: −(ξu0 + θ0).
     pub floor: f64,
+    /// The lowest ln v of the stick and when (after its start) it is reached. Under the slip
+    /// law ln v = −(ξ(u0 − t) + θ0) only rises: the floor at t = 0. Under ageing and PRZ,
+    /// d ln v/dt = ξ − (1+ε) e^(−θ/(1+ε)): ln v keeps falling while θ < θ* = (1+ε) ln((1+ε)/ξ)
+    /// and is lowest where θ reaches θ*, at t* = (1+ε)/ξ − e^(θ0/(1+ε)) (e^(θ/(1+ε)) grows by
+    /// t). This minimum is a function of the orbit (ξu + ξe^(θ/(1+ε)) is constant on the stick),
+    /// whereas the floor at the start depends on where the integrator's step crossed the hold
+    /// (measured: ageing, γ = 1e8, ξ = 0.7, ε = 10: floor −500.0 … −500.3 from cycle to cycle,
+    /// lowest ln v ≈ −605).
+    pub lowest: (f64, f64),
     /// Time until ln v comes back up to [`STICK_EXIT`].
     pub duration: f64,
     /// The state there (on the slow manifold, ln v = [`STICK_EXIT`]).
@@ -80,7 +89,15 @@ impl Drr {
         }
         let theta_exit = theta(hi);
         let u_exit = -(theta_exit + STICK_EXIT) / p.xi;
-        Some(DeepStick { floor, duration: hi, exit: [u_exit, STICK_EXIT, theta_exit] })
+        let lowest = match p.state_law {
+            StateLaw::Ageing | StateLaw::Prz if y[THETA] < c * (c / p.xi).ln() => {
+                let theta_star = c * (c / p.xi).ln();
+                let t_star = (c / p.xi - (y[THETA] / c).exp()).clamp(0.0, hi);
+                ((-(p.xi * (y[U] - t_star) + theta_star)).min(floor), t_star)
+            }
+            _ => (floor, 0.0),
+        };
+        Some(DeepStick { floor, lowest, duration: hi, exit: [u_exit, STICK_EXIT, theta_exit] })
     }
 }
 
@@ -142,6 +159,34 @@ mod tests {
             // The exit is on the slow manifold at ln v = −50, and u fell by the duration.
             assert!((2.0 * stick.exit[U] + stick.exit[THETA] + STICK_EXIT).abs() < 1e-9, "{stick:?}");
             assert!((y[U] - stick.duration - stick.exit[U]).abs() < 1e-9 * y[U], "{stick:?}");
+        }
+    }
+
+    #[test]
+    fn the_lowest_ln_v_of_a_healing_stick_lies_below_its_start() {
+        // Slip law: ln v only rises from the floor.
+        let stick = drr(StateLaw::Slip, Friction::Log).deep_stick(&[1e3, -1e3, -1e3]).expect("a deep stick");
+        assert_eq!(stick.lowest, (-1e3, 0.0));
+        for law in [StateLaw::Ageing, StateLaw::Prz] {
+            let d = drr(law, Friction::Log);
+            // ξ = 2, 1 + ε = 6: θ0 = −20 heals faster than ξ until θ* = 6 ln 3.
+            let (u, theta0) = (510.0, -20.0);
+            let y = [u, -(2.0 * u + theta0), theta0];
+            let stick = d.deep_stick(&y).expect("a deep stick");
+            // ln v = −(ξ(u0 − t) + θ(t)) on a fine grid of the stick.
+            let n = 2_000_000;
+            let (mut best, mut at) = (f64::INFINITY, 0.0);
+            for i in 0..=n {
+                let t = stick.duration * i as f64 / n as f64;
+                let w = -(2.0 * (u - t) + at_rest(law, theta0, 6.0, t));
+                if w < best {
+                    (best, at) = (w, t);
+                }
+            }
+            assert!(stick.lowest.0 < stick.floor - 1.0, "{stick:?}");
+            assert!((stick.lowest.0 - best).abs() < 1e-9 * best.abs(), "{law:?}: {:?} vs {best}", stick.lowest);
+            assert!((stick.lowest.1 - at).abs() < 1e-3, "{law:?}: {:?} vs t = {at}", stick.lowest);
+            assert!((stick.lowest.1 - (3.0 - (-20.0f64 / 6.0).exp())).abs() < 1e-12);
         }
     }
 

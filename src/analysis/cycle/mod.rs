@@ -437,11 +437,21 @@ impl<'a> Tracker<'a> {
 
     /// Crosses a stick below the arrest-rate hold in closed form ([`Drr::deep_stick`]): its
     /// floor is the lowest ln v of the cycle, and the integrator restarts where ln v comes back
-    /// up to the hold, `stick.duration` later. No event lies inside (u falls, ln v rises).
+    /// up to the hold, `stick.duration` later. No event lies inside but ln v's minimum under
+    /// ageing and PRZ ([`DeepStick::lowest`]), accounted for here (u falls, θ rises).
     fn cross(&mut self, stick: DeepStick) -> Result<(), SolverError> {
         let y = self.prev.y;
         self.update_ranges(&[y[U], stick.floor, y[THETA]]);
         self.record(self.prev.t, &[y[U], stick.floor, y[THETA]]);
+        // Under ageing and PRZ ln v goes on falling below the floor at the start while θ heals
+        // faster than ξ: its lowest value (a function of the orbit, not of where the step
+        // crossed the hold) is the cycle's ln v_min.
+        let (lowest, t_lowest) = stick.lowest;
+        if t_lowest > 0.0 {
+            let at_lowest = [y[U] - t_lowest, lowest, -(self.drr.params().xi * (y[U] - t_lowest) + lowest)];
+            self.update_ranges(&at_lowest);
+            self.record(self.prev.t + t_lowest, &at_lowest);
+        }
         let at = self.clock.now().plus(stick.duration);
         self.clock.reinit(at, &stick.exit)?;
         self.steps += 1;
