@@ -93,7 +93,6 @@ pub struct Clock<'a> {
     integ: &'a mut dyn Integrator,
     epoch: Time,
     threshold: f64,
-    restarts: bool,
     last_step: f64,
     rebases: u64,
 }
@@ -109,9 +108,8 @@ impl<'a> Clock<'a> {
     /// [`RESTART_THRESHOLD`] for a restart).
     pub fn new(integ: &'a mut dyn Integrator, start: Time) -> Self {
         let epoch = start.plus(-integ.t());
-        let restarts = integ.rebase_restarts();
-        let threshold = if restarts { RESTART_THRESHOLD } else { DEFAULT_THRESHOLD };
-        Self { integ, epoch, threshold, restarts, last_step: f64::INFINITY, rebases: 0 }
+        let threshold = if integ.rebase_restarts() { RESTART_THRESHOLD } else { DEFAULT_THRESHOLD };
+        Self { integ, epoch, threshold, last_step: f64::INFINITY, rebases: 0 }
     }
 
     /// Sets the re-base threshold (last step / |local t|), > 0.
@@ -129,7 +127,7 @@ impl<'a> Clock<'a> {
     /// Whether a re-base restarts the integrator ([`Integrator::rebase_restarts`]): callers
     /// then re-base only where they must, since a restart costs work and accuracy.
     pub fn rebase_restarts(&self) -> bool {
-        self.restarts
+        self.integ.rebase_restarts()
     }
 
     /// One internal step, re-basing first if the last step was below the threshold.

@@ -89,9 +89,9 @@ impl Drr {
         }
         let theta_exit = theta(hi);
         let u_exit = -(theta_exit + STICK_EXIT) / p.xi;
+        let theta_star = c * (c / p.xi).ln();
         let lowest = match p.state_law {
-            StateLaw::Ageing | StateLaw::Prz if y[THETA] < c * (c / p.xi).ln() => {
-                let theta_star = c * (c / p.xi).ln();
+            StateLaw::Ageing | StateLaw::Prz if y[THETA] < theta_star => {
                 let t_star = (c / p.xi - (y[THETA] / c).exp()).clamp(0.0, hi);
                 ((-(p.xi * (y[U] - t_star) + theta_star)).min(floor), t_star)
             }

@@ -91,13 +91,12 @@ pub struct Drr {
 }
 
 /// The velocity-dependent part of the force balance, f(v) + η v, at w = ln v: its value, its
-/// w-derivative v f'(v) + η v and the next two w-derivatives.
+/// w-derivative v f'(v) + η v and the w-derivative of that.
 #[derive(Debug, Clone, Copy)]
 struct Resistance {
     value: f64,
     slope: f64,
     curvature: f64,
-    curvature_slope: f64,
 }
 
 impl Drr {
@@ -115,12 +114,11 @@ impl Drr {
         let p = &self.params;
         let (f, vfp) = p.friction.eval(w);
         let h = p.friction.d_vfprime_dw(w);
-        let h1 = p.friction.d2_vfprime_dw2(w);
         if p.eta == 0.0 {
-            return Resistance { value: f, slope: vfp, curvature: h, curvature_slope: h1 };
+            return Resistance { value: f, slope: vfp, curvature: h };
         }
         let ev = p.eta * w.exp();
-        Resistance { value: f + ev, slope: vfp + ev, curvature: h + ev, curvature_slope: h1 + ev }
+        Resistance { value: f + ev, slope: vfp + ev, curvature: h + ev }
     }
 
     /// The fixed point (u*, w* = 0, θ*): v = 1, θ* = (1+ε)(x* − f(1)) with x* the state law's
@@ -241,7 +239,9 @@ impl Drr {
         n_hess[W][THETA] = law.w_theta;
         n_hess[THETA][W] = law.w_theta;
         n_hess[THETA][THETA] = law.theta_theta;
-        quasi_dynamic::quotient(n, n_grad, n_hess, (r.slope, r.curvature, r.curvature_slope))
+        // d³(f + ηv)/dw³, needed here only (not on the inertial right-hand side's path).
+        let curvature_slope = p.friction.d2_vfprime_dw2(w) + if p.eta == 0.0 { 0.0 } else { p.eta * v };
+        quasi_dynamic::quotient(n, n_grad, n_hess, (r.slope, r.curvature, curvature_slope))
     }
 
     /// The slopes of the inertial model in the paper's coordinates (u, v, θ) at (u, ln v, θ),
