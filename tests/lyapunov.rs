@@ -3,7 +3,7 @@
 //! Poincaré map.
 
 use stickslip::analysis::events;
-use stickslip::analysis::orbit::Orbit;
+use stickslip::analysis::cycle_period::CyclePeriod;
 use stickslip::integrate::{Options, Radau5, Task, Tolerance};
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::report::Report;
@@ -101,7 +101,7 @@ fn ftle_matches_finite_differences_of_the_poincare_map() {
     let r = run(text);
     let ftle = r.lyapunov.as_ref().unwrap().ftle.as_ref().unwrap();
     let ours = ftle.per_period.last().unwrap().ln_r[1];
-    let orbit = Orbit::from_cycle(r.cycle.as_ref().unwrap()).unwrap();
+    let orbit = CyclePeriod::from_cycle(r.cycle.as_ref().unwrap()).unwrap();
     let x = [orbit.u[orbit.up], orbit.theta[orbit.up]];
     let drr = Drr::new(DrrParams::new(1e4, 0.8, 1.0, Friction::Log));
     // δ = 1e-2: nonlinear error O(δ); δ = 1e-3: the return moves by ~2e-11, near the

@@ -12,7 +12,7 @@ pub mod claims;
 pub mod finite;
 pub mod fit;
 pub mod lyapunov;
-pub mod orbit;
+pub mod cycle_period;
 pub mod series;
 pub mod period_map;
 pub mod shooting;

@@ -6,7 +6,7 @@
 
 use super::slow_run::{self, SlowRun};
 use super::AsymptoticsOptions;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Options, Tolerance};
@@ -112,7 +112,7 @@ fn point(gamma: f64, s: f64, u: f64, w: f64, theta: f64) -> StatePoint {
 
 /// The first k in `range` where `offset(k)` exceeds `threshold`, with the crossing
 /// interpolated linearly from k − 1.
-fn first_exceeding(orbit: &Orbit, gamma: f64, range: std::ops::Range<usize>, threshold: f64, offset: &dyn Fn(usize) -> Option<f64>) -> Option<StatePoint> {
+fn first_exceeding(orbit: &CyclePeriod, gamma: f64, range: std::ops::Range<usize>, threshold: f64, offset: &dyn Fn(usize) -> Option<f64>) -> Option<StatePoint> {
     let mut prev: Option<(usize, f64)> = None;
     for k in range {
         let d = offset(k)?;
@@ -128,7 +128,7 @@ fn first_exceeding(orbit: &Orbit, gamma: f64, range: std::ops::Range<usize>, thr
 }
 
 /// The manifold analysis of one cycle.
-pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, AnalysisError> {
+pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, AnalysisError> {
     let gamma = params.gamma;
     let flow = SlowFlow::new(*params);
     let (rtol, atol) = (options.rtol, options.rtol * 1e-2);

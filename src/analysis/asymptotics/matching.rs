@@ -12,7 +12,7 @@
 //! θ is extremal on S where εθ + (1+ε)ξu = 0 (dθ/dt = v[εθ + (1+ε)ξu]).
 
 use super::AsymptoticsOptions;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::model::slow_manifold::{matching_k, matching_theta, phi, SlowFlow};
 use crate::model::DrrParams;
@@ -147,7 +147,7 @@ pub const THETA_EXTREMA: usize = 2;
 /// The adiabatic limit.
 pub const ADIABATIC: usize = 3;
 
-fn fit_branch(orbit: &Orbit, params: &DrrParams, idx: &[usize]) -> Option<Branch> {
+fn fit_branch(orbit: &CyclePeriod, params: &DrrParams, idx: &[usize]) -> Option<Branch> {
     if idx.is_empty() {
         return None;
     }
@@ -228,7 +228,7 @@ pub fn blow_up_integral(xi: f64, epsilon: f64, c: f64, u0: f64) -> Option<f64> {
 }
 
 /// The matching analysis of one cycle. `slow_samples` are the 2D flow's (t − t_c, u, θ, ln v).
-pub fn analyse(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, slow_samples: &[[f64; 4]]) -> MatchingReport {
+pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions, slow_samples: &[[f64; 4]]) -> MatchingReport {
     let (xi, e, gamma) = (params.xi, params.epsilon, params.gamma);
     let flow = SlowFlow::new(*params);
     let ln_v_min = options.matching_v_min.ln();

@@ -24,7 +24,7 @@ pub mod verdicts;
 
 use crate::analysis::claims::Claim;
 use crate::analysis::cycle::CycleReport;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::{AnalysisError, InvalidOption};
 use crate::model::{Drr, DrrParams};
 use serde::{Deserialize, Serialize};
@@ -166,7 +166,7 @@ pub fn analyse(
     cycle: Option<&CycleReport>,
     options: &AsymptoticsOptions,
 ) -> Result<AsymptoticsReport, AnalysisError> {
-    let orbit = Orbit::of_scene(cycle);
+    let orbit = CyclePeriod::of_scene(cycle);
     let (manifold, matching, note) = match &orbit {
         Ok(o) => {
             let m = manifold::analyse(o, params, options)?;

@@ -15,7 +15,7 @@ use super::scan::ScanValues;
 use super::AsymptoticsOptions;
 use crate::analysis::events::{self, Knot};
 use crate::analysis::fit::{least_squares, power_limit, Fit, PowerLimit};
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Integrator, Options, SolverError, Task, Tolerance};
@@ -163,7 +163,7 @@ fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), k: u32, g: &dy
 
 /// The fast system on the scene's cycle; [`AnalysisError::NotApplicable`] when it cannot be
 /// started or finds no peak (a note in the report).
-fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, half_width_3d: Option<f64>, spread_3d: [f64; 2]) -> Result<FastCheck, AnalysisError> {
+fn fast_check(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions, half_width_3d: Option<f64>, spread_3d: [f64; 2]) -> Result<FastCheck, AnalysisError> {
     let not_applicable = |reason: String| AnalysisError::NotApplicable { reason };
     let Some(fast) = FastSlip::new(params) else {
         return Err(not_applicable(format!("the fast system needs f = ln v; this scene's friction is {}", params.friction.label())));
@@ -244,7 +244,7 @@ fn fast_check(orbit: &Orbit, params: &DrrParams, options: &AsymptoticsOptions, h
 /// and `spread_3d` (relative spreads of v_max and the half-width) come from the scene's cycle.
 pub fn analyse(
     points: &[(f64, ScanValues)],
-    orbit: Option<&Orbit>,
+    orbit: Option<&CyclePeriod>,
     params: &DrrParams,
     options: &AsymptoticsOptions,
     half_width_3d: Option<f64>,

@@ -33,7 +33,7 @@
 
 use crate::analysis::cycle::restart_safe;
 use crate::analysis::events;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::AnalysisError;
@@ -153,7 +153,7 @@ pub fn analyse(
     p: DrrParams,
     solver: &SolverSpec,
     variational: &mut VariationalFactory<'_>,
-    orbit: &Orbit,
+    orbit: &CyclePeriod,
     periods: usize,
     series_points: usize,
 ) -> Result<FtleReport, AnalysisError> {
@@ -296,7 +296,7 @@ fn floquet_link(
     solver: &SolverSpec,
     variational: &mut VariationalFactory<'_>,
     drr: &Drr,
-    orbit: &Orbit,
+    orbit: &CyclePeriod,
     per_period: &[PeriodLogs],
     exponents: &[f64; 3],
 ) -> Result<FloquetLink, AnalysisError> {

@@ -16,7 +16,7 @@
 //!   (the paper's B = ½ (v + (ξ − A)/f'(v)), C = ξ v/f'(v) for the slip law without damping).
 
 use crate::analysis::hopf::cubic_roots;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::model::Drr;
 use nalgebra::Matrix3;
 
@@ -100,16 +100,16 @@ pub struct Crossing {
 
 /// The first upward crossing of zero by `f` over samples `from..to` of the orbit (`f` must
 /// be negative somewhere before it).
-pub fn first_up(orbit: &Orbit, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
+pub fn first_up(orbit: &CyclePeriod, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
     (from + 1..to).find(|&k| values[k - 1] < 0.0 && values[k] >= 0.0).map(|k| crossing(orbit, values, k))
 }
 
 /// The last downward crossing of zero by `values` over samples `from..to`.
-pub fn last_down(orbit: &Orbit, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
+pub fn last_down(orbit: &CyclePeriod, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
     (from + 1..to).rev().find(|&k| values[k - 1] >= 0.0 && values[k] < 0.0).map(|k| crossing(orbit, values, k))
 }
 
-fn crossing(orbit: &Orbit, values: &[f64], k: usize) -> Crossing {
+fn crossing(orbit: &CyclePeriod, values: &[f64], k: usize) -> Crossing {
     let (a, b) = (values[k - 1], values[k]);
     let x = a / (a - b);
     let s = orbit.s[k - 1] + x * (orbit.s[k] - orbit.s[k - 1]);

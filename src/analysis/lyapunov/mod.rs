@@ -14,7 +14,7 @@ pub mod local;
 
 use crate::analysis::claims::{Claim, Source};
 use crate::analysis::cycle::CycleReport;
-use crate::analysis::orbit::Orbit;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::{AnalysisError, InvalidOption};
 use crate::integrate::{Integrator, SolverError};
@@ -178,7 +178,7 @@ pub fn analyse(
     cycle: Option<&CycleReport>,
     options: &LyapunovOptions,
 ) -> Result<LyapunovReport, AnalysisError> {
-    let orbit = match Orbit::of_scene(cycle) {
+    let orbit = match CyclePeriod::of_scene(cycle) {
         Ok(o) => o,
         Err(why) => return Ok(empty(options, why.into_note()?)),
     };

@@ -34,16 +34,18 @@ use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, To
 /// Largest augmented dimension (2 × the DRR's 3).
 const MAX_BIG: usize = 6;
 
-/// The deterministic orbit at the steps of a Rodas5P run, read by cubic Hermite interpolation.
+/// The deterministic orbit x̄(t) stored at the steps of one Rodas5P run (state and slope at
+/// each step) and read between them by cubic Hermite interpolation: the path the covariance
+/// and the adjoints are integrated along.
 #[derive(Debug, Clone)]
-pub struct Orbit {
+pub struct HermiteOrbit {
     n: usize,
     t: Vec<f64>,
     x: Vec<f64>,
     f: Vec<f64>,
 }
 
-impl Orbit {
+impl HermiteOrbit {
     /// The orbit from (t0, x0) to t1 (Rodas5P at rtol, atol); derivatives from the integrator's
     /// interpolant (never from the right-hand side, which is noisy on a stiff slow manifold).
     pub fn compute(model: &NoiseModel, t0: f64, x0: &[f64], t1: f64, rtol: f64, atol: &[f64]) -> Result<Self, SolverError> {
@@ -98,7 +100,7 @@ impl Orbit {
 }
 
 /// A (N×N, row-major) at time t on the orbit.
-fn matrix(model: &NoiseModel, orbit: &Orbit, tau: f64, t: f64, a: &mut [f64]) {
+fn matrix(model: &NoiseModel, orbit: &HermiteOrbit, tau: f64, t: f64, a: &mut [f64]) {
     let n = orbit.n;
     let nn = 2 * n;
     let mut x = [0.0; MAX_BIG / 2];
@@ -122,7 +124,7 @@ fn matrix(model: &NoiseModel, orbit: &Orbit, tau: f64, t: f64, a: &mut [f64]) {
 #[derive(Clone, Copy)]
 struct Lyapunov<'a> {
     model: &'a NoiseModel,
-    orbit: &'a Orbit,
+    orbit: &'a HermiteOrbit,
     tau: f64,
 }
 
@@ -160,7 +162,7 @@ impl OdeSystem for Lyapunov<'_> {
 #[derive(Clone, Copy)]
 struct Adjoint<'a> {
     model: &'a NoiseModel,
-    orbit: &'a Orbit,
+    orbit: &'a HermiteOrbit,
     tau: f64,
 }
 
@@ -216,7 +218,7 @@ pub struct LinearResponse {
     /// Steps of the orbit (Rodas5P), the covariance and the adjoints (Radau5).
     pub steps: u64,
     model: NoiseModel,
-    path: Orbit,
+    path: HermiteOrbit,
     times: Vec<f64>,
     tau: f64,
     rtol: f64,
@@ -227,7 +229,7 @@ fn failure(t: f64, message: String) -> AnalysisError {
 }
 
 /// μ_k = Φ(t_j, t_k)ᵀ μ_j for k = j, j−1, …, 0 (backwards along the orbit).
-fn adjoint_sweep(model: &NoiseModel, orbit: &Orbit, tau: f64, times: &[f64], j: usize, mu_j: &[f64], rtol: f64) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
+fn adjoint_sweep(model: &NoiseModel, orbit: &HermiteOrbit, tau: f64, times: &[f64], j: usize, mu_j: &[f64], rtol: f64) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
     let scale = mu_j.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
     let options = Options {
         max_steps: Some(1_000_000),
@@ -266,7 +268,7 @@ pub fn compute(
         return Err(failure(t_start, "every noise amplitude is zero: nothing to respond to".into()));
     }
     let tc = *times.last().ok_or_else(|| failure(t_start, "an empty grid".into()))?;
-    let path = Orbit::compute(model, t_start, x_start, tc, 1e-10, atol_x)?;
+    let path = HermiteOrbit::compute(model, t_start, x_start, tc, 1e-10, atol_x)?;
     let mut steps = path.steps() as u64;
     let orbit: Vec<Vec<f64>> = times
         .iter()

@@ -298,8 +298,9 @@ fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f6
     })
 }
 
-/// Step 1's result: the deterministic orbit and the realisations' start.
-struct Orbit {
+/// Step 1's result: the deterministic orbit settled on its limit cycle (or, for the
+/// saddle-node, its passage), its event and the realisations' start.
+struct SettledOrbit {
     /// The event the orbit is converged on (before arming at the DRR's slip).
     burn_in_event: EventKind,
     periodic: bool,
@@ -376,7 +377,7 @@ pub fn run(
 /// Step 1, the deterministic orbit: for periodic models the converged limit cycle, the start
 /// `start_before_event` before an event, t_c and (DRR) t0; for the saddle-node the passage
 /// from t = 0.
-fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptions, det_atol: &[f64]) -> Result<Orbit, AnalysisError> {
+fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptions, det_atol: &[f64]) -> Result<SettledOrbit, AnalysisError> {
     let (event_for_burn_in, periodic) = match model {
         NoiseModel::Drr { .. } => (EventKind::Maximum { component: 1, arm: 0.0, drop: std::f64::consts::LN_2 }, true),
         NoiseModel::VanDerPol { .. } => (EventKind::CrossDown { component: 0, level: 0.0, arm: 1.0 }, true),
@@ -423,7 +424,7 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
         }
         _ => None,
     };
-    Ok(Orbit {
+    Ok(SettledOrbit {
         burn_in_event: event_for_burn_in,
         periodic,
         period,
@@ -437,7 +438,7 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
 }
 
 /// The settings resolved on the orbit (defaults, checks against the period) and the grid.
-fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &Orbit) -> Result<Plan, AnalysisError> {
+fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &SettledOrbit) -> Result<Plan, AnalysisError> {
     let before = orbit.before;
     let tau = options.correlation_time.unwrap_or(match model {
         NoiseModel::Drr { system, .. } => 2.5 / system.params().gamma,
@@ -520,7 +521,7 @@ fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &Orbit) -> Result<Pla
 fn realisations(
     model: &NoiseModel,
     options: &NoiseOptions,
-    orbit: &Orbit,
+    orbit: &SettledOrbit,
     plan: &Plan,
     linear: Option<&linear_response::LinearResponse>,
     threads: usize,

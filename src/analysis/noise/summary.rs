@@ -11,7 +11,7 @@ use super::options::Alignment;
 use super::scheme;
 use super::statistics::{self, Moments, Width};
 use super::{
-    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, Events, Growth, NoiseReport, Orbit, Plan, Realisations, Series, Settings, Work,
+    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, Events, Growth, NoiseReport, Plan, Realisations, Series, Settings, SettledOrbit, Work,
     DET_RTOL, SCHEME,
 };
 use crate::analysis::AnalysisError;
@@ -21,7 +21,7 @@ use crate::integrate::{OdeSystem, SolverError};
 /// 4) and where the two agree; the report.
 pub(super) fn statistics(
     model: &NoiseModel,
-    orbit: &Orbit,
+    orbit: &SettledOrbit,
     plan: Plan,
     realisations: Realisations,
     linear: Option<LinearResponse>,
@@ -190,7 +190,7 @@ fn event_spread(data: &EnsembleData, t_event: f64, realisations: usize, linear: 
 }
 
 /// The settings as used.
-fn settings(model: &NoiseModel, orbit: &Orbit, plan: Plan, atol: Vec<f64>) -> Settings {
+fn settings(model: &NoiseModel, orbit: &SettledOrbit, plan: Plan, atol: Vec<f64>) -> Settings {
     Settings {
         amplitudes: model.amplitudes(),
         correlation_time: plan.tau,
@@ -212,7 +212,7 @@ fn settings(model: &NoiseModel, orbit: &Orbit, plan: Plan, atol: Vec<f64>) -> Se
 }
 
 /// The deterministic orbit's section, with the scheme's own event-time error.
-fn deterministic(model: &NoiseModel, orbit: &Orbit, event_time_without_noise: f64) -> Deterministic {
+fn deterministic(model: &NoiseModel, orbit: &SettledOrbit, event_time_without_noise: f64) -> Deterministic {
     Deterministic {
         period: orbit.period,
         burn_in_events: orbit.burn_in_events,
@@ -275,7 +275,7 @@ fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[
 }
 
 /// DRR: the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1, from the series.
-fn growth(model: &NoiseModel, orbit: &Orbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
+fn growth(model: &NoiseModel, orbit: &SettledOrbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
     match (model, orbit.t0) {
         (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
             let (jf, j0) = (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));

@@ -9,11 +9,12 @@
 use super::cycle::{CycleReport, CycleStatus};
 use super::AnalysisError;
 
-/// One period of the cycle; samples in time order (non-decreasing: in the slip arrest at
-/// γ ≳ 1e7 steps of 1e-17 fall below the recorded clock's resolution and neighbours can share
-/// a time).
+/// One period of the cycle analysis' last recorded cycle, from v minimum to v minimum (not the
+/// shooting's corrected orbit, nor the noise analysis's settled orbit); samples in time order
+/// (non-decreasing: in the slip arrest at γ ≳ 1e7 steps of 1e-17 fall below the recorded
+/// clock's resolution and neighbours can share a time).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Orbit {
+pub struct CyclePeriod {
     /// Period of the recorded cycle.
     pub period: f64,
     /// t − t_c of each sample (t_c: the v maximum).
@@ -32,7 +33,7 @@ pub struct Orbit {
     pub down: usize,
 }
 
-impl Orbit {
+impl CyclePeriod {
     /// The last recorded cycle of a periodic cycle analysis; [`AnalysisError::NoLimitCycle`]
     /// says why there is none.
     pub fn from_cycle(cycle: &CycleReport) -> Result<Self, AnalysisError> {
@@ -66,10 +67,10 @@ impl Orbit {
         // The cycle ends at its upward crossing of v = 1 (a located event, t = period).
         let up = n - 1 - argmin;
         let down = (peak..s.len()).find(|&k| w[k] < 0.0).ok_or_else(|| none("no downward crossing of v = 1 after the peak".into()))?;
-        Ok(Orbit { period, s, u, w, theta, peak, up, down })
+        Ok(CyclePeriod { period, s, u, w, theta, peak, up, down })
     }
 
-    /// [`Orbit::from_cycle`] of the scene's cycle analysis, if it ran one.
+    /// [`CyclePeriod::from_cycle`] of the scene's cycle analysis, if it ran one.
     pub fn of_scene(cycle: Option<&CycleReport>) -> Result<Self, AnalysisError> {
         let none = AnalysisError::NoLimitCycle { reason: "the scene ran no cycle analysis".into() };
         cycle.ok_or(none).and_then(Self::from_cycle)
@@ -124,7 +125,7 @@ mod tests {
         let t = vec![0.0, 0.5, 1.0, 1.5, 2.0, 5.0, 8.0, 10.0];
         let v = vec![1.0, 10.0, 100.0, 10.0, 0.5, 0.1, 0.3, 1.0];
         let tr = TrajectoryCycle { t: t.clone(), u: t.clone(), v, theta: vec![0.0; 8] };
-        let o = Orbit::from_cycle(&report(tr)).unwrap();
+        let o = CyclePeriod::from_cycle(&report(tr)).unwrap();
         assert_eq!(o.s, vec![-6.0, -3.0, -1.0, -0.5, 0.0, 0.5, 1.0, 4.0]);
         assert_eq!((o.peak, o.up, o.down), (4, 2, 6));
         assert_eq!(o.w[0], 0.1f64.ln());
