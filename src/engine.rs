@@ -108,14 +108,15 @@ pub struct EngineError {
     pub kind: Box<AnalysisError>,
     /// The state where it failed, when known (empty otherwise).
     pub state: Vec<f64>,
-    /// `kind`'s message: what failed, where (t and the state) and why.
+    /// `kind`'s message under the heading `analysis` (which it does not repeat, see
+    /// [`AnalysisError::message_under`]): what failed, where (t and the state) and why.
     pub message: String,
 }
 
 impl EngineError {
     /// The error of `analysis`.
     pub fn new(analysis: &'static str, kind: AnalysisError) -> Self {
-        Self { analysis, state: kind.state().to_vec(), message: kind.to_string(), kind: Box::new(kind) }
+        Self { analysis, state: kind.state().to_vec(), message: kind.message_under(analysis), kind: Box::new(kind) }
     }
 
     /// Whether the input is at fault (an option that does not fit the computed orbit, named
@@ -308,7 +309,8 @@ fn cycle_step(scene: &Scene, drr: &Drr, linear: Option<&HopfReport>) -> Result<(
     };
     let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
     let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
-    let (report, name, tables, stats) = cycle_with(scene, drr, options, keep, linear).map_err(failed(drr, "cycle"))?;
+    // cycle_with has added the physical cause already (once: not `failed`, which adds it again).
+    let (report, name, tables, stats) = cycle_with(scene, drr, options, keep, linear).map_err(|e| EngineError::new("cycle", e))?;
     Ok((Some(report), Integration { name, tables, stats }))
 }
 

@@ -4,12 +4,14 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::io::IsTerminal;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
 use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::robertson_examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
+
+mod cli;
+use cli::progress::Progress;
 
 #[derive(Parser)]
 #[command(name = "stickslip", version, about = "Very stiff stick-slip dynamics with Debian's SUNDIALS")]
@@ -345,36 +347,6 @@ fn compare_command(
     Ok(())
 }
 
-/// A one-line progress report with ETA on stderr, shown only when stderr is a terminal.
-struct Progress {
-    label: &'static str,
-    unit: &'static str,
-    started: std::time::Instant,
-    terminal: bool,
-}
-
-impl Progress {
-    fn new(label: &'static str, unit: &'static str) -> Self {
-        Self { label, unit, started: std::time::Instant::now(), terminal: std::io::stderr().is_terminal() }
-    }
-
-    fn update(&self, done: usize, total: usize) {
-        if self.terminal {
-            let elapsed = self.started.elapsed().as_secs_f64();
-            let eta = elapsed / done as f64 * (total - done) as f64;
-            eprint!("\r{}: {done}/{total} {}, {elapsed:.0} s, ETA {eta:.0} s   ", self.label, self.unit);
-        }
-    }
-
-    /// Ends the progress line; returns the seconds elapsed.
-    fn finish(&self) -> f64 {
-        if self.terminal {
-            eprintln!();
-        }
-        self.started.elapsed().as_secs_f64()
-    }
-}
-
 /// `--threads`, or every core.
 fn worker_threads(threads: Option<usize>) -> usize {
     threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
@@ -491,33 +463,11 @@ fn stress_command(
     }
 }
 
-/// Reproduce's progress on stderr: a line per figure, and a run counter on a terminal.
-struct ReproduceProgress {
-    started: std::time::Instant,
-    terminal: bool,
-}
-
-impl stickslip::reproduce::Progress for ReproduceProgress {
-    fn stage(&self, index: usize, total: usize, what: &str) {
-        if self.terminal {
-            eprint!("\r\x1b[K");
-        }
-        eprintln!("reproduce [{index}/{total}] {:.0} s: {what}", self.started.elapsed().as_secs_f64());
-    }
-
-    fn points(&self, done: usize, total: usize) {
-        if self.terminal {
-            eprint!("\r  {done}/{total} runs   ");
-            if done == total {
-                eprint!("\r\x1b[K");
-            }
-        }
-    }
-}
-
 fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Result<(), Failure> {
-    let progress = ReproduceProgress { started: std::time::Instant::now(), terminal: std::io::stderr().is_terminal() };
-    let summary = stickslip::reproduce::run(&out, worker_threads(threads), reduced, &progress).map_err(|e| Failure(1, e.to_string()))?;
+    let progress = Progress::new("reproduce", "runs");
+    let summary = stickslip::reproduce::run(&out, worker_threads(threads), reduced, &progress);
+    progress.finish();
+    let summary = summary.map_err(|e| Failure(1, e.to_string()))?;
     for f in &summary.figures {
         match &f.error {
             None => println!("{:<5} {:>5.1} s  {}", f.id, f.seconds, f.output.files.join(", ")),

@@ -144,9 +144,25 @@ fn grade(deviation: f64, tol: f64) -> Verdict {
     }
 }
 
+/// A relative tolerance `x` in percent, to three significant digits without trailing zeros:
+/// positional from 0.001 % up ("5", "0.25", "3.47"), in exponent form below ("1e-4" for a
+/// relative 1e-6), never a binary-to-decimal artefact such as 0.00009999999999999999.
 fn pct(x: f64) -> String {
     let p = 100.0 * x;
-    if p >= 1.0 { format!("{p:.0}") } else { format!("{p}") }
+    if !(p.is_finite() && p > 0.0) {
+        return format!("{p}");
+    }
+    // Rounded to three significant digits first: the exponent is the rounded value's.
+    let e = format!("{p:.2e}");
+    let (mantissa, exponent) = e.split_once('e').expect("{:e} has an exponent");
+    let exponent: i32 = exponent.parse().expect("{:e}'s exponent is an integer");
+    let trim = |s: &str| if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s.to_string() };
+    if exponent >= -3 {
+        let rounded: f64 = e.parse().expect("{:e} parses back");
+        trim(&format!("{rounded:.*}", (2 - exponent).max(0) as usize))
+    } else {
+        format!("{}e{exponent}", trim(mantissa))
+    }
 }
 
 /// One line per claim for the CLI summary.
@@ -192,5 +208,31 @@ mod tests {
         assert_eq!(Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict, "disagrees");
         assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict, "agrees");
         assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict, "disagrees");
+    }
+
+    #[test]
+    fn percentages_print_as_clean_numbers() {
+        // The tolerances reproduce uses (0.05: paper, asymptotics, lyapunov; 1e-6: the state
+        // laws' periods) and their 4× "roughly", and computed ones (a spread, 1/v).
+        let cases = [
+            (0.05, "5"),
+            (0.2, "20"),
+            (1e-6, "1e-4"),
+            (4e-6, "4e-4"),
+            (1e-5, "0.001"),
+            (0.0347, "3.47"),
+            (0.014, "1.4"),
+            (0.0123456, "1.23"),
+            (0.00999999, "1"),
+            (2.5e-3, "0.25"),
+            (3.14159e-9, "3.14e-7"),
+            (1.0, "100"),
+            (12.345, "1230"),
+        ];
+        for (x, want) in cases {
+            assert_eq!(pct(x), want, "{x}");
+        }
+        let c = Claim::relative("x", Source::Check, 2.0, 2.0, 1e-6, String::new());
+        assert_eq!(c.criterion, "agrees if |ours − reference| ≤ 1e-4 % of |reference|, roughly if ≤ 4e-4 %");
     }
 }

@@ -59,9 +59,10 @@ pub enum AnalysisError {
     },
     /// The analysis's computation failed at a point of an orbit (an event that never came, a
     /// flow that left its domain, a tangent frame that overflowed).
-    #[error("{analysis} failed at t = {t:e} (state {state:?}): {message}")]
+    #[error("{analysis} {}", failed_at(.t, .state, .message))]
     Failed {
-        /// The analysis or its part, e.g. "noise" or "the 2D slow flow".
+        /// The analysis or its part, e.g. "noise" or "the 2D slow flow"; under the analysis's
+        /// own heading ([`AnalysisError::message_under`]) the analysis is not named again.
         analysis: &'static str,
         /// The time reached.
         t: f64,
@@ -73,26 +74,52 @@ pub enum AnalysisError {
     /// The analysis's own budget (its step or time limit, an option named in the message) ran
     /// out before the integration reached what the analysis integrates for (a settled cycle, a
     /// return to the section). The integrator itself did not fail.
-    #[error("{analysis} ran out of its budget at t = {t:e} (state {state:?}): {message}")]
+    #[error("{analysis} {}", out_of_budget_at(.t, .state, .message))]
     Budget {
-        /// The analysis or its part, e.g. "cycle" or "the return to the section v = 1".
+        /// The analysis or its part, e.g. "cycle" or "the return to the section v = 1"; under
+        /// the analysis's own heading ([`AnalysisError::message_under`]) the analysis is not
+        /// named again.
         analysis: &'static str,
         /// The time reached.
         t: f64,
         /// The state there.
         state: Vec<f64>,
-        /// Which limit, its value, and what to raise.
+        /// Which limit, its value, and what to raise (the option's field, e.g.
+        /// "cycle.max_steps", where the limit is an option).
         message: String,
     },
     /// A result contains a NaN or an infinity; it is not reported.
-    #[error("the {path} section contains a non-finite number; refusing to report it")]
+    #[error("a non-finite number at {path}; refusing to report it")]
     NonFinite {
         /// Path of the first non-finite number, or the section.
         path: String,
     },
 }
 
+/// [`AnalysisError::Failed`] after the name of the analysis or its part.
+fn failed_at(t: &f64, state: &[f64], message: &str) -> String {
+    format!("failed at t = {t:e} (state {state:?}): {message}")
+}
+
+/// [`AnalysisError::Budget`] after the name of the analysis or its part.
+fn out_of_budget_at(t: &f64, state: &[f64], message: &str) -> String {
+    format!("ran out of its budget at t = {t:e} (state {state:?}): {message}")
+}
+
 impl AnalysisError {
+    /// The message as read under the heading `analysis` (the engine's "cycle: …"): a failure
+    /// of `analysis` itself does not name it a second time ("cycle: ran out of its budget at
+    /// …", not "cycle: cycle ran out …"); a failure of a part of it still names the part
+    /// ("shooting: the return to the section v = 1 ran out …"). Every other message is
+    /// [`to_string`](ToString::to_string)'s.
+    pub fn message_under(&self, analysis: &str) -> String {
+        match self {
+            Self::Failed { analysis: a, t, state, message } if *a == analysis => failed_at(t, state, message),
+            Self::Budget { analysis: a, t, state, message } if *a == analysis => out_of_budget_at(t, state, message),
+            other => other.to_string(),
+        }
+    }
+
     /// The state where the failure happened, when known (empty otherwise).
     pub fn state(&self) -> &[f64] {
         match self {
@@ -145,5 +172,33 @@ impl AnalysisError {
             Self::NotApplicable { .. } | Self::NoLimitCycle { .. } | Self::NotConverged { .. } => Ok(self.to_string()),
             other => Err(other),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn under_its_own_heading_a_failure_names_the_analysis_once() {
+        let budget = AnalysisError::Budget {
+            analysis: "cycle",
+            t: 5.5,
+            state: vec![1.0, 2.0, 3.0],
+            message: "501 CVODE steps without settling on a cycle (cycle.max_steps = 500; raise it)".into(),
+        };
+        let alone = budget.to_string();
+        assert_eq!(alone, "cycle ran out of its budget at t = 5.5e0 (state [1.0, 2.0, 3.0]): 501 CVODE steps without settling on a cycle (cycle.max_steps = 500; raise it)");
+        assert_eq!(budget.message_under("cycle"), alone["cycle ".len()..]);
+        assert_eq!(budget.message_under("asymptotics"), alone, "a part of another analysis keeps its name");
+        let failed = AnalysisError::Failed { analysis: "noise", t: 1.0, state: vec![], message: "no event".into() };
+        assert_eq!(failed.to_string(), "noise failed at t = 1e0 (state []): no event");
+        assert_eq!(failed.message_under("noise"), "failed at t = 1e0 (state []): no event");
+        let part = AnalysisError::Failed { analysis: "the 2D slow flow", t: 1.0, state: vec![], message: "left".into() };
+        assert_eq!(part.message_under("asymptotics"), part.to_string());
+        let refused = AnalysisError::NonFinite { path: "cycle.period".into() };
+        assert_eq!(refused.message_under("cycle"), "a non-finite number at cycle.period; refusing to report it");
+        let note = AnalysisError::NoLimitCycle { reason: "none".into() };
+        assert_eq!(note.message_under("lyapunov"), "none");
     }
 }

@@ -1,0 +1,3 @@
+//! The `stickslip` binary's own modules (not part of the library).
+
+pub mod progress;
