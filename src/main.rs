@@ -274,56 +274,67 @@ fn compare_command(
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }
-    if let Some(file) = against {
-        let text = std::fs::read_to_string(&file).map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
-        let data = compare::read_user_data(&text).map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
-        let verdict = match data {
-            compare::UserData::Trajectory(t) => {
-                let c = compare::against_trajectory(&scene, &t, tolerance).map_err(|e| match e {
-                    e @ (compare::CompareError::Input(_) | compare::CompareError::UnresolvedReference(_)) => Failure(2, format!("{}: {e}", file.display())),
-                    other => Failure(1, other.to_string()),
-                })?;
-                if json {
-                    print_json(&c);
-                } else {
-                    let r = &c.reference;
-                    println!("{} samples, {} complete cycles (reference: {})", c.samples, c.cycles[0], c.cycles[1]);
-                    println!("reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy {:.1e} (against rodas5p)", r.rtol, r.rebases, r.accuracy);
-                    for q in &c.worst_per_quantity {
-                        println!("{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}", q.quantity, q.cycle, q.user, q.reference, q.deviation);
-                    }
-                    let m = &c.max_state_deviation;
-                    println!("state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}", m.u, m.ln_v, m.theta);
-                    if let Some(w) = &c.worst_state {
-                        println!("worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}", w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference);
-                    }
-                    for reason in &c.reasons {
-                        println!("DISAGREES: {reason}");
-                    }
-                }
-                c.verdict
-            }
-            compare::UserData::Report(r) => {
-                let c = compare::against_report(&scene, &r, tolerance).map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
-                if json {
-                    print_json(&c);
-                } else {
-                    for row in &c.rows {
-                        let flag = if row.beyond_tolerance { "  BEYOND TOLERANCE" } else { "" };
-                        println!("{:<16} yours {:<22} ours {:<22} {:.1e}{flag}", row.quantity, row.user, row.reference, row.deviation);
-                    }
-                }
-                c.verdict
-            }
-        };
-        if !json {
-            println!("verdict: {} (tolerance {tolerance:.1e})", if verdict == compare::Verdict::Agrees { "agrees" } else { "disagrees" });
-        }
-        return match verdict {
-            compare::Verdict::Agrees => Ok(()),
-            compare::Verdict::Disagrees => Err(Failure(3, format!("{} disagrees with the reference beyond the tolerance {tolerance:e}", file.display()))),
-        };
+    match against {
+        Some(file) => compare_against(&scene, &file, tolerance, json),
+        None => compare_methods(&scene, &methods, json),
     }
+}
+
+/// `compare --against FILE`: a user's trajectory or report against our reference (exit 3 if
+/// it disagrees).
+fn compare_against(scene: &scene::Scene, file: &std::path::Path, tolerance: f64, json: bool) -> Result<(), Failure> {
+    let text = std::fs::read_to_string(file).map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
+    let data = compare::read_user_data(&text).map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
+    let verdict = match data {
+        compare::UserData::Trajectory(t) => {
+            let c = compare::against_trajectory(scene, &t, tolerance).map_err(|e| match e {
+                e @ (compare::CompareError::Input(_) | compare::CompareError::UnresolvedReference(_)) => Failure(2, format!("{}: {e}", file.display())),
+                other => Failure(1, other.to_string()),
+            })?;
+            if json {
+                print_json(&c);
+            } else {
+                let r = &c.reference;
+                println!("{} samples, {} complete cycles (reference: {})", c.samples, c.cycles[0], c.cycles[1]);
+                println!("reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy {:.1e} (against rodas5p)", r.rtol, r.rebases, r.accuracy);
+                for q in &c.worst_per_quantity {
+                    println!("{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}", q.quantity, q.cycle, q.user, q.reference, q.deviation);
+                }
+                let m = &c.max_state_deviation;
+                println!("state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}", m.u, m.ln_v, m.theta);
+                if let Some(w) = &c.worst_state {
+                    println!("worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}", w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference);
+                }
+                for reason in &c.reasons {
+                    println!("DISAGREES: {reason}");
+                }
+            }
+            c.verdict
+        }
+        compare::UserData::Report(r) => {
+            let c = compare::against_report(scene, &r, tolerance).map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
+            if json {
+                print_json(&c);
+            } else {
+                for row in &c.rows {
+                    let flag = if row.beyond_tolerance { "  BEYOND TOLERANCE" } else { "" };
+                    println!("{:<16} yours {:<22} ours {:<22} {:.1e}{flag}", row.quantity, row.user, row.reference, row.deviation);
+                }
+            }
+            c.verdict
+        }
+    };
+    if !json {
+        println!("verdict: {} (tolerance {tolerance:.1e})", if verdict == compare::Verdict::Agrees { "agrees" } else { "disagrees" });
+    }
+    match verdict {
+        compare::Verdict::Agrees => Ok(()),
+        compare::Verdict::Disagrees => Err(Failure(3, format!("{} disagrees with the reference beyond the tolerance {tolerance:e}", file.display()))),
+    }
+}
+
+/// `compare --methods a,b,…`: the scene's cycle by several methods.
+fn compare_methods(scene: &scene::Scene, methods: &[String], json: bool) -> Result<(), Failure> {
     if methods.is_empty() {
         return Err(Failure(2, "give --methods a,b,... or --against FILE".into()));
     }
@@ -331,7 +342,7 @@ fn compare_command(
         .iter()
         .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
         .collect::<Result<Vec<_>, _>>()?;
-    let c = compare::methods(&scene, &parsed);
+    let c = compare::methods(scene, &parsed);
     if json {
         print_json(&c);
     } else {
