@@ -13,7 +13,7 @@
 //! SIAM 2003, ch. 1–2 (natural-parameter continuation with step control).
 
 use super::hopf;
-use super::shooting::{self, NoOrbit, Orbit, ShootingSettings};
+use super::shooting::{self, NoOrbit, PeriodicOrbit, ShootingSettings};
 use super::AnalysisError;
 use crate::integrate::{Integrator, SolverError};
 use crate::model::{Drr, DrrParams};
@@ -89,7 +89,7 @@ pub struct CurvePoint {
     pub value: f64,
     /// The orbit found.
     #[serde(flatten)]
-    pub orbit: Orbit,
+    pub orbit: PeriodicOrbit,
     /// Sub-steps taken from the previous grid point.
     pub substeps: usize,
 }
@@ -204,7 +204,7 @@ enum Rejected {
 }
 
 /// One corrector attempt at `value` from the predicted section point.
-fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationSettings, value: f64, x: [f64; 2]) -> Result<Orbit, Rejected> {
+fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationSettings, value: f64, x: [f64; 2]) -> Result<PeriodicOrbit, Rejected> {
     let drr = Drr::new(settings.parameter.set(base, value));
     let y0 = [x[0], 0.0, x[1]];
     let mut integ = factory(drr, y0).map_err(AnalysisError::from)?;
@@ -212,7 +212,7 @@ fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationS
 }
 
 /// Runs the continuation from `start`, the orbit at the scene's parameters `base`.
-pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: &ContinuationSettings) -> ContinuationReport {
+pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: PeriodicOrbit, settings: &ContinuationSettings) -> ContinuationReport {
     let par = settings.parameter;
     let from = par.get(base);
     let to_coordinate = |v: f64| if settings.log { v.log10() } else { v };
@@ -223,7 +223,7 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: 
     let mut flips = Vec::new();
     let mut stopped = None;
     // Current and previous orbit, as (coordinate, section point).
-    let section = |o: &Orbit| [o.section_point[0], o.section_point[2]];
+    let section = |o: &PeriodicOrbit| [o.section_point[0], o.section_point[2]];
     let mut previous: Option<(f64, [f64; 2])> = None;
     let mut current = (to_coordinate(from), section(&points[0].orbit));
     let mut step = spacing;
@@ -300,8 +300,8 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: Orbit, settings: 
 }
 
 /// [`Rejected::Jump`] when `next` is not the continuation of `last`.
-fn jump(last: &Orbit, next: &Orbit) -> Option<Rejected> {
-    let range = |o: &Orbit| o.ln_v_max - o.ln_v_min;
+fn jump(last: &PeriodicOrbit, next: &PeriodicOrbit) -> Option<Rejected> {
+    let range = |o: &PeriodicOrbit| o.ln_v_max - o.ln_v_min;
     let dt = (next.period - last.period).abs() / last.period;
     let dr = (range(next) - range(last)).abs() / range(last);
     (dt > 0.1 || dr > 0.1).then(|| Rejected::Jump { period: (last.period, next.period), range: (range(last), range(next)) })

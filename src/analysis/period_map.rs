@@ -85,6 +85,9 @@ fn first3(z: &[f64]) -> [f64; 3] {
 /// next upward crossing of w = 0. With `on_section`, `start` lies on the section and the
 /// crossing must follow a downward one (a full turn); otherwise the first upward crossing
 /// ends the flow (used to reach the section from an arbitrary start).
+///
+/// Each step: sample its end, record the v extrema, end at the return, check the budget,
+/// then cut at an intermediate section, re-base the clock, or go on.
 pub fn flow_to_section(
     integ: &mut dyn Integrator,
     drr: &Drr,
@@ -95,136 +98,231 @@ pub fn flow_to_section(
     integ.reinit(0.0, &Variational::<Drr, 3>::initial(&start))?;
     // Global time 0 at the start; the clock re-bases when its steps outrun it.
     let mut clock = Clock::new(integ, Time::new(0.0));
-    // A failure of the integrator: the global time, the state without Φ.
-    let with_context = |clock: &Clock, e: SolverError| {
-        let mut e = clock.at_global(e);
-        e.state.truncate(3);
-        e
-    };
-    let mut d0 = [0.0; 3];
-    crate::integrate::OdeSystem::rhs(drr, 0.0, &start, &mut d0);
-    let mut prev = Sample { t: 0.0, y: start, d: d0 };
-    let mut steps = 0u64;
-    // Sub-threshold noise at the start (w = 0 exactly, G ≠ 0 at large γ) must not count as a
-    // turn: the return needs a v maximum above the noise floor, then a downward crossing.
-    let floor = 1e-9f64.max(1e3 * (limits.w_tolerance.0 + limits.w_tolerance.1));
-    let mut down_seen = !on_section;
-    let mut peak: Option<(f64, [f64; 3])> = None;
-    let mut rebase_pending = false;
-    let mut rise_rate: f64 = 0.0;
-    let mut ln_v_min = start[W];
-    let cut_level = 0.5 * drr.slip_speed_scale().ln();
-    let mut fundamental = Matrix3::identity();
-    let mut section_jacobian = Matrix2::identity();
-    // Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.
-    let mut cuts = 0u8;
+    let mut flow = Progress::new(drr, start, on_section, limits);
     loop {
-        let step = clock.step().map_err(|e| with_context(&clock, e))?;
-        prev.t = step.start;
-        steps += 1;
-        let y = first3(clock.state());
-        let d = first3(&clock.integrator().dense(step.t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
-        let next = Sample { t: step.t, y, d };
-        if clock.state().iter().chain(&d).any(|v| !v.is_finite()) {
-            return Err(AnalysisError::Failed {
-                analysis: "the return to the section v = 1",
-                t: clock.now().to_f64(),
-                state: y.to_vec(),
-                message: format!(
-                    "{} accepted a step to a non-finite state, Φ or dy/dt (dy/dt = {d:?}); the model or its variational equations have left the range of doubles",
-                    clock.name()
-                ),
-            });
+        let step = clock.step().map_err(|e| in_global_time(&clock, e))?;
+        flow.prev.t = step.start;
+        flow.steps += 1;
+        let next = sample_step_end(&mut clock, step.t)?;
+        flow.record_extrema(&mut clock, &next)?;
+        if let Some(done) = flow.completed(&mut clock, &next)? {
+            return Ok(done);
         }
-        rise_rate = rise_rate.max(d[W].abs());
-        ln_v_min = ln_v_min.min(y[W]);
-        let span = (prev.t, next.t);
-        if prev.d[W] > 0.0 && next.d[W] <= 0.0 {
-            let t = events::refine(clock.integrator(), span, 1, W, 0.0).map_err(|e| with_context(&clock, e))?;
-            let yp = first3(&clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
-            if yp[W] > floor && peak.is_none_or(|(_, p)| yp[W] > p[W]) {
-                peak = Some((clock.global(t).to_f64(), yp));
-                rebase_pending = true;
+        flow.check_budget(&clock, &next)?;
+        flow.cut_or_rebase(&mut clock, drr, next)?;
+    }
+}
+
+/// What is known of a return so far, between steps.
+struct Progress {
+    start: [f64; 3],
+    limits: Limits,
+    /// The last step end (or restart point).
+    prev: Sample,
+    steps: u64,
+    /// ln v above which a v maximum counts as a turn, not as noise at the start.
+    floor: f64,
+    /// Whether the downward crossing of w = 0 that precedes the return has been seen.
+    down_seen: bool,
+    /// The highest v maximum so far: (global time, state).
+    peak: Option<(f64, [f64; 3])>,
+    /// A v maximum has been seen since the last re-base or cut.
+    rebase_pending: bool,
+    /// The largest |dw/dt| seen, to judge where a restart is safe.
+    rise_rate: f64,
+    ln_v_min: f64,
+    /// The intermediate section w = ½ ln γ (½ ln(1/η) without inertia).
+    cut_level: f64,
+    /// The product of the finished segments' fundamental matrices.
+    fundamental: Matrix3<f64>,
+    /// The product of the finished segments' section Jacobians.
+    section_jacobian: Matrix2<f64>,
+    /// Cuts made in this return: 0 none, 1 at ½ ln γ up, 2 at ½ ln γ down, 3 at w = 0 down.
+    cuts: u8,
+}
+
+impl Progress {
+    fn new(drr: &Drr, start: [f64; 3], on_section: bool, limits: &Limits) -> Self {
+        let mut d0 = [0.0; 3];
+        crate::integrate::OdeSystem::rhs(drr, 0.0, &start, &mut d0);
+        Self {
+            start,
+            limits: *limits,
+            prev: Sample { t: 0.0, y: start, d: d0 },
+            steps: 0,
+            // Sub-threshold noise at the start (w = 0 exactly, G ≠ 0 at large γ) must not
+            // count as a turn: the return needs a v maximum above the noise floor, then a
+            // downward crossing.
+            floor: 1e-9f64.max(1e3 * (limits.w_tolerance.0 + limits.w_tolerance.1)),
+            down_seen: !on_section,
+            peak: None,
+            rebase_pending: false,
+            rise_rate: 0.0,
+            ln_v_min: start[W],
+            cut_level: 0.5 * drr.slip_speed_scale().ln(),
+            fundamental: Matrix3::identity(),
+            section_jacobian: Matrix2::identity(),
+            cuts: 0,
+        }
+    }
+
+    /// The rise rate and ln v minimum at the step end; the v maximum (dw/dt of the
+    /// interpolant changing sign downward, above the noise floor) and the v minimum inside
+    /// the step.
+    fn record_extrema(&mut self, clock: &mut Clock, next: &Sample) -> Result<(), SolverError> {
+        self.rise_rate = self.rise_rate.max(next.d[W].abs());
+        self.ln_v_min = self.ln_v_min.min(next.y[W]);
+        let span = (self.prev.t, next.t);
+        if self.prev.d[W] > 0.0 && next.d[W] <= 0.0 {
+            let t = refine(clock, span, 1, 0.0)?;
+            let yp = first3(&dense(clock, t, 0)?);
+            if yp[W] > self.floor && self.peak.is_none_or(|(_, p)| yp[W] > p[W]) {
+                self.peak = Some((clock.global(t).to_f64(), yp));
+                self.rebase_pending = true;
             }
         }
-        if prev.d[W] < 0.0 && next.d[W] >= 0.0 {
-            let t = events::refine(clock.integrator(), span, 1, W, 0.0).map_err(|e| with_context(&clock, e))?;
-            ln_v_min = ln_v_min.min(clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?[W]);
+        if self.prev.d[W] < 0.0 && next.d[W] >= 0.0 {
+            let t = refine(clock, span, 1, 0.0)?;
+            self.ln_v_min = self.ln_v_min.min(dense(clock, t, 0)?[W]);
         }
-        if peak.is_some() && prev.y[W] >= 0.0 && next.y[W] < 0.0 {
-            down_seen = true;
-        } else if down_seen && prev.y[W] < 0.0 && next.y[W] >= 0.0 {
-            let t = events::refine(clock.integrator(), span, 0, W, 0.0).map_err(|e| with_context(&clock, e))?;
-            let z = clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?;
-            let velocity = first3(&clock.integrator().dense(t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
-            let phi = fundamental_of(&z);
-            let (t_peak, peak) = peak.unwrap_or((clock.global(t).to_f64(), first3(&z)));
-            return Ok(Return {
-                start,
-                period: clock.global(t).to_f64(),
-                end: first3(&z),
-                velocity,
-                fundamental: phi * fundamental,
-                section_jacobian: section_map(&phi, &velocity) * section_jacobian,
-                t_peak,
-                peak,
-                ln_v_min,
-                steps,
-            });
+        Ok(())
+    }
+
+    /// Notes the downward crossing of w = 0 after a v maximum; at the upward crossing after
+    /// it, the return.
+    fn completed(&mut self, clock: &mut Clock, next: &Sample) -> Result<Option<Return>, SolverError> {
+        let prev = &self.prev;
+        if self.peak.is_some() && prev.y[W] >= 0.0 && next.y[W] < 0.0 {
+            self.down_seen = true;
+            return Ok(None);
         }
-        let out_of_time = clock.global(next.t).to_f64() > limits.max_time;
-        if out_of_time || steps > limits.max_steps {
-            let limit = if out_of_time { format!("t = {:e}", limits.max_time) } else { format!("{} steps", limits.max_steps) };
-            return Err(AnalysisError::Budget {
-                analysis: "the return to the section v = 1",
-                t: clock.now().to_f64(),
-                state: y.to_vec(),
-                message: format!("no return within {limit} (the orbit may have decayed to the fixed point)"),
-            });
+        if !(self.down_seen && prev.y[W] < 0.0 && next.y[W] >= 0.0) {
+            return Ok(None);
         }
-        // A cut: the first crossing in this step of w = ½ ln γ (either way) or of w = 0
-        // downward (the latter only once a v maximum has been seen).
+        let t = refine(clock, (prev.t, next.t), 0, 0.0)?;
+        let z = dense(clock, t, 0)?;
+        let velocity = first3(&dense(clock, t, 1)?);
+        let phi = fundamental_of(&z);
+        let (t_peak, peak) = self.peak.unwrap_or((clock.global(t).to_f64(), first3(&z)));
+        Ok(Some(Return {
+            start: self.start,
+            period: clock.global(t).to_f64(),
+            end: first3(&z),
+            velocity,
+            fundamental: phi * self.fundamental,
+            section_jacobian: section_map(&phi, &velocity) * self.section_jacobian,
+            t_peak,
+            peak,
+            ln_v_min: self.ln_v_min,
+            steps: self.steps,
+        }))
+    }
+
+    /// A [`AnalysisError::Budget`] when the time or step limit is passed without a return.
+    fn check_budget(&self, clock: &Clock, next: &Sample) -> Result<(), AnalysisError> {
+        let out_of_time = clock.global(next.t).to_f64() > self.limits.max_time;
+        if !(out_of_time || self.steps > self.limits.max_steps) {
+            return Ok(());
+        }
+        let limit = if out_of_time { format!("t = {:e}", self.limits.max_time) } else { format!("{} steps", self.limits.max_steps) };
+        Err(AnalysisError::Budget {
+            analysis: "the return to the section v = 1",
+            t: clock.now().to_f64(),
+            state: next.y.to_vec(),
+            message: format!("no return within {limit} (the orbit may have decayed to the fixed point)"),
+        })
+    }
+
+    /// The intermediate section crossed in this step, if it is the next one due: w = ½ ln γ
+    /// (up, then down) and w = 0 downward once a v maximum has been seen, each once per
+    /// return and in order (a restart on the level must not cut again). Counts the cut.
+    fn due_cut(&mut self, next: &Sample) -> Option<f64> {
+        let prev = &self.prev;
         let crosses = |level: f64, up: bool, down: bool| {
             (up && prev.y[W] < level && next.y[W] >= level) || (down && prev.y[W] >= level && next.y[W] < level)
         };
-        // Each cut once per return, in order (a restart on the level must not cut again).
-        let hit = if cut_level > 0.0 && cuts == 0 && crosses(cut_level, true, false) {
-            Some((cut_level, 1))
-        } else if cut_level > 0.0 && cuts == 1 && crosses(cut_level, false, true) {
-            Some((cut_level, 2))
-        } else if peak.is_some() && cuts < 3 && crosses(0.0, false, true) {
-            Some((0.0, 3))
+        let cut_level = self.cut_level;
+        let (level, count) = if cut_level > 0.0 && self.cuts == 0 && crosses(cut_level, true, false) {
+            (cut_level, 1)
+        } else if cut_level > 0.0 && self.cuts == 1 && crosses(cut_level, false, true) {
+            (cut_level, 2)
+        } else if self.peak.is_some() && self.cuts < 3 && crosses(0.0, false, true) {
+            (0.0, 3)
         } else {
-            None
+            return None;
         };
-        let cut = match hit {
-            Some((level, count)) => {
-                cuts = count;
-                let t = events::refine(clock.integrator(), span, 0, W, level).map_err(|e| with_context(&clock, e))?;
-                let z = clock.integrator().dense(t, 0).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?;
-                let velocity = first3(&clock.integrator().dense(t, 1).map(<[f64]>::to_vec).map_err(|e| with_context(&clock, e))?);
-                let y = first3(&z);
-                restart_safe(drr, limits.w_tolerance, &y, velocity[W].abs().max(rise_rate)).then_some((t, z, velocity))
-            }
-            None => None,
-        };
-        if let Some((t, z, velocity)) = cut {
-            let phi = fundamental_of(&z);
-            fundamental = phi * fundamental;
-            section_jacobian = section_map(&phi, &velocity) * section_jacobian;
-            let y = first3(&z);
-            let at = clock.global(t);
-            clock.reinit(at, &Variational::<Drr, 3>::initial(&y)).map_err(|e| with_context(&clock, e))?;
-            rebase_pending = false;
-            prev = Sample { t: 0.0, y, d: velocity };
-        } else if rebase_pending && next.y[W] > 0.0 && restart_safe(drr, limits.w_tolerance, &y, rise_rate) {
-            rebase_pending = false;
-            clock.rebase().map_err(|e| with_context(&clock, e))?;
-            prev = Sample { t: 0.0, ..next };
-        } else {
-            prev = next;
-        }
+        self.cuts = count;
+        Some(level)
     }
+
+    /// Ends the step: at a due cut where a restart is safe, the segment's Φ goes into the
+    /// products and the integration restarts there with Φ = I; after a v maximum, the clock
+    /// re-bases at the first safe step end above v = 1; otherwise the step end becomes the
+    /// previous sample.
+    fn cut_or_rebase(&mut self, clock: &mut Clock, drr: &Drr, next: Sample) -> Result<(), SolverError> {
+        if let Some(level) = self.due_cut(&next) {
+            let t = refine(clock, (self.prev.t, next.t), 0, level)?;
+            let z = dense(clock, t, 0)?;
+            let velocity = first3(&dense(clock, t, 1)?);
+            let y = first3(&z);
+            if restart_safe(drr, self.limits.w_tolerance, &y, velocity[W].abs().max(self.rise_rate)) {
+                let phi = fundamental_of(&z);
+                self.fundamental = phi * self.fundamental;
+                self.section_jacobian = section_map(&phi, &velocity) * self.section_jacobian;
+                let at = clock.global(t);
+                clock.reinit(at, &Variational::<Drr, 3>::initial(&y)).map_err(|e| in_global_time(clock, e))?;
+                self.rebase_pending = false;
+                self.prev = Sample { t: 0.0, y, d: velocity };
+                return Ok(());
+            }
+        }
+        if self.rebase_pending && next.y[W] > 0.0 && restart_safe(drr, self.limits.w_tolerance, &next.y, self.rise_rate) {
+            self.rebase_pending = false;
+            clock.rebase().map_err(|e| in_global_time(clock, e))?;
+            self.prev = Sample { t: 0.0, ..next };
+        } else {
+            self.prev = next;
+        }
+        Ok(())
+    }
+}
+
+/// The step end at local time `t`: the state and the interpolant's derivative; an error if
+/// the augmented state (Φ included) or the derivative is not finite.
+fn sample_step_end(clock: &mut Clock, t: f64) -> Result<Sample, AnalysisError> {
+    let y = first3(clock.state());
+    let d = first3(&dense(clock, t, 1)?);
+    if clock.state().iter().chain(&d).any(|v| !v.is_finite()) {
+        return Err(AnalysisError::Failed {
+            analysis: "the return to the section v = 1",
+            t: clock.now().to_f64(),
+            state: y.to_vec(),
+            message: format!(
+                "{} accepted a step to a non-finite state, Φ or dy/dt (dy/dt = {d:?}); the model or its variational equations have left the range of doubles",
+                clock.name()
+            ),
+        });
+    }
+    Ok(Sample { t, y, d })
+}
+
+/// An integrator failure in global time, with the state without Φ.
+fn in_global_time(clock: &Clock, e: SolverError) -> SolverError {
+    let mut e = clock.at_global(e);
+    e.state.truncate(3);
+    e
+}
+
+/// The k-th derivative of the interpolant (the augmented state) at local time `t`.
+fn dense(clock: &mut Clock, t: f64, k: u32) -> Result<Vec<f64>, SolverError> {
+    let z = clock.integrator().dense(t, k).map(<[f64]>::to_vec);
+    z.map_err(|e| in_global_time(clock, e))
+}
+
+/// Where the k-th derivative of w crosses `level` inside `span` of the last step.
+fn refine(clock: &mut Clock, span: (f64, f64), k: u32, level: f64) -> Result<f64, SolverError> {
+    let t = events::refine(clock.integrator(), span, k, W, level);
+    t.map_err(|e| in_global_time(clock, e))
 }
 
 /// Φ from an augmented state of the variational equations.

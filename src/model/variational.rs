@@ -15,6 +15,14 @@
 //! which need the exact Jacobian: at γ = 1e8 the absolute error (~1e6 against entries ~γ²)
 //! made Rodas5P take 0.5 M steps per period.
 //!
+//! For methods that use the Jacobian only in a Newton iteration (Radau5), [`Variational::for_newton`]
+//! leaves the coupling block ∂(JΦ)/∂y out: the iteration matrix is then block diagonal (J on y
+//! and on each column of Φ). The iteration still converges (Φ's equations are linear given y,
+//! so Φ follows y's iterates) to the same stage values, to the Newton tolerance. The block must go in
+//! a stiff stick: its entries are (∂J/∂y)Φ ≈ γ²e^(−w)Φ_w/ξ, 7e29 at the ageing law's
+//! earthquake stick (γ = 1e8, ln v = −31.7), where Radau5's Newton iteration failed with it
+//! ("Newton failed 10 times in one step", h ≈ 1e-5) and converges without it (docs/shooting.md).
+//!
 //! Reference: E. Hairer, S. P. Nørsett, G. Wanner, *Solving Ordinary Differential Equations I*,
 //! §I.14 (variational equations).
 
@@ -26,6 +34,8 @@ use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem};
 #[derive(Debug, Clone, Copy)]
 pub struct Variational<S, const N: usize> {
     system: S,
+    /// Whether the Jacobian includes ∂(JΦ)/∂y (false: [`Variational::for_newton`]).
+    coupled: bool,
 }
 
 impl<S: OdeSystem, const N: usize> Variational<S, N> {
@@ -36,7 +46,17 @@ impl<S: OdeSystem, const N: usize> Variational<S, N> {
     pub fn new(system: S) -> Self {
         assert_eq!(system.dim(), N, "Variational<_, N>: the system's dimension must be N");
         assert!(system.has_jacobian(), "Variational needs the system's analytic Jacobian");
-        Self { system }
+        Self { system, coupled: true }
+    }
+
+    /// Wraps `system` with a Jacobian for Newton iterations only: without the block
+    /// ∂(JΦ)/∂y (see the module documentation). Not for Rosenbrock or linearly implicit
+    /// methods, whose results depend on the exact Jacobian.
+    ///
+    /// # Panics
+    /// As [`Variational::new`].
+    pub fn for_newton(system: S) -> Self {
+        Self { coupled: false, ..Self::new(system) }
     }
 
     /// The wrapped system.
@@ -108,6 +128,9 @@ impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
                     jac.set(N + block * N + row, N + block * N + col, entry);
                 }
             }
+        }
+        if !self.coupled {
+            return;
         }
         // ∂(JΦ)/∂y_k: the system's ∂J/∂y_k, or central differences of J.
         let mut yk = [0.0; N];
@@ -190,6 +213,33 @@ mod tests {
                     assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{state_law:?} η={eta} ({row},{col}): {exact} vs {fd}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn the_newton_jacobian_is_the_exact_one_without_the_coupling_block() {
+        for (_, state_law) in StateLaw::ALL {
+            let drr = Drr::new(DrrParams { state_law, ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log) });
+            let mut z = Variational::<Drr, 3>::initial(&[37.0, -31.6, 1.9]);
+            z[4] = -0.8;
+            let n = 12;
+            let (mut exact, mut newton) = (vec![0.0; n * n], vec![0.0; n * n]);
+            Variational::<_, 3>::new(drr).jacobian(0.0, &z, &mut JacobianMatrix::new(&mut exact, n));
+            Variational::<_, 3>::for_newton(drr).jacobian(0.0, &z, &mut JacobianMatrix::new(&mut newton, n));
+            let mut coupling = 0.0f64;
+            for col in 0..n {
+                for row in 0..n {
+                    let (e, w) = (exact[col * n + row], newton[col * n + row]);
+                    if row >= 3 && col < 3 {
+                        assert_eq!(w, 0.0, "{state_law:?} ({row},{col})");
+                        coupling = coupling.max(e.abs());
+                    } else {
+                        assert_eq!(w, e, "{state_law:?} ({row},{col})");
+                    }
+                }
+            }
+            // What is left out: entries ~γ²e^(−w)Φ_w/ξ in this stick.
+            assert!(coupling > 1e28, "{state_law:?}: {coupling:e}");
         }
     }
 }

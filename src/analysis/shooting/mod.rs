@@ -68,7 +68,7 @@ pub struct Multiplier {
 
 /// A periodic orbit found by shooting.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Orbit {
+pub struct PeriodicOrbit {
     /// The orbit's point on the section: (u, v = 1, θ).
     pub section_point: [f64; 3],
     /// Period (for a doubled orbit, the full period: two returns).
@@ -108,7 +108,7 @@ pub struct Orbit {
     pub steps_per_period: u64,
 }
 
-impl Orbit {
+impl PeriodicOrbit {
     /// The non-trivial multipliers.
     pub fn nontrivial(&self) -> &[Multiplier] {
         &self.multipliers[1..]
@@ -137,7 +137,7 @@ pub struct PeriodDoubling {
     /// The real multiplier below −1.
     pub multiplier: f64,
     /// The doubled orbit, if found.
-    pub doubled: Option<Orbit>,
+    pub doubled: Option<PeriodicOrbit>,
     /// What happened in the search for it.
     pub note: String,
 }
@@ -148,7 +148,7 @@ pub struct ShootingReport {
     /// Whether Newton converged.
     pub converged: bool,
     /// The periodic orbit (when converged).
-    pub orbit: Option<Orbit>,
+    pub orbit: Option<PeriodicOrbit>,
     /// Why it did not converge.
     #[serde(serialize_with = "display")]
     pub failure: Option<NoOrbit>,
@@ -194,7 +194,7 @@ pub enum NoOrbit {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Newton {
     /// The orbit, when converged.
-    pub orbit: Result<Orbit, NoOrbit>,
+    pub orbit: Result<PeriodicOrbit, NoOrbit>,
     /// The iterations.
     pub iterations: Vec<Iteration>,
 }
@@ -264,7 +264,7 @@ fn section_multipliers(dp: &Matrix2<f64>) -> Vec<Multiplier> {
     mu
 }
 
-fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> Orbit {
+fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> PeriodicOrbit {
     let monodromy = rs.iter().fold(Matrix3::identity(), |acc, r| r.fundamental * acc);
     let dp = map_jacobian(rs);
     let trivial = trivial_multiplier(&monodromy);
@@ -274,7 +274,7 @@ fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> O
     mu.insert(0, trivial);
     let highest = rs.iter().max_by(|a, b| a.peak[W].total_cmp(&b.peak[W])).unwrap_or(&rs[0]);
     let ln_v_max = highest.peak[W];
-    Orbit {
+    PeriodicOrbit {
         section_point: [x[0], 1.0, x[1]],
         period: rs.iter().map(|r| r.period).sum(),
         returns_per_period: rs.len(),
@@ -410,14 +410,14 @@ pub fn analyse(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], settings: &S
 }
 
 /// The flip multiplier of an orbit, if a non-trivial real one is below −1.
-pub fn flip_multiplier(orbit: &Orbit) -> Option<f64> {
+pub fn flip_multiplier(orbit: &PeriodicOrbit) -> Option<f64> {
     orbit.negative_real_multiplier().filter(|&mu| mu < -1.0)
 }
 
 fn period_doubling(
     integ: &mut dyn Integrator,
     drr: &Drr,
-    orbit: &Orbit,
+    orbit: &PeriodicOrbit,
     settings: &ShootingSettings,
 ) -> Result<Option<PeriodDoubling>, AnalysisError> {
     let Some(mu) = flip_multiplier(orbit) else { return Ok(None) };
