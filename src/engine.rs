@@ -74,12 +74,9 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // with 3 iterations, at 1.2× the steps; 5 iterations cost the same as before); 1e-4
     // fails in the earthquake scene's initial layer, where the round-off of G sets a floor.
     let dirk = spec.method == Method::ArkodeDirk;
-    // ln v's error weight is rtol + atol (a relative error rtol in v), not rtol·|ln v| + atol,
-    // which loosens with the depth of the arrest and the height of the slip (docs/robustness.md).
     let options = &Options {
         max_step: Some(max_step),
         max_err_test_fails: Some(20),
-        logarithmic: vec![W],
         initial_step,
         jacobian_max_age,
         nonlin_conv_coef: dirk.then_some(1e-3),

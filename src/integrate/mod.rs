@@ -18,7 +18,7 @@ pub use clock::{Clock, ClockStep, Time};
 pub use error::{ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
-pub use options::{magnitude, Options, Tolerance, DEFAULT_MAX_STEPS};
+pub use options::{Options, Tolerance, DEFAULT_MAX_STEPS};
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
 #[cfg(test)]
 pub(crate) use problem::jacobian_against_differences;

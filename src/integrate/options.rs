@@ -16,16 +16,6 @@ pub enum Tolerance {
 /// (docs/test-set.md) and still bounds a runaway run to seconds for small systems.
 pub const DEFAULT_MAX_STEPS: i64 = 1_000_000;
 
-/// The size a relative tolerance multiplies in the error weight rtol·size + atol of a
-/// component whose value is `y`: |y|, or 1 for a logarithmic one ([`Options::logarithmic`]).
-pub fn magnitude(y: f64, logarithmic: bool) -> f64 {
-    if logarithmic {
-        1.0
-    } else {
-        y.abs()
-    }
-}
-
 /// Integrator options. `None` keeps the integrator's own default.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
@@ -33,10 +23,6 @@ pub struct Options {
     pub rtol: f64,
     /// Absolute tolerance (≥ 0, finite).
     pub atol: Tolerance,
-    /// Components that are logarithms (ln v): their error weight is rtol + atol_i (a relative
-    /// error of rtol in v) instead of rtol·|y_i| + atol_i, which would loosen with |ln v| and
-    /// depend on v's unit. Empty: every component scales with its size (see [`magnitude`]).
-    pub logarithmic: Vec<usize>,
     /// Maximum number of internal steps per call to `advance` (as SUNDIALS' `mxstep`): a call
     /// that needs more fails with [`crate::integrate::ErrorKind::TooMuchWork`] at the last
     /// step reached, from where a further call may go on. `None` is [`DEFAULT_MAX_STEPS`] for
@@ -84,7 +70,6 @@ impl Options {
         Self {
             rtol,
             atol,
-            logarithmic: Vec::new(),
             max_steps: None,
             max_order: None,
             initial_step: None,
@@ -98,18 +83,6 @@ impl Options {
             jacobian_max_age: None,
             fail_on_step_underflow: true,
         }
-    }
-
-    /// Per component, whether it is logarithmic ([`Options::logarithmic`]), for a system of
-    /// dimension `dim` (indices already validated).
-    pub fn logarithmic_mask(&self, dim: usize) -> Vec<bool> {
-        let mut mask = vec![false; dim];
-        for &i in &self.logarithmic {
-            if let Some(m) = mask.get_mut(i) {
-                *m = true;
-            }
-        }
-        mask
     }
 
     /// Checks the options against a system of dimension `dim`; the error names the field.
@@ -128,9 +101,6 @@ impl Options {
                 return Err(format!("atol = {v:?}: every component must be finite and ≥ 0"));
             }
             _ => {}
-        }
-        if let Some(i) = self.logarithmic.iter().find(|&&i| i >= dim) {
-            return Err(format!("logarithmic component {i}: the system has {dim} components (indices 0 … {})", dim.saturating_sub(1)));
         }
         let positive = [
             ("initial_step", self.initial_step),
@@ -166,25 +136,5 @@ impl Options {
             }
         }
         Ok(())
-    }
-}
-
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_logarithmic_component_outside_the_system_is_refused_by_name() {
-        let options = Options { logarithmic: vec![3], ..Options::new(1e-6, Tolerance::Scalar(1e-8)) };
-        let err = options.validate(3).unwrap_err();
-        assert!(err.contains("logarithmic component 3"), "{err}");
-        assert_eq!(options.logarithmic_mask(4), vec![false, false, false, true]);
-    }
-
-    #[test]
-    fn a_logarithmic_component_weighs_as_size_one() {
-        assert_eq!(magnitude(-130.0, true), 1.0);
-        assert_eq!(magnitude(-130.0, false), 130.0);
     }
 }

@@ -37,7 +37,7 @@
 use super::linalg::{lu_real, rms, solve_real};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{
-    magnitude, ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
@@ -424,7 +424,7 @@ impl<S: OdeSystem> Radau5<S> {
 
     fn update_scal(&mut self) {
         for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * magnitude(self.core.y[i], self.core.logarithmic[i]);
+            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
             self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
         }
     }

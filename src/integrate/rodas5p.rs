@@ -45,7 +45,7 @@
 use super::linalg::{lu_real, rms, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{
-    magnitude, ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
     Tolerance,
 };
 
@@ -272,11 +272,10 @@ impl<S: OdeSystem> Rodas5p<S> {
         &self.system
     }
 
-    /// Error weights atol + rtol·max(|y|, |other|) into `work.scal` (1 for |·| of a
-    /// logarithmic component, [`magnitude`]).
-    fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, logarithmic: &[bool], y: &[f64], other: &[f64]) {
+    /// Error weights atol + rtol·max(|y|, |other|) into `work.scal`.
+    fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, y: &[f64], other: &[f64]) {
         for i in 0..scal.len() {
-            let s = atol[i] + rtol * magnitude(y[i], logarithmic[i]).max(magnitude(other[i], logarithmic[i]));
+            let s = atol[i] + rtol * y[i].abs().max(other[i].abs());
             scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
         }
     }
@@ -285,7 +284,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// estimate's order), measured with the weights atol + rtol·|y0|.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.logarithmic, &self.core.y, &self.core.y);
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &self.core.y);
         let d0 = rms(&self.core.y, &w.scal);
         let d1 = rms(&self.core.f0, &w.scal);
         let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
@@ -418,7 +417,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn estimate_error(&mut self) -> f64 {
         let n = self.n;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.logarithmic, &self.core.y, &w.ynew);
+        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &w.ynew);
         let err = rms(&w.k[(STAGES - 1) * n..], &w.scal);
         if err.is_finite() {
             err

@@ -50,8 +50,6 @@ pub(super) struct Core {
     /// Buffer of [`dense`].
     pub dense: Vec<f64>,
     pub stats: Stats,
-    /// Per component, whether its error weight ignores its size ([`Options::logarithmic`]).
-    pub logarithmic: Vec<bool>,
 }
 
 impl Core {
@@ -119,7 +117,6 @@ impl Core {
             y_out: y0.to_vec(),
             dense: vec![0.0; n],
             stats,
-            logarithmic: options.logarithmic_mask(n),
         })
     }
 

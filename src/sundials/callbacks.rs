@@ -132,37 +132,6 @@ pub(crate) struct Shared<S> {
     pub roots: Option<RootFunction>,
     pub root_count: usize,
     pub diag: Diagnostics,
-    /// The tolerances [`error_weights`] applies (only when some component is logarithmic).
-    pub weights: Option<ErrorWeights>,
-}
-
-/// Tolerances for [`error_weights`]: rtol, one atol per component, and which components are
-/// logarithmic ([`crate::integrate::Options::logarithmic`]).
-pub(crate) struct ErrorWeights {
-    pub rtol: f64,
-    pub atol: Vec<f64>,
-    pub logarithmic: Vec<bool>,
-}
-
-/// SUNDIALS' error-weight function (CVEwtFn / ARKEwtFn, the same in 6.x and 7.x):
-/// ewt_i = 1/(rtol·|y_i| + atol_i), with 1 for |y_i| in a logarithmic component
-/// ([`crate::integrate::magnitude`]). Returns −1 (SUNDIALS then stops with an illegal-input
-/// error, as with its own weights) where a weight would be infinite or not finite.
-pub(crate) unsafe extern "C" fn error_weights<S>(y: ffi::N_Vector, ewt: ffi::N_Vector, data: *mut c_void) -> c_int {
-    // SAFETY: `data` is the `Shared<S>` registered as user data, alive for the solver's life;
-    // only read here.
-    let shared = unsafe { &*(data as *const Shared<S>) };
-    let Some(w) = &shared.weights else { return -1 };
-    // SAFETY: `y` and `ewt` are distinct serial vectors of length `dim`, valid for this call.
-    let (y, ewt) = unsafe { (slice(y, shared.dim), slice_mut(ewt, shared.dim)) };
-    for (i, e) in ewt.iter_mut().enumerate() {
-        let d = w.rtol * crate::integrate::magnitude(y[i], w.logarithmic[i]) + w.atol[i];
-        if !(d > 0.0 && d.is_finite()) {
-            return -1;
-        }
-        *e = 1.0 / d;
-    }
-    0
 }
 
 /// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.

@@ -1,7 +1,7 @@
 //! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
 //! table of their functions ([`Api`]) lets a single implementation drive either.
 
-use super::callbacks::{self, Diagnostics, ErrorWeights, Shared};
+use super::callbacks::{self, Diagnostics, Shared};
 use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
@@ -24,8 +24,6 @@ pub(crate) struct Api {
     pub set_err_handler: unsafe extern "C" fn(Mem, ffi::CVErrHandlerFn, *mut c_void) -> c_int,
     pub ss_tolerances: unsafe extern "C" fn(Mem, f64, f64) -> c_int,
     pub sv_tolerances: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
-    /// Sets a user error-weight function (`*WFtolerances`).
-    pub wf_tolerances: unsafe extern "C" fn(Mem, ffi::CVEwtFn) -> c_int,
     pub set_linear_solver: unsafe extern "C" fn(Mem, ffi::SUNLinearSolver, ffi::SUNMatrix) -> c_int,
     pub set_jac_fn: unsafe extern "C" fn(Mem, ffi::CVLsJacFn) -> c_int,
     pub root_init: unsafe extern "C" fn(Mem, c_int, ffi::CVRootFn) -> c_int,
@@ -155,17 +153,7 @@ impl<S> Solver<S> {
             let log = ctx.warning_log().map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
             diag.warning_log = Some(log);
         }
-        // Logarithmic components need SUNDIALS' error weights replaced by ours.
-        let weights = (!options.logarithmic.is_empty()).then(|| ErrorWeights {
-            rtol: options.rtol,
-            atol: match &options.atol {
-                Tolerance::Scalar(a) => vec![*a; dim],
-                Tolerance::PerComponent(v) => v.clone(),
-            },
-            logarithmic: options.logarithmic_mask(dim),
-        });
-        let own_weights = weights.is_some();
-        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag, weights });
+        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -207,9 +195,6 @@ impl<S> Solver<S> {
         // SAFETY: `m` is live solver memory; the setter only stores a scalar option.
         solver.check(unsafe { (api.set_max_hnil_warns)(m, c_int::MAX) })?;
         match &atol {
-            // SAFETY: `m` is live and its user data (set above) is the `Shared<S>` the
-            // weight function reads; SUNDIALS passes it the solver's own vectors.
-            _ if own_weights => solver.check(unsafe { (api.wf_tolerances)(m, Some(callbacks::error_weights::<S>)) })?,
             // SAFETY: `m` is live; the tolerance vector is kept alive in `_atol` below.
             Some(v) => solver.check(unsafe { (api.sv_tolerances)(m, options.rtol, v.raw()) })?,
             None => {

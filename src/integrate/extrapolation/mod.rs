@@ -102,7 +102,7 @@ mod tableau;
 
 use super::linalg::rms;
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
-use super::{magnitude, ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
+use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
@@ -353,7 +353,7 @@ impl<S: OdeSystem> Extrapolation<S> {
 
     fn update_scal(&mut self) {
         for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * magnitude(self.core.y[i], self.core.logarithmic[i]);
+            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
             self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
         }
     }

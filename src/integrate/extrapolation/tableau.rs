@@ -6,7 +6,7 @@
 
 use super::{Extrapolation, Mode};
 use crate::integrate::stepper::UROUND;
-use crate::integrate::{magnitude, OdeSystem};
+use crate::integrate::OdeSystem;
 
 /// Maximal tableau sizes (SEULEX: 12 columns, ODEX: 9).
 pub(super) const KM_IMPLICIT: usize = 12;
@@ -222,8 +222,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             let d = (w.t[1][i] - w.t[2][i]).abs();
             if explicit {
                 // ODEX's weights: atol + rtol·max(|y0|, |y1|).
-                let log = self.core.logarithmic[i];
-                let s = self.atol[i] + self.rtol * magnitude(self.core.y[i], log).max(magnitude(w.t[1][i], log));
+                let s = self.atol[i] + self.rtol * self.core.y[i].abs().max(w.t[1][i].abs());
                 self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
                 sum += (d / self.scal[i]).powi(2);
             } else {
