@@ -41,6 +41,10 @@ pub(super) struct Core {
     /// An accepted step exists since the last (re)start: the dense output is valid.
     pub have_step: bool,
     pub reject: bool,
+    /// In the current step, h was cut to the local time scale of f after a non-finite stage
+    /// (Rodas5P): a step underflow that follows is a layer sharper than the clock, not steps
+    /// shrinking onto a point where f turns non-finite.
+    pub layer_step: bool,
     /// The internal point x is a stop time that a call has not returned yet (a step ended
     /// there while the call returned an earlier tout).
     pub stop_pending: bool,
@@ -112,6 +116,7 @@ impl Core {
             xold: t0,
             have_step: false,
             reject: false,
+            layer_step: false,
             stop_pending: false,
             t_out: t0,
             y_out: y0.to_vec(),
@@ -412,12 +417,14 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
         // trial point of one of them, it stays a step underflow, which the Clock cures by
         // re-basing (measured: radau5 at rtol 1e-4, γ = 1e8, ξ = 2, ε = 5 from v = 1e30, one
         // non-finite Newton iterate among the rejections of a step collapsing to 4e-16 at
-        // local t = 0.63; docs/robustness.md).
+        // local t = 0.63; docs/robustness.md). Likewise when Rodas5P cut h to the local time
+        // scale of f after a non-finite stage (`layer_step`): the layer is sharper than the
+        // clock, and the Clock's re-base lets the step be taken.
         let nonfinite = c.stats.nonfinite_rhs - before.nonfinite_rhs;
         if nonfinite > 0 {
             let attempts = c.stats.step_attempts.saturating_sub(before.step_attempts);
             let failed = attempts.saturating_sub(c.stats.steps.saturating_sub(before.steps));
-            let from_rhs = e.kind != ErrorKind::StepUnderflow || 2 * nonfinite >= failed;
+            let from_rhs = e.kind != ErrorKind::StepUnderflow || (2 * nonfinite >= failed && !c.layer_step);
             if e.kind != ErrorKind::InvalidInput && from_rhs {
                 e.kind = ErrorKind::RhsFailure;
             }
