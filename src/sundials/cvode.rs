@@ -125,6 +125,7 @@ static CVODE: Api = Api {
     set_jacobian_max_age,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
+    get_num_steps: ffi::CVodeGetNumSteps,
     read_stats,
     classify,
 };

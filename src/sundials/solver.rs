@@ -1,7 +1,7 @@
 //! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
 //! table of their functions ([`Api`]) lets a single implementation drive either.
 
-use super::callbacks::{self, Diagnostics, Shared};
+use super::callbacks::{self, Diagnostics, Shared, StepEnds};
 use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
@@ -46,6 +46,8 @@ pub(crate) struct Api {
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
     pub reinit_resets_counters: bool,
+    /// Reads the step counter alone (without the other getters' error reports).
+    pub get_num_steps: unsafe extern "C" fn(Mem, *mut c_long) -> c_int,
     /// Reads the raw counters (linear-solver ones only when there is a linear solver: asking
     /// otherwise goes through the error handler).
     pub read_stats: unsafe fn(Mem, bool) -> Stats,
@@ -153,7 +155,7 @@ impl<S> Solver<S> {
             let log = ctx.warning_log().map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
             diag.warning_log = Some(log);
         }
-        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag });
+        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag, step_ends: None });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -336,6 +338,11 @@ impl<S> Solver<S> {
             // SAFETY: as above.
             flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         }
+        if flag < 0 {
+            // Located at the last accepted point, whose state SUNDIALS returned (ARKStep
+            // returns the failed attempt's stage time with it).
+            t = self.last_accepted_end().unwrap_or(t);
+        }
         self.t = t;
         self.stepped |= t != t_before;
         self.shared_mut().diag.poll_warnings();
@@ -385,6 +392,32 @@ impl<S> Solver<S> {
         };
         self.at_step_end = task == Task::OneStep && !matches!(event, StepEvent::Root(_));
         Ok(Step { t, event })
+    }
+
+    /// Where the last accepted step ended, when the post-step function keeps it (ARKStep).
+    fn last_accepted_end(&self) -> Option<f64> {
+        let ends = self.shared().step_ends?;
+        ends.last_accepted(self.raw_steps())
+    }
+
+    /// The solver's own step counter (since construction; a restart may reset it).
+    fn raw_steps(&self) -> u64 {
+        let mut steps: c_long = 0;
+        // SAFETY: live solver memory; the getter writes one long.
+        unsafe { (self.api.get_num_steps)(self.mem.as_ptr(), &mut steps) };
+        steps.max(0) as u64
+    }
+
+    /// Registers the post-step function that keeps the ends of the accepted steps, through
+    /// which a failure is located ([`StepEnds`]); `set` is ARKODE's setter. Call after the user
+    /// data is set (ARKODE hands the post-step function the user data current at this call).
+    pub(crate) fn keep_step_ends(&mut self, set: unsafe extern "C" fn(Mem, ffi::ARKPostProcessFn) -> c_int) -> Result<(), SolverError> {
+        let start = StepEnds::new(self.t, self.raw_steps());
+        self.shared_mut().step_ends = Some(start);
+        // SAFETY: `mem` is live ARKODE memory whose user data is the boxed `Shared<S>` the
+        // trampoline casts to; it stays alive until after the memory is freed.
+        self.check(unsafe { set(self.mem.as_ptr(), Some(callbacks::step_end::<S>)) })?;
+        Ok(())
     }
 
     /// The typed error for `fail_on_step_underflow`, quoting SUNDIALS' last "t + h = t" warning.
@@ -519,6 +552,10 @@ impl<S> Solver<S> {
         self.check(flag)?;
         if self.api.reinit_resets_counters {
             self.counters_before_reinit.accumulate(&before);
+        }
+        if self.shared().step_ends.is_some() {
+            let start = StepEnds::new(t0, self.raw_steps());
+            self.shared_mut().step_ends = Some(start);
         }
         self.t = t0;
         self.stepped = false;
