@@ -277,8 +277,14 @@ fn a_failure_is_located_at_the_last_good_point_arkode_erk() {
     let mut integ = build();
     let e = integ.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
+    assert!(e.message.contains("tries no smaller step"), "the why: {e}");
     assert!(e.t <= 0.5 && (e.state[0] - (-e.t).exp()).abs() < 1e-6, "{e}");
     assert_eq!((integ.t(), integ.state()), (e.t, &e.state[..]));
+    // Dense output at the failure point is the state (ARKStep's own interpolant spans the
+    // failed attempt then: 0.6245 here, against the state 0.6135), and nothing else is served.
+    assert_eq!(integ.dense(e.t, 0).unwrap(), &e.state[..]);
+    assert!((integ.dense(e.t, 1).unwrap()[0] + e.state[0]).abs() < 1e-15);
+    assert_eq!(integ.dense(e.t - 1e-3, 0).unwrap_err().kind, ErrorKind::InvalidInput);
     // Exactly the last step's end, as one-step mode sees it.
     let ((t, y), e) = last_point_and_error(build());
     assert_eq!((e.t, e.state), (t, y));

@@ -249,6 +249,14 @@ fn classify(flag: c_int) -> ErrorKind {
     }
 }
 
+/// What ARKStep's return codes leave unsaid.
+fn explain(flag: c_int) -> Option<&'static str> {
+    // ARKStep retries a smaller step only when f fails inside a Newton iteration; after an
+    // explicit stage, or the evaluation that follows a converged implicit stage, it stops.
+    (flag == ffi::ARK_UNREC_RHSFUNC_ERR)
+        .then_some("ARKStep tries no smaller step when f fails at an explicit stage or after an implicit stage's solve")
+}
+
 /// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
 /// for ERK) leave their counter at zero.
 unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
@@ -339,6 +347,7 @@ static ARKSTEP: Api = Api {
     get_num_steps: ark::GetNumSteps,
     read_stats,
     classify,
+    explain,
 };
 
 fn dimension_error(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {

@@ -128,6 +128,7 @@ static CVODE: Api = Api {
     get_num_steps: ffi::CVodeGetNumSteps,
     read_stats,
     classify,
+    explain: |_| None,
 };
 
 impl<S: OdeSystem> Solver<S> {

@@ -53,6 +53,8 @@ pub(crate) struct Api {
     pub read_stats: unsafe fn(Mem, bool) -> Stats,
     /// Maps a negative return code to an error kind.
     pub classify: fn(c_int) -> ErrorKind,
+    /// Why the solver stopped, for return codes whose kind and SUNDIALS message leave it out.
+    pub explain: fn(c_int) -> Option<&'static str>,
 }
 
 /// A SUNDIALS integrator (CVODE or ARKStep) for the system `S`, built by
@@ -82,8 +84,9 @@ pub struct Solver<S> {
     rebased: bool,
     /// See [`Creation::rhs`].
     rhs: fn(&S, f64, &[f64], &mut [f64]),
-    /// Whether a step was taken since construction or the last restart: before that, dense
-    /// output holds only (t0, y0, f(t0, y0)).
+    /// Whether a step was taken since construction, the last restart or a failure located
+    /// before SUNDIALS' own time (see `advance`): otherwise dense output holds only the point
+    /// (t, y, f(t, y)).
     stepped: bool,
     /// Whether the last return was the end of the last internal step. After an interpolated
     /// return SUNDIALS' one-step mode returns that step's end without taking a step; the
@@ -338,13 +341,17 @@ impl<S> Solver<S> {
             // SAFETY: as above.
             flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         }
-        if flag < 0 {
-            // Located at the last accepted point, whose state SUNDIALS returned (ARKStep
-            // returns the failed attempt's stage time with it).
-            t = self.last_accepted_end().unwrap_or(t);
-        }
+        // A failure is located at the last accepted point, whose state SUNDIALS returned
+        // (ARKStep returns the failed attempt's stage time with it).
+        let located = if flag < 0 { self.last_accepted_end().filter(|tn| *tn != t) } else { None };
+        t = located.unwrap_or(t);
         self.t = t;
         self.stepped |= t != t_before;
+        if located.is_some() {
+            // ARKStep's interpolant now spans the failed attempt: dense output falls back to
+            // the point itself until the next step.
+            self.stepped = false;
+        }
         self.shared_mut().diag.poll_warnings();
         let (nonfinite, underflows) = self.shared_mut().diag.since_call();
         if self.shared().diag.stopped_for_underflow {
@@ -370,6 +377,9 @@ impl<S> Solver<S> {
             }
             if nonfinite > 0 {
                 e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            }
+            if let Some(why) = (self.api.explain)(e.flag) {
+                e.message.push_str(&format!(" [{why}]"));
             }
             if underflows > 0 {
                 e.message.push_str(&format!(" [{underflows} steps below the spacing of t (t + h = t)]"));
@@ -440,15 +450,16 @@ impl<S> Solver<S> {
     /// The k-th derivative of the interpolated solution at `t`, which must lie within the last
     /// internal step (dense output).
     ///
-    /// Before any step (since construction or a restart) only t = t0 with k ≤ 1 is held: the
-    /// state and f(t0, y0). A non-finite `t` is invalid input.
+    /// Before any step (since construction, a restart, or an ARKStep failure located before
+    /// the failed attempt) only the current t with k ≤ 1 is held: the state and f(t, y). A
+    /// non-finite `t` is invalid input.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
         if !t.is_finite() {
             return Err(self.error(ErrorKind::InvalidInput, 0, format!("dense output needs a finite t, got {t}")));
         }
         if !self.stepped {
             if t != self.t || k > 1 {
-                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1, got t = {t:e}, k = {k}", self.t);
+                let message = format!("no step taken yet (or since a failure): dense output only at t = {:e} with k ≤ 1, got t = {t:e}, k = {k}", self.t);
                 return Err(self.error(ErrorKind::InvalidInput, 0, message));
             }
             let mut value = self.y.as_slice().to_vec();
