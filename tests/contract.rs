@@ -285,6 +285,10 @@ fn a_failure_is_located_at_the_last_good_point_arkode_erk() {
     assert_eq!(integ.dense(e.t, 0).unwrap(), &e.state[..]);
     assert!((integ.dense(e.t, 1).unwrap()[0] + e.state[0]).abs() < 1e-15);
     assert_eq!(integ.dense(e.t - 1e-3, 0).unwrap_err().kind, ErrorKind::InvalidInput);
+    // It goes on from there, not from inside the failed attempt (which ended at 0.506).
+    integ.set_stop_time(0.495).unwrap();
+    assert_eq!(integ.advance(0.495, Task::Normal).unwrap().t, 0.495);
+    assert!((integ.state()[0] - (-0.495f64).exp()).abs() < 1e-8, "{:?}", integ.state());
     // Exactly the last step's end, as one-step mode sees it.
     let ((t, y), e) = last_point_and_error(build());
     assert_eq!((e.t, e.state), (t, y));

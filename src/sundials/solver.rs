@@ -347,10 +347,17 @@ impl<S> Solver<S> {
         t = located.unwrap_or(t);
         self.t = t;
         self.stepped |= t != t_before;
+        let mut reset_flag = 0;
         if located.is_some() {
-            // ARKStep's interpolant now spans the failed attempt: dense output falls back to
-            // the point itself until the next step.
+            // ARKStep's own time and interpolant still describe the failed attempt, and a later
+            // call with an output time inside it would be interpolated over it: restart at the
+            // point (options and counters kept). Dense output holds the point until a step.
+            // SAFETY: live solver memory; SUNDIALS copies `y`, the state it just returned.
+            reset_flag = unsafe { (self.api.reinit)(self.mem.as_ptr(), t, self.y.raw()) };
+            let start = StepEnds::new(t, self.raw_steps());
+            self.shared_mut().step_ends = Some(start);
             self.stepped = false;
+            self.at_step_end = true;
         }
         self.shared_mut().diag.poll_warnings();
         let (nonfinite, underflows) = self.shared_mut().diag.since_call();
@@ -380,6 +387,9 @@ impl<S> Solver<S> {
             }
             if let Some(why) = (self.api.explain)(e.flag) {
                 e.message.push_str(&format!(" [{why}]"));
+            }
+            if reset_flag < 0 {
+                e.message.push_str(&format!(" [the restart at the failure point failed too (flag {reset_flag}): do not go on]"));
             }
             if underflows > 0 {
                 e.message.push_str(&format!(" [{underflows} steps below the spacing of t (t + h = t)]"));
