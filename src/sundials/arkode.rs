@@ -53,6 +53,7 @@ mod ark {
         ARKodeSetLSetupFrequency as SetLSetupFrequency,
         ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
         ARKodeSetInterpolantType as SetInterpolantType,
+        ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
     };
 }
 #[cfg(not(sundials7))]
@@ -98,6 +99,7 @@ mod ark {
         ARKStepSetLSetupFrequency as SetLSetupFrequency,
         ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
         ARKStepSetInterpolantType as SetInterpolantType,
+        ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
     };
 }
 
@@ -247,6 +249,14 @@ fn classify(flag: c_int) -> ErrorKind {
     }
 }
 
+/// What ARKStep's return codes leave unsaid.
+fn explain(flag: c_int) -> Option<&'static str> {
+    // ARKStep retries a smaller step only when f fails inside a Newton iteration; after an
+    // explicit stage, or the evaluation that follows a converged implicit stage, it stops.
+    (flag == ffi::ARK_UNREC_RHSFUNC_ERR)
+        .then_some("ARKStep tries no smaller step when f fails at an explicit stage or after an implicit stage's solve")
+}
+
 /// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
 /// for ERK) leave their counter at zero.
 unsafe fn read_stats(m: *mut c_void, has_linear_solver: bool) -> Stats {
@@ -334,8 +344,10 @@ static ARKSTEP: Api = Api {
     set_jacobian_max_age,
     reinit: ark::Reset,
     reinit_resets_counters: false,
+    get_num_steps: ark::GetNumSteps,
     read_stats,
     classify,
+    explain,
 };
 
 fn dimension_error(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
@@ -382,6 +394,17 @@ impl<S> Solver<S> {
         if settings.deduce_implicit_rhs {
             // SAFETY: live ARKStep memory; stores a flag.
             self.check(unsafe { ark::SetDeduceImplicitRhs(m, 1) })?;
+        }
+        // A failure is located at the end of the last accepted step (ARKStep itself returns
+        // the failed attempt's stage time with the last accepted state), kept by a post-step
+        // function. Not for DIRK on SUNDIALS 6: with a post-step function set, 6 evaluates
+        // f(t_n, y_n) afresh for the Hermite interpolant at every step end instead of taking
+        // the last stage's (tables with c_s = 1, SDIRK-5-3-4 among them), which costs one
+        // implicit evaluation per step and changes the dense output (docs/debian.md). There
+        // the stage time stays: docs/robustness.md, "Where a failure is located".
+        let dirk_only = tables.1 == ffi::ARKODE_ERKTableID_ARKODE_ERK_NONE;
+        if cfg!(sundials7) || !dirk_only {
+            self.keep_step_ends(ark::SetPostprocessStepFn)?;
         }
         Ok(())
     }

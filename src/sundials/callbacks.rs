@@ -124,14 +124,68 @@ impl Diagnostics {
     }
 }
 
-/// The data behind SUNDIALS' `user_data` pointer: the system, the current root functions and
-/// the diagnostics. Boxed by the solver so its address never changes.
+/// The data behind SUNDIALS' `user_data` pointer: the system, the current root functions, the
+/// diagnostics and (ARKStep) the ends of the last accepted steps. Boxed by the solver so its
+/// address never changes.
 pub(crate) struct Shared<S> {
     pub system: S,
     pub dim: usize,
     pub roots: Option<RootFunction>,
     pub root_count: usize,
     pub diag: Diagnostics,
+    /// Kept by [`step_end`] when it is registered (ARKStep); `None` otherwise (CVODE).
+    pub step_ends: Option<StepEnds>,
+}
+
+/// The ends of the last two steps ARKODE's post-step function saw. On a failure ARKStep returns
+/// the last accepted state with the time of the failed attempt's current stage, so the solver
+/// takes the time from here: the end of the last accepted step, where that state belongs.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct StepEnds {
+    /// Post-step calls since the last (re)start.
+    calls: u64,
+    /// ARKODE's step count at the last (re)start.
+    steps_at_start: u64,
+    /// The ends of the steps of the last two post-step calls (the start time before them).
+    ends: [f64; 2],
+}
+
+impl StepEnds {
+    /// A (re)start at `t0`, with ARKODE's step counter at `steps`.
+    pub fn new(t0: f64, steps: u64) -> Self {
+        Self { calls: 0, steps_at_start: steps, ends: [t0, t0] }
+    }
+
+    /// One post-step call, for a step ending at `t`.
+    fn record(&mut self, t: f64) {
+        self.calls += 1;
+        self.ends = [self.ends[1], t];
+    }
+
+    /// The end of the last accepted step (or the start time), given ARKODE's step count now.
+    /// ARKODE calls the post-step function before it completes the step; a completion that
+    /// then fails (SUNDIALS 6 evaluates f at the new point there) leaves one call more than
+    /// steps, and the state is the one before it. `None` if the counts do not fit together.
+    pub fn last_accepted(&self, steps: u64) -> Option<f64> {
+        match self.calls.checked_sub(steps.checked_sub(self.steps_at_start)?)? {
+            0 => Some(self.ends[1]),
+            1 => Some(self.ends[0]),
+            _ => None,
+        }
+    }
+}
+
+/// ARKODE's post-step function (ARKPostProcessFn): records where each step ends; leaves the
+/// state alone.
+pub(crate) unsafe extern "C" fn step_end<S>(t: f64, _y: ffi::N_Vector, data: *mut c_void) -> c_int {
+    // SAFETY: `data` is the `Shared<S>` registered as user data (ARKODE passes the user data
+    // set before the post-step function), alive for the solver's life; no other reference to
+    // it is alive during a SUNDIALS call.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    if let Some(ends) = shared.step_ends.as_mut() {
+        ends.record(t);
+    }
+    0
 }
 
 /// Calls an RHS-like function and maps the outcome to a SUNDIALS return code.
@@ -330,4 +384,21 @@ pub(crate) unsafe extern "C" fn error_handler(
     // SAFETY: `data` is the `Diagnostics` inside the solver's boxed `Shared<S>`.
     let diag = unsafe { &mut *(data as *mut Diagnostics) };
     diag.record(message, error_code < 0);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::StepEnds;
+
+    #[test]
+    fn the_last_accepted_step_end_follows_the_step_count() {
+        let mut ends = StepEnds::new(1.0, 7);
+        assert_eq!(ends.last_accepted(7), Some(1.0), "no step yet: the start");
+        ends.record(1.5);
+        ends.record(2.0);
+        assert_eq!(ends.last_accepted(9), Some(2.0), "both steps completed");
+        assert_eq!(ends.last_accepted(8), Some(1.5), "the second step's completion failed");
+        assert_eq!(ends.last_accepted(7), None, "counts that do not fit");
+        assert_eq!(ends.last_accepted(6), None, "a counter below the start");
+    }
 }

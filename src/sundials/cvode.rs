@@ -125,8 +125,10 @@ static CVODE: Api = Api {
     set_jacobian_max_age,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
+    get_num_steps: ffi::CVodeGetNumSteps,
     read_stats,
     classify,
+    explain: |_| None,
 };
 
 impl<S: OdeSystem> Solver<S> {

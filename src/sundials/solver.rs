@@ -1,7 +1,7 @@
 //! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
 //! table of their functions ([`Api`]) lets a single implementation drive either.
 
-use super::callbacks::{self, Diagnostics, Shared};
+use super::callbacks::{self, Diagnostics, Shared, StepEnds};
 use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
@@ -46,11 +46,15 @@ pub(crate) struct Api {
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
     pub reinit_resets_counters: bool,
+    /// Reads the step counter alone (without the other getters' error reports).
+    pub get_num_steps: unsafe extern "C" fn(Mem, *mut c_long) -> c_int,
     /// Reads the raw counters (linear-solver ones only when there is a linear solver: asking
     /// otherwise goes through the error handler).
     pub read_stats: unsafe fn(Mem, bool) -> Stats,
     /// Maps a negative return code to an error kind.
     pub classify: fn(c_int) -> ErrorKind,
+    /// Why the solver stopped, for return codes whose kind and SUNDIALS message leave it out.
+    pub explain: fn(c_int) -> Option<&'static str>,
 }
 
 /// A SUNDIALS integrator (CVODE or ARKStep) for the system `S`, built by
@@ -80,8 +84,9 @@ pub struct Solver<S> {
     rebased: bool,
     /// See [`Creation::rhs`].
     rhs: fn(&S, f64, &[f64], &mut [f64]),
-    /// Whether a step was taken since construction or the last restart: before that, dense
-    /// output holds only (t0, y0, f(t0, y0)).
+    /// Whether a step was taken since construction, the last restart or a failure located
+    /// before SUNDIALS' own time (see `advance`): otherwise dense output holds only the point
+    /// (t, y, f(t, y)).
     stepped: bool,
     /// Whether the last return was the end of the last internal step. After an interpolated
     /// return SUNDIALS' one-step mode returns that step's end without taking a step; the
@@ -153,7 +158,7 @@ impl<S> Solver<S> {
             let log = ctx.warning_log().map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
             diag.warning_log = Some(log);
         }
-        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag });
+        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag, step_ends: None });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -336,8 +341,24 @@ impl<S> Solver<S> {
             // SAFETY: as above.
             flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         }
+        // A failure is located at the last accepted point, whose state SUNDIALS returned
+        // (ARKStep returns the failed attempt's stage time with it).
+        let located = if flag < 0 { self.last_accepted_end().filter(|tn| *tn != t) } else { None };
+        t = located.unwrap_or(t);
         self.t = t;
         self.stepped |= t != t_before;
+        let mut reset_flag = 0;
+        if located.is_some() {
+            // ARKStep's own time and interpolant still describe the failed attempt, and a later
+            // call with an output time inside it would be interpolated over it: restart at the
+            // point (options and counters kept). Dense output holds the point until a step.
+            // SAFETY: live solver memory; SUNDIALS copies `y`, the state it just returned.
+            reset_flag = unsafe { (self.api.reinit)(self.mem.as_ptr(), t, self.y.raw()) };
+            let start = StepEnds::new(t, self.raw_steps());
+            self.shared_mut().step_ends = Some(start);
+            self.stepped = false;
+            self.at_step_end = true;
+        }
         self.shared_mut().diag.poll_warnings();
         let (nonfinite, underflows) = self.shared_mut().diag.since_call();
         if self.shared().diag.stopped_for_underflow {
@@ -364,6 +385,12 @@ impl<S> Solver<S> {
             if nonfinite > 0 {
                 e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
             }
+            if let Some(why) = (self.api.explain)(e.flag) {
+                e.message.push_str(&format!(" [{why}]"));
+            }
+            if reset_flag < 0 {
+                e.message.push_str(&format!(" [the restart at the failure point failed too (flag {reset_flag}): do not go on]"));
+            }
             if underflows > 0 {
                 e.message.push_str(&format!(" [{underflows} steps below the spacing of t (t + h = t)]"));
             }
@@ -387,6 +414,32 @@ impl<S> Solver<S> {
         Ok(Step { t, event })
     }
 
+    /// Where the last accepted step ended, when the post-step function keeps it (ARKStep).
+    fn last_accepted_end(&self) -> Option<f64> {
+        let ends = self.shared().step_ends?;
+        ends.last_accepted(self.raw_steps())
+    }
+
+    /// The solver's own step counter (since construction; a restart may reset it).
+    fn raw_steps(&self) -> u64 {
+        let mut steps: c_long = 0;
+        // SAFETY: live solver memory; the getter writes one long.
+        unsafe { (self.api.get_num_steps)(self.mem.as_ptr(), &mut steps) };
+        steps.max(0) as u64
+    }
+
+    /// Registers the post-step function that keeps the ends of the accepted steps, through
+    /// which a failure is located ([`StepEnds`]); `set` is ARKODE's setter. Call after the user
+    /// data is set (ARKODE hands the post-step function the user data current at this call).
+    pub(crate) fn keep_step_ends(&mut self, set: unsafe extern "C" fn(Mem, ffi::ARKPostProcessFn) -> c_int) -> Result<(), SolverError> {
+        let start = StepEnds::new(self.t, self.raw_steps());
+        self.shared_mut().step_ends = Some(start);
+        // SAFETY: `mem` is live ARKODE memory whose user data is the boxed `Shared<S>` the
+        // trampoline casts to; it stays alive until after the memory is freed.
+        self.check(unsafe { set(self.mem.as_ptr(), Some(callbacks::step_end::<S>)) })?;
+        Ok(())
+    }
+
     /// The typed error for `fail_on_step_underflow`, quoting SUNDIALS' last "t + h = t" warning.
     fn underflow_error(&self, underflows: u64, flag: c_int) -> SolverError {
         let warning = self.shared().diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
@@ -407,15 +460,16 @@ impl<S> Solver<S> {
     /// The k-th derivative of the interpolated solution at `t`, which must lie within the last
     /// internal step (dense output).
     ///
-    /// Before any step (since construction or a restart) only t = t0 with k ≤ 1 is held: the
-    /// state and f(t0, y0). A non-finite `t` is invalid input.
+    /// Before any step (since construction, a restart, or an ARKStep failure located before
+    /// the failed attempt) only the current t with k ≤ 1 is held: the state and f(t, y). A
+    /// non-finite `t` is invalid input.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
         if !t.is_finite() {
             return Err(self.error(ErrorKind::InvalidInput, 0, format!("dense output needs a finite t, got {t}")));
         }
         if !self.stepped {
             if t != self.t || k > 1 {
-                let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1, got t = {t:e}, k = {k}", self.t);
+                let message = format!("no step taken yet (or since a failure): dense output only at t = {:e} with k ≤ 1, got t = {t:e}, k = {k}", self.t);
                 return Err(self.error(ErrorKind::InvalidInput, 0, message));
             }
             let mut value = self.y.as_slice().to_vec();
@@ -519,6 +573,10 @@ impl<S> Solver<S> {
         self.check(flag)?;
         if self.api.reinit_resets_counters {
             self.counters_before_reinit.accumulate(&before);
+        }
+        if self.shared().step_ends.is_some() {
+            let start = StepEnds::new(t0, self.raw_steps());
+            self.shared_mut().step_ends = Some(start);
         }
         self.t = t0;
         self.stepped = false;
