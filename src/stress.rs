@@ -68,6 +68,8 @@ impl Cell {
             Expectation::Limit("IMEX: only the plate drive is explicit; not part of the physical-region guarantee")
         } else if self.rtol < 1e-12 {
             Expectation::Limit("rtol below 1e-12: not attainable in double precision over the cycle's 17 decades")
+        } else if self.method == Method::ArkodeDirk && self.eta > 0.0 && self.rtol < 1e-8 {
+            Expectation::Limit("arkode-dirk with radiation damping below rtol 1e-8: SDIRK-5-3-4 (stage order 1) falls to order 2 on the quasi-static slip that damping creates, so its steps grow as rtol^(-1/2), ~400 k per cycle at rtol 1e-10, beyond the grid's 2 M steps (docs/robustness.md)")
         } else if self.gamma < 10.0 {
             Expectation::Limit("γ < 10: no relaxation oscillation; transients of thousands of time units")
         } else if self.epsilon > 1.05 * eps_c {
