@@ -264,7 +264,10 @@ fn laws_grid() -> Vec<Cell> {
                     for rtol in [1e-6, 1e-10] {
                         for method in PHYSICAL_METHODS {
                             let cell = Cell { gamma, xi, epsilon, rtol, start: None, method, state_law, eta };
-                            if epsilon <= 25.0 * xi && cell.expectation() == Expectation::Cycle {
+                            // A point of the physical region (where radau5 must find the cycle);
+                            // a method's own limit there stays in the grid as its own row.
+                            let reference = Cell { method: Method::Radau5, ..cell };
+                            if epsilon <= 25.0 * xi && reference.expectation() == Expectation::Cycle {
                                 cells.push(cell);
                             }
                         }
@@ -523,6 +526,15 @@ fn counts_by(title: &str, cells: &[Cell], outcomes: &[Outcome], columns: &[Strin
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_laws_grid_keeps_a_methods_limits_as_their_own_rows() {
+        let cells = grid(Grid::Laws);
+        assert_eq!(cells.len(), 3360);
+        let limits: Vec<&Cell> = cells.iter().filter(|c| matches!(c.expectation(), Expectation::Limit(_))).collect();
+        assert!(!limits.is_empty());
+        assert!(limits.iter().all(|c| c.method == Method::ArkodeDirk && c.eta > 0.0 && c.rtol < 1e-8), "{}", limits[0].key());
+    }
 
     #[test]
     fn every_cell_of_every_grid_is_a_valid_scene() {
