@@ -375,22 +375,27 @@ fn lyapunov_step(scene: &Scene, drr: &Drr, cycle: Option<&cycle::CycleReport>) -
 /// write NaN and infinity as null): the error names the first one's path. The model section
 /// is not checked: its γ is +∞ for the quasi-dynamic model, written as null by design.
 fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
-    let sections: [(&'static str, Option<String>); 10] = [
-        ("hopf", r.hopf.as_ref().and_then(|x| finite::first_non_finite(x, "hopf"))),
-        ("cycle", r.cycle.as_ref().and_then(|x| finite::first_non_finite(x, "cycle"))),
-        ("shooting", r.shooting.as_ref().and_then(|x| finite::first_non_finite(x, "shooting"))),
-        ("continuation", r.continuation.as_ref().and_then(|x| finite::first_non_finite(x, "continuation"))),
-        ("asymptotics", r.asymptotics.as_ref().and_then(|x| finite::first_non_finite(x, "asymptotics"))),
-        ("lyapunov", r.lyapunov.as_ref().and_then(|x| finite::first_non_finite(x, "lyapunov"))),
-        ("physical", r.physical.as_ref().and_then(|x| finite::first_non_finite(x, "physical"))),
-        ("paper", r.paper.as_ref().and_then(|x| finite::first_non_finite(x, "paper"))),
-        ("noise", r.noise.as_ref().and_then(|x| finite::first_non_finite(x, "noise"))),
-        ("solver", finite::first_non_finite(&r.solver, "solver")),
+    let sections = [
+        first_non_finite_in("hopf", r.hopf.as_ref()),
+        first_non_finite_in("cycle", r.cycle.as_ref()),
+        first_non_finite_in("shooting", r.shooting.as_ref()),
+        first_non_finite_in("continuation", r.continuation.as_ref()),
+        first_non_finite_in("asymptotics", r.asymptotics.as_ref()),
+        first_non_finite_in("lyapunov", r.lyapunov.as_ref()),
+        first_non_finite_in("physical", r.physical.as_ref()),
+        first_non_finite_in("paper", r.paper.as_ref()),
+        first_non_finite_in("noise", r.noise.as_ref()),
+        first_non_finite_in("solver", Some(&r.solver)),
     ];
-    match sections.into_iter().find_map(|(section, path)| path.map(|p| (section, p))) {
+    match sections.into_iter().flatten().next() {
         Some((section, path)) => Err(non_finite(&path, section)),
         None => Ok(()),
     }
+}
+
+/// The section and the path of the first non-finite number in it, if any.
+fn first_non_finite_in<T: serde::Serialize>(section: &'static str, value: Option<&T>) -> Option<(&'static str, String)> {
+    value.and_then(|v| finite::first_non_finite(v, section)).map(|path| (section, path))
 }
 
 /// The scene's integrator on the DRR variational equations (state and fundamental matrix Φ),

@@ -199,15 +199,12 @@ impl Progress {
         if !(self.down_seen && prev.y[W] < 0.0 && next.y[W] >= 0.0) {
             return Ok(None);
         }
-        let t = refine(clock, (prev.t, next.t), 0, 0.0)?;
-        let z = dense(clock, t, 0)?;
-        let velocity = first3(&dense(clock, t, 1)?);
-        let phi = fundamental_of(&z);
-        let (t_peak, peak) = self.peak.unwrap_or((clock.global(t).to_f64(), first3(&z)));
+        let (t, y, velocity, phi) = crossing(clock, (prev.t, next.t), 0.0)?;
+        let (t_peak, peak) = self.peak.unwrap_or((clock.global(t).to_f64(), y));
         Ok(Some(Return {
             start: self.start,
             period: clock.global(t).to_f64(),
-            end: first3(&z),
+            end: y,
             velocity,
             fundamental: phi * self.fundamental,
             section_jacobian: section_map(&phi, &velocity) * self.section_jacobian,
@@ -261,12 +258,8 @@ impl Progress {
     /// previous sample.
     fn cut_or_rebase(&mut self, clock: &mut Clock, drr: &Drr, next: Sample) -> Result<(), SolverError> {
         if let Some(level) = self.due_cut(&next) {
-            let t = refine(clock, (self.prev.t, next.t), 0, level)?;
-            let z = dense(clock, t, 0)?;
-            let velocity = first3(&dense(clock, t, 1)?);
-            let y = first3(&z);
+            let (t, y, velocity, phi) = crossing(clock, (self.prev.t, next.t), level)?;
             if restart_safe(drr, self.limits.w_tolerance, &y, velocity[W].abs().max(self.rise_rate)) {
-                let phi = fundamental_of(&z);
                 self.fundamental = phi * self.fundamental;
                 self.section_jacobian = section_map(&phi, &velocity) * self.section_jacobian;
                 let at = clock.global(t);
@@ -285,6 +278,15 @@ impl Progress {
         }
         Ok(())
     }
+}
+
+/// The crossing of w = `level` inside the step `span` (local times): its time, the state, the
+/// velocity and the segment's fundamental matrix Φ there.
+fn crossing(clock: &mut Clock, span: (f64, f64), level: f64) -> Result<(f64, [f64; 3], [f64; 3], Matrix3<f64>), SolverError> {
+    let t = refine(clock, span, 0, level)?;
+    let z = dense(clock, t, 0)?;
+    let velocity = first3(&dense(clock, t, 1)?);
+    Ok((t, first3(&z), velocity, fundamental_of(&z)))
 }
 
 /// The step end at local time `t`: the state and the interpolant's derivative; an error if
