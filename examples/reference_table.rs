@@ -276,7 +276,7 @@ fn far() {
 /// the cycles computed (transient included), so it depends on the machine and its load.
 fn cost() {
     let rtol: f64 = 1e-8;
-    let settings = (rtol, rtol * 1e-2, (1000.0 * rtol).clamp(1e-7, 1e-3));
+    let settings = (rtol, rtol * 1e-2, stickslip::analysis::cycle::CycleSettings::defaults(rtol, rtol * 1e-2).tolerance);
     println!("| ε/ξ | k/k_c | ξ | ε | ln v_min | method | cycles | steps/cycle | wall ms/cycle |");
     println!("|---|---|---|---|---|---|---|---|---|");
     for (xi, epsilon) in FAR_POINTS {

@@ -456,13 +456,15 @@ fn stress_command(
     match &known {
         Some(text) => {
             let (new, fixed) = stress::against_known(&cells, &outcomes, text);
+            // With --json, stdout holds only the JSON summary; the verdict goes to stderr.
+            let say = |line: String| if json { eprintln!("{line}") } else { println!("{line}") };
             for k in &new {
-                println!("  NEW FAILURE (not in the known-failures file) {k}");
+                say(format!("  NEW FAILURE (not in the known-failures file) {k}"));
             }
             for k in &fixed {
-                println!("  NOW PASSES (remove it from the known-failures file) {k}");
+                say(format!("  NOW PASSES (remove it from the known-failures file) {k}"));
             }
-            println!("stress: {} known failures, {} new failures, {} fixed", summary.failures.len() - new.len(), new.len(), fixed.len());
+            say(format!("stress: {} known failures, {} new failures, {} fixed", summary.failures.len() - new.len(), new.len(), fixed.len()));
             problems += new.len() + fixed.len();
         }
         None => problems += summary.failures.len(),

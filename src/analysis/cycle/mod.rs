@@ -44,7 +44,8 @@ use serde::Serialize;
 /// How the cycle analysis runs; defaults documented on each field.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CycleSettings {
-    /// Relative tolerance of the convergence rule (default 1000·rtol within [1e-7, 1e-3]).
+    /// Relative tolerance of the convergence rule (default 1000·rtol within [1e-7, 1e-2]; see
+    /// [`CycleSettings::defaults`]).
     pub tolerance: f64,
     /// Consecutive agreeing cycle pairs required (default 3).
     pub settle: usize,
@@ -99,10 +100,16 @@ impl EscapeStep {
 
 impl CycleSettings {
     /// Defaults for a given integration rtol and absolute tolerance on w.
+    ///
+    /// The rule's tolerance is 1000·rtol (the agreement asked of two methods), within
+    /// [1e-7, 1e-2]. It must exceed the integration's own scatter of the cycle quantities: far
+    /// from threshold a BDF's global error at rtol 1e-4 moves the period by up to 4e-3 from
+    /// cycle to cycle (measured: γ = 1e8, ξ = 0.2, ε = 5, cvode-bdf; docs/robustness.md), which
+    /// the former cap, 1e-3 (10·rtol there), never let settle.
     pub fn defaults(rtol: f64, atol_w: f64) -> Self {
         Self {
             w_tolerance: (rtol, atol_w),
-            tolerance: (1000.0 * rtol).clamp(1e-7, 1e-3),
+            tolerance: (1000.0 * rtol).clamp(1e-7, 1e-2),
             settle: 3,
             max_cycles: 1000,
             max_time: 1e6,
@@ -655,10 +662,15 @@ fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
         && (range(a) - range(b)).abs() <= tolerance * range(a)
 }
 
+/// The cap on how clearly consecutive cycles of a period-n orbit (n > 1) must differ: they
+/// must differ by more than min(100 × tolerance, 10 %), so that a loose rtol's tolerance (up to
+/// 1e-2) does not ask a period doubling for cycles 100 % apart.
+const DISTINCT_CYCLES: f64 = 0.1;
+
 /// n if the last cycles form a period-n orbit (n = 1..4) under the convergence rule. The
 /// first cycle (from the start) is never used. For n > 1 the consecutive cycles must also
-/// differ clearly (by more than 100 × tolerance), so that noise around a period-1 orbit is
-/// never mistaken for a period-n one.
+/// differ clearly (by more than min(100 × tolerance, 10 %)), so that noise around a period-1
+/// orbit is never mistaken for a period-n one.
 fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
     let k = closed.len();
     // An "orbit" whose ln v range is within the integration noise is not one (found by the
@@ -668,10 +680,11 @@ fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize
         return None;
     }
     let lagged = |n: usize, tol: f64| (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], tol));
+    let distinct = DISTINCT_CYCLES.min(100.0 * settings.tolerance);
     (1..=4).find(|&n| {
         k > settings.settle.saturating_add(n)
             && lagged(n, settings.tolerance)
-            && (n == 1 || (0..settings.settle).all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], 100.0 * settings.tolerance)))
+            && (n == 1 || (0..settings.settle).all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], distinct)))
     })
 }
 
