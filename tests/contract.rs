@@ -6,6 +6,7 @@
 
 use stickslip::integrate::{ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Step, StepEvent, Task, Tolerance};
 use stickslip::solver::{self, Method, MethodSettings};
+use std::cell::Cell;
 
 /// y0' = y1, y1' = −y0 from (0, 1): y = (sin t, cos t). All of it implicit in the IMEX split.
 #[derive(Clone, Copy)]
@@ -28,21 +29,6 @@ impl OdeSystem for Oscillator {
     }
 }
 
-impl ImexSystem for Oscillator {
-    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
-        dydt.fill(0.0);
-    }
-    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        self.rhs(t, y, dydt);
-    }
-    fn has_implicit_jacobian(&self) -> bool {
-        true
-    }
-    fn implicit_jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        self.jacobian(t, y, jac);
-    }
-}
-
 /// y' = −y, with NaN once t passes `from`. All of it implicit in the IMEX split.
 #[derive(Clone, Copy)]
 struct NanAfter(f64);
@@ -56,14 +42,28 @@ impl OdeSystem for NanAfter {
     }
 }
 
-impl ImexSystem for NanAfter {
-    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
-        dydt.fill(0.0);
-    }
-    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        self.rhs(t, y, dydt);
-    }
+/// `ImexSystem` for the test systems: all of it implicit (f_E = 0, f_I = f, with the system's
+/// Jacobian when it has one).
+macro_rules! all_implicit {
+    ($($T:ty),*) => {$(
+        impl ImexSystem for $T {
+            fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
+                dydt.fill(0.0);
+            }
+            fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+                self.rhs(t, y, dydt);
+            }
+            fn has_implicit_jacobian(&self) -> bool {
+                self.has_jacobian()
+            }
+            fn implicit_jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+                self.jacobian(t, y, jac);
+            }
+        }
+    )*};
 }
+
+all_implicit!(Oscillator, NanAfter, PanicOnce, JacobianPanics);
 
 fn methods() -> impl Iterator<Item = Method> {
     Method::ALL.iter().map(|(_, m)| *m)
@@ -257,7 +257,7 @@ fn failures_are_typed_errors_with_time_and_state() {
 }
 
 /// Steps one at a time until the integration fails; returns the last accepted point and the error.
-fn last_point_and_error(mut integ: Box<dyn Integrator>) -> ((f64, Vec<f64>), SolverError) {
+fn last_point_and_error(integ: &mut dyn Integrator) -> ((f64, Vec<f64>), SolverError) {
     let mut last = (integ.t(), integ.state().to_vec());
     loop {
         match integ.advance(10.0, Task::OneStep) {
@@ -290,56 +290,116 @@ fn a_failure_is_located_at_the_last_good_point_arkode_erk() {
     assert_eq!(integ.advance(0.495, Task::Normal).unwrap().t, 0.495);
     assert!((integ.state()[0] - (-0.495f64).exp()).abs() < 1e-8, "{:?}", integ.state());
     // Exactly the last step's end, as one-step mode sees it.
-    let ((t, y), e) = last_point_and_error(build());
+    let ((t, y), e) = last_point_and_error(&mut *build());
     assert_eq!((e.t, e.state), (t, y));
     assert!(t > 0.45, "{t}");
 }
 
-/// y' = −y, with a panic once t passes `from`: ARKStep stops at the first call (unrecoverable).
-#[derive(Clone, Copy)]
-struct PanicAfter(f64);
+/// y' = −y, with a panic at the first call past t = `at` (deliberately impure: the calls after
+/// it succeed, so a caller can go on after the error).
+struct PanicOnce {
+    at: f64,
+    armed: Cell<bool>,
+}
 
-impl OdeSystem for PanicAfter {
+impl PanicOnce {
+    fn new(at: f64) -> Self {
+        Self { at, armed: Cell::new(true) }
+    }
+}
+
+impl OdeSystem for PanicOnce {
     fn dim(&self) -> usize {
         1
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        assert!(t <= self.0, "the right-hand side refuses t = {t}");
+        if t > self.at && self.armed.replace(false) {
+            panic!("the right-hand side refuses t = {t}");
+        }
         dydt[0] = -y[0];
     }
 }
 
-impl ImexSystem for PanicAfter {
-    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
-        dydt.fill(0.0);
-    }
-    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
-        self.rhs(t, y, dydt);
-    }
-}
-
 /// Every method names the last accepted point for a right-hand side that fails (NaN) past
-/// t = 0.5, and every SUNDIALS method for one that panics there. Known exception: ARKStep's DIRK on SUNDIALS 6, which keeps no step ends
-/// (src/sundials/arkode.rs) and reports a panic at the failed stage's time.
+/// t = 0.5, and for one that panics there: a panic is a `CallbackPanic` error with the panic's
+/// message, never an unwind to the caller, and the integrator goes on from that point. Known
+/// exception: ARKStep's DIRK on SUNDIALS 6, which keeps no step ends (src/sundials/arkode.rs)
+/// and reports a panic at the failed stage's time.
 #[test]
 fn every_failure_is_located_at_the_last_accepted_step() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     let sundials6 = !stickslip::sundials::HEADER_VERSION.starts_with('7');
     for method in methods() {
-        let nan = solver::build(method, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
-        let ((t, y), e) = last_point_and_error(nan);
+        let mut nan = solver::build(method, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+        let ((t, y), e) = last_point_and_error(&mut *nan);
         assert_eq!((e.t, &e.state), (t, &y), "{method}: {e}");
         assert!(t > 0.45 && t <= 0.5, "{method}: {t}");
-        // A panic is a typed error only where it must not cross into C (the pure-Rust
-        // methods let it unwind to the caller).
-        let wrapped = matches!(method, Method::CvodeBdf | Method::CvodeAdams | Method::ArkodeDirk | Method::ArkodeImex | Method::ArkodeErk);
-        if !wrapped || (sundials6 && method == Method::ArkodeDirk) {
-            continue;
-        }
-        let panic = solver::build(method, &MethodSettings::default(), PanicAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
-        let ((t, y), e) = last_point_and_error(panic);
+        let mut panic = solver::build(method, &MethodSettings::default(), PanicOnce::new(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+        let ((t, y), e) = last_point_and_error(&mut *panic);
         assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
-        assert_eq!((e.t, &e.state), (t, &y), "{method}: {e}");
-        assert!(t > 0.4 && t <= 0.5, "{method}: {t}");
+        assert!(e.message.contains("the right-hand side refuses t = 0.5"), "{method}: {e}");
+        if !(sundials6 && method == Method::ArkodeDirk) {
+            assert_eq!((e.t, &e.state), (t, &y), "{method}: {e}");
+            assert_eq!((panic.t(), panic.state()), (t, &y[..]), "{method}");
+        }
+        // No smaller step is tried after a panic: the last accepted step is the start of the
+        // one that reached past 0.5 (extrapolation's long steps: t = 0.148).
+        assert!(t > 0.1 && t <= 0.5, "{method}: {t}");
+        // Usable afterwards: it goes on from there.
+        let step = panic.advance(1.0, Task::Normal).unwrap_or_else(|e| panic!("{method} after the panic: {e}"));
+        assert_eq!(step.t, 1.0);
+        assert!((panic.state()[0] - (-1.0f64).exp()).abs() < 1e-6, "{method}: {:?}", panic.state());
+    }
+}
+
+/// y' = −1e6 y, stiff, with an analytic Jacobian that panics.
+#[derive(Clone, Copy)]
+struct JacobianPanics;
+
+impl OdeSystem for JacobianPanics {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = -1e6 * y[0];
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], _jac: &mut JacobianMatrix<'_>) {
+        panic!("deliberate panic in the Jacobian");
+    }
+}
+
+/// Every stiff method asks for the Jacobian of a stiff problem, and a panic there is the same
+/// `CallbackPanic` error at the last accepted step (one-step mode's last point; the known
+/// exception of DIRK on SUNDIALS 6 as above: there the first stage's time, 1.8e-10).
+#[test]
+fn a_panic_in_the_jacobian_is_an_error() {
+    let options = Options::new(1e-6, Tolerance::Scalar(1e-10));
+    let sundials6 = !stickslip::sundials::HEADER_VERSION.starts_with('7');
+    for method in methods().filter(|m| m.is_stiff()) {
+        let mut integ = solver::build(method, &MethodSettings::default(), JacobianPanics, 0.0, &[1.0], &options).unwrap().integrator;
+        let ((t, y), e) = last_point_and_error(&mut *integ);
+        assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
+        assert!(e.message.contains("deliberate panic in the Jacobian"), "{method}: {e}");
+        if !(sundials6 && method == Method::ArkodeDirk) {
+            assert_eq!((e.t, &e.state), (t, &y), "{method}: {e}");
+        }
+    }
+}
+
+/// A panic in the one callback dense output makes (f at the start, before any step) is the same
+/// error, and the integrator answers the next request.
+#[test]
+fn a_panic_in_dense_output_is_an_error() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = solver::build(method, &MethodSettings::default(), PanicOnce::new(-1.0), 0.0, &[1.0], &options).unwrap().integrator;
+        let e = integ.dense(0.0, 1).unwrap_err();
+        assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
+        assert!(e.message.contains("refuses t = 0"), "{method}: {e}");
+        assert_eq!((e.t, &e.state[..]), (0.0, &[1.0][..]), "{method}: {e}");
+        assert_eq!(integ.dense(0.0, 1).unwrap(), &[-1.0], "{method}");
     }
 }

@@ -27,7 +27,9 @@ pub enum ErrorKind {
     /// The step fell below the floating-point spacing of t ("t + h = t").
     #[error("step underflow: t + h = t (the step is below the spacing of t; re-base time)")]
     StepUnderflow,
-    /// A user callback panicked; the panic message is in the error message.
+    /// A user callback (right-hand side, Jacobian, root function) panicked; the panic message
+    /// is the error's message. Every integrator catches the panic and returns this error at the
+    /// last accepted step; the integrator can go on from there.
     #[error("a user callback panicked")]
     CallbackPanic,
     /// Invalid input (options, initial state, output time, dense-output request).
@@ -58,4 +60,14 @@ pub struct SolverError {
 
 fn detail(message: &str) -> String {
     if message.is_empty() { String::new() } else { format!(" — {message}") }
+}
+
+/// The text of a caught panic's payload (a `&str` or `String` message), for
+/// [`ErrorKind::CallbackPanic`].
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "non-string panic payload".to_string())
 }

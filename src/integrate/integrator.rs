@@ -7,7 +7,10 @@ use super::{SolverError, Stats, Step, Task};
 /// Requirements: `dense(t, k)` is valid for t inside the last internal step; `reinit` restarts
 /// at a new (t, y) keeping tolerances and options, and statistics run on across restarts.
 pub trait Integrator {
-    /// Integrates towards `tout` (one internal step with [`Task::OneStep`]).
+    /// Integrates towards `tout` (one internal step with [`Task::OneStep`]). A failure is an
+    /// error at the last accepted step, a panicking callback included
+    /// ([`ErrorKind::CallbackPanic`](super::ErrorKind::CallbackPanic)); the integrator can go
+    /// on from there.
     fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError>;
     /// State at [`Integrator::t`].
     fn state(&self) -> &[f64];

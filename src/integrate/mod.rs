@@ -16,6 +16,7 @@ mod stepper;
 
 pub use clock::{Clock, ClockStep, Time};
 pub use error::{ErrorKind, SolverError};
+pub(crate) use error::panic_message;
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{Options, Tolerance, DEFAULT_MAX_STEPS};

@@ -2,17 +2,21 @@
 //! the state every method keeps in the same way ([`Core`]: current point, last step, returned
 //! state, options of the step sequence, statistics) and, on top of a method's "take one step /
 //! interpolate inside the last step" ([`Stepper`]), [`Integrator::advance`] for both tasks,
-//! stop time, `max_steps` per call, dense output and the errors with their t and state.
+//! stop time, `max_steps` per call, dense output and the errors with their t and state (a
+//! panicking callback included).
 //!
 //! [`Integrator::advance`]: super::Integrator::advance
 
-use super::{ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
+use super::{panic_message, ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
+use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The unit roundoff of RADAU5, RODAS, SEULEX and ODEX (step-underflow test, difference
 /// increments, tolerance floors).
 pub(super) const UROUND: f64 = 1e-16;
 /// Consecutive non-finite right-hand sides in one step before giving up.
 const MAX_NONFINITE: u32 = 10;
+/// The return code of an [`ErrorKind::CallbackPanic`] error.
+const PANIC_FLAG: i32 = -8;
 
 /// State and options every homemade integrator shares.
 pub(super) struct Core {
@@ -399,11 +403,30 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
     }
 }
 
+/// Runs `f`, which may call the system (right-hand side, Jacobian), on the method, and turns
+/// a panic there into an [`ErrorKind::CallbackPanic`] error with the panic's message at the
+/// internal point, the last accepted step's end: a panic never unwinds to the caller, as in
+/// the SUNDIALS wrappers, which must catch it before it reaches C.
+///
+/// Why the method stays usable (and `AssertUnwindSafe` is sound): every method changes its
+/// point (`x`, `y`, and `f0` with `f0_valid` set after f0 is written), its last step (`xold`,
+/// `hold`, continuous output) and `have_step` only in its `accept`, which calls no callback,
+/// and marks a Jacobian or LU factors current only once they are complete. A panic thus
+/// leaves the method as a failed attempt does: at the last accepted step with its dense
+/// output, its scratch (stages, Newton iterates, a Jacobian half built) rebuilt by the next
+/// attempt. A later `advance` goes on from there.
+fn guarded<M: Stepper, T>(m: &mut M, f: impl FnOnce(&mut M) -> Result<T, SolverError>) -> Result<T, SolverError> {
+    match catch_unwind(AssertUnwindSafe(|| f(m))) {
+        Ok(result) => result,
+        Err(payload) => Err(m.core().error(ErrorKind::CallbackPanic, PANIC_FLAG, panic_message(&*payload))),
+    }
+}
+
 /// [`Integrator::advance`](super::Integrator::advance) of a method. On an error, the returned
 /// t and state are the last accepted step's end.
 pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, SolverError> {
     let before = m.core().stats;
-    advance_inner(m, tout, task).map_err(|mut e| {
+    guarded(m, |m| advance_inner(m, tout, task)).map_err(|mut e| {
         let c = m.core_mut();
         if e.kind != ErrorKind::InvalidInput {
             c.t_out = c.x;
@@ -425,7 +448,7 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
             let attempts = c.stats.step_attempts.saturating_sub(before.step_attempts);
             let failed = attempts.saturating_sub(c.stats.steps.saturating_sub(before.steps));
             let from_rhs = e.kind != ErrorKind::StepUnderflow || (2 * nonfinite >= failed && !c.layer_step);
-            if e.kind != ErrorKind::InvalidInput && from_rhs {
+            if !matches!(e.kind, ErrorKind::InvalidInput | ErrorKind::CallbackPanic) && from_rhs {
                 e.kind = ErrorKind::RhsFailure;
             }
             e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
@@ -452,7 +475,7 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
             let c = m.core_mut();
             c.dense.copy_from_slice(&c.y);
         } else {
-            if !m.ensure_f0() {
+            if !guarded(m, |m| Ok(m.ensure_f0()))? {
                 return Err(m.core().error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
             }
             let c = m.core_mut();

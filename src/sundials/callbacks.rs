@@ -7,7 +7,7 @@
 
 use super::ffi;
 use super::vector::{slice, slice_mut};
-use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction};
+use crate::integrate::{panic_message, ImexSystem, JacobianMatrix, OdeSystem, RootFunction};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -112,12 +112,7 @@ impl Diagnostics {
         match catch_unwind(AssertUnwindSafe(f)) {
             Ok(()) => true,
             Err(payload) => {
-                let text = payload
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| payload.downcast_ref::<String>().cloned())
-                    .unwrap_or_else(|| "non-string panic payload".to_string());
-                self.panic = Some(text);
+                self.panic = Some(panic_message(&*payload));
                 false
             }
         }

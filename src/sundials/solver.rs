@@ -6,7 +6,7 @@ use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
 use super::vector::SerialVector;
-use crate::integrate::{ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
+use crate::integrate::{panic_message, ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr::NonNull;
 
@@ -475,7 +475,11 @@ impl<S> Solver<S> {
             let mut value = self.y.as_slice().to_vec();
             if k == 1 {
                 let mut f = vec![0.0; value.len()];
-                (self.rhs)(&self.shared().system, self.t, &value, &mut f);
+                // Outside SUNDIALS, but a panic is an error here too, as in every integrator.
+                let call = || (self.rhs)(&self.shared().system, self.t, &value, &mut f);
+                if let Err(payload) = std::panic::catch_unwind(std::panic::AssertUnwindSafe(call)) {
+                    return Err(self.error(ErrorKind::CallbackPanic, 0, panic_message(&*payload)));
+                }
                 if let Some(i) = f.iter().position(|v| !v.is_finite()) {
                     let message = format!("the right-hand side is not finite at t0 (component {i}: {})", f[i]);
                     return Err(self.error(ErrorKind::RhsFailure, 0, message));
