@@ -267,7 +267,16 @@ impl Report {
 
 /// Writes `text` to `path` atomically: a temporary file in the same directory, flushed to
 /// disk, then renamed over `path`. A crash leaves either the old file or the new one.
+///
+/// A path that exists and is not a regular file (`/dev/null`, `/dev/stdout`, a FIFO) is
+/// written to directly: renaming over it would replace the device with a regular file. A
+/// symbolic link is followed, so the file it points to is replaced, not the link.
 pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
+    match std::fs::metadata(path) {
+        Ok(m) if !m.is_file() && !m.is_dir() => return std::fs::write(path, text),
+        Ok(m) if m.is_file() && path.is_symlink() => return write_atomic(&std::fs::canonicalize(path)?, text),
+        _ => {}
+    }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().ok_or_else(|| std::io::Error::other("the output path has no file name"))?;
     let tmp = dir.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));

@@ -168,3 +168,32 @@ fn cli_exit_codes_and_nothing_written_on_bad_input() {
     assert!(report.get("cycle").is_none(), "only what the scene asks for");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--out` onto a path that is not a regular file (a FIFO here, `/dev/null` in practice) writes
+/// into it instead of renaming a temporary file over it, and `--out` through a symbolic link
+/// replaces the file it points to, not the link.
+#[test]
+fn reports_are_written_through_fifos_and_symbolic_links() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = std::env::temp_dir().join(format!("stickslip-write-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fifo = dir.join("pipe");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+    };
+    stickslip::report::write_atomic(&fifo, "through the pipe\n").unwrap();
+    // Checked before joining: a replaced FIFO would leave the reader waiting for ever.
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo(), "the FIFO was replaced");
+    assert_eq!(reader.join().unwrap(), "through the pipe\n");
+
+    let target = dir.join("report.json");
+    let link = dir.join("latest.json");
+    std::fs::write(&target, "old").unwrap();
+    std::os::unix::fs::symlink(&target, &link).unwrap();
+    stickslip::report::write_atomic(&link, "new").unwrap();
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link was replaced");
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
