@@ -31,7 +31,7 @@ fn shooting_agrees_with_brute_force_on_every_reference_cycle() {
         assert!(rel < 1e-8, "ξ={xi} ε={epsilon} γ={gamma:e}: shooting {} vs brute force {reference} ({rel:.1e})", orbit.period);
         let ln_v_max = row["reference"]["ln_v_max"].as_f64().unwrap();
         assert!((orbit.ln_v_max - ln_v_max).abs() < 1e-6 * ln_v_max, "γ={gamma:e}: ln v_max {} vs {ln_v_max}", orbit.ln_v_max);
-        assert!(orbit.stable, "γ={gamma:e}: the relaxation cycle is an attractor: {:?}", orbit.multipliers);
+        assert!(orbit.stable == Some(true), "γ={gamma:e}: the relaxation cycle is an attractor: {:?}", orbit.multipliers);
         // The trivial multiplier: 1 to 1e-6 up to γ = 1e3 (its accuracy degrades ∝ γ, see
         // analysis::shooting: ~1e-6 at 1e4), and no worse than 5e-2 at γ = 1e8.
         let bound = if gamma <= 1e3 { 1e-6 } else if gamma <= 1e4 { 1e-5 } else { 5e-2 };
@@ -110,12 +110,12 @@ fn period_doubling_is_detected_and_the_doubled_orbit_matches_brute_force() {
     let report = run(&text);
     let shooting = report.shooting.unwrap();
     let single = shooting.orbit.unwrap();
-    assert!(!single.stable, "the period-1 orbit has lost stability: {:?}", single.multipliers);
+    assert!(single.stable == Some(false), "the period-1 orbit has lost stability: {:?}", single.multipliers);
     let pd = shooting.period_doubling.expect("a multiplier below −1");
     assert!(pd.multiplier < -1.1, "{}", pd.multiplier);
     let doubled = pd.doubled.unwrap_or_else(|| panic!("doubled orbit not found: {}", pd.note));
     assert_eq!(doubled.returns_per_period, 2);
-    assert!(doubled.stable && doubled.trivial_multiplier_error < 1e-6, "{:?}", doubled.multipliers);
+    assert!(doubled.stable == Some(true) && doubled.trivial_multiplier_error < 1e-6, "{:?}", doubled.multipliers);
     // Brute force settles on the same period-2 orbit.
     let cycle = report.cycle.unwrap();
     assert_eq!(cycle.cycles_per_period, Some(2));
@@ -159,7 +159,7 @@ fn shooting_crosses_the_ageing_and_prz_sticks_at_gamma_1e8() {
         // The same bound as the slip law's at γ = 1e8 (the fixed-time monodromy loses
         // accuracy ∝ γ); the cycle is an attractor.
         assert!(orbit.trivial_multiplier_error < 5e-2, "{law}: |μ − 1| = {:e}", orbit.trivial_multiplier_error);
-        assert!(orbit.stable && orbit.nontrivial()[0].modulus > 1e-3, "{law}: {:?}", orbit.multipliers);
+        assert!(orbit.stable == Some(true) && orbit.nontrivial()[0].modulus > 1e-3, "{law}: {:?}", orbit.multipliers);
     }
 }
 
