@@ -163,22 +163,18 @@ fn shooting_crosses_the_ageing_and_prz_sticks_at_gamma_1e8() {
     }
 }
 
-#[test]
-fn ageing_multiplier_at_gamma_1e8_matches_differences_of_the_map() {
+/// The Poincaré map's Jacobian at the section point x by central differences of the return,
+/// steps `rel`·(1 + |x_j|), integrated with the scene's solver.
+fn map_differences(s: &scene::Scene, x: [f64; 2], rel: f64) -> nalgebra::Matrix2<f64> {
     use stickslip::analysis::{period_map, shooting::ShootingSettings};
     use stickslip::model::Drr;
-    let s = scene::parse(&earthquake_under("ageing"), "test").unwrap();
-    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
     let drr = Drr::new(s.params);
     let limits = ShootingSettings::defaults(s.solver.rtol, s.solver.atol[1]).limits;
-    let x = [orbit.section_point[0], orbit.section_point[2]];
     let mut integ = engine::variational_integrator(drr, &s.solver, &[x[0], 0.0, x[1]]).unwrap();
     let mut flow = |x: [f64; 2]| period_map::flow_to_section(integ.as_mut(), &drr, [x[0], 0.0, x[1]], true, &limits).unwrap();
-    // The Poincaré map by central differences of the return (steps 1e-4 relative: the map's
-    // noise is ~1e-9).
     let mut fd = nalgebra::Matrix2::zeros();
     for j in 0..2 {
-        let h = 1e-4 * (1.0 + x[j].abs());
+        let h = rel * (1.0 + x[j].abs());
         let (mut xp, mut xm) = (x, x);
         xp[j] += h;
         xm[j] -= h;
@@ -187,6 +183,17 @@ fn ageing_multiplier_at_gamma_1e8_matches_differences_of_the_map() {
             fd[(i, j)] = (ep[k] - em[k]) / (2.0 * h);
         }
     }
+    fd
+}
+
+#[test]
+fn ageing_multiplier_at_gamma_1e8_matches_differences_of_the_map() {
+    let s = scene::parse(&earthquake_under("ageing"), "test").unwrap();
+    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    let x = [orbit.section_point[0], orbit.section_point[2]];
+    // The Poincaré map by central differences of the return (steps 1e-4 relative: the map's
+    // noise is ~1e-9).
+    let fd = map_differences(&s, x, 1e-4);
     // The map is nearly rank one (the other multiplier is below the noise): its dominant
     // multiplier is its trace. Measured: 0.0544152 (variational) vs 0.0544180 (differences),
     // 5e-5 apart. The entries differ by up to 2.5e-3 of the largest, by a matrix whose trace
@@ -196,4 +203,29 @@ fn ageing_multiplier_at_gamma_1e8_matches_differences_of_the_map() {
     assert!(dominant.im == 0.0);
     let rel = (dominant.re - fd.trace()).abs() / fd.trace().abs();
     assert!(rel < 1e-3, "multiplier {} vs differences {} ({rel:e}; DP by differences {fd:?})", dominant.re, fd.trace());
+}
+
+#[test]
+#[ignore = "heavy: ~10 s of CVODE at γ = 1e10"]
+fn cvode_ageing_multipliers_at_gamma_1e10_are_resolved_or_withheld() {
+    // DP's multiplier was −0.96 here (trivial error 1.0; tests/shooting_guard.rs has the
+    // γ = 1e8 case). The references: central differences of the map at a step (3e-4 relative)
+    // the check does not use, and Radau5 at rtol 1e-11, where DP passes the check (measured
+    // 0.044356, 4.5e-5 from the differences; Radau5 fails at rtol 1e-10 here).
+    use stickslip::analysis::shooting::MultiplierSource;
+    let mut v: serde_json::Value = serde_json::from_str(&earthquake_under("ageing")).unwrap();
+    v["model"]["gamma"] = 1e10.into();
+    v["solver"]["method"] = "cvode-bdf".into();
+    v["analyses"] = serde_json::json!(["shooting"]);
+    let s = scene::parse(&v.to_string(), "test").unwrap();
+    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    if orbit.multipliers_source == MultiplierSource::Unresolved {
+        assert!(orbit.stable.is_none() && orbit.nontrivial().is_empty() && orbit.multipliers_note.is_some());
+        return;
+    }
+    let fd = map_differences(&s, [orbit.section_point[0], orbit.section_point[2]], 3e-4);
+    let mu = orbit.nontrivial()[0];
+    assert!((mu.re - fd.trace()).abs() < 1e-3, "{:?} vs the differences' trace {}", orbit.multipliers, fd.trace());
+    assert!((mu.re - 0.044356).abs() < 1e-3, "{:?} vs Radau5's 0.044356", orbit.multipliers);
+    assert_eq!(orbit.stable, Some(true));
 }
