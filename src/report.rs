@@ -217,7 +217,11 @@ impl Report {
                         "  Floquet multipliers: trivial 1{:+.1e}, others {} ({})\n",
                         o.multipliers[0].re - 1.0,
                         mu.join(", "),
-                        if o.stable { "stable" } else { "unstable" }
+                        match o.stable {
+                            Some(true) => "stable".to_string(),
+                            Some(false) => "unstable".to_string(),
+                            None => format!("stability unknown: {}", o.multipliers_note.as_deref().unwrap_or("")),
+                        }
                     );
                 }
                 None => s += &format!("shooting: NOT converged: {}\n", r.failure.as_ref().map_or("?".to_string(), ToString::to_string)),

@@ -79,7 +79,7 @@ fn shipped_scene_shooting_and_floquet() {
     let (period, _, _) = cycle(&r);
     let orbit = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap();
     assert!((orbit.period - period).abs() < 1e-8 * period, "shooting {} vs cycle {period}", orbit.period);
-    assert!(orbit.stable && orbit.trivial_multiplier_error < 1e-6, "{orbit:?}");
+    assert!(orbit.stable == Some(true) && orbit.trivial_multiplier_error < 1e-6, "{orbit:?}");
     // The non-trivial multipliers: the model's (0.1207293 at γ = 1e8 with inertia, where the
     // other is ~0) and the stabilisation's e^{−κ_G T}, κ_G = 1.
     let m: Vec<f64> = orbit.multipliers[1..].iter().map(|m| m.re).collect();

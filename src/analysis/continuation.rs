@@ -7,7 +7,8 @@
 //! doubles it, up to the grid spacing; below 1/1024 of the spacing the continuation stops
 //! and says why (e.g. the orbit shrinking onto the fixed point at the Hopf threshold ε_c, or a
 //! fold where a multiplier reaches 1). A real multiplier crossing −1 between two points is
-//! reported as a period doubling.
+//! reported as a period doubling; an orbit whose multipliers are unresolved (withheld by
+//! shooting) has none, so no flip is reported on it.
 //!
 //! Reference: E. L. Allgower, K. Georg, *Introduction to Numerical Continuation Methods*,
 //! SIAM 2003, ch. 1–2 (natural-parameter continuation with step control).

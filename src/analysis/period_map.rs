@@ -83,7 +83,8 @@ fn first3(z: &[f64]) -> [f64; 3] {
 
 /// Integrates `integ` (a [`Variational`] DRR integrator, 12 components) from `start` until the
 /// next upward crossing of w = 0. With `on_section`, `start` lies on the section and the
-/// crossing must follow a downward one (a full turn); otherwise the first upward crossing
+/// crossing must follow a v maximum and a fall of ln v below minus the noise floor (a full
+/// turn); otherwise the first upward crossing
 /// ends the flow (used to reach the section from an arbitrary start).
 ///
 /// Each step: sample its end, record the v extrema, end at the return, check the budget,
@@ -122,7 +123,8 @@ struct Progress {
     steps: u64,
     /// ln v above which a v maximum counts as a turn, not as noise at the start.
     floor: f64,
-    /// Whether the downward crossing of w = 0 that precedes the return has been seen.
+    /// Whether ln v has fallen below −floor after the v maximum (the fall that precedes the
+    /// return).
     down_seen: bool,
     /// The highest v maximum so far: (global time, state).
     peak: Option<(f64, [f64; 3])>,
@@ -188,11 +190,16 @@ impl Progress {
         Ok(())
     }
 
-    /// Notes the downward crossing of w = 0 after a v maximum; at the upward crossing after
-    /// it, the return.
+    /// Notes the fall of ln v below −floor after a v maximum; at the upward crossing of w = 0
+    /// after it, the return. A mere crossing of w = 0 is not enough: where the slip's arrest
+    /// crosses v = 1 on the slow manifold (dw/dt ≈ −25 against a model noise of ±70 at
+    /// γ = 1e8, ξ = 0.7, ε = 0.72), the integrator's first steps after the cut there wiggled
+    /// by ±5e-14 around w = 0 (CVODE), which ended the return 0.97 after its start, and Newton
+    /// then converged on the arrest's crossing as the section point (t0 one period, multipliers
+    /// 574 … 3e5 in fig1c-extended at 5 of 41 points).
     fn completed(&mut self, clock: &mut Clock, next: &Sample) -> Result<Option<Return>, SolverError> {
         let prev = &self.prev;
-        if self.peak.is_some() && prev.y[W] >= 0.0 && next.y[W] < 0.0 {
+        if !self.down_seen && self.peak.is_some() && next.y[W] < -self.floor {
             self.down_seen = true;
             return Ok(None);
         }
@@ -265,6 +272,11 @@ impl Progress {
                 let at = clock.global(t);
                 clock.reinit(at, &Variational::<Drr, 3>::initial(&y)).map_err(|e| in_global_time(clock, e))?;
                 self.rebase_pending = false;
+                // Back on w = 0 at the arrest's cut: the fall below −floor must be seen anew
+                // (the step that crossed may have ended below it already).
+                if level == 0.0 {
+                    self.down_seen = false;
+                }
                 self.prev = Sample { t: 0.0, y, d: velocity };
                 return Ok(());
             }

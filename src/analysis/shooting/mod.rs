@@ -6,7 +6,10 @@
 //! (DP − I) δ = −(P(x) − x) with the linearised Poincaré map DP; a step that does not reduce
 //! the residual is halved (up to 8 times). The orbit's Floquet multipliers are the
 //! eigenvalues of the monodromy matrix Φ(T); one of them is 1 (the flow direction), and how
-//! close the computed one comes is reported as a check of the whole computation.
+//! close the computed one comes is reported as a check of the whole computation. When that
+//! check fails (error above [`MULTIPLIER_CHECK_ABOVE`]), the non-trivial multipliers are
+//! checked against central differences of the map and replaced or withheld (module `check`):
+//! unresolved multipliers are never reported, and their stability is unknown (null).
 //!
 //! A real multiplier below −1 means the period-1 orbit has lost stability by period doubling.
 //! The doubled orbit is then sought by the same Newton iteration on P∘P, from the period-1
@@ -16,8 +19,10 @@
 //! Reference: R. Seydel, *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer
 //! 2010, §7.3 (shooting) and §7.4 (Floquet multipliers).
 
+mod check;
 mod options;
 
+pub use check::{MultiplierCheck, MultiplierSource};
 pub use options::ShootingOptions;
 
 use super::period_map::{self, Limits, Return};
@@ -40,6 +45,9 @@ pub struct ShootingSettings {
     pub max_warmup: usize,
     /// Limits of each return.
     pub limits: Limits,
+    /// Above this trivial multiplier error the non-trivial multipliers are checked against
+    /// central differences of the map (module `check`).
+    pub multiplier_check_above: f64,
 }
 
 impl ShootingSettings {
@@ -51,9 +59,17 @@ impl ShootingSettings {
             max_iterations: 30,
             max_warmup: 500,
             limits: Limits { w_tolerance: (rtol, atol_w), max_time: 1e5, max_steps: 1_000_000 },
+            multiplier_check_above: MULTIPLIER_CHECK_ABOVE,
         }
     }
 }
+
+/// The default bound on the trivial multiplier's error above which the non-trivial multipliers
+/// are checked against the map's central differences. The cancellation in the fixed-time
+/// monodromy alone gives errors up to 3.7e-2 at γ = 1e8 (Radau5, rtol 1e-10: slip, ageing,
+/// PRZ laws), where DP agrees with the differences; a failed variational integration gives
+/// ≈ 1 (CVODE at γ ≥ 1e8, Radau5 under the ageing law at 1e12).
+pub const MULTIPLIER_CHECK_ABOVE: f64 = 5e-2;
 
 /// A Floquet multiplier μ (complex).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -94,12 +110,25 @@ pub struct PeriodicOrbit {
     /// measured |μ − 1| ≈ 1e-7 at γ = 1e3, 1e-5 at 1e5, 3e-2 at 1e8 with Radau5 at rtol
     /// 1e-10, because Φ(T) is the product of factors as large as dy/dt in the slip); then the
     /// non-trivial ones, the eigenvalues of the linearised Poincaré map (the product of the
-    /// section maps, free of that cancellation), by decreasing modulus.
+    /// section maps, free of that cancellation; or the map's central differences, see
+    /// `multipliers_source`), by decreasing modulus; none when they are unresolved.
     pub multipliers: Vec<Multiplier>,
     /// |μ_trivial − 1|: the check that the flow direction is reproduced.
     pub trivial_multiplier_error: f64,
-    /// Whether every non-trivial multiplier lies inside the unit circle.
-    pub stable: bool,
+    /// Whether every non-trivial multiplier lies inside the unit circle (by more than their
+    /// uncertainty, when they were checked); None (null) when unknown: the multipliers are
+    /// unresolved, or within their uncertainty of the unit circle.
+    pub stable: Option<bool>,
+    /// Where the non-trivial multipliers come from (`section_jacobian`,
+    /// `section_jacobian_checked`, `map_differences`, `unresolved`).
+    pub multipliers_source: MultiplierSource,
+    /// The check against the map's central differences, when it ran.
+    pub multipliers_check: Option<MultiplierCheck>,
+    /// Why the multipliers are not DP's, or the stability is unknown (null otherwise).
+    pub multipliers_note: Option<String>,
+    /// The matrix whose eigenvalues are the non-trivial multipliers (DP or the differences).
+    #[serde(skip)]
+    pub map_jacobian: Option<Matrix2<f64>>,
     /// Iterations used (plain warm-up iterations of the map, then Newton's).
     pub newton_iterations: usize,
     /// Final residual max_i |P(x)_i − x_i| / max_i |x_i − x*_i|.
@@ -255,22 +284,18 @@ fn trivial_multiplier(monodromy: &Matrix3<f64>) -> Multiplier {
     Multiplier { re: z.re, im: z.im, modulus: z.norm() }
 }
 
-/// The non-trivial multipliers: eigenvalues of the linearised Poincaré map, by decreasing
-/// modulus.
-fn section_multipliers(dp: &Matrix2<f64>) -> Vec<Multiplier> {
-    let mut mu: Vec<Multiplier> =
-        dp.complex_eigenvalues().iter().map(|z| Multiplier { re: z.re, im: z.im, modulus: z.norm() }).collect();
-    mu.sort_by(|a, b| b.modulus.total_cmp(&a.modulus));
-    mu
-}
-
-fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> PeriodicOrbit {
+fn orbit_from(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], rs: &[Return], newton: (usize, f64), settings: &ShootingSettings) -> PeriodicOrbit {
+    let (iterations, residual) = newton;
     let monodromy = rs.iter().fold(Matrix3::identity(), |acc, r| r.fundamental * acc);
     let dp = map_jacobian(rs);
     let trivial = trivial_multiplier(&monodromy);
     let trivial_multiplier_error = (trivial.re - 1.0).hypot(trivial.im);
-    let mut mu = section_multipliers(&dp);
-    let stable = mu.iter().all(|m| m.modulus < 1.0);
+    let checked = check::check(integ, drr, x, rs, &dp, trivial_multiplier_error, settings);
+    let (stable, mut note) = stability(&checked);
+    if let Some(why) = &checked.note {
+        note = Some(note.map_or(why.clone(), |n| format!("{why}; {n}")));
+    }
+    let mut mu = checked.multipliers.unwrap_or_default();
     mu.insert(0, trivial);
     let highest = rs.iter().max_by(|a, b| a.peak[W].total_cmp(&b.peak[W])).unwrap_or(&rs[0]);
     let ln_v_max = highest.peak[W];
@@ -288,9 +313,33 @@ fn orbit_from(x: [f64; 2], rs: &[Return], iterations: usize, residual: f64) -> P
         multipliers: mu,
         trivial_multiplier_error,
         stable,
+        multipliers_source: checked.source,
+        multipliers_check: checked.check,
+        multipliers_note: note,
+        map_jacobian: checked.jacobian,
         newton_iterations: iterations,
         residual,
         steps_per_period: rs.iter().map(|r| r.steps).sum(),
+    }
+}
+
+/// The stability verdict from checked multipliers, and why it is unknown when it is: every
+/// |μ| below 1 by more than the uncertainty → stable; one above 1 by more → unstable; else
+/// unknown. The uncertainty is 0 for unchecked DP (as before the check existed), the larger
+/// of the spread and DP's distance from the differences otherwise.
+fn stability(checked: &check::Checked) -> (Option<bool>, Option<String>) {
+    let Some(mu) = &checked.multipliers else { return (None, None) };
+    let uncertainty = checked.check.map_or(0.0, |c| match checked.source {
+        MultiplierSource::SectionJacobianChecked => c.differences_spread.max(c.section_jacobian_difference),
+        _ => c.differences_spread,
+    });
+    let largest = mu.iter().map(|m| m.modulus).fold(0.0, f64::max);
+    if largest + uncertainty < 1.0 {
+        (Some(true), None)
+    } else if largest - uncertainty > 1.0 {
+        (Some(false), None)
+    } else {
+        (None, Some(format!("the largest |μ| = {largest:.6} is within its uncertainty {uncertainty:.1e} of 1: stability unknown")))
     }
 }
 
@@ -330,7 +379,7 @@ pub fn newton(
             if amplitude < floor {
                 return Ok(Newton { orbit: Err(NoOrbit::FixedPoint { amplitude, floor }), iterations });
             }
-            let orbit = orbit_from(x, &rs, iterations.len(), res);
+            let orbit = orbit_from(integ, drr, x, &rs, (iterations.len(), res), settings);
             return Ok(Newton { orbit: Ok(orbit), iterations });
         }
         if iterations.len() - warmup >= settings.max_iterations {
@@ -376,9 +425,8 @@ pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits
     Ok([r.end[U], r.end[THETA]])
 }
 
-/// The flip eigenvector of the linearised Poincaré map (for a real multiplier μ < −1).
-fn flip_direction(rs: &[Return], mu: f64) -> [f64; 2] {
-    let dp = rs[0].section_jacobian;
+/// The flip eigenvector of the linearised Poincaré map `dp` (for a real multiplier μ < −1).
+fn flip_direction(dp: &Matrix2<f64>, mu: f64) -> [f64; 2] {
     // (DP − μI) e = 0: e ⟂ the first row (or the second, whichever is larger).
     let a = dp - Matrix2::identity() * mu;
     let (p, q) = if a.row(0).norm() >= a.row(1).norm() { (a[(0, 0)], a[(0, 1)]) } else { (a[(1, 0)], a[(1, 1)]) };
@@ -420,10 +468,9 @@ fn period_doubling(
     orbit: &PeriodicOrbit,
     settings: &ShootingSettings,
 ) -> Result<Option<PeriodDoubling>, AnalysisError> {
-    let Some(mu) = flip_multiplier(orbit) else { return Ok(None) };
+    let (Some(mu), Some(dp)) = (flip_multiplier(orbit), orbit.map_jacobian) else { return Ok(None) };
     let x = [orbit.section_point[0], orbit.section_point[2]];
-    let rs = returns(integ, drr, x, 1, &settings.limits)?;
-    let e = flip_direction(&rs, mu);
+    let e = flip_direction(&dp, mu);
     let mut notes = Vec::new();
     for size in [1e-2, 1e-1] {
         for sign in [1.0, -1.0] {
