@@ -122,7 +122,37 @@ pub struct Events {
     pub std: f64,
     /// The linear response's standard deviation of the event time.
     pub std_linear_response: Option<f64>,
+    /// Whether the linear response's event time (and so its own-event alignment) is inside
+    /// its validity; with the linear response only.
+    pub linearity: Option<EventLinearity>,
 }
+
+/// The validity of the linearised event time δt_c = −δg(t_c)/ġ (g the event function, δg its
+/// fluctuation, ġ its slope on the orbit), from the linear response: it assumes that δg does
+/// not change while the event moves by δt_c. ρ_g(s) is the correlation coefficient of δg
+/// between t_c and t_c − s; over a lag s, δg changes by √(2(1 − ρ_g(s))) of its rms.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventLinearity {
+    /// Half-height width of ρ_g(s) (null where ρ_g does not cross 1/2 between the shortest
+    /// and longest lags examined, 1e-4 · min(σ_tc, h) and min(0.9 (t_c − t_start),
+    /// 1e3 · max(σ_tc, h))).
+    pub event_function_correlation_time: Option<f64>,
+    /// √(2(1 − ρ_g(σ_tc))), σ_tc the linear event-time spread: the relative change of δg
+    /// over the event's own shift, the relative error of the linearisation.
+    pub decorrelation_over_spread: f64,
+    /// √(2(1 − ρ_g(h))), h the noise step: how much of δg the realisations' noise, smooth
+    /// between nodes h apart, cannot carry (in the linear regime their event-time spread is
+    /// then below the linear response's, converging as h → 0).
+    pub decorrelation_over_noise_step: f64,
+    /// decorrelation_over_spread ≤ [`EVENT_LINEARITY_LIMIT`]: the own-event linear response
+    /// (event-time spread, and σ and Γ aligned on each realisation's event) is meaningful. When
+    /// false, compare the ensemble with the linear response on the deterministic alignment.
+    pub valid: bool,
+}
+
+/// Largest relative change of the event function's fluctuation over the linear event-time
+/// spread for which the linearised event time is taken as valid (docs/noise.md).
+pub const EVENT_LINEARITY_LIMIT: f64 = 0.1;
 
 /// Mean and σ of one observable on the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -405,6 +435,15 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
         }
         let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, det_atol)?;
+        // The event search arms only after the component has been below its arming level: a
+        // start already past it (inside a broad damped slip, v > 1) would find the next event,
+        // a period later, while the realisations find this one.
+        if (tc - before).abs() > 1e-6 * period {
+            return Err(invalid(
+                "start_before_event",
+                format!("{before} starts past the arming of the event search (the next event found from there is {tc} later, not {before}): start earlier, before the slip's onset"),
+            ));
+        }
         (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
     } else {
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, det_atol)?;

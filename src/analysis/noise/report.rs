@@ -28,6 +28,16 @@ impl NoiseReport {
             self.events.std,
             self.events.std_linear_response.map_or("-".into(), |v| format!("{v:.3e}"))
         );
+        if let Some(l) = &self.events.linearity {
+            s += &format!(
+                "  linearised event time {}: the event function's fluctuation changes by {:.3} of its rms over the linear spread (limit {}), by {:.3} within one noise step; its correlation time {}\n",
+                if l.valid { "valid" } else { "NOT valid (own-event linear response meaningless here; compare on \"alignment\": \"deterministic\")" },
+                l.decorrelation_over_spread,
+                super::EVENT_LINEARITY_LIMIT,
+                l.decorrelation_over_noise_step,
+                l.event_function_correlation_time.map_or("-".into(), |v| format!("{v:.3e}"))
+            );
+        }
         let f = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{v:8.4}"));
         s += &format!("  correlation time of {} (half-height width of Γ; ensemble / linear response):\n", self.correlation_variable);
         let step = (self.correlation_time.len() / 8).max(1);
