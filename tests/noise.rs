@@ -168,10 +168,11 @@ fn drr_ensemble_agrees_with_the_linear_response_at_small_noise() {
     // Event-time spread: ensemble against linear response.
     let lin = r.events.std_linear_response.unwrap();
     assert!((r.events.std / lin - 1.0).abs() < 0.25, "{} vs {lin}", r.events.std);
-    // ... as its validity says: the event function (d ln v/dt) keeps its fluctuation while the
-    // event moves (measured 0.002 of its rms; its correlation time 1.5e-3).
+    // ... as its validity says: in each realisation's own frame the event function (d ln v/dt)
+    // stays the orbit's over the spread (measured deviation 0.002: the slip arrives early or
+    // late as a whole).
     let linearity = r.events.linearity.as_ref().unwrap();
-    assert!(linearity.valid && linearity.decorrelation_over_spread < 0.02, "{linearity:?}");
+    assert!(linearity.valid && linearity.own_frame_deviation < 0.02, "{linearity:?}");
     // The correlation time of u shrinks towards the slip (speed-up), in both: the last one
     // (30/γ before the slip) is below half the largest one in the window.
     let last = r.correlation_time.last().unwrap();
@@ -235,8 +236,9 @@ fn damped_slip_peak_is_outside_the_linearised_event_time() {
     assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None);
     let l = r.events.linearity.as_ref().unwrap();
     assert!(!l.valid, "{l:?}");
-    // Fully decorrelated over the spread (√2 = no correlation left) and within one noise step.
-    assert!(l.decorrelation_over_spread > 1.3 && l.decorrelation_over_noise_step > 1.3, "{l:?}");
+    // In each realisation's own frame the event function has lost its relation to the orbit's
+    // one spread before the event (~√2: δg decorrelated; measured 1.48).
+    assert!(l.own_frame_deviation > 1.0, "{l:?}");
     let xc = &r.deterministic.event_state;
     let v = xc[1].exp();
     let p = drr.params();
@@ -267,7 +269,7 @@ fn a_start_inside_the_slip_is_an_error_naming_start_before_event() {
 }
 
 /// The small-noise limit of the damped case (amplitudes 1e-4 of the above): there the
-/// linearisation holds better (ρ_g decorrelates by 0.32 over σ_tc = 4.6e-7), and the
+/// linearisation holds better (own-frame deviation 0.32 over σ_tc = 4.6e-7), and the
 /// ensemble's event-time spread converges to the linear response's as the noise step h
 /// resolves the fast relaxation (λh = 27 at the default h = τ/10): measured ratio 0.19, 0.46,
 /// 0.79, 0.87 at h = τ/10, τ/40, τ/160, τ/640 (200 realisations). ~30 s of CPU.
@@ -348,6 +350,11 @@ fn shipped_noise_scenes_run_in_reduced_form() {
         assert_eq!(points.len(), 12, "{name}");
         assert!(points.iter().all(|p| p["t_before_event"].is_f64() && p.get("tau").is_some()), "{name}");
         assert!(points.iter().any(|p| p["tau"].is_f64()), "{name}: no correlation time at all");
+        // No shipped scene is damped: each one's linearised event time holds (noise-drr 0.003,
+        // its σ_tc 2.8e-3 longer than the event function's correlation time 1.8e-3: the slip
+        // moves as a whole, which a mere decorrelation test would have taken for a failure).
+        let linearity = &report["noise"]["events"]["linearity"];
+        assert_eq!(linearity["valid"], true, "{name}: {linearity}");
         ran += 1;
     }
     assert_eq!(ran, 4);

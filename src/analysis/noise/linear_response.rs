@@ -198,6 +198,20 @@ impl OdeSystem for Adjoint<'_> {
     }
 }
 
+/// The event function g's fluctuation at lags s before the deterministic event
+/// ([`LinearResponse::event_function_at_lags`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventFunctionLags {
+    /// ρ_g(s): the correlation coefficient of δg(t_c) and δg(t_c − s).
+    pub correlation: Vec<f64>,
+    /// σ(δg̃(t_c − s))/(|ġ| σ_tc), δg̃(t) = δg(t) + ġ(t) δt_c the event function's deviation
+    /// in each realisation's own frame (read at t + δt_c; zero at t_c by construction): how far
+    /// g departs, one lag before the event, from the orbit's own g shifted by the linear δt_c,
+    /// relative to the change ġσ_tc that defines the event. A coherent time shift of the orbit
+    /// leaves it at zero; a fluctuation of δg faster than the lag makes it ~√2.
+    pub own_frame: Vec<f64>,
+}
+
 /// The linear response on a grid of times t_0 < … < t_K = t_c (deterministic event).
 #[derive(Debug, Clone)]
 pub struct LinearResponse {
@@ -223,6 +237,8 @@ pub struct LinearResponse {
     tau: f64,
     rtol: f64,
     event: EventKind,
+    /// ġ, the event function's slope at t_c on the orbit.
+    event_slope: f64,
     /// The covariance's absolute tolerances (second pass).
     covariance_atol: Vec<f64>,
 }
@@ -399,51 +415,60 @@ pub fn compute(
         tau,
         rtol,
         event,
+        event_slope: gdot,
         covariance_atol,
     })
 }
 
 impl LinearResponse {
-    /// The correlation coefficient ρ_g(s) of the event function's fluctuation δg = ∇gᵀδz
-    /// between t_c and t_c − s, at the ascending positive `lags` s (each below t_c − t_start),
-    /// and the steps taken. The linearised event time δt_c = −δg(t_c)/ġ assumes that δg does
-    /// not change while the event moves by δt_c: it holds where ρ_g(σ_tc) ≈ 1, not where δg
-    /// decorrelates within σ_tc (docs/noise.md, "Validity of the own-event alignment").
-    pub fn event_function_correlation(&self, lags: &[f64]) -> Result<(Vec<f64>, u64), SolverError> {
+    /// The event function's fluctuation δg = ∇gᵀδz at t_c − s for the ascending positive
+    /// `lags` s (each below t_c − t_start), and the steps taken. The linearised event time
+    /// δt_c = −δg(t_c)/ġ assumes that g stays linear in time around t_c in each realisation's
+    /// own frame; [`EventFunctionLags`] measures how far that holds.
+    pub fn event_function_at_lags(&self, lags: &[f64]) -> Result<(EventFunctionLags, u64), SolverError> {
         let nn = self.big;
+        let n = nn / 2;
         let tc = *self.times.last().expect("a grid");
-        let at = |t: f64| {
-            let mut x = vec![0.0; nn / 2];
+        let state = |t: f64| {
+            let mut x = vec![0.0; n];
             self.path.at(t, &mut x);
-            event_function_gradient(&self.model, self.event, t, &x)
+            x
         };
-        // Local times, ascending, ending at t_c: the adjoint from ∇g(t_c) backwards through them.
+        let grad_at = |t: f64| event_function_gradient(&self.model, self.event, t, &state(t));
+        // Local times, ascending, ending at t_c: the adjoint μ = Φ(t_c, t)ᵀ∇g(t_c) backwards
+        // through them (the event's adjoint λ = −μ/ġ).
         let mut local: Vec<f64> = lags.iter().rev().map(|s| tc - s).collect();
         local.push(tc);
         let last = local.len() - 1;
-        let (mu, adjoint_steps) = adjoint_sweep(&self.model, &self.path, self.tau, &local, last, &at(tc), self.rtol)?;
+        let grad_c = grad_at(tc);
+        let (mu, adjoint_steps) = adjoint_sweep(&self.model, &self.path, self.tau, &local, last, &grad_c, self.rtol)?;
         // C there, forwards from the last grid time at or before the earliest local time.
-        let k0 = self.times.iter().rposition(|t| *t <= local[0]);
-        let (t0, c0) = match k0 {
+        let (t0, c0) = match self.times.iter().rposition(|t| *t <= local[0]) {
             Some(k) => (self.times[k], self.covariance[k].clone()),
             None => {
                 let mut c0 = vec![0.0; nn * nn];
-                (nn / 2..nn).for_each(|i| c0[i * nn + i] = 1.0);
+                (n..nn).for_each(|i| c0[i * nn + i] = 1.0);
                 (self.path.t[0], c0)
             }
         };
         let sys = Lyapunov { model: &self.model, orbit: &self.path, tau: self.tau };
         let (cov, cov_steps) = integrate_covariance(sys, t0, &c0, &local[..last], self.rtol, &self.covariance_atol)?;
-        let grad_c = at(tc);
         let var_c = form(&grad_c, self.covariance.last().expect("a grid"), &grad_c);
-        let rho = (0..last)
-            .rev()
-            .map(|l| {
-                let g = at(local[l]);
-                form(&mu[l], &cov[l], &g) / (var_c * form(&g, &cov[l], &g)).sqrt()
-            })
-            .collect();
-        Ok((rho, adjoint_steps + cov_steps))
+        let var_tc = self.event_time_std * self.event_time_std;
+        let (mut correlation, mut own_frame) = (Vec::new(), Vec::new());
+        for l in (0..last).rev() {
+            let (t, g, c) = (local[l], grad_at(local[l]), &cov[l]);
+            let var = form(&g, c, &g);
+            correlation.push(form(&mu[l], c, &g) / (var_c * var).sqrt());
+            // ġ(t) = ∇g(t)·ż(t) on the orbit, and Cov(δg(t), δt_c) = ∇g(t)ᵀ C λ.
+            let mut f = vec![0.0; n];
+            self.model.rhs(t, &state(t), &mut f);
+            let slope: f64 = g[..n].iter().zip(&f).map(|(a, b)| a * b).sum();
+            let with_tc = -form(&g, c, &mu[l]) / self.event_slope;
+            let aligned = var + 2.0 * slope * with_tc + slope * slope * var_tc;
+            own_frame.push(aligned.max(0.0).sqrt() / (self.event_slope.abs() * self.event_time_std));
+        }
+        Ok((EventFunctionLags { correlation, own_frame }, adjoint_steps + cov_steps))
     }
 
     /// Cov(gᵀδz(t_k), δt_c) at every grid time for gradients g_k.

@@ -128,30 +128,31 @@ pub struct Events {
 }
 
 /// The validity of the linearised event time δt_c = −δg(t_c)/ġ (g the event function, δg its
-/// fluctuation, ġ its slope on the orbit), from the linear response: it assumes that δg does
-/// not change while the event moves by δt_c. ρ_g(s) is the correlation coefficient of δg
-/// between t_c and t_c − s; over a lag s, δg changes by √(2(1 − ρ_g(s))) of its rms.
+/// fluctuation, ġ its slope on the orbit), from the linear response. Each realisation's event
+/// is a root of g_i(t) ≈ ḡ(t) + δg(t); the linearisation takes that root from g's values at
+/// t_c alone, and so holds while, in each realisation's own frame (read at t + δt_c), g stays
+/// the orbit's: δg̃(t) = δg(t) + ġ(t)δt_c (zero at t_c) must stay small against ġσ_tc over the
+/// spread σ_tc. A coherent time shift of the orbit (an inertial slip arriving early or late)
+/// keeps δg̃ = 0 at any lag; a δg that fluctuates faster than σ_tc (a slip peak slaved to the
+/// noise, with radiation damping) makes it ~√2.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EventLinearity {
-    /// Half-height width of ρ_g(s) (null where ρ_g does not cross 1/2 between the shortest
-    /// and longest lags examined, 1e-4 · min(σ_tc, h) and min(0.9 (t_c − t_start),
-    /// 1e3 · max(σ_tc, h))).
+    /// σ(δg̃(t_c − σ_tc))/(|ġ|σ_tc): the event function's deviation in each realisation's own
+    /// frame one spread before its event, relative to the orbit's change over the spread.
+    pub own_frame_deviation: f64,
+    /// Half-height width of ρ_g(s), the correlation coefficient of δg(t_c) and δg(t_c − s):
+    /// the shorter of the fluctuation's memory and the orbit's time scale at the event (null
+    /// where ρ_g does not cross 1/2 between the shortest and longest lags examined,
+    /// 1e-4 · min(σ_tc, h) and min(0.9 (t_c − t_start), 1e3 · max(σ_tc, h))).
     pub event_function_correlation_time: Option<f64>,
-    /// √(2(1 − ρ_g(σ_tc))), σ_tc the linear event-time spread: the relative change of δg
-    /// over the event's own shift, the relative error of the linearisation.
-    pub decorrelation_over_spread: f64,
-    /// √(2(1 − ρ_g(h))), h the noise step: how much of δg the realisations' noise, smooth
-    /// between nodes h apart, cannot carry (in the linear regime their event-time spread is
-    /// then below the linear response's, converging as h → 0).
-    pub decorrelation_over_noise_step: f64,
-    /// decorrelation_over_spread ≤ [`EVENT_LINEARITY_LIMIT`]: the own-event linear response
+    /// own_frame_deviation ≤ [`EVENT_LINEARITY_LIMIT`]: the own-event linear response
     /// (event-time spread, and σ and Γ aligned on each realisation's event) is meaningful. When
     /// false, compare the ensemble with the linear response on the deterministic alignment.
     pub valid: bool,
 }
 
-/// Largest relative change of the event function's fluctuation over the linear event-time
-/// spread for which the linearised event time is taken as valid (docs/noise.md).
+/// Largest own-frame deviation of the event function for which the linearised event time is
+/// taken as valid (docs/noise.md).
 pub const EVENT_LINEARITY_LIMIT: f64 = 0.1;
 
 /// Mean and σ of one observable on the grid.

@@ -30,11 +30,10 @@ impl NoiseReport {
         );
         if let Some(l) = &self.events.linearity {
             s += &format!(
-                "  linearised event time {}: the event function's fluctuation changes by {:.3} of its rms over the linear spread (limit {}), by {:.3} within one noise step; its correlation time {}\n",
-                if l.valid { "valid" } else { "NOT valid (own-event linear response meaningless here; compare on \"alignment\": \"deterministic\")" },
-                l.decorrelation_over_spread,
+                "  linearised event time {}: event function's own-frame deviation {:.3} over the linear spread (limit {}); its fluctuation's correlation time {}\n",
+                if l.valid { "valid" } else { "NOT valid (the own-event linear response does not apply; compare on \"alignment\": \"deterministic\")" },
+                l.own_frame_deviation,
                 super::EVENT_LINEARITY_LIMIT,
-                l.decorrelation_over_noise_step,
                 l.event_function_correlation_time.map_or("-".into(), |v| format!("{v:.3e}"))
             );
         }

@@ -193,36 +193,31 @@ fn event_spread(data: &EnsembleData, t_event: f64, realisations: usize, linear: 
 /// Lags per decade at which the event function's correlation ρ_g is sampled.
 const LAGS_PER_DECADE: f64 = 8.0;
 
-/// The validity of the linearised event time: ρ_g at the linear event-time spread σ_tc, at the
-/// noise step h, and on log-spaced lags from 1e-4 · min(σ_tc, h) to min(0.9 · `span`,
-/// 1e3 · max(σ_tc, h)) for its half-height width; `span` = t_c − t_start. The steps are added to
-/// `linear_steps`.
+/// The validity of the linearised event time: the own-frame deviation of the event function
+/// at the lag σ_tc (the linear event-time spread), and ρ_g's half-height width on log-spaced
+/// lags from 1e-4 · min(σ_tc, h) to min(0.9 · `span`, 1e3 · max(σ_tc, h)), h the noise step;
+/// `span` = t_c − t_start. The steps are added to `linear_steps`.
 fn event_linearity(l: &LinearResponse, h: f64, span: f64, linear_steps: &mut u64) -> Result<EventLinearity, SolverError> {
     let sigma = l.event_time_std;
     let shortest = if sigma > 0.0 { sigma.min(h) } else { h };
     let (lo, hi) = (1e-4 * shortest, (0.9 * span).min(1e3 * sigma.max(h)));
     let count = (LAGS_PER_DECADE * (hi / lo).log10()).ceil().max(1.0) as usize;
     let mut lags: Vec<f64> = (0..=count).map(|i| lo * (hi / lo).powf(i as f64 / count as f64)).collect();
-    lags.extend([sigma.min(hi), h.min(hi)]);
+    let at_spread = sigma.clamp(lo, hi);
+    lags.push(at_spread);
     lags.sort_by(|a, b| a.total_cmp(b));
     lags.dedup();
-    let (rho, steps) = l.event_function_correlation(&lags)?;
+    let (e, steps) = l.event_function_at_lags(&lags)?;
     *linear_steps += steps;
-    let at = |lag: f64| rho[lags.iter().position(|s| *s == lag.min(hi)).expect("an examined lag")];
-    let change = |r: f64| (2.0 * (1.0 - r)).max(0.0).sqrt();
+    let rho = &e.correlation;
     // The first lag where ρ_g has fallen to one half, log-linearly interpolated.
     let width = (rho[0] > 0.5).then(|| rho.iter().position(|r| *r <= 0.5)).flatten().map(|i| {
         let (r0, r1) = (rho[i - 1], rho[i]);
         let (a, b) = (lags[i - 1].ln(), lags[i].ln());
         (a + (r0 - 0.5) / (r0 - r1) * (b - a)).exp()
     });
-    let decorrelation_over_spread = change(at(sigma));
-    Ok(EventLinearity {
-        event_function_correlation_time: width,
-        decorrelation_over_spread,
-        decorrelation_over_noise_step: change(at(h)),
-        valid: decorrelation_over_spread <= EVENT_LINEARITY_LIMIT,
-    })
+    let own_frame_deviation = e.own_frame[lags.iter().position(|s| *s == at_spread).expect("an examined lag")];
+    Ok(EventLinearity { own_frame_deviation, event_function_correlation_time: width, valid: own_frame_deviation <= EVENT_LINEARITY_LIMIT })
 }
 
 /// The settings as used.
