@@ -198,6 +198,20 @@ impl OdeSystem for Adjoint<'_> {
     }
 }
 
+/// The event function g's fluctuation at lags s before the deterministic event
+/// ([`LinearResponse::event_function_at_lags`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EventFunctionLags {
+    /// ρ_g(s): the correlation coefficient of δg(t_c) and δg(t_c − s).
+    pub correlation: Vec<f64>,
+    /// σ(δg̃(t_c − s))/(|ġ| σ_tc), δg̃(t) = δg(t) + ġ(t) δt_c the event function's deviation
+    /// in each realisation's own frame (read at t + δt_c; zero at t_c by construction): how far
+    /// g departs, one lag before the event, from the orbit's own g shifted by the linear δt_c,
+    /// relative to the change ġσ_tc that defines the event. A coherent time shift of the orbit
+    /// leaves it at zero; a fluctuation of δg faster than the lag makes it ~√2.
+    pub own_frame: Vec<f64>,
+}
+
 /// The linear response on a grid of times t_0 < … < t_K = t_c (deterministic event).
 #[derive(Debug, Clone)]
 pub struct LinearResponse {
@@ -222,10 +236,59 @@ pub struct LinearResponse {
     times: Vec<f64>,
     tau: f64,
     rtol: f64,
+    event: EventKind,
+    /// ġ, the event function's slope at t_c on the orbit.
+    event_slope: f64,
+    /// The covariance's absolute tolerances (second pass).
+    covariance_atol: Vec<f64>,
 }
 
 fn failure(t: f64, message: String) -> AnalysisError {
     AnalysisError::Failed { analysis: "the linear response", t, state: vec![], message }
+}
+
+/// ∇g at (t, x̄) over the augmented state (x, η) for the event function g: g = dx_c/dt =
+/// F_c(t, x) + b_c(x) η_c at a maximum (∇g = (J_c·, b_c e_c); ∂b_c/∂x·η vanishes at η = 0),
+/// g = x_c − level at a crossing (∇g = e_c).
+fn event_function_gradient(model: &NoiseModel, event: EventKind, t: f64, x: &[f64]) -> Vec<f64> {
+    let n = model.dim();
+    let mut grad = vec![0.0; 2 * n];
+    match event {
+        EventKind::Maximum { component: c, .. } => {
+            let mut jstore = vec![0.0; n * n];
+            let mut jac = JacobianMatrix::new(&mut jstore, n);
+            model.jacobian(t, x, &mut jac);
+            let mut b = vec![0.0; n];
+            model.noise_diag(x, &mut b);
+            for (j, gj) in grad.iter_mut().take(n).enumerate() {
+                *gj = jac.get(c, j);
+            }
+            grad[n + c] = b[c];
+        }
+        EventKind::CrossDown { component: c, .. } | EventKind::CrossUp { component: c, .. } => grad[c] = 1.0,
+    }
+    grad
+}
+
+/// C at the ascending `times` (all ≥ t0) from C(t0) = c0, Radau5 at (rtol, atol); also the steps.
+fn integrate_covariance(sys: Lyapunov<'_>, t0: f64, c0: &[f64], times: &[f64], rtol: f64, atol: &[f64]) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
+    let options = Options { max_steps: Some(1_000_000), ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec())) };
+    let mut integ = solver::build_default(Method::Radau5, sys, t0, c0, &options)?;
+    let mut out = Vec::with_capacity(times.len());
+    for &t in times {
+        if t > integ.t() {
+            integ.set_stop_time(t)?;
+            integ.advance(t, Task::Normal)?;
+        }
+        out.push(integ.state().to_vec());
+    }
+    Ok((out, integ.stats().steps))
+}
+
+/// The bilinear form aᵀ C b (C row-major, N×N).
+fn form(a: &[f64], c: &[f64], b: &[f64]) -> f64 {
+    let nn = a.len();
+    (0..nn).map(|i| a[i] * (0..nn).map(|j| c[i * nn + j] * b[j]).sum::<f64>()).sum()
 }
 
 /// μ_k = Φ(t_j, t_k)ᵀ μ_j for k = j, j−1, …, 0 (backwards along the orbit).
@@ -285,25 +348,15 @@ pub fn compute(
     (n..nn).for_each(|i| c0[i * nn + i] = 1.0);
     let mut scales = vec![1.0; nn];
     let mut covariance = Vec::new();
+    let mut covariance_atol = Vec::new();
     for pass in 0..2 {
         let factor = if pass == 0 { 1e-12 } else { 1e-9 };
-        let atol: Vec<f64> = (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
+        covariance_atol = (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
         let pass_rtol = if pass == 0 { rtol.max(1e-4) } else { rtol };
-        let options = Options { max_steps: Some(1_000_000), ..Options::new(pass_rtol, Tolerance::PerComponent(atol)) };
-        let mut integ = solver::build_default(Method::Radau5, sys, t_start, &c0, &options)?;
-        covariance.clear();
-        let mut max_var = vec![0.0f64; nn];
-        for &t in times {
-            integ.set_stop_time(t)?;
-            integ.advance(t, Task::Normal)?;
-            let c = integ.state().to_vec();
-            for (i, m) in max_var.iter_mut().enumerate() {
-                *m = m.max(c[i * nn + i].abs());
-            }
-            covariance.push(c);
-        }
-        steps += integ.stats().steps;
-        scales = max_var.iter().map(|v| v.sqrt().max(1e-300)).collect();
+        let (c, pass_steps) = integrate_covariance(sys, t_start, &c0, times, pass_rtol, &covariance_atol)?;
+        covariance = c;
+        steps += pass_steps;
+        scales = (0..nn).map(|i| covariance.iter().fold(0.0f64, |m, c| m.max(c[i * nn + i].abs())).sqrt().max(1e-300)).collect();
     }
     if covariance.iter().any(|m| m.iter().any(|v| !v.is_finite())) {
         return Err(failure(tc, "the covariance is not finite".into()));
@@ -319,42 +372,34 @@ pub fn compute(
         .collect();
     // The event gradient p = −∇g/ġ at t_c.
     let xc = orbit.last().expect("a grid");
-    let mut p = vec![0.0; nn];
     let mut f = vec![0.0; n];
     model.rhs(tc, xc, &mut f);
-    match event {
+    let grad = event_function_gradient(model, event, tc, xc);
+    let gdot = match event {
         EventKind::Maximum { component: c, .. } => {
-            let mut jstore = vec![0.0; n * n];
-            let mut jac = JacobianMatrix::new(&mut jstore, n);
-            model.jacobian(tc, xc, &mut jac);
             // ġ = d/dt F_c(t, x̄): J_c· F (+ ∂F_c/∂t by a central difference; 0 when autonomous).
             let dt = 1e-6 * (1.0 + tc.abs());
             let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
             model.rhs(tc + dt, xc, &mut fp);
             model.rhs(tc - dt, xc, &mut fm);
-            let gdot: f64 = (0..n).map(|j| jac.get(c, j) * f[j]).sum::<f64>() + (fp[c] - fm[c]) / (2.0 * dt);
+            let gdot: f64 = (0..n).map(|j| grad[j] * f[j]).sum::<f64>() + (fp[c] - fm[c]) / (2.0 * dt);
             if gdot.is_nan() || gdot >= 0.0 {
                 return Err(failure(tc, format!("the event is not a strict maximum (d²x/dt² = {gdot:e})")));
             }
-            let mut b = vec![0.0; n];
-            model.noise_diag(xc, &mut b);
-            for (j, pj) in p.iter_mut().take(n).enumerate() {
-                *pj = -jac.get(c, j) / gdot;
-            }
-            p[n + c] = -b[c] / gdot;
+            gdot
         }
         EventKind::CrossDown { component: c, .. } | EventKind::CrossUp { component: c, .. } => {
             if f[c] == 0.0 {
                 return Err(failure(tc, "the event crossing is tangential (dx/dt = 0)".into()));
             }
-            p[c] = -1.0 / f[c];
+            f[c]
         }
-    }
+    };
+    let p: Vec<f64> = grad.iter().map(|g| -g / gdot).collect();
     let k_last = times.len() - 1;
     let (adjoint, adjoint_steps) = adjoint_sweep(model, &path, tau, times, k_last, &p, rtol)?;
     steps += adjoint_steps;
-    let c_last = &covariance[k_last];
-    let var_tc: f64 = (0..nn).map(|a| p[a] * (0..nn).map(|b| c_last[a * nn + b] * p[b]).sum::<f64>()).sum();
+    let var_tc = form(&p, &covariance[k_last], &p);
     Ok(LinearResponse {
         big: nn,
         orbit,
@@ -369,19 +414,66 @@ pub fn compute(
         times: times.to_vec(),
         tau,
         rtol,
+        event,
+        event_slope: gdot,
+        covariance_atol,
     })
 }
 
 impl LinearResponse {
+    /// The event function's fluctuation δg = ∇gᵀδz at t_c − s for the ascending positive
+    /// `lags` s (each below t_c − t_start), and the steps taken. The linearised event time
+    /// δt_c = −δg(t_c)/ġ assumes that g stays linear in time around t_c in each realisation's
+    /// own frame; [`EventFunctionLags`] measures how far that holds.
+    pub fn event_function_at_lags(&self, lags: &[f64]) -> Result<(EventFunctionLags, u64), SolverError> {
+        let nn = self.big;
+        let n = nn / 2;
+        let tc = *self.times.last().expect("a grid");
+        let state = |t: f64| {
+            let mut x = vec![0.0; n];
+            self.path.at(t, &mut x);
+            x
+        };
+        let grad_at = |t: f64| event_function_gradient(&self.model, self.event, t, &state(t));
+        // Local times, ascending, ending at t_c: the adjoint μ = Φ(t_c, t)ᵀ∇g(t_c) backwards
+        // through them (the event's adjoint λ = −μ/ġ).
+        let mut local: Vec<f64> = lags.iter().rev().map(|s| tc - s).collect();
+        local.push(tc);
+        let last = local.len() - 1;
+        let grad_c = grad_at(tc);
+        let (mu, adjoint_steps) = adjoint_sweep(&self.model, &self.path, self.tau, &local, last, &grad_c, self.rtol)?;
+        // C there, forwards from the last grid time at or before the earliest local time.
+        let (t0, c0) = match self.times.iter().rposition(|t| *t <= local[0]) {
+            Some(k) => (self.times[k], self.covariance[k].clone()),
+            None => {
+                let mut c0 = vec![0.0; nn * nn];
+                (n..nn).for_each(|i| c0[i * nn + i] = 1.0);
+                (self.path.t[0], c0)
+            }
+        };
+        let sys = Lyapunov { model: &self.model, orbit: &self.path, tau: self.tau };
+        let (cov, cov_steps) = integrate_covariance(sys, t0, &c0, &local[..last], self.rtol, &self.covariance_atol)?;
+        let var_c = form(&grad_c, self.covariance.last().expect("a grid"), &grad_c);
+        let var_tc = self.event_time_std * self.event_time_std;
+        let (mut correlation, mut own_frame) = (Vec::new(), Vec::new());
+        for l in (0..last).rev() {
+            let (t, g, c) = (local[l], grad_at(local[l]), &cov[l]);
+            let var = form(&g, c, &g);
+            correlation.push(form(&mu[l], c, &g) / (var_c * var).sqrt());
+            // ġ(t) = ∇g(t)·ż(t) on the orbit, and Cov(δg(t), δt_c) = ∇g(t)ᵀ C λ.
+            let mut f = vec![0.0; n];
+            self.model.rhs(t, &state(t), &mut f);
+            let slope: f64 = g[..n].iter().zip(&f).map(|(a, b)| a * b).sum();
+            let with_tc = -form(&g, c, &mu[l]) / self.event_slope;
+            let aligned = var + 2.0 * slope * with_tc + slope * slope * var_tc;
+            own_frame.push(aligned.max(0.0).sqrt() / (self.event_slope.abs() * self.event_time_std));
+        }
+        Ok((EventFunctionLags { correlation, own_frame }, adjoint_steps + cov_steps))
+    }
+
     /// Cov(gᵀδz(t_k), δt_c) at every grid time for gradients g_k.
     fn with_event_time(&self, grads: &[Vec<f64>]) -> Vec<f64> {
-        let nn = self.big;
-        (0..self.covariance.len())
-            .map(|k| {
-                let (c, l, g) = (&self.covariance[k], &self.adjoint[k], &grads[k]);
-                (0..nn).map(|a| g[a] * (0..nn).map(|m| c[a * nn + m] * l[m]).sum::<f64>()).sum()
-            })
-            .collect()
+        (0..self.covariance.len()).map(|k| form(&grads[k], &self.covariance[k], &self.adjoint[k])).collect()
     }
 
     /// gᵀ ż at every grid time: the observable's rate of change along the orbit.
@@ -392,14 +484,12 @@ impl LinearResponse {
     /// Var(g_kᵀ δz(t_k)) at every grid time for the observable gradients g_k (of length N, zero
     /// on the noise components), aligned on each realisation's event when `own`.
     pub fn variances(&self, grads: &[Vec<f64>], own: bool) -> Vec<f64> {
-        let nn = self.big;
         let with_tc = self.with_event_time(grads);
         let rate = self.rates(grads);
         let var_tc = self.event_time_std * self.event_time_std;
         (0..self.covariance.len())
             .map(|k| {
-                let (c, g) = (&self.covariance[k], &grads[k]);
-                let mut v: f64 = (0..nn).map(|a| g[a] * (0..nn).map(|b| c[a * nn + b] * g[b]).sum::<f64>()).sum();
+                let mut v = form(&grads[k], &self.covariance[k], &grads[k]);
                 if own {
                     v += 2.0 * rate[k] * with_tc[k] + rate[k] * rate[k] * var_tc;
                 }
@@ -412,15 +502,13 @@ impl LinearResponse {
     /// `own` (through the adjoint μ_k = Φ(t_j, t_k)ᵀ g_j, integrated backwards from t_j); also
     /// the adjoint's steps.
     pub fn row(&self, grads: &[Vec<f64>], own: bool, j: usize) -> Result<(Vec<f64>, u64), SolverError> {
-        let nn = self.big;
         let with_tc = self.with_event_time(grads);
         let rate = self.rates(grads);
         let var_tc = self.event_time_std * self.event_time_std;
         let (mu, steps) = adjoint_sweep(&self.model, &self.path, self.tau, &self.times, j, &grads[j], self.rtol)?;
         let row = (0..=j)
             .map(|k| {
-                let (c, g) = (&self.covariance[k], &grads[k]);
-                let mut v: f64 = (0..nn).map(|a| mu[k][a] * (0..nn).map(|b| c[a * nn + b] * g[b]).sum::<f64>()).sum();
+                let mut v = form(&mu[k], &self.covariance[k], &grads[k]);
                 if own {
                     v += rate[j] * with_tc[k] + with_tc[j] * rate[k] + rate[j] * rate[k] * var_tc;
                 }

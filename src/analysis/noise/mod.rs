@@ -122,7 +122,38 @@ pub struct Events {
     pub std: f64,
     /// The linear response's standard deviation of the event time.
     pub std_linear_response: Option<f64>,
+    /// Whether the linear response's event time (and so its own-event alignment) is inside
+    /// its validity; with the linear response only.
+    pub linearity: Option<EventLinearity>,
 }
+
+/// The validity of the linearised event time δt_c = −δg(t_c)/ġ (g the event function, δg its
+/// fluctuation, ġ its slope on the orbit), from the linear response. Each realisation's event
+/// is a root of g_i(t) ≈ ḡ(t) + δg(t); the linearisation takes that root from g's values at
+/// t_c alone, and so holds while, in each realisation's own frame (read at t + δt_c), g stays
+/// the orbit's: δg̃(t) = δg(t) + ġ(t)δt_c (zero at t_c) must stay small against ġσ_tc over the
+/// spread σ_tc. A coherent time shift of the orbit (an inertial slip arriving early or late)
+/// keeps δg̃ = 0 at any lag; a δg that fluctuates faster than σ_tc (a slip peak slaved to the
+/// noise, with radiation damping) makes it ~√2.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventLinearity {
+    /// σ(δg̃(t_c − σ_tc))/(|ġ|σ_tc): the event function's deviation in each realisation's own
+    /// frame one spread before its event, relative to the orbit's change over the spread.
+    pub own_frame_deviation: f64,
+    /// Half-height width of ρ_g(s), the correlation coefficient of δg(t_c) and δg(t_c − s):
+    /// the shorter of the fluctuation's memory and the orbit's time scale at the event (null
+    /// where ρ_g does not cross 1/2 between the shortest and longest lags examined,
+    /// 1e-4 · min(σ_tc, h) and min(0.9 (t_c − t_start), 1e3 · max(σ_tc, h))).
+    pub event_function_correlation_time: Option<f64>,
+    /// own_frame_deviation ≤ [`EVENT_LINEARITY_LIMIT`]: the own-event linear response
+    /// (event-time spread, and σ and Γ aligned on each realisation's event) is meaningful. When
+    /// false, compare the ensemble with the linear response on the deterministic alignment.
+    pub valid: bool,
+}
+
+/// Largest own-frame deviation of the event function for which the linearised event time is
+/// taken as valid (docs/noise.md).
+pub const EVENT_LINEARITY_LIMIT: f64 = 0.1;
 
 /// Mean and σ of one observable on the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -405,6 +436,15 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
         }
         let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, det_atol)?;
+        // The event search arms only after the component has been below its arming level: a
+        // start already past it (inside a broad damped slip, v > 1) would find the next event,
+        // a period later, while the realisations find this one.
+        if (tc - before).abs() > 1e-6 * period {
+            return Err(invalid(
+                "start_before_event",
+                format!("{before} starts past the arming of the event search (the next event found from there is {tc} later, not {before}): start earlier, before the slip's onset"),
+            ));
+        }
         (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
     } else {
         let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, det_atol)?;

@@ -28,6 +28,15 @@ impl NoiseReport {
             self.events.std,
             self.events.std_linear_response.map_or("-".into(), |v| format!("{v:.3e}"))
         );
+        if let Some(l) = &self.events.linearity {
+            s += &format!(
+                "  linearised event time {}: event function's own-frame deviation {:.3} over the linear spread (limit {}); its fluctuation's correlation time {}\n",
+                if l.valid { "valid" } else { "NOT valid (the own-event linear response does not apply; compare on \"alignment\": \"deterministic\")" },
+                l.own_frame_deviation,
+                super::EVENT_LINEARITY_LIMIT,
+                l.event_function_correlation_time.map_or("-".into(), |v| format!("{v:.3e}"))
+            );
+        }
         let f = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{v:8.4}"));
         s += &format!("  correlation time of {} (half-height width of Γ; ensemble / linear response):\n", self.correlation_variable);
         let step = (self.correlation_time.len() / 8).max(1);

@@ -11,8 +11,8 @@ use super::options::Alignment;
 use super::scheme;
 use super::statistics::{self, Moments, Width};
 use super::{
-    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, Events, Growth, NoiseReport, Plan, Realisations, Series, Settings, SettledOrbit, Work,
-    DET_RTOL, SCHEME,
+    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, EventLinearity, Events, Growth, NoiseReport, Plan, Realisations, Series, Settings, SettledOrbit, Work,
+    DET_RTOL, EVENT_LINEARITY_LIMIT, SCHEME,
 };
 use crate::analysis::AnalysisError;
 use crate::integrate::{OdeSystem, SolverError};
@@ -44,7 +44,8 @@ pub(super) fn statistics(
         series.push(stats.series);
     }
     let growth = growth(model, orbit, &plan, &series);
-    let events = event_spread(&realisations.data, orbit.t_event, plan.realisations, linear.as_ref());
+    let linearity = linear.as_ref().map(|l| event_linearity(l, plan.h, orbit.t_event - orbit.start.t, &mut linear_steps)).transpose()?;
+    let events = event_spread(&realisations.data, orbit.t_event, plan.realisations, linear.as_ref(), linearity);
     let work = work(&realisations, plan.realisations, linear.as_ref().map(|_| linear_steps));
     let deterministic = deterministic(model, orbit, realisations.event_time_without_noise);
     Ok(NoiseReport {
@@ -181,12 +182,42 @@ fn row_of(m: &Moments, j: usize) -> Vec<f64> {
 
 /// The realisations' event times against the deterministic one: mean shift and spread, with
 /// the linear response's spread.
-fn event_spread(data: &EnsembleData, t_event: f64, realisations: usize, linear: Option<&LinearResponse>) -> Events {
+fn event_spread(data: &EnsembleData, t_event: f64, realisations: usize, linear: Option<&LinearResponse>, linearity: Option<EventLinearity>) -> Events {
     let r_n = realisations as f64;
     let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event).collect();
     let mean_shift = shifts.iter().sum::<f64>() / r_n;
     let std = (shifts.iter().map(|d| (d - mean_shift).powi(2)).sum::<f64>() / (r_n - 1.0)).sqrt();
-    Events { mean_shift, std, std_linear_response: linear.map(|l| l.event_time_std) }
+    Events { mean_shift, std, std_linear_response: linear.map(|l| l.event_time_std), linearity }
+}
+
+/// Lags per decade at which the event function's correlation ρ_g is sampled.
+const LAGS_PER_DECADE: f64 = 8.0;
+
+/// The validity of the linearised event time: the own-frame deviation of the event function
+/// at the lag σ_tc (the linear event-time spread), and ρ_g's half-height width on log-spaced
+/// lags from 1e-4 · min(σ_tc, h) to min(0.9 · `span`, 1e3 · max(σ_tc, h)), h the noise step;
+/// `span` = t_c − t_start. The steps are added to `linear_steps`.
+fn event_linearity(l: &LinearResponse, h: f64, span: f64, linear_steps: &mut u64) -> Result<EventLinearity, SolverError> {
+    let sigma = l.event_time_std;
+    let shortest = if sigma > 0.0 { sigma.min(h) } else { h };
+    let (lo, hi) = (1e-4 * shortest, (0.9 * span).min(1e3 * sigma.max(h)));
+    let count = (LAGS_PER_DECADE * (hi / lo).log10()).ceil().max(1.0) as usize;
+    let mut lags: Vec<f64> = (0..=count).map(|i| lo * (hi / lo).powf(i as f64 / count as f64)).collect();
+    let at_spread = sigma.clamp(lo, hi);
+    lags.push(at_spread);
+    lags.sort_by(|a, b| a.total_cmp(b));
+    lags.dedup();
+    let (e, steps) = l.event_function_at_lags(&lags)?;
+    *linear_steps += steps;
+    let rho = &e.correlation;
+    // The first lag where ρ_g has fallen to one half, log-linearly interpolated.
+    let width = (rho[0] > 0.5).then(|| rho.iter().position(|r| *r <= 0.5)).flatten().map(|i| {
+        let (r0, r1) = (rho[i - 1], rho[i]);
+        let (a, b) = (lags[i - 1].ln(), lags[i].ln());
+        (a + (r0 - 0.5) / (r0 - r1) * (b - a)).exp()
+    });
+    let own_frame_deviation = e.own_frame[lags.iter().position(|s| *s == at_spread).expect("an examined lag")];
+    Ok(EventLinearity { own_frame_deviation, event_function_correlation_time: width, valid: own_frame_deviation <= EVENT_LINEARITY_LIMIT })
 }
 
 /// The settings as used.
