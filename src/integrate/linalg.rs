@@ -8,9 +8,36 @@ pub(super) fn rms(v: &[f64], scal: &[f64]) -> f64 {
     (sum / v.len() as f64).sqrt()
 }
 
+/// Evaluates `body` with the dimension `n` as a compile-time constant for the small systems
+/// that dominate the integrators' cost (the spring-slider's n = 3, E5's n = 4), so that the
+/// loops in it unroll and lose their bounds checks and iterator bookkeeping; any other n runs
+/// the same body with n at run time. The arithmetic, and so the result, is the same in every
+/// case. (A macro, not a function taking a closure: a closure called from three arms is not
+/// inlined, and then n is not constant.)
+macro_rules! with_small_n {
+    ($n:ident, $body:expr) => {
+        match $n {
+            3 => {
+                let $n = 3;
+                $body
+            }
+            4 => {
+                let $n = 4;
+                $body
+            }
+            _ => $body,
+        }
+    };
+}
+
 /// LU factorisation with partial pivoting of the column-major n×n matrix `a` (LINPACK DGEFA
 /// layout: row interchanges applied to the columns to the right only). False if singular.
 pub(super) fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    with_small_n!(n, lu_real_n(&mut a[..n * n], &mut ip[..n], n))
+}
+
+#[inline(always)]
+fn lu_real_n(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     for k in 0..n {
         let col = k * n;
         let mut p = k;
@@ -47,9 +74,15 @@ pub(super) fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     true
 }
 
-/// Solves with the factors of [`lu_real`], in place. (Column slices instead of indices: the
-/// same operations in the same order, without bounds checks in the inner loops.)
+/// Solves with the factors of [`lu_real`], in place.
 pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
+    with_small_n!(n, solve_real_n(a, ip, n, b))
+}
+
+/// [`solve_real`]'s body. (Column slices instead of indices: the same operations in the same
+/// order, without bounds checks in the inner loops when n is only known at run time.)
+#[inline(always)]
+fn solve_real_n(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
     let (a, ip, b) = (&a[..n * n], &ip[..n], &mut b[..n]);
     for (k, col) in a.chunks_exact(n).enumerate() {
         let p = ip[k];
@@ -72,6 +105,25 @@ pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
     }
 }
 
+/// Veltkamp's split of `a` into a high part of 26 significant bits and the exact rest.
+#[inline(always)]
+fn split(a: f64) -> (f64, f64) {
+    let c = 134_217_729.0 * a; // 2^27 + 1
+    let hi = c - (c - a);
+    (hi, a - hi)
+}
+
+/// The rounding error a·b − p of the product p = fl(a·b), exactly (Dekker's TwoProduct), in
+/// plain f64 arithmetic: the same value as `a.mul_add(b, -p)`, which without a target FMA is a
+/// software `fma` call several times as expensive. Exact unless a partial product underflows
+/// (|a·b| below about 1e-292, where the error is below 1e-308 either way); NaN if |a| or |b|
+/// exceeds about 1e299 (the split overflows) — [`solve_refined`] falls back to `mul_add` then.
+#[inline(always)]
+fn product_error(a: f64, b: f64, p: f64) -> f64 {
+    let ((ah, al), (bh, bl)) = (split(a), split(b));
+    ((ah * bh - p) + ah * bl + al * bh) + al * bl
+}
+
 /// Solves (d·I − J) x = b, J column-major, with the LU factors `a`, `ip` of the rounded
 /// matrix, then refines x once with the residual b − d·x + J·x evaluated in compensated
 /// (error-free product and sum) arithmetic; `x` holds b on entry and x on return, `r` is
@@ -81,7 +133,25 @@ pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
 /// from d and J themselves restores x to working accuracy.
 pub(super) fn solve_refined(a: &[f64], ip: &[usize], jac: &[f64], d: f64, b: &[f64], x: &mut [f64], r: &mut [f64]) {
     let n = b.len();
-    solve_real(a, ip, n, x);
+    with_small_n!(n, {
+        solve_real_n(a, ip, n, x);
+        residual(jac, d, &b[..n], &x[..n], &mut r[..n], product_error);
+        if !r[..n].iter().all(|v| v.is_finite()) {
+            residual(jac, d, &b[..n], &x[..n], &mut r[..n], |a, b, p| a.mul_add(b, -p));
+        }
+        solve_real_n(a, ip, n, r);
+    });
+    for (xi, ri) in x.iter_mut().zip(r.iter()) {
+        *xi += ri;
+    }
+}
+
+/// The residual r = b − d·x + J·x of [`solve_refined`], each product's rounding error
+/// (`error(a, b, fl(a·b))`) and each sum's carried in a compensation term.
+#[inline(always)]
+fn residual(jac: &[f64], d: f64, b: &[f64], x: &[f64], r: &mut [f64], error: impl Fn(f64, f64, f64) -> f64) {
+    let n = b.len();
+    let jac = &jac[..n * n];
     for i in 0..n {
         let (mut s, mut c) = (b[i], 0.0);
         let mut add = |p: f64, e: f64| {
@@ -91,19 +161,15 @@ pub(super) fn solve_refined(a: &[f64], ip: &[usize], jac: &[f64], d: f64, b: &[f
             s = t;
         };
         let p = -d * x[i];
-        add(p, (-d).mul_add(x[i], -p));
+        add(p, error(-d, x[i], p));
         for j in 0..n {
             let jij = jac[j * n + i];
             if jij != 0.0 {
                 let p = jij * x[j];
-                add(p, jij.mul_add(x[j], -p));
+                add(p, error(jij, x[j], p));
             }
         }
         r[i] = s + c;
-    }
-    solve_real(a, ip, n, r);
-    for (xi, ri) in x.iter_mut().zip(r.iter()) {
-        *xi += ri;
     }
 }
 
@@ -134,6 +200,30 @@ mod tests {
         let mut nan = [f64::NAN, 0.0, 0.0, 1.0];
         assert!(!lu_real(&mut nan, &mut [0; 2], 2));
         assert!((rms(&[3.0, 4.0], &[1.0, 2.0]) - 6.5f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn product_error_is_the_fused_multiply_add_error() {
+        // Quasi-random operands over 1e-120 … 1e120, of both signs.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let m = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            m * 10f64.powi((state % 240) as i32 - 120)
+        };
+        for _ in 0..10_000 {
+            let (a, b) = (next(), next());
+            let p = a * b;
+            assert_eq!(product_error(a, b, p), a.mul_add(b, -p), "{a:e} × {b:e}");
+        }
+        // Beyond the split's range the refined solve falls back to mul_add: still finite.
+        assert!(product_error(1e305, 3.0, 3e305).is_nan());
+        let (jac, ip, lu) = ([-1e305, 0.0, 0.0, -1.0], [0, 1], [1e305 + 1.0, 0.0, 0.0, 2.0]);
+        let (b, mut x, mut r) = ([1.0, 1.0], [1.0, 1.0], [0.0; 2]);
+        solve_refined(&lu, &ip, &jac, 1.0, &b, &mut x, &mut r);
+        assert!(x.iter().all(|v| v.is_finite()) && (x[1] - 0.5).abs() < 1e-16, "{x:?}");
     }
 
     /// E5's Jacobian (column-major) at a state of its t ≈ 1e4 phase, with the slow rate A = 0
