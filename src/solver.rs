@@ -204,7 +204,7 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     let integrator: Box<dyn Integrator + 's> = match method {
         Method::CvodeBdf => Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), t0, y0, options)?),
         Method::CvodeAdams => Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), t0, y0, options)?),
-        Method::ArkodeDirk => Box::new(Solver::arkstep(system, ArkMethod::Dirk(dirk), dirk_settings(options), t0, y0, options)?),
+        Method::ArkodeDirk => Box::new(Solver::arkstep(system, ArkMethod::Dirk(dirk), ark_settings(), t0, y0, options)?),
         Method::ArkodeErk => Box::new(Solver::arkstep(system, ArkMethod::Erk(erk), ark_settings(), t0, y0, options)?),
         Method::ArkodeImex => {
             let message = "arkode-imex needs a system split into explicit and implicit parts: implement ImexSystem and use solver::build";
@@ -233,21 +233,6 @@ pub fn build_default<'s, S: OdeSystem + 's>(method: Method, system: S, t0: f64, 
 /// ARKStep's settings for every ARKStep method (see [`build`]).
 fn ark_settings() -> ArkSettings {
     ArkSettings { deduce_implicit_rhs: true, ..ArkSettings::default() }
-}
-
-/// ARKStep DIRK's settings: [`ark_settings`], and, when the Jacobian is fresh at every step
-/// (`jacobian_max_age` = 1, as the engine sets it), every step-size change applied
-/// ([`ArkSettings::resize_every_step`]). ARKODE keeps h while the proposed growth is below 1.5
-/// to reuse its Newton matrix, which saves nothing when that matrix is rebuilt at every step
-/// anyway; and with that window h stalled in the arrest after a slip: the DRR work–precision
-/// cell γ = 1e8, rtol 1e-11 held h = 3.08e-13 for 192 523 accepted steps without a failure
-/// (204 128 steps in one cycle, against 12 042 when h happened to get out of the window), where
-/// w settles on the slow manifold and the error estimate no longer falls with h. Measured: that
-/// cell 270 214 → 29 570 steps in 3 cycles (docs/robustness.md). Not with ARKODE's Jacobian
-/// reuse: there the window saves setups, and applying every change made the Prothero–Robinson
-/// run of examples/own_system.rs less accurate (error 1.6e-9 → 6.8e-6 at rtol 1e-8).
-fn dirk_settings(options: &Options) -> ArkSettings {
-    ArkSettings { resize_every_step: options.jacobian_max_age == Some(1), ..ark_settings() }
 }
 
 /// Invalid input to [`build`], at the start.

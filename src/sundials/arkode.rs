@@ -54,7 +54,6 @@ mod ark {
         ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
         ARKodeSetInterpolantType as SetInterpolantType,
         ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKodeSetFixedStepBounds as SetFixedStepBounds,
     };
 }
 #[cfg(not(sundials7))]
@@ -101,7 +100,6 @@ mod ark {
         ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
         ARKStepSetInterpolantType as SetInterpolantType,
         ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKStepSetFixedStepBounds as SetFixedStepBounds,
     };
 }
 
@@ -230,12 +228,6 @@ pub struct ArkSettings {
     /// the evaluated f_I carries the Newton residual times the stiffness into the error
     /// estimate; deducing it avoids that.
     pub deduce_implicit_rhs: bool,
-    /// Apply every step-size change the controller proposes (ARKStepSetFixedStepBounds(1, 1)).
-    /// By default ARKODE keeps h when the proposed growth factor lies in [1, 1.5], which
-    /// saves linear-solver setups; when the error estimate stays at a level independent of h
-    /// (a round-off or Newton-error floor, e.g. on a slow manifold) that proposal can stay in
-    /// the window for ever, and h with it.
-    pub resize_every_step: bool,
 }
 
 fn classify(flag: c_int) -> ErrorKind {
@@ -402,10 +394,6 @@ impl<S> Solver<S> {
         if settings.deduce_implicit_rhs {
             // SAFETY: live ARKStep memory; stores a flag.
             self.check(unsafe { ark::SetDeduceImplicitRhs(m, 1) })?;
-        }
-        if settings.resize_every_step {
-            // SAFETY: live ARKStep memory; stores two scalars (an interval enclosing 1).
-            self.check(unsafe { ark::SetFixedStepBounds(m, 1.0, 1.0) })?;
         }
         // A failure is located at the end of the last accepted step (ARKStep itself returns
         // the failed attempt's stage time with the last accepted state), kept by a post-step
