@@ -292,9 +292,12 @@ impl Progress {
     }
 }
 
-/// The crossing of w = `level` inside the step `span` (local times): its time, the state, the
-/// velocity and the segment's fundamental matrix Φ there.
-fn crossing(clock: &mut Clock, span: (f64, f64), level: f64) -> Result<(f64, [f64; 3], [f64; 3], Matrix3<f64>), SolverError> {
+/// A crossing of a level of w: its local time, the state, the velocity and the segment's
+/// fundamental matrix Φ there.
+type Crossing = (f64, [f64; 3], [f64; 3], Matrix3<f64>);
+
+/// The crossing of w = `level` inside the step `span` (local times).
+fn crossing(clock: &mut Clock, span: (f64, f64), level: f64) -> Result<Crossing, SolverError> {
     let t = refine(clock, span, 0, level)?;
     let z = dense(clock, t, 0)?;
     let velocity = first3(&dense(clock, t, 1)?);

@@ -173,7 +173,7 @@ pub fn against_report(scene: &Scene, user: &UserCycle, tolerance: f64) -> Result
             let theirs = user.get(key)?;
             let mine = quantity(&ours, key)?;
             let deviation = (theirs - mine).abs() / scale(key, mine);
-            Some(ReportRow { quantity: key.into(), user: theirs, reference: mine, deviation, beyond_tolerance: !(deviation <= tolerance) })
+            Some(ReportRow { quantity: key.into(), user: theirs, reference: mine, deviation, beyond_tolerance: deviation.is_nan() || deviation > tolerance })
         })
         .collect();
     Ok(ReportComparison {

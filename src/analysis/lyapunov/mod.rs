@@ -183,7 +183,7 @@ pub fn analyse(
         Err(why) => return Ok(empty(options, why.into_note()?)),
     };
     let p = params;
-    let drr = Drr::new(p.clone());
+    let drr = Drr::new(*p);
     let n = orbit.peak + 1;
     let locals: Vec<local::Local> = (0..orbit.len()).map(|k| local::at(&drr, &orbit.state(k))).collect();
     let stick = &locals[..n];
