@@ -2,7 +2,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{Api, Creation, Solver};
+use super::solver::{Api, Attached, Creation, Solver};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -52,7 +52,7 @@ fn classify(flag: c_int) -> ErrorKind {
 
 /// Reads CVODE's counters. Getters that do not apply (no root functions, no linear solver)
 /// leave their counter at zero.
-unsafe fn read_stats(m: *mut c_void, _has_linear_solver: bool) -> Stats {
+unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     let mut s = Stats::default();
     let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
         let mut v: c_long = 0;
@@ -69,7 +69,9 @@ unsafe fn read_stats(m: *mut c_void, _has_linear_solver: bool) -> Stats {
     s.nonlin_conv_fails = count(ffi::CVodeGetNumNonlinSolvConvFails);
     s.jac_evals = count(ffi::CVodeGetNumJacEvals);
     s.rhs_evals_jacobian = count(ffi::CVodeGetNumLinRhsEvals);
-    s.root_evals = count(ffi::CVodeGetNumGEvals);
+    if attached.roots {
+        s.root_evals = count(ffi::CVodeGetNumGEvals);
+    }
     s.stab_lim_order_reductions = count(ffi::CVodeGetNumStabLimOrderReds);
     s.step_attempts = s.steps + s.err_test_fails + s.step_solve_fails;
     // SAFETY: as above; each getter writes one value of the pointed-to type.

@@ -48,13 +48,24 @@ pub(crate) struct Api {
     pub reinit_resets_counters: bool,
     /// Reads the step counter alone (without the other getters' error reports).
     pub get_num_steps: unsafe extern "C" fn(Mem, *mut c_long) -> c_int,
-    /// Reads the raw counters (linear-solver ones only when there is a linear solver: asking
-    /// otherwise goes through the error handler).
-    pub read_stats: unsafe fn(Mem, bool) -> Stats,
+    /// Reads the raw counters (linear-solver and root counters only when the solver has a
+    /// linear solver and root functions: ARKODE answers the other getters through the error
+    /// handler).
+    pub read_stats: unsafe fn(Mem, Attached) -> Stats,
     /// Maps a negative return code to an error kind.
     pub classify: fn(c_int) -> ErrorKind,
     /// Why the solver stopped, for return codes whose kind and SUNDIALS message leave it out.
     pub explain: fn(c_int) -> Option<&'static str>,
+}
+
+/// What is attached to the solver memory, so that [`Api::read_stats`] asks only the getters
+/// that apply.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Attached {
+    /// A linear solver (not for ERK or Adams with functional iteration).
+    pub linear_solver: bool,
+    /// Root functions.
+    pub roots: bool,
 }
 
 /// A SUNDIALS integrator (CVODE or ARKStep) for the system `S`, built by
@@ -614,8 +625,9 @@ impl<S> Solver<S> {
     }
 
     fn raw_stats(&self) -> Stats {
+        let attached = Attached { linear_solver: self.linear.is_some(), roots: self.shared().root_count > 0 };
         // SAFETY: live solver memory; the reader only calls getters.
-        unsafe { (self.api.read_stats)(self.mem.as_ptr(), self.linear.is_some()) }
+        unsafe { (self.api.read_stats)(self.mem.as_ptr(), attached) }
     }
 
     /// Statistics over the solver's whole life, restarts included.
