@@ -64,7 +64,7 @@ pub(crate) struct Api {
 pub(crate) struct Attached {
     /// A linear solver (not for ERK or Adams with functional iteration).
     pub linear_solver: bool,
-    /// Root functions.
+    /// Root functions (now or before).
     pub roots: bool,
 }
 
@@ -105,6 +105,9 @@ pub struct Solver<S> {
     at_step_end: bool,
     counters_before_reinit: Stats,
     reinits: u64,
+    /// Whether root functions were ever attached (SUNDIALS keeps their counter after they are
+    /// removed; before the first, ARKODE has no root memory to ask).
+    had_roots: bool,
     ctx: Context,
 }
 
@@ -188,6 +191,7 @@ impl<S> Solver<S> {
             at_step_end: true,
             counters_before_reinit: Stats::default(),
             reinits: 0,
+            had_roots: false,
             ctx,
         };
         let m = solver.mem.as_ptr();
@@ -536,6 +540,7 @@ impl<S> Solver<S> {
         self.check(unsafe { (self.api.root_init)(m, count, trampoline) })?;
         self.shared_mut().roots = Some(roots.function);
         self.shared_mut().root_count = roots.count;
+        self.had_roots = true;
         if !roots.directions.is_empty() {
             let mut directions: Vec<c_int> = roots.directions.clone();
             // SAFETY: `directions` holds one entry per root function; SUNDIALS copies it.
@@ -625,7 +630,7 @@ impl<S> Solver<S> {
     }
 
     fn raw_stats(&self) -> Stats {
-        let attached = Attached { linear_solver: self.linear.is_some(), roots: self.shared().root_count > 0 };
+        let attached = Attached { linear_solver: self.linear.is_some(), roots: self.had_roots };
         // SAFETY: live solver memory; the reader only calls getters.
         unsafe { (self.api.read_stats)(self.mem.as_ptr(), attached) }
     }
