@@ -292,16 +292,6 @@ impl OdeSystem for Drr {
         3
     }
 
-    /// None: no combination c·(u, w, θ) is conserved, and the refinement does not make the
-    /// periods more accurate: without it rodas5p's and extrapolation's periods on the three
-    /// reference tables (γ up to 1e12) and the earthquake move by at most 1.7e-9 relative, far
-    /// inside their distance from the references, except where the cycle analysis stops one
-    /// cycle apart in a slow transient (docs/test-set.md, E5, "Its cost"); rodas5p runs 30 %
-    /// and extrapolation 18 % fewer instructions.
-    fn has_linear_invariants(&self) -> bool {
-        false
-    }
-
     fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
         let (du, dw, dtheta) = self.split(y);
         dydt[U] = du;

@@ -3,7 +3,7 @@
 
 use super::rounding::add_noise;
 use super::switching::jacobian_bound;
-use super::tableau::{Failure, Work};
+use super::tableau::Failure;
 use super::Extrapolation;
 use crate::integrate::linalg::{lu_real, solve_real, solve_refined};
 use crate::integrate::stepper::{self, all_finite};
@@ -15,16 +15,6 @@ const DENSE_LAMBDA: usize = 1;
 /// Weighted Euclidean norm ‖v/scal‖₂ (SEULEX's stability check).
 fn norm2(v: &[f64], scal: &[f64]) -> f64 {
     v.iter().zip(scal).map(|(a, s)| (a / s) * (a / s)).sum::<f64>().sqrt()
-}
-
-/// Solves (I/h_j − J) del = dy with the factors in `w` (`w.del` holds dy on entry): refined
-/// when f may have linear invariants ([`OdeSystem::has_linear_invariants`], `solve_refined`).
-fn solve_stage(refine: bool, w: &mut Work, n: usize, hji: f64) {
-    if refine {
-        solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
-    } else {
-        solve_real(&w.lu, &w.ip, n, &mut w.del);
-    }
 }
 
 /// l! as a float.
@@ -72,8 +62,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         w.t[j].iter_mut().for_each(|v| *v = 0.0);
         w.del.copy_from_slice(&w.dy);
         // Refined solves keep the linear invariants of f (see `solve_refined`).
-        let refine = self.system.has_linear_invariants();
-        solve_stage(refine, w, n, hji);
+        solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
         let base = self.imp.off[j];
         w.incr[base].copy_from_slice(&w.del);
         for mm in 1..m {
@@ -103,7 +92,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             add_noise(w, j, false);
             w.del.copy_from_slice(&w.dy);
-            solve_stage(refine, w, n, hji);
+            solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
             w.incr[base + mm].copy_from_slice(&w.del);
         }
         for i in 0..n {
