@@ -31,6 +31,18 @@ pub trait OdeSystem {
     /// Writes ∂J/∂y_k at (t, y) into `out` (which arrives zeroed), J = ∂f/∂y. Called only
     /// when [`OdeSystem::has_jacobian_derivative`] returns true.
     fn jacobian_derivative(&self, _t: f64, _y: &[f64], _k: usize, _out: &mut JacobianMatrix<'_>) {}
+
+    /// Whether f may have linear invariants (conserved combinations c·y, such as a mass
+    /// balance) that rodas5p must keep to working accuracy. When true, each of its stage
+    /// solves is refined once with a compensated residual (+43 % instructions on the
+    /// 3-component spring-slider; see docs/test-set.md, E5), without which a balance drifts
+    /// by u·h‖J‖ relative per step. (Extrapolation always refines: its extrapolation weights
+    /// amplify the stage solves' rounding.) The default is true, so that no system silently
+    /// loses its invariants; return false only for a system without any whose accuracy has
+    /// been shown not to depend on the refinement.
+    fn has_linear_invariants(&self) -> bool {
+        true
+    }
 }
 
 /// A system split as f = f_E + f_I for implicit–explicit (IMEX) methods: f_E is integrated

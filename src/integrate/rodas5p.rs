@@ -48,7 +48,7 @@
 // The published coefficients are kept with all their digits.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_refined};
+use super::linalg::{lu_real, rms, solve_real, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{
     ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
@@ -408,9 +408,14 @@ impl<S: OdeSystem> Rodas5p<S> {
                     *k += hd * ft;
                 }
             }
-            // Solve (I/(hγ) − J) k_s = b_s, refined: see `solve_refined`.
-            w.tmp.copy_from_slice(ks);
-            solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
+            // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
+            // `solve_refined`.
+            if self.system.has_linear_invariants() {
+                w.tmp.copy_from_slice(ks);
+                solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
+            } else {
+                solve_real(&w.e, &w.ip, n, ks);
+            }
         }
         let last = &w.k[(STAGES - 1) * n..];
         for ((ynew, u), k) in w.ynew.iter_mut().zip(&w.u).zip(last) {
