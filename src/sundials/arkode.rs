@@ -54,6 +54,7 @@ mod ark {
         ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
         ARKodeSetInterpolantType as SetInterpolantType,
         ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
+        ARKodeSetFixedStepBounds as SetFixedStepBounds,
     };
 }
 #[cfg(not(sundials7))]
@@ -100,6 +101,7 @@ mod ark {
         ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
         ARKStepSetInterpolantType as SetInterpolantType,
         ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
+        ARKStepSetFixedStepBounds as SetFixedStepBounds,
     };
 }
 
@@ -228,6 +230,19 @@ pub struct ArkSettings {
     /// the evaluated f_I carries the Newton residual times the stiffness into the error
     /// estimate; deducing it avoids that.
     pub deduce_implicit_rhs: bool,
+    /// Apply every step-size change the controller proposes (ARKStepSetFixedStepBounds(1, 1)).
+    /// By default ARKODE keeps h when the proposed growth factor lies in [1, 1.5], which
+    /// saves linear-solver setups; when the error estimate stays at a level independent of h
+    /// (a round-off or Newton-error floor, e.g. on a slow manifold) that proposal can stay in
+    /// the window for ever, and h with it.
+    pub resize_every_step: bool,
+    /// Rebuild the Newton matrix (Jacobian and LU) at every implicit stage, not only at the
+    /// first stage of a step (ARKStepSetLSetupFrequency(−1)). This also restarts ARKODE's
+    /// Newton convergence-rate estimate at each stage: otherwise the rate measured on an
+    /// earlier stage (decayed by 0.3 an iteration) carries over, and ARKODE's stopping test,
+    /// min(1, rate) · ‖correction‖ < `nonlin_conv_coef`, can stop a stage far from its
+    /// solution. Overrides the setup frequency of [`Options::jacobian_max_age`].
+    pub setup_every_stage: bool,
 }
 
 fn classify(flag: c_int) -> ErrorKind {
@@ -399,6 +414,15 @@ impl<S> Solver<S> {
         if settings.deduce_implicit_rhs {
             // SAFETY: live ARKStep memory; stores a flag.
             self.check(unsafe { ark::SetDeduceImplicitRhs(m, 1) })?;
+        }
+        if settings.resize_every_step {
+            // SAFETY: live ARKStep memory; stores two scalars (an interval enclosing 1).
+            self.check(unsafe { ark::SetFixedStepBounds(m, 1.0, 1.0) })?;
+        }
+        if settings.setup_every_stage {
+            // SAFETY: live ARKStep memory with a linear solver (an implicit table); stores a
+            // scalar (negative: a setup at every stage).
+            self.check(unsafe { ark::SetLSetupFrequency(m, -1) })?;
         }
         // A failure is located at the end of the last accepted step (ARKStep itself returns
         // the failed attempt's stage time with the last accepted state), kept by a post-step
