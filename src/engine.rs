@@ -80,8 +80,9 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // a correction below nonlin_conv_coef · rtol (weighted), which at 1e-3 · 1e-11 lies under
     // the round-off of the stage residual, so Newton "fails" in the first slip (earthquake,
     // rtol 1e-11: repeated convergence failures at h = 1.5e-11). The test is kept at least
-    // 1000 u / rtol: 100 u still fails there, 1000 u converges (56 970 steps in 5 cycles);
-    // 5000 u also fails there (20 M steps). Physical grid's arkode-dirk cells: 936 of 936.
+    // 1000 u / rtol: 100 u still fails there, 1000 u converges (5 cycles: 56 970 steps,
+    // 47 251 since solver::dirk_settings); 5000 u also fails there (20 M steps). Physical
+    // grid's arkode-dirk cells: 936 of 936.
     let dirk = spec.method == Method::ArkodeDirk;
     let dirk_conv_coef = (1e3 * f64::EPSILON / spec.rtol).clamp(1e-3, 0.1);
     let options = &Options {
