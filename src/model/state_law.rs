@@ -62,21 +62,30 @@ impl StateLaw {
         Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, l)| *l)
     }
 
-    /// v·F(x) and its first two x-derivatives times v, at w = ln v. The exponentials are
-    /// combined (e^{w∓x}) so that v e^{∓x} does not overflow where the product is finite.
-    pub fn terms(self, w: f64, x: f64) -> LawTerms {
+    /// v·F(x) alone at w = ln v, given v = e^w: the `f` of [`StateLaw::terms`], for a
+    /// right-hand side that needs no derivatives. The exponentials are combined (e^{w∓x}) so
+    /// that v e^{∓x} does not overflow where the product is finite.
+    pub fn rate(self, w: f64, v: f64, x: f64) -> f64 {
         match self {
-            StateLaw::Slip => {
-                let v = w.exp();
-                LawTerms { f: -v * x, d1: -v, d2: 0.0 }
-            }
+            StateLaw::Slip => -v * x,
+            StateLaw::Ageing => (w - x).exp() - v,
+            StateLaw::Prz => (w - x).exp() - 0.25 * (w + x).exp(),
+        }
+    }
+
+    /// v·F(x) and its first two x-derivatives times v, at w = ln v (see [`StateLaw::rate`]).
+    pub fn terms(self, w: f64, x: f64) -> LawTerms {
+        let v = w.exp();
+        let f = self.rate(w, v, x);
+        match self {
+            StateLaw::Slip => LawTerms { f, d1: -v, d2: 0.0 },
             StateLaw::Ageing => {
                 let a = (w - x).exp();
-                LawTerms { f: a - w.exp(), d1: -a, d2: a }
+                LawTerms { f, d1: -a, d2: a }
             }
             StateLaw::Prz => {
                 let (a, b) = ((w - x).exp(), 0.25 * (w + x).exp());
-                LawTerms { f: a - b, d1: -a - b, d2: a - b }
+                LawTerms { f, d1: -a - b, d2: a - b }
             }
         }
     }
