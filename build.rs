@@ -206,7 +206,7 @@ fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
     if config.major >= 7 {
         header.push_str("#include <sundials/sundials_logger.h>\n#include <sundials/sundials_errors.h>\n");
     }
-    let functions = "SUNContext_.*|SUNLogger_.*|SUNDIALSGetVersion|N_VNew_Serial|N_VDestroy|N_VGetArrayPointer\
+    let functions = "SUNContext_.*|SUNLogger_.*|SUNDIALSGetVersion|N_VNew_Serial|N_VDestroy\
                      |SUNDenseMatrix|SUNDenseMatrix_Data|SUNMatDestroy|SUNLinSol_Dense|SUNLinSolFree\
                      |CVode.*|ARKStep.*|ARKode.*";
     let mut builder = bindgen::Builder::default()
@@ -214,7 +214,8 @@ fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
         .clang_arg(format!("-I{}", inc.display()))
         .allowlist_function(functions)
         .allowlist_var("CV_.*|ARK_.*|ARKODE_.*|SUN_LOGLEVEL_.*")
-        .allowlist_type("ARKODE_.*|SUNLogLevel")
+        // The serial vector's content, read directly as nvector_serial.h's NV_DATA_S does.
+        .allowlist_type("ARKODE_.*|SUNLogLevel|_N_VectorContent_Serial")
         // Only ever behind pointers (the *PrintAllStats functions); glibc's layout has bitfields.
         .opaque_type("FILE|_IO_FILE")
         // SUNDIALS' flags and return codes are C ints (`CV_BDF`, `ARK_SUCCESS`, ...).

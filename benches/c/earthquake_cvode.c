@@ -140,7 +140,7 @@ static void model_rhs(const double *y, double *d) {
   double dw = -arrest_rate(w, &varies) * g;
   double x = y[TH] / (1.0 + EPS) + w;         /* law_argument */
   double v = exp(w);
-  double dtheta = (1.0 + EPS) * (-v * x);     /* (1+ε) StateLaw::Slip.terms(w, x).f */
+  double dtheta = (1.0 + EPS) * (-v * x);     /* (1+ε) StateLaw::Slip.rate(w, v, x) */
   d[U] = expm1(w);
   d[W] = dw;
   d[TH] = dtheta;

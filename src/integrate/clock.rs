@@ -132,12 +132,13 @@ impl<'a> Clock<'a> {
 
     /// One internal step, re-basing first if the last step was below the threshold.
     pub fn step(&mut self) -> Result<ClockStep, SolverError> {
-        if self.last_step < self.threshold * self.integ.t().abs() {
+        let mut start = self.integ.t();
+        if self.last_step < self.threshold * start.abs() {
             // Deep in a layer: a restarting integrator goes on with the step it was taking (a
             // fresh estimate from f there can be off by decades).
             self.rebase_with(Some(self.last_step))?;
+            start = self.integ.t();
         }
-        let mut start = self.integ.t();
         let step = match self.integ.advance(start + HORIZON, Task::OneStep) {
             // The step collapsed within one call below the spacing of the local clock (e.g. a
             // cascade of rejections where a rise begins): the clock ran out before the

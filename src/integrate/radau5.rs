@@ -271,14 +271,19 @@ fn cdiv(a: f64, b: f64, c: f64, d: f64) -> (f64, f64) {
     }
 }
 
-/// Complex LU factorisation with partial pivoting (real parts `ar`, imaginary `ai`).
+/// Complex LU factorisation with partial pivoting (real parts `ar`, imaginary `ai`). (Column
+/// slices instead of indices, as in [`solve_complex`]: the same operations in the same order,
+/// without bounds checks in the inner loops.)
 fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    let (ar, ai, ip) = (&mut ar[..n * n], &mut ai[..n * n], &mut ip[..n]);
     for k in 0..n {
-        let col = k * n;
+        // Column k, and the columns right of it.
+        let ((left_r, right_r), (left_i, right_i)) = (ar.split_at_mut((k + 1) * n), ai.split_at_mut((k + 1) * n));
+        let (cr, ci) = (&mut left_r[k * n..], &mut left_i[k * n..]);
         let mut p = k;
-        let mut big = ar[col + k].abs() + ai[col + k].abs();
+        let mut big = cr[k].abs() + ci[k].abs();
         for i in k + 1..n {
-            let v = ar[col + i].abs() + ai[col + i].abs();
+            let v = cr[i].abs() + ci[i].abs();
             if v > big {
                 big = v;
                 p = i;
@@ -289,24 +294,26 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
             return false;
         }
         if p != k {
-            for j in k..n {
-                ar.swap(j * n + k, j * n + p);
-                ai.swap(j * n + k, j * n + p);
+            cr.swap(k, p);
+            ci.swap(k, p);
+            for (col_r, col_i) in right_r.chunks_exact_mut(n).zip(right_i.chunks_exact_mut(n)) {
+                col_r.swap(k, p);
+                col_i.swap(k, p);
             }
         }
-        let (inv_r, inv_i) = cdiv(-1.0, 0.0, ar[col + k], ai[col + k]);
-        for i in k + 1..n {
-            let (xr, xi) = (ar[col + i], ai[col + i]);
-            ar[col + i] = xr * inv_r - xi * inv_i;
-            ai[col + i] = xr * inv_i + xi * inv_r;
+        let (inv_r, inv_i) = cdiv(-1.0, 0.0, cr[k], ci[k]);
+        for (xr, xi) in cr[k + 1..].iter_mut().zip(ci[k + 1..].iter_mut()) {
+            let (r, i) = (*xr, *xi);
+            *xr = r * inv_r - i * inv_i;
+            *xi = r * inv_i + i * inv_r;
         }
-        for j in k + 1..n {
-            let (tr, ti) = (ar[j * n + k], ai[j * n + k]);
+        let (mr, mi) = (&cr[k + 1..], &ci[k + 1..]);
+        for (col_r, col_i) in right_r.chunks_exact_mut(n).zip(right_i.chunks_exact_mut(n)) {
+            let (tr, ti) = (col_r[k], col_i[k]);
             if tr != 0.0 || ti != 0.0 {
-                for i in k + 1..n {
-                    let (mr, mi) = (ar[col + i], ai[col + i]);
-                    ar[j * n + i] += mr * tr - mi * ti;
-                    ai[j * n + i] += mr * ti + mi * tr;
+                for (((xr, xi), &ar_), &ai_) in col_r[k + 1..].iter_mut().zip(col_i[k + 1..].iter_mut()).zip(mr).zip(mi) {
+                    *xr += ar_ * tr - ai_ * ti;
+                    *xi += ar_ * ti + ai_ * tr;
                 }
             }
         }

@@ -56,12 +56,20 @@ const SETTLED: f64 = 1e-6;
 
 impl Drr {
     /// The stick ahead of `y` when it lies wholly below the hold: ln v has settled on a floor
-    /// −(ξu + θ) < −500 (logarithmic friction only). None otherwise.
+    /// −(ξu + θ) < −500 (logarithmic friction only). None otherwise. Asked after every step:
+    /// the test that rules a stick out is inlined into the caller, the rest is not.
+    #[inline]
     pub fn deep_stick(&self, y: &[f64; 3]) -> Option<DeepStick> {
-        let p = self.params();
-        if p.friction != Friction::Log || y[W] >= ARREST_RATE_HELD_BELOW {
+        if self.params().friction != Friction::Log || y[W] >= ARREST_RATE_HELD_BELOW {
             return None;
         }
+        self.deep_stick_below_hold(y)
+    }
+
+    /// [`Drr::deep_stick`] for ln v below the hold under logarithmic friction.
+    #[inline(never)]
+    fn deep_stick_below_hold(&self, y: &[f64; 3]) -> Option<DeepStick> {
+        let p = self.params();
         let floor = -(p.xi * y[U] + y[THETA]);
         let settled = (y[W] - floor).abs() <= SETTLED * floor.abs();
         if !(floor < ARREST_RATE_HELD_BELOW && settled && floor.is_finite()) {

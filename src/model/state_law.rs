@@ -62,21 +62,30 @@ impl StateLaw {
         Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, l)| *l)
     }
 
-    /// v·F(x) and its first two x-derivatives times v, at w = ln v. The exponentials are
-    /// combined (e^{w∓x}) so that v e^{∓x} does not overflow where the product is finite.
-    pub fn terms(self, w: f64, x: f64) -> LawTerms {
+    /// v·F(x) alone at w = ln v, given v = e^w: the `f` of [`StateLaw::terms`], for a
+    /// right-hand side that needs no derivatives. The exponentials are combined (e^{w∓x}) so
+    /// that v e^{∓x} does not overflow where the product is finite.
+    pub fn rate(self, w: f64, v: f64, x: f64) -> f64 {
         match self {
-            StateLaw::Slip => {
-                let v = w.exp();
-                LawTerms { f: -v * x, d1: -v, d2: 0.0 }
-            }
+            StateLaw::Slip => -v * x,
+            StateLaw::Ageing => (w - x).exp() - v,
+            StateLaw::Prz => (w - x).exp() - 0.25 * (w + x).exp(),
+        }
+    }
+
+    /// v·F(x) and its first two x-derivatives times v, at w = ln v, given v = e^w (see
+    /// [`StateLaw::rate`]).
+    pub fn terms(self, w: f64, v: f64, x: f64) -> LawTerms {
+        let f = self.rate(w, v, x);
+        match self {
+            StateLaw::Slip => LawTerms { f, d1: -v, d2: 0.0 },
             StateLaw::Ageing => {
                 let a = (w - x).exp();
-                LawTerms { f: a - w.exp(), d1: -a, d2: a }
+                LawTerms { f, d1: -a, d2: a }
             }
             StateLaw::Prz => {
                 let (a, b) = ((w - x).exp(), 0.25 * (w + x).exp());
-                LawTerms { f: a - b, d1: -a - b, d2: a - b }
+                LawTerms { f, d1: -a - b, d2: a - b }
             }
         }
     }
@@ -91,7 +100,7 @@ impl StateLaw {
 
     /// κ = −F'(x*), the relaxation rate of the state at steady sliding (per unit v).
     pub fn steady_rate(self) -> f64 {
-        -self.terms(0.0, self.steady_x()).d1
+        -self.terms(0.0, 1.0, self.steady_x()).d1
     }
 }
 
@@ -102,15 +111,16 @@ mod tests {
     #[test]
     fn terms_match_differences_and_vanish_at_steady_sliding() {
         for (_, law) in StateLaw::ALL {
-            let w = 0.7;
+            let w = 0.7f64;
+            let v = w.exp();
             for x in [-2.0, -0.3, 0.0, 0.4, 1.5] {
-                let t = law.terms(w, x);
+                let t = law.terms(w, v, x);
                 let h = 1e-6;
-                let (p, m) = (law.terms(w, x + h), law.terms(w, x - h));
+                let (p, m) = (law.terms(w, v, x + h), law.terms(w, v, x - h));
                 assert!(((p.f - m.f) / (2.0 * h) - t.d1).abs() < 1e-7 * (1.0 + t.d1.abs()), "{law:?} x={x}");
                 assert!(((p.d1 - m.d1) / (2.0 * h) - t.d2).abs() < 1e-7 * (1.0 + t.d2.abs()), "{law:?} x={x}");
             }
-            assert!(law.terms(0.3, law.steady_x()).f.abs() < 1e-15, "{law:?}");
+            assert!(law.terms(0.3, 0.3f64.exp(), law.steady_x()).f.abs() < 1e-15, "{law:?}");
             assert!((law.steady_rate() - 1.0).abs() < 1e-15, "{law:?}: κ = {}", law.steady_rate());
         }
     }
@@ -120,7 +130,7 @@ mod tests {
         // dθ/dt = (1+ε)(e^{−θ/(1+ε)} − v) with x = θ/(1+ε) + ln v.
         let (eps, theta, w) = (1.0f64, 0.37, -1.2f64);
         let c = 1.0 + eps;
-        let ours = c * StateLaw::Ageing.terms(w, theta / c + w).f;
+        let ours = c * StateLaw::Ageing.rate(w, w.exp(), theta / c + w);
         let direct = c * ((-theta / c).exp() - w.exp());
         assert!((ours - direct).abs() < 1e-15, "{ours} vs {direct}");
     }

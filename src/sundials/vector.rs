@@ -32,12 +32,12 @@ impl SerialVector {
     pub(crate) fn as_slice(&self) -> &[f64] {
         // SAFETY: a serial vector owns a contiguous array of `len` reals that lives as long as
         // the vector; the shared borrow of `self` prevents concurrent mutation through us.
-        unsafe { std::slice::from_raw_parts(ffi::N_VGetArrayPointer(self.raw()), self.len) }
+        unsafe { std::slice::from_raw_parts(data(self.raw()), self.len) }
     }
 
     pub(crate) fn as_mut_slice(&mut self) -> &mut [f64] {
         // SAFETY: as in `as_slice`, with exclusive access through `&mut self`.
-        unsafe { std::slice::from_raw_parts_mut(ffi::N_VGetArrayPointer(self.raw()), self.len) }
+        unsafe { std::slice::from_raw_parts_mut(data(self.raw()), self.len) }
     }
 }
 
@@ -48,6 +48,19 @@ impl Drop for SerialVector {
     }
 }
 
+/// The data array of a serial vector, read from its content as nvector_serial.h's NV_DATA_S
+/// does. N_VGetArrayPointer gives the same pointer through two calls (the generic function and
+/// the vector's operation), ~20 instructions on each of the two or three per callback: 2 % of
+/// an ERK cycle (issue #17).
+///
+/// # Safety
+/// `v` must be a valid serial `N_Vector` (made by N_VNew_Serial, or cloned from one, as every
+/// vector SUNDIALS hands the callbacks here is).
+unsafe fn data(v: ffi::N_Vector) -> *mut f64 {
+    // SAFETY: a serial vector's content is an `_N_VectorContent_Serial` (caller's guarantee).
+    unsafe { (*((*v).content as *const ffi::_N_VectorContent_Serial)).data }
+}
+
 /// Views a SUNDIALS-owned serial vector as a slice for the duration of a callback.
 ///
 /// # Safety
@@ -55,7 +68,7 @@ impl Drop for SerialVector {
 /// accessed through another path while the slice is alive.
 pub(crate) unsafe fn slice<'a>(v: ffi::N_Vector, len: usize) -> &'a [f64] {
     // SAFETY: guaranteed by the caller (see above).
-    unsafe { std::slice::from_raw_parts(ffi::N_VGetArrayPointer(v), len) }
+    unsafe { std::slice::from_raw_parts(data(v), len) }
 }
 
 /// Mutable counterpart of [`slice`].
@@ -64,5 +77,5 @@ pub(crate) unsafe fn slice<'a>(v: ffi::N_Vector, len: usize) -> &'a [f64] {
 /// As for [`slice`], with exclusive access.
 pub(crate) unsafe fn slice_mut<'a>(v: ffi::N_Vector, len: usize) -> &'a mut [f64] {
     // SAFETY: guaranteed by the caller (see above).
-    unsafe { std::slice::from_raw_parts_mut(ffi::N_VGetArrayPointer(v), len) }
+    unsafe { std::slice::from_raw_parts_mut(data(v), len) }
 }
