@@ -30,9 +30,10 @@ struct Config {
 }
 
 fn include_dir() -> PathBuf {
-    let candidates: Vec<PathBuf> = env::var_os("SUNDIALS_INCLUDE_DIR")
-        .map(|d| vec![PathBuf::from(d)])
-        .unwrap_or_else(|| vec![PathBuf::from("/usr/include"), PathBuf::from("/usr/local/include")]);
+    let candidates: Vec<PathBuf> =
+        env::var_os("SUNDIALS_INCLUDE_DIR").map(|d| vec![PathBuf::from(d)]).unwrap_or_else(|| {
+            vec![PathBuf::from("/usr/include"), PathBuf::from("/usr/local/include")]
+        });
     let needed = ["sundials/sundials_config.h", "cvode/cvode.h", "arkode/arkode_arkstep.h"];
     for dir in &candidates {
         if needed.iter().all(|h| dir.join(h).is_file()) {
@@ -55,11 +56,18 @@ fn read_config(inc: &Path) -> Config {
         .unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", path.display()), FIX_SUNDIALS));
     let define = |name: &str| {
         text.lines()
-            .find_map(|l| l.trim().strip_prefix("#define ")?.strip_prefix(name)?.strip_prefix(' ').map(str::trim))
+            .find_map(|l| {
+                l.trim()
+                    .strip_prefix("#define ")?
+                    .strip_prefix(name)?
+                    .strip_prefix(' ')
+                    .map(str::trim)
+            })
             .map(|v| v.trim_matches('"').to_string())
     };
-    let version = define("SUNDIALS_VERSION")
-        .unwrap_or_else(|| fail(&format!("{} has no SUNDIALS_VERSION", path.display()), FIX_SUNDIALS));
+    let version = define("SUNDIALS_VERSION").unwrap_or_else(|| {
+        fail(&format!("{} has no SUNDIALS_VERSION", path.display()), FIX_SUNDIALS)
+    });
     let major: u32 = version.split('.').next().and_then(|m| m.parse().ok()).unwrap_or(0);
     if major != 6 && major != 7 {
         fail(
@@ -78,8 +86,13 @@ fn library_dir(config: &Config) -> PathBuf {
         candidates.push(d.into());
     }
     candidates.extend(
-        [format!("/usr/lib/{arch}-linux-gnu"), "/usr/lib".into(), "/usr/lib64".into(), "/usr/local/lib".into()]
-            .map(PathBuf::from),
+        [
+            format!("/usr/lib/{arch}-linux-gnu"),
+            "/usr/lib".into(),
+            "/usr/lib64".into(),
+            "/usr/local/lib".into(),
+        ]
+        .map(PathBuf::from),
     );
     let needed: Vec<String> = libraries(config).iter().map(|l| format!("lib{l}.so")).collect();
     for dir in &candidates {
@@ -88,7 +101,8 @@ fn library_dir(config: &Config) -> PathBuf {
         }
     }
     let first = &candidates[0];
-    let missing: Vec<&str> = needed.iter().filter(|l| !first.join(l).exists()).map(String::as_str).collect();
+    let missing: Vec<&str> =
+        needed.iter().filter(|l| !first.join(l).exists()).map(String::as_str).collect();
     fail(
         &format!(
             "SUNDIALS {} shared libraries not found: {} missing from {} (also searched {:?})",
@@ -204,7 +218,9 @@ fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
          #include <arkode/arkode_arkstep.h>\n",
     );
     if config.major >= 7 {
-        header.push_str("#include <sundials/sundials_logger.h>\n#include <sundials/sundials_errors.h>\n");
+        header.push_str(
+            "#include <sundials/sundials_logger.h>\n#include <sundials/sundials_errors.h>\n",
+        );
     }
     let functions = "SUNContext_.*|SUNLogger_.*|SUNDIALSGetVersion|N_VNew_Serial|N_VDestroy\
                      |SUNDenseMatrix|SUNDenseMatrix_Data|SUNMatDestroy|SUNLinSol_Dense|SUNLinSolFree\
@@ -225,7 +241,8 @@ fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
     for dir in &mpi.include {
         builder = builder.clang_arg(format!("-I{}", dir.display()));
     }
-    let generated = std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
+    let generated =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(move || builder.generate()));
     match generated {
         Ok(Ok(bindings)) => bindings
             .write_to_file(out)
@@ -257,9 +274,9 @@ fn comm_null_shim(inc: &Path, mpi: &Mpi) {
     for dir in &mpi.include {
         build.include(dir);
     }
-    build
-        .try_compile("stickslip_comm_null")
-        .unwrap_or_else(|e| fail(&format!("cannot compile the SUN_COMM_NULL shim: {e}"), "`apt-get install -y gcc`"));
+    build.try_compile("stickslip_comm_null").unwrap_or_else(|e| {
+        fail(&format!("cannot compile the SUN_COMM_NULL shim: {e}"), "`apt-get install -y gcc`")
+    });
 }
 
 fn main() {
@@ -276,12 +293,16 @@ fn main() {
     println!("cargo:rerun-if-changed={}", inc.join("sundials/sundials_config.h").display());
     println!("cargo:rustc-env=STICKSLIP_SUNDIALS_HEADER_VERSION={}", config.version);
     println!("cargo:rustc-env=STICKSLIP_SUNDIALS_LIBRARY_DIR={}", lib.display());
-    println!("cargo:rustc-env=STICKSLIP_SUNDIALS_MPI={}", if config.mpi { mpi.source.as_str() } else { "no" });
+    println!(
+        "cargo:rustc-env=STICKSLIP_SUNDIALS_MPI={}",
+        if config.mpi { mpi.source.as_str() } else { "no" }
+    );
     if config.major >= 7 {
         println!("cargo:rustc-cfg=sundials7");
     }
 
-    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("sundials_bindings.rs");
+    let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"))
+        .join("sundials_bindings.rs");
     bindings(&inc, &config, &mpi, &out);
     if config.major >= 7 {
         comm_null_shim(&inc, &mpi);

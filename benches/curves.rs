@@ -13,14 +13,18 @@ use stickslip::{engine, scene};
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("period_curves");
-    group.sampling_mode(SamplingMode::Flat).sample_size(10).measurement_time(Duration::from_secs(20));
+    group
+        .sampling_mode(SamplingMode::Flat)
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(20));
     for name in ["fig1c", "fig1b"] {
         let path = format!("{}/data/scenes/{name}.json", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).expect("scene file");
         let parsed = scene::parse(&text, &path).expect("valid scene");
         group.bench_function(name, |b| {
             b.iter(|| {
-                let report = engine::run(black_box(&parsed), serde_json::Value::Null).expect("the scene runs");
+                let report = engine::run(black_box(&parsed), serde_json::Value::Null)
+                    .expect("the scene runs");
                 assert!(report.continuation.as_ref().is_some_and(|c| c.points.len() >= 50));
                 report
             })

@@ -95,10 +95,7 @@ fn setup() -> Setup {
         scene.initial
     );
     let a = &scene.analyses;
-    let options = a
-        .cycle
-        .as_ref()
-        .expect("the earthquake scene asks for the cycle analysis");
+    let options = a.cycle.as_ref().expect("the earthquake scene asks for the cycle analysis");
     let no_overrides = options.tolerance.is_none()
         && options.settle.is_none()
         && options.max_cycles.is_none()
@@ -137,15 +134,7 @@ fn setup() -> Setup {
         "the C program replicates neither deep sticks nor the escape's step limits in action"
     );
     let cycles = c.cycles_computed;
-    Setup {
-        scene,
-        json,
-        drr,
-        stable,
-        settings,
-        cycles,
-        limits,
-    }
+    Setup { scene, json, drr, stable, settings, cycles, limits }
 }
 
 /// What the engine does for the cycle section: build the integrator, integrate through the
@@ -165,11 +154,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     // Same integration, but the convergence rule made unsatisfiable so that the report lists
     // every cycle (`last_cycles`); the run stops at max_cycles = N, exactly where the default
     // rule stops (the rule only reads closed cycles, it never changes the stepping).
-    let listing = cycle::CycleSettings {
-        settle: 1000,
-        max_cycles: s.cycles,
-        ..s.settings.clone()
-    };
+    let listing = cycle::CycleSettings { settle: 1000, max_cycles: s.cycles, ..s.settings.clone() };
     let (listed, stats) = rust_cycles(s, &listing);
     assert_eq!(
         listed.last_cycles.len(),
@@ -179,10 +164,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     );
     let (default_report, default_stats) = rust_cycles(s, &s.settings);
     assert_eq!(default_report.cycles_computed, s.cycles);
-    assert_eq!(
-        stats, default_stats,
-        "the listing run must integrate exactly like the default one"
-    );
+    assert_eq!(stats, default_stats, "the listing run must integrate exactly like the default one");
 
     let n = s.cycles.to_string();
     let out = common::run_c(binary, &["check", &n, &s.limits[0], &s.limits[1]]);
@@ -192,10 +174,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         .filter(|l| l.starts_with("cycle "))
         .map(|l| {
             let w: Vec<&str> = l.split_whitespace().collect();
-            w[2..]
-                .chunks(2)
-                .map(|kv| (kv[0].to_string(), kv[1].to_string()))
-                .collect()
+            w[2..].chunks(2).map(|kv| (kv[0].to_string(), kv[1].to_string())).collect()
         })
         .collect();
     assert_eq!(
@@ -208,11 +187,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     let mut c_steps = Vec::new();
     for (k, (rust, c)) in listed.last_cycles.iter().zip(&c_cycles).enumerate() {
         let steps: u64 = c["steps"].parse().expect("steps");
-        assert_eq!(
-            rust.steps, steps,
-            "cycle {k}: Rust {} steps, C {steps}",
-            rust.steps
-        );
+        assert_eq!(rust.steps, steps, "cycle {k}: Rust {} steps, C {steps}", rust.steps);
         c_steps.push(steps);
         let half_width = rust.slip_half_width.unwrap_or(f64::NAN);
         let values = [
@@ -227,10 +202,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
             let c_value: f64 = c[name].parse().expect(name);
             let same = rust_value.to_bits() == c_value.to_bits()
                 || (rust_value.is_nan() && c_value.is_nan());
-            assert!(
-                same,
-                "cycle {k}: {name} Rust {rust_value:.17e}, C {c_value:.17e}"
-            );
+            assert!(same, "cycle {k}: {name} Rust {rust_value:.17e}, C {c_value:.17e}");
         }
     }
     let f = fields(&out);
@@ -240,18 +212,11 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
     for (name, value) in [("max_step", &s.limits[0]), ("escape_near", &s.limits[1])] {
         let rust: f64 = value.parse().expect(name);
         let c: f64 = f[name].parse().expect(name);
-        assert_eq!(
-            rust.to_bits(),
-            c.to_bits(),
-            "{name}: Rust {rust:e}, C {c:e}"
-        );
+        assert_eq!(rust.to_bits(), c.to_bits(), "{name}: Rust {rust:e}, C {c:e}");
     }
     assert_eq!(
         (stats.step_underflow_warnings, listed.fixed_point_escapes),
-        (
-            common::counter(&f, "step_underflows"),
-            common::counter(&f, "fixed_point_escapes")
-        ),
+        (common::counter(&f, "step_underflows"), common::counter(&f, "fixed_point_escapes")),
         "step underflows and escapes: Rust engine vs plain C"
     );
     eprintln!(
@@ -265,11 +230,7 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         s.limits[1]
     );
     let c_time: f64 = f["time_integrated"].parse().expect("time_integrated");
-    assert_eq!(
-        listed.time_integrated.to_bits(),
-        c_time.to_bits(),
-        "time integrated differs"
-    );
+    assert_eq!(listed.time_integrated.to_bits(), c_time.to_bits(), "time integrated differs");
     (stats.steps, c_steps)
 }
 
@@ -372,10 +333,7 @@ fn main() {
     let rust_median = common::criterion_median("earthquake_cycles", "rust_engine", start);
     let c_median = common::criterion_median("earthquake_cycles", "plain_c", start);
     if let Some(t) = scene_median {
-        eprintln!(
-            "criterion median: earthquake scene (engine::run) {:.2} ms",
-            t / 1e6
-        );
+        eprintln!("criterion median: earthquake scene (engine::run) {:.2} ms", t / 1e6);
     }
     if let (Some(r), Some(c)) = (rust_median, c_median) {
         eprintln!(
@@ -407,8 +365,5 @@ fn main() {
         ms(rust[0]) / nf,
         ms(c[0]) / nf
     );
-    eprintln!(
-        "per-cycle ratio rust/c = {:.3}",
-        common::ratio(rust[0], c[0])
-    );
+    eprintln!("per-cycle ratio rust/c = {:.3}", common::ratio(rust[0], c[0]));
 }

@@ -33,7 +33,9 @@ fn cpu_seconds() -> f64 {
 }
 
 fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_default()
 }
 
 fn main() {
@@ -43,7 +45,8 @@ fn main() {
     if let Ok(r) = std::env::var("NOISE_BENCH_REALISATIONS") {
         json["analyses"][0]["noise"]["realisations"] = r.parse::<u64>().expect("a count").into();
     }
-    let AnyScene::Drr(scene) = scene::parse_any(&json.to_string(), SCENE).expect("a valid scene") else {
+    let AnyScene::Drr(scene) = scene::parse_any(&json.to_string(), SCENE).expect("a valid scene")
+    else {
         panic!("{SCENE} is a DRR scene");
     };
     let realisations = scene.analyses.noise.as_ref().and_then(|o| o.realisations).unwrap_or(1000);
@@ -52,7 +55,8 @@ fn main() {
     let mut runs = Vec::new();
     for threads in [2usize, 1] {
         let (wall0, cpu0) = (Instant::now(), cpu_seconds());
-        let report = engine::run_with(&scene, json.clone(), threads, &|_, _| {}).expect("the scene runs");
+        let report =
+            engine::run_with(&scene, json.clone(), threads, &|_, _| {}).expect("the scene runs");
         let (wall, cpu) = (wall0.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
         let n = report.noise.as_ref().expect("a noise section");
         let w = &n.work;
@@ -73,13 +77,22 @@ fn main() {
     assert_eq!(runs[0], runs[1], "1 and 2 threads must give bit-identical statistics");
     println!("1 and 2 threads: bit-identical statistics");
     // The other shipped noise scenes in full (the tests run them reduced), 2 threads.
-    for other in ["data/scenes/noise-power-law.json", "data/scenes/noise-saddle-node.json", "data/scenes/noise-van-der-pol.json"] {
+    for other in [
+        "data/scenes/noise-power-law.json",
+        "data/scenes/noise-saddle-node.json",
+        "data/scenes/noise-van-der-pol.json",
+    ] {
         let text = std::fs::read_to_string(other).expect("the scene");
         let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         let (wall0, cpu0) = (Instant::now(), cpu_seconds());
         let noise = match scene::parse_any(&text, other).expect("a valid scene") {
-            AnyScene::Drr(s) => engine::run_with(&s, json, 2, &|_, _| {}).expect("the scene runs").noise.expect("a noise section"),
-            AnyScene::Other(s) => stickslip::engine::run_other(&s, json, 2, &|_, _| {}).expect("the scene runs").noise,
+            AnyScene::Drr(s) => engine::run_with(&s, json, 2, &|_, _| {})
+                .expect("the scene runs")
+                .noise
+                .expect("a noise section"),
+            AnyScene::Other(s) => {
+                stickslip::engine::run_other(&s, json, 2, &|_, _| {}).expect("the scene runs").noise
+            }
         };
         println!(
             "{other}: {} realisations, {:.2} s wall, {:.2} s CPU, {:.0} nodes per realisation; load average {}",

@@ -49,14 +49,8 @@ fn compare(binary: &Path, rust: &ExampleRun) -> (u64, u64, bool) {
         let fields: Vec<&str> = line.split_whitespace().collect();
         match fields.as_slice() {
             ["row", rest @ ..] => {
-                let v: Vec<f64> = rest[..4]
-                    .iter()
-                    .map(|s| s.parse().expect("row value"))
-                    .collect();
-                let r: Vec<i32> = rest[4..]
-                    .iter()
-                    .map(|s| s.parse().expect("root flag"))
-                    .collect();
+                let v: Vec<f64> = rest[..4].iter().map(|s| s.parse().expect("row value")).collect();
+                let r: Vec<i32> = rest[4..].iter().map(|s| s.parse().expect("root flag")).collect();
                 rows.push((v, r));
             }
             [name, value] => {
@@ -138,9 +132,7 @@ fn main() {
     {
         let mut group = criterion.benchmark_group(GROUP);
         group.bench_function("rust_wrapper", |b| b.iter(cvode_example));
-        group.bench_function("plain_c", |b| {
-            b.iter_custom(|iters| c_total(&binary, iters))
-        });
+        group.bench_function("plain_c", |b| b.iter_custom(|iters| c_total(&binary, iters)));
         group.finish();
     }
     criterion.final_summary();

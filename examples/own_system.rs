@@ -17,8 +17,8 @@
 
 use std::process::ExitCode;
 use stickslip::integrate::{
-    ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, Roots, SolverError, StepEvent,
-    Task, Tolerance,
+    ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, Roots,
+    SolverError, StepEvent, Task, Tolerance,
 };
 use stickslip::solver::{self, Method, MethodSettings};
 use stickslip::sundials::{CvodeSettings, Solver};
@@ -78,7 +78,12 @@ impl ImexSystem for ProtheroRobinson {
 /// Builds `method` on `system` at (0, y0): the one constructor for every method
 /// (`solver::build`; `solver::build_ode` for a system without an IMEX split). Every one
 /// returns a typed error on bad input or an unsupported option.
-fn build(method: Method, system: ProtheroRobinson, y0: &[f64], options: &Options) -> Result<Box<dyn Integrator>, SolverError> {
+fn build(
+    method: Method,
+    system: ProtheroRobinson,
+    y0: &[f64],
+    options: &Options,
+) -> Result<Box<dyn Integrator>, SolverError> {
     Ok(solver::build(method, &MethodSettings::default(), system, 0.0, y0, options)?.integrator)
 }
 
@@ -121,7 +126,9 @@ fn main() -> ExitCode {
         }
         // The step ends exactly at the stop time.
         match integ.advance(20.0, Task::Normal) {
-            Ok(step) if step.event == StepEvent::StopTime && step.t == 10.25 => worst = worst.max(error(integ.state(), step.t)),
+            Ok(step) if step.event == StepEvent::StopTime && step.t == 10.25 => {
+                worst = worst.max(error(integ.state(), step.t))
+            }
             other => failures.push(format!("{method}: stop time 10.25 gave {other:?}")),
         }
         if integ.set_stop_time(f64::NAN).map_err(|e| e.kind) != Err(ErrorKind::InvalidInput) {
@@ -133,7 +140,10 @@ fn main() -> ExitCode {
             Ok(step) => {
                 let mid = 0.5 * (start + step.t);
                 let y = integ.dense(mid, 0).map(|y| error(y, mid)).unwrap_or(f64::INFINITY);
-                let dy = integ.dense(mid, 1).map(|d| (d[1] + (-mid).exp()).abs()).unwrap_or(f64::INFINITY);
+                let dy = integ
+                    .dense(mid, 1)
+                    .map(|d| (d[1] + (-mid).exp()).abs())
+                    .unwrap_or(f64::INFINITY);
                 y.max(dy)
             }
             Err(e) => {
@@ -147,15 +157,20 @@ fn main() -> ExitCode {
             s.steps, s.rhs_evals, s.jac_evals, s.err_test_fails
         );
         if !(worst <= bound && dense_error <= bound) {
-            failures.push(format!("{method}: error {worst:.1e} (dense {dense_error:.1e}) above {bound:.0e}"));
+            failures.push(format!(
+                "{method}: error {worst:.1e} (dense {dense_error:.1e}) above {bound:.0e}"
+            ));
         }
     }
 
     // Roots (CVODE and ARKStep): the first time y1 = e^(−t) falls through 1/2, at t = ln 2.
-    let mut cvode = Solver::cvode(system, CvodeSettings::default(), 0.0, &[0.0, 1.0], &options).expect("valid input");
+    let mut cvode = Solver::cvode(system, CvodeSettings::default(), 0.0, &[0.0, 1.0], &options)
+        .expect("valid input");
     cvode.set_roots(Some(Roots::new(1, |_t, y, g| g[0] = y[1] - 0.5))).expect("one root function");
     match cvode.advance(10.0, Task::Normal) {
-        Ok(step) if matches!(step.event, StepEvent::Root(_)) && (step.t - 2f64.ln()).abs() < 1e-7 => {
+        Ok(step)
+            if matches!(step.event, StepEvent::Root(_)) && (step.t - 2f64.ln()).abs() < 1e-7 =>
+        {
             println!("cvode-bdf root: y1 = 1/2 at t = {:.10} (ln 2 = {:.10})", step.t, 2f64.ln());
         }
         other => failures.push(format!("cvode-bdf root: expected t = ln 2, got {other:?}")),

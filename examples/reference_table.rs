@@ -48,7 +48,9 @@ fn try_cycle(
         format!("{e} [kind {}, state (u, ln v, θ) = {:?}]", e.kind.label(), e.state)
     })?;
     let c = report.cycle.expect("cycle asked");
-    let v = c.values.ok_or_else(|| format!("not periodic: {:?} after {} cycles", c.status, c.cycles_computed))?;
+    let v = c.values.ok_or_else(|| {
+        format!("not periodic: {:?} after {} cycles", c.status, c.cycles_computed)
+    })?;
     Ok(json!({
         "period": v.period,
         "t0": v.t0,
@@ -64,7 +66,8 @@ fn try_cycle(
 }
 
 fn cycle(gamma: f64, xi: f64, epsilon: f64, state_law: &str, method: &str) -> serde_json::Value {
-    try_cycle(gamma, xi, epsilon, state_law, method, (1e-11, 1e-13, 1e-8)).unwrap_or_else(|e| panic!("{method} γ={gamma}: {e}"))
+    try_cycle(gamma, xi, epsilon, state_law, method, (1e-11, 1e-13, 1e-8))
+        .unwrap_or_else(|e| panic!("{method} γ={gamma}: {e}"))
 }
 
 /// A table: its state law, integrators (scene name, description), file and title.
@@ -114,11 +117,19 @@ fn main() {
             for key in ["period", "t0", "slip_half_width_times_gamma", "ln_v_max"] {
                 let (x, y) = (a[key].as_f64().expect("number"), b[key].as_f64().expect("number"));
                 let diff = (x - y).abs() / x.abs().max(y.abs());
-                worst = worst.max(if key == "t0" || key == "slip_half_width_times_gamma" { 0.0 } else { diff });
+                worst = worst.max(if key == "t0" || key == "slip_half_width_times_gamma" {
+                    0.0
+                } else {
+                    diff
+                });
                 reference.insert(key.into(), json!(0.5 * (x + y)));
                 agreement.insert(key.into(), json!(diff));
             }
-            eprintln!("ξ={xi} ε={epsilon} γ=1e{k}: period {} (agreement {:.1e})", reference["period"], agreement["period"].as_f64().unwrap());
+            eprintln!(
+                "ξ={xi} ε={epsilon} γ=1e{k}: period {} (agreement {:.1e})",
+                reference["period"],
+                agreement["period"].as_f64().unwrap()
+            );
             let mut row = json!({
                 "gamma": gamma, "xi": xi, "epsilon": epsilon, "friction": "log",
                 "reference": reference, "relative_agreement": agreement,
@@ -146,12 +157,14 @@ fn main() {
         "rows": rows,
     });
     let path = format!("{}/data/reference/{}", env!("CARGO_MANIFEST_DIR"), t.file);
-    std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n").expect("write table");
+    std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n")
+        .expect("write table");
     eprintln!("wrote {path}; worst agreement on period and ln v_max: {worst:.2e}");
 }
 
 /// (ξ, ε) of the far table: ε/ξ = 1.5, 2.86, 4, 5, 10, 10, 25 (k/k_c = ξ/ε from 0.67 to 0.04).
-const FAR_POINTS: [(f64, f64); 7] = [(2.0, 3.0), (0.7, 2.0), (0.5, 2.0), (0.2, 1.0), (0.2, 2.0), (0.5, 5.0), (0.2, 5.0)];
+const FAR_POINTS: [(f64, f64); 7] =
+    [(2.0, 3.0), (0.7, 2.0), (0.5, 2.0), (0.2, 1.0), (0.2, 2.0), (0.5, 5.0), (0.2, 5.0)];
 /// Relative agreement on the period and ln v_max a far row needs to be a reference.
 const FAR_AGREEMENT: f64 = 1e-9;
 
@@ -171,7 +184,12 @@ fn command_output(program: &str, args: &[&str]) -> String {
 fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split(':').nth(1)).map(|m| m.trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into());
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(0);
     format!("{cpu}, {cores} cores, {}", command_output("uname", &["-srm"]))
@@ -190,8 +208,10 @@ fn far() {
     let keys = ["period", "t0", "slip_half_width_times_gamma", "ln_v_max"];
     let started = std::time::Instant::now();
     let date = command_output("date", &["-u", "+%Y-%m-%dT%H:%M:%SZ"]);
-    let dirty = !command_output("git", &["status", "--porcelain", "--untracked-files=no"]).is_empty();
-    let commit = command_output("git", &["rev-parse", "HEAD"]) + if dirty { " (with uncommitted changes)" } else { "" };
+    let dirty =
+        !command_output("git", &["status", "--porcelain", "--untracked-files=no"]).is_empty();
+    let commit = command_output("git", &["rev-parse", "HEAD"])
+        + if dirty { " (with uncommitted changes)" } else { "" };
     let mut rows = Vec::new();
     let (mut worst, mut disagreeing) = (0.0f64, 0);
     for (xi, epsilon) in FAR_POINTS {
@@ -213,11 +233,15 @@ fn far() {
                 let mut reference = serde_json::Map::new();
                 let mut agreement = serde_json::Map::new();
                 for key in keys {
-                    let (x, y) = (a[key].as_f64().expect("number"), b[key].as_f64().expect("number"));
+                    let (x, y) =
+                        (a[key].as_f64().expect("number"), b[key].as_f64().expect("number"));
                     reference.insert(key.into(), json!(0.5 * (x + y)));
                     agreement.insert(key.into(), json!((x - y).abs() / x.abs().max(y.abs())));
                 }
-                let decisive = agreement["period"].as_f64().unwrap().max(agreement["ln_v_max"].as_f64().unwrap());
+                let decisive = agreement["period"]
+                    .as_f64()
+                    .unwrap()
+                    .max(agreement["ln_v_max"].as_f64().unwrap());
                 agrees = decisive <= FAR_AGREEMENT;
                 if agrees {
                     worst = worst.max(decisive);
@@ -267,7 +291,8 @@ fn far() {
         "rows": rows,
     });
     let path = format!("{}/data/reference/drr_cycles_far.json", env!("CARGO_MANIFEST_DIR"));
-    std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n").expect("write table");
+    std::fs::write(&path, serde_json::to_string_pretty(&table).expect("json") + "\n")
+        .expect("write table");
     eprintln!("wrote {path}; worst agreement on period and ln v_max: {worst:.2e}; rows not agreeing: {disagreeing}");
 }
 
@@ -276,7 +301,11 @@ fn far() {
 /// the cycles computed (transient included), so it depends on the machine and its load.
 fn cost() {
     let rtol: f64 = 1e-8;
-    let settings = (rtol, rtol * 1e-2, stickslip::analysis::cycle::CycleSettings::defaults(rtol, rtol * 1e-2).tolerance);
+    let settings = (
+        rtol,
+        rtol * 1e-2,
+        stickslip::analysis::cycle::CycleSettings::defaults(rtol, rtol * 1e-2).tolerance,
+    );
     println!("| ε/ξ | k/k_c | ξ | ε | ln v_min | method | cycles | steps/cycle | wall ms/cycle |");
     println!("|---|---|---|---|---|---|---|---|---|");
     for (xi, epsilon) in FAR_POINTS {

@@ -1,26 +1,29 @@
 //! The engine: a validated scene in, a report out, computing only what the scene asks for.
 
 use crate::analysis::continuation::{self, ContinuationReport, ContinuationSettings};
+use crate::analysis::cycle::CycleOptions;
+use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting;
-use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
-use crate::analysis::cycle::CycleOptions;
 use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
-pub fn integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+pub fn integrator(
+    drr: Drr,
+    spec: &SolverSpec,
+    y0: &[f64; 3],
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     integrator_for(drr, &drr, spec, y0, Tolerance::PerComponent(spec.atol.to_vec()))
 }
-
 
 /// Builds the scene's integrator on any system derived from `drr` (e.g. its variational
 /// equations), starting at (0, y0) with absolute tolerances `atol`. Also returns the Butcher
@@ -50,11 +53,16 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // or du/dt = v − 1 is astronomically large, and a solver's own first-step estimate
     // overshoots out of the range of exp (v = e^w overflows). Start with a step that changes
     // each component by at most 1e-3 of max(1, |y|).
-    let initial_step = (y0[W].abs() > 30.0).then(|| {
-        let mut f = vec![0.0; system.dim()];
-        system.rhs(0.0, y0, &mut f);
-        y0.iter().zip(&f).map(|(y, f)| 1e-3 * y.abs().max(1.0) / f.abs().max(1e-300)).fold(f64::INFINITY, f64::min)
-    }).filter(|h| h.is_finite() && *h > 0.0);
+    let initial_step = (y0[W].abs() > 30.0)
+        .then(|| {
+            let mut f = vec![0.0; system.dim()];
+            system.rhs(0.0, y0, &mut f);
+            y0.iter()
+                .zip(&f)
+                .map(|(y, f)| 1e-3 * y.abs().max(1.0) / f.abs().max(1e-300))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|h| h.is_finite() && *h > 0.0);
     // A fresh Jacobian at every step for SUNDIALS' implicit methods: the stiff rate
     // γ²e^(−w)/ξ grows by e per unit fall of w, and on the stick w changes by O(1) within
     // CVODE's default 20 steps between setups (51 between Jacobians). With the older
@@ -65,7 +73,11 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // Not for cvode-adams (a non-stiff method, used at small γ): there the fresh Jacobian
     // only costs steps (γ = 10, ξ = 0.8, ε = 1: 1053 → 778 steps per cycle at rtol 1e-6, 1864
     // → 1503 at 1e-8, the same period error).
-    let jacobian_max_age = matches!(spec.method, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5).then_some(1);
+    let jacobian_max_age = matches!(
+        spec.method,
+        Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5
+    )
+    .then_some(1);
     // ARKStep DIRK: a Newton test 100 times tighter than ARKODE's default 0.1, with up to 5
     // iterations instead of 3. The Jacobian is fresh at each step but not at each stage, and
     // on the stick the stiff rate γ²e^(−w)/ξ falls by e^(ξ c_i h) from the step's start to
@@ -94,7 +106,8 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
         max_nonlin_iters: dirk.then_some(5),
         ..Options::new(spec.rtol, atol)
     };
-    let built = solver::build(spec.method, &MethodSettings::of(spec, true), system, 0.0, y0, options)?;
+    let built =
+        solver::build(spec.method, &MethodSettings::of(spec, true), system, 0.0, y0, options)?;
     Ok((built.integrator, built.tables))
 }
 
@@ -127,7 +140,12 @@ pub struct EngineError {
 impl EngineError {
     /// The error of `analysis`.
     pub fn new(analysis: &'static str, kind: AnalysisError) -> Self {
-        Self { analysis, state: kind.state().to_vec(), message: kind.message_under(analysis), kind: Box::new(kind) }
+        Self {
+            analysis,
+            state: kind.state().to_vec(),
+            message: kind.message_under(analysis),
+            kind: Box::new(kind),
+        }
     }
 
     /// Whether the input is at fault (an option that does not fit the computed orbit, named
@@ -139,7 +157,10 @@ impl EngineError {
 
 /// The engine's error for `analysis` from an analysis error or an integrator's, with the
 /// physical cause added (see `diagnose`).
-fn failed<'a, E: Into<AnalysisError>>(drr: &'a Drr, analysis: &'static str) -> impl Fn(E) -> EngineError + 'a {
+fn failed<'a, E: Into<AnalysisError>>(
+    drr: &'a Drr,
+    analysis: &'static str,
+) -> impl Fn(E) -> EngineError + 'a {
     move |e| EngineError::new(analysis, diagnose(drr, e))
 }
 
@@ -165,7 +186,11 @@ fn diagnose<E: Into<AnalysisError>>(drr: &Drr, error: E) -> AnalysisError {
             let g = drr.manifold_offset(&[u, w, theta]);
             let floor = drr.manifold_w(u, theta);
             if w < -10.0 && g > 0.0 && floor.is_none() {
-                let pull = if drr.params().inertia { "dv/dt = −γ²G with G" } else { "the quasi-dynamic force balance is off by G" };
+                let pull = if drr.params().inertia {
+                    "dv/dt = −γ²G with G"
+                } else {
+                    "the quasi-dynamic force balance is off by G"
+                };
                 Some(format!(
                     " [v = {:.3e} is falling to 0 in finite time ({pull} = {g:.3e} > 0 and no slow manifold \
                      below it): the block stops, which the integration in ln v cannot pass]",
@@ -208,9 +233,11 @@ pub fn cycle_with(
         ..o.settings(scene.solver.rtol, scene.solver.atol[1])
     };
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
-    let (mut integ, tables) = integrator_with_max_step(*drr, max_step(linear), &scene.solver, &scene.initial, atol)?;
+    let (mut integ, tables) =
+        integrator_with_max_step(*drr, max_step(linear), &scene.solver, &scene.initial, atol)?;
     let stable = linear.max_real_part < 0.0;
-    let report = cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
+    let report =
+        cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
     Ok((report, integ.name().to_string(), tables, integ.stats()))
 }
 
@@ -254,12 +281,18 @@ pub fn run_with(
         slip_half_width: v.slip_half_width.map(|w| w * u.time_scale),
         slip_duration: v.slip_duration * u.time_scale,
     });
-    let paper = linear.as_ref().filter(|_| a.paper).map(|h| paper::compare(&scene.params, h, values.as_ref()));
+    let paper = linear
+        .as_ref()
+        .filter(|_| a.paper)
+        .map(|h| paper::compare(&scene.params, h, values.as_ref()));
     let noise = match &a.noise {
         Some(options) => {
             let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
             let model = NoiseModel::Drr { system: drr, amplitudes };
-            Some(noise::run(&model, &scene.initial, options, threads, progress).map_err(failed(&drr, "noise"))?)
+            Some(
+                noise::run(&model, &scene.initial, options, threads, progress)
+                    .map_err(failed(&drr, "noise"))?,
+            )
         }
         None => None,
     };
@@ -312,16 +345,25 @@ struct Integration {
 }
 
 /// The "cycle" analysis, keeping one recorded cycle when asymptotics or lyapunov need it.
-fn cycle_step(scene: &Scene, drr: &Drr, linear: Option<&HopfReport>) -> Result<(Option<cycle::CycleReport>, Integration), EngineError> {
+fn cycle_step(
+    scene: &Scene,
+    drr: &Drr,
+    linear: Option<&HopfReport>,
+) -> Result<(Option<cycle::CycleReport>, Integration), EngineError> {
     let a = &scene.analyses;
     let (Some(options), Some(linear)) = (&a.cycle, linear) else {
-        let none = Integration { name: "none (no integration asked for)".to_string(), tables: Vec::new(), stats: Stats::default() };
+        let none = Integration {
+            name: "none (no integration asked for)".to_string(),
+            tables: Vec::new(),
+            stats: Stats::default(),
+        };
         return Ok((None, none));
     };
     let needs_orbit = a.asymptotics.is_some() || a.lyapunov.is_some();
     let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
     // cycle_with has added the physical cause already (once: not `failed`, which adds it again).
-    let (report, name, tables, stats) = cycle_with(scene, drr, options, keep, linear).map_err(|e| EngineError::new("cycle", e))?;
+    let (report, name, tables, stats) =
+        cycle_with(scene, drr, options, keep, linear).map_err(|e| EngineError::new("cycle", e))?;
     Ok((Some(report), Integration { name, tables, stats }))
 }
 
@@ -337,18 +379,29 @@ fn shooting_step(
     if a.shooting.is_none() && a.continuation.is_none() {
         return Ok((None, None));
     }
-    let settings = a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
-    let (mut integ, tables) = variational_integrator_with_tables(*drr, &scene.solver, &scene.initial).map_err(failed(drr, "shooting"))?;
-    let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings).map_err(failed(drr, "shooting"))?;
+    let settings =
+        a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
+    let (mut integ, tables) =
+        variational_integrator_with_tables(*drr, &scene.solver, &scene.initial)
+            .map_err(failed(drr, "shooting"))?;
+    let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings)
+        .map_err(failed(drr, "shooting"))?;
     if !cycle_ran {
         (integration.name, integration.tables) = (integ.name().to_string(), tables);
     }
     integration.stats.accumulate(&integ.stats());
     let curve = a.continuation.as_ref().map(|c| {
-        let cs = ContinuationSettings { parameter: c.parameter, to: c.to, points: c.points, log: c.log, shooting: settings };
+        let cs = ContinuationSettings {
+            parameter: c.parameter,
+            to: c.to,
+            points: c.points,
+            log: c.log,
+            shooting: settings,
+        };
         match &report.orbit {
             Some(orbit) => {
-                let mut factory = |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
+                let mut factory =
+                    |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
                 continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
             }
             None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
@@ -358,18 +411,40 @@ fn shooting_step(
 }
 
 /// "asymptotics", with the γ scan's cycles run by [`cycle_with`] at the scene's options.
-fn asymptotics_step(scene: &Scene, drr: &Drr, cycle: Option<&cycle::CycleReport>) -> Result<Option<asymptotics::AsymptoticsReport>, EngineError> {
+fn asymptotics_step(
+    scene: &Scene,
+    drr: &Drr,
+    cycle: Option<&cycle::CycleReport>,
+) -> Result<Option<asymptotics::AsymptoticsReport>, EngineError> {
     let Some(o) = &scene.analyses.asymptotics else { return Ok(None) };
     let options = scene.analyses.cycle.clone().unwrap_or_default();
-    let mut cycle_at = |drr: &Drr, start: [f64; 3]| Ok(cycle_with(&Scene { initial: start, ..scene.clone() }, drr, &options, 0, &hopf::analyse(drr))?.0);
-    asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle, o).map(Some).map_err(failed(drr, "asymptotics"))
+    let mut cycle_at = |drr: &Drr, start: [f64; 3]| {
+        Ok(cycle_with(
+            &Scene { initial: start, ..scene.clone() },
+            drr,
+            &options,
+            0,
+            &hopf::analyse(drr),
+        )?
+        .0)
+    };
+    asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle, o)
+        .map(Some)
+        .map_err(failed(drr, "asymptotics"))
 }
 
 /// "lyapunov", with the variational equations integrated by the scene's method.
-fn lyapunov_step(scene: &Scene, drr: &Drr, cycle: Option<&cycle::CycleReport>) -> Result<Option<lyapunov::LyapunovReport>, EngineError> {
+fn lyapunov_step(
+    scene: &Scene,
+    drr: &Drr,
+    cycle: Option<&cycle::CycleReport>,
+) -> Result<Option<lyapunov::LyapunovReport>, EngineError> {
     let Some(o) = &scene.analyses.lyapunov else { return Ok(None) };
-    let mut variational = |drr, spec: &SolverSpec, y0: &[f64; 3]| variational_integrator(drr, spec, y0);
-    lyapunov::analyse(&scene.params, &scene.solver, &mut variational, cycle, o).map(Some).map_err(failed(drr, "lyapunov"))
+    let mut variational =
+        |drr, spec: &SolverSpec, y0: &[f64; 3]| variational_integrator(drr, spec, y0);
+    lyapunov::analyse(&scene.params, &scene.solver, &mut variational, cycle, o)
+        .map(Some)
+        .map_err(failed(drr, "lyapunov"))
 }
 
 /// The one check that every number in the analyses' sections is finite (serde_json would
@@ -395,7 +470,10 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
 }
 
 /// The section and the path of the first non-finite number in it, if any.
-fn first_non_finite_in<T: serde::Serialize>(section: &'static str, value: Option<&T>) -> Option<(&'static str, String)> {
+fn first_non_finite_in<T: serde::Serialize>(
+    section: &'static str,
+    value: Option<&T>,
+) -> Option<(&'static str, String)> {
     value.and_then(|v| finite::first_non_finite(v, section)).map(|path| (section, path))
 }
 
@@ -403,11 +481,19 @@ fn first_non_finite_in<T: serde::Serialize>(section: &'static str, value: Option
 /// starting at (0, y0) with Φ = I. Φ's entries get the absolute tolerance rtol (they are
 /// O(1) where they matter; the components that decay on the slow manifold need no more).
 /// Radau5 gets the Newton-only Jacobian ([`Variational::for_newton`]).
-pub fn variational_integrator(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<Box<dyn Integrator>, SolverError> {
+pub fn variational_integrator(
+    drr: Drr,
+    spec: &SolverSpec,
+    y0: &[f64; 3],
+) -> Result<Box<dyn Integrator>, SolverError> {
     Ok(variational_integrator_with_tables(drr, spec, y0)?.0)
 }
 
-fn variational_integrator_with_tables(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+fn variational_integrator_with_tables(
+    drr: Drr,
+    spec: &SolverSpec,
+    y0: &[f64; 3],
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     let mut atol = spec.atol.to_vec();
     atol.extend([spec.rtol; 9]);
     let z0 = Variational::<Drr, 3>::initial(y0);
@@ -415,7 +501,11 @@ fn variational_integrator_with_tables(drr: Drr, spec: &SolverSpec, y0: &[f64; 3]
     // PRZ laws' sticks at γ = 1e8 with the coupling block ∂(JΦ)/∂y (entries ~1e29) and
     // converges without it (src/model/variational.rs). The others keep the exact Jacobian:
     // Rodas5P and extrapolation need it, and CVODE measured no difference.
-    let system: Variational<Drr, 3> = if spec.method == Method::Radau5 { Variational::for_newton(drr) } else { Variational::new(drr) };
+    let system: Variational<Drr, 3> = if spec.method == Method::Radau5 {
+        Variational::for_newton(drr)
+    } else {
+        Variational::new(drr)
+    };
     integrator_for(system, &drr, spec, &z0, Tolerance::PerComponent(atol))
 }
 
@@ -430,12 +520,17 @@ pub fn run_other(
     let started = std::time::Instant::now();
     let a = &scene.noise.amplitudes;
     let (model, initial) = match &scene.model {
-        OtherModel::SaddleNode { params, x0 } => (NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] }, vec![*x0]),
-        OtherModel::VanDerPol { params, initial } => {
-            (NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] }, initial.to_vec())
-        }
+        OtherModel::SaddleNode { params, x0 } => (
+            NoiseModel::SaddleNode { system: SaddleNode::new(*params), amplitude: a[0] },
+            vec![*x0],
+        ),
+        OtherModel::VanDerPol { params, initial } => (
+            NoiseModel::VanDerPol { system: VanDerPol::new(*params), amplitudes: [a[0], a[1]] },
+            initial.to_vec(),
+        ),
     };
-    let noise = noise::run(&model, &initial, &scene.noise, threads, progress).map_err(|e| EngineError::new("noise", e))?;
+    let noise = noise::run(&model, &initial, &scene.noise, threads, progress)
+        .map_err(|e| EngineError::new("noise", e))?;
     if let Some(path) = finite::first_non_finite(&noise, "noise") {
         return Err(non_finite(&path, "noise"));
     }

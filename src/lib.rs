@@ -21,5 +21,5 @@ pub mod robertson_examples;
 pub mod scene;
 pub mod solver;
 pub mod stress;
-pub mod sweep;
 pub mod sundials;
+pub mod sweep;

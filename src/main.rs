@@ -6,15 +6,19 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
-use stickslip::{compare, engine, report, scene, stress, sweep};
 use stickslip::robertson_examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
+use stickslip::{compare, engine, report, scene, stress, sweep};
 
 mod cli;
 use cli::progress::Progress;
 
 #[derive(Parser)]
-#[command(name = "stickslip", version, about = "Very stiff stick-slip dynamics with Debian's SUNDIALS")]
+#[command(
+    name = "stickslip",
+    version,
+    about = "Very stiff stick-slip dynamics with Debian's SUNDIALS"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -171,13 +175,17 @@ fn print_stats(run: &ExampleRun) {
 fn robertson_command() -> Result<(), String> {
     println!("SUNDIALS {} (linked at run time)\n", sundials::version());
     let cvode = robertson::cvode_example().map_err(|e| e.to_string())?;
-    println!("cvRoberts_dns through stickslip's CVODE wrapper (BDF, rtol 1e-4, analytic Jacobian):");
+    println!(
+        "cvRoberts_dns through stickslip's CVODE wrapper (BDF, rtol 1e-4, analytic Jacobian):"
+    );
     for line in robertson::format_cvode_rows(&cvode.rows) {
         println!("{line}");
     }
     print_stats(&cvode);
     let arkode = robertson::arkode_example().map_err(|e| e.to_string())?;
-    println!("\nark_robertson_root through stickslip's ARKStep wrapper (DIRK SDIRK_5_3_4, rtol 1e-4):");
+    println!(
+        "\nark_robertson_root through stickslip's ARKStep wrapper (DIRK SDIRK_5_3_4, rtol 1e-4):"
+    );
     for line in robertson::format_arkode_rows(&arkode.rows) {
         println!("{line}");
     }
@@ -196,26 +204,31 @@ fn failed(name: &str, error: engine::EngineError) -> Failure {
 
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
-fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads: Option<usize>) -> Result<(), Failure> {
+fn run_command(
+    path: Option<PathBuf>,
+    json: bool,
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+) -> Result<(), Failure> {
     let (text, source) = match &path {
-        Some(p) => (
-            read_scene_text(p)?,
-            p.display().to_string(),
-        ),
+        Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
-    let echo: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
+    let echo: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
     let progress = Progress::new("noise", "realisations");
     let update = |d, t| progress.update(d, t);
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
-            let report = engine::run_with(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
+            let report = engine::run_with(scene, echo, threads, &update)
+                .map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
         scene::AnyScene::Other(scene) => {
-            let report = engine::run_other(scene, echo, threads, &update).map_err(|e| failed(&scene.name, e))?;
+            let report = engine::run_other(scene, echo, threads, &update)
+                .map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
         }
     };
@@ -246,7 +259,8 @@ fn run_command(path: Option<PathBuf>, json: bool, out: Option<PathBuf>, threads:
 const MAX_SCENE_BYTES: u64 = 16 << 20;
 
 fn read_scene_text(path: &std::path::Path) -> Result<String, Failure> {
-    let cannot = |e: std::io::Error| Failure(2, format!("cannot read scene {}: {e}", path.display()));
+    let cannot =
+        |e: std::io::Error| Failure(2, format!("cannot read scene {}: {e}", path.display()));
     let size = std::fs::metadata(path).map_err(cannot)?.len();
     if size > MAX_SCENE_BYTES {
         return Err(Failure(2, format!("scene {}: the file has {size} bytes; a scene is at most {MAX_SCENE_BYTES} bytes (is this the right file?)", path.display())));
@@ -282,28 +296,50 @@ fn compare_command(
 
 /// `compare --against FILE`: a user's trajectory or report against our reference (exit 3 if
 /// it disagrees).
-fn compare_against(scene: &scene::Scene, file: &std::path::Path, tolerance: f64, json: bool) -> Result<(), Failure> {
-    let text = std::fs::read_to_string(file).map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
-    let data = compare::read_user_data(&text).map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
+fn compare_against(
+    scene: &scene::Scene,
+    file: &std::path::Path,
+    tolerance: f64,
+    json: bool,
+) -> Result<(), Failure> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
+    let data = compare::read_user_data(&text)
+        .map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
     let verdict = match data {
         compare::UserData::Trajectory(t) => {
             let c = compare::against_trajectory(scene, &t, tolerance).map_err(|e| match e {
-                e @ (compare::CompareError::Input(_) | compare::CompareError::UnresolvedReference(_)) => Failure(2, format!("{}: {e}", file.display())),
+                e @ (compare::CompareError::Input(_)
+                | compare::CompareError::UnresolvedReference(_)) => {
+                    Failure(2, format!("{}: {e}", file.display()))
+                }
                 other => Failure(1, other.to_string()),
             })?;
             if json {
                 print_json(&c);
             } else {
                 let r = &c.reference;
-                println!("{} samples, {} complete cycles (reference: {})", c.samples, c.cycles[0], c.cycles[1]);
+                println!(
+                    "{} samples, {} complete cycles (reference: {})",
+                    c.samples, c.cycles[0], c.cycles[1]
+                );
                 println!("reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy {:.1e} (against rodas5p)", r.rtol, r.rebases, r.accuracy);
                 for q in &c.worst_per_quantity {
-                    println!("{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}", q.quantity, q.cycle, q.user, q.reference, q.deviation);
+                    println!(
+                        "{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}",
+                        q.quantity, q.cycle, q.user, q.reference, q.deviation
+                    );
                 }
                 let m = &c.max_state_deviation;
-                println!("state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}", m.u, m.ln_v, m.theta);
+                println!(
+                    "state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}",
+                    m.u, m.ln_v, m.theta
+                );
                 if let Some(w) = &c.worst_state {
-                    println!("worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}", w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference);
+                    println!(
+                        "worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}",
+                        w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference
+                    );
                 }
                 for reason in &c.reasons {
                     println!("DISAGREES: {reason}");
@@ -312,24 +348,37 @@ fn compare_against(scene: &scene::Scene, file: &std::path::Path, tolerance: f64,
             c.verdict
         }
         compare::UserData::Report(r) => {
-            let c = compare::against_report(scene, &r, tolerance).map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
+            let c = compare::against_report(scene, &r, tolerance)
+                .map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
             if json {
                 print_json(&c);
             } else {
                 for row in &c.rows {
                     let flag = if row.beyond_tolerance { "  BEYOND TOLERANCE" } else { "" };
-                    println!("{:<16} yours {:<22} ours {:<22} {:.1e}{flag}", row.quantity, row.user, row.reference, row.deviation);
+                    println!(
+                        "{:<16} yours {:<22} ours {:<22} {:.1e}{flag}",
+                        row.quantity, row.user, row.reference, row.deviation
+                    );
                 }
             }
             c.verdict
         }
     };
     if !json {
-        println!("verdict: {} (tolerance {tolerance:.1e})", if verdict == compare::Verdict::Agrees { "agrees" } else { "disagrees" });
+        println!(
+            "verdict: {} (tolerance {tolerance:.1e})",
+            if verdict == compare::Verdict::Agrees { "agrees" } else { "disagrees" }
+        );
     }
     match verdict {
         compare::Verdict::Agrees => Ok(()),
-        compare::Verdict::Disagrees => Err(Failure(3, format!("{} disagrees with the reference beyond the tolerance {tolerance:e}", file.display()))),
+        compare::Verdict::Disagrees => Err(Failure(
+            3,
+            format!(
+                "{} disagrees with the reference beyond the tolerance {tolerance:e}",
+                file.display()
+            ),
+        )),
     }
 }
 
@@ -350,9 +399,23 @@ fn compare_methods(scene: &scene::Scene, methods: &[String], json: bool) -> Resu
             println!("{m:<12} {status} ({})", time.map_or("-".into(), |t| format!("{:.3} s", t)));
         }
         for row in &c.rows {
-            let values: Vec<String> = row.values.iter().map(|(m, v)| format!("{m}={}", v.map_or("-".into(), |v| format!("{v:.12}")))).collect();
-            let flag = if row.outliers.is_empty() { String::new() } else { format!("  OUTLIERS: {}", row.outliers.join(", ")) };
-            println!("{:<16} spread {:<9} (allowed {:.0e}) {}{flag}", row.quantity, row.spread.map_or("-".into(), |s| format!("{s:.1e}")), row.allowed, values.join("  "));
+            let values: Vec<String> = row
+                .values
+                .iter()
+                .map(|(m, v)| format!("{m}={}", v.map_or("-".into(), |v| format!("{v:.12}"))))
+                .collect();
+            let flag = if row.outliers.is_empty() {
+                String::new()
+            } else {
+                format!("  OUTLIERS: {}", row.outliers.join(", "))
+            };
+            println!(
+                "{:<16} spread {:<9} (allowed {:.0e}) {}{flag}",
+                row.quantity,
+                row.spread.map_or("-".into(), |s| format!("{s:.1e}")),
+                row.allowed,
+                values.join("  ")
+            );
         }
     }
     Ok(())
@@ -373,13 +436,21 @@ fn sweep_command(
 ) -> Result<(), Failure> {
     let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
-    let base: serde_json::Value = serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let axes = specs.iter().map(|s| sweep::parse_axis(s)).collect::<Result<Vec<_>, _>>().map_err(|e| Failure(2, e.to_string()))?;
+    let base: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
+    let axes = specs
+        .iter()
+        .map(|s| sweep::parse_axis(s))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| Failure(2, e.to_string()))?;
     sweep::check_base(&base, &axes).map_err(|e| Failure(2, format!("{}: {e}", path.display())))?;
-    let shard = shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e.to_string()))?;
+    let shard =
+        shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e.to_string()))?;
     let progress = Progress::new("sweep", "points");
-    let ran = sweep::run(&base, &axes, &out, resume, shard, worker_threads(threads), &|d, t| progress.update(d, t))
-        .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    let ran = sweep::run(&base, &axes, &out, resume, shard, worker_threads(threads), &|d, t| {
+        progress.update(d, t)
+    })
+    .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
     let seconds = progress.finish();
     println!("sweep: {ran} points run into {} in {seconds:.1} s", out.display());
     Ok(())
@@ -387,14 +458,20 @@ fn sweep_command(
 
 fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Result<(), Failure> {
     let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
-    let (rows, missing) = sweep::merge(&paths, total).map_err(|e| Failure(2, format!("cannot read inputs: {e}")))?;
-    let text: String = rows.iter().map(|r| serde_json::to_string(r).expect("a row serialises") + "\n").collect();
-    report::write_atomic(&out, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    let (rows, missing) =
+        sweep::merge(&paths, total).map_err(|e| Failure(2, format!("cannot read inputs: {e}")))?;
+    let text: String =
+        rows.iter().map(|r| serde_json::to_string(r).expect("a row serialises") + "\n").collect();
+    report::write_atomic(&out, &text)
+        .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
     println!("merge: {} rows into {}", rows.len(), out.display());
     if missing.is_empty() {
         Ok(())
     } else {
-        Err(Failure(1, format!("{} points missing: {:?}", missing.len(), &missing[..missing.len().min(20)])))
+        Err(Failure(
+            1,
+            format!("{} points missing: {:?}", missing.len(), &missing[..missing.len().min(20)]),
+        ))
     }
 }
 
@@ -406,12 +483,13 @@ fn stress_command(
     table: Option<PathBuf>,
     known: Option<PathBuf>,
 ) -> Result<(), Failure> {
-    let known = match &known {
-        Some(path) => Some(
-            std::fs::read_to_string(path).map_err(|e| Failure(2, format!("--known {}: cannot read it: {e}", path.display())))?,
-        ),
-        None => None,
-    };
+    let known =
+        match &known {
+            Some(path) => Some(std::fs::read_to_string(path).map_err(|e| {
+                Failure(2, format!("--known {}: cannot read it: {e}", path.display()))
+            })?),
+            None => None,
+        };
     let methods = methods
         .iter()
         .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
@@ -421,11 +499,17 @@ fn stress_command(
         cells.retain(|cell| methods.contains(&cell.method));
     }
     let progress = Progress::new("stress", "cells");
-    let (outcomes, summary) = stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
+    let (outcomes, summary) =
+        stress::run(&cells, worker_threads(threads), &|d, t| progress.update(d, t));
     let seconds = progress.finish();
     if let Some(path) = table {
-        let text = format!("{} cells in {seconds:.0} s\n\n{}", cells.len(), stress::table(&cells, &outcomes, &summary));
-        report::write_atomic(&path, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))?;
+        let text = format!(
+            "{} cells in {seconds:.0} s\n\n{}",
+            cells.len(),
+            stress::table(&cells, &outcomes, &summary)
+        );
+        report::write_atomic(&path, &text)
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", path.display())))?;
     }
     if json {
         println!("{}", serde_json::to_string_pretty(&summary).expect("serialisable"));
@@ -464,7 +548,12 @@ fn stress_command(
             for k in &fixed {
                 say(format!("  NOW PASSES (remove it from the known-failures file) {k}"));
             }
-            say(format!("stress: {} known failures, {} new failures, {} fixed", summary.failures.len() - new.len(), new.len(), fixed.len()));
+            say(format!(
+                "stress: {} known failures, {} new failures, {} fixed",
+                summary.failures.len() - new.len(),
+                new.len(),
+                fixed.len()
+            ));
             problems += new.len() + fixed.len();
         }
         None => problems += summary.failures.len(),
@@ -498,12 +587,23 @@ fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Res
         count(Verdict::DoesNotHold),
         if summary.pending.is_empty() { "none".to_string() } else { summary.pending.iter().map(|p| p.figure).collect::<Vec<_>>().join(", ") }
     );
-    println!("summary: {} and summary.html ({:.1} s)", out.join("summary.md").display(), summary.wall_time_s);
+    println!(
+        "summary: {} and summary.html ({:.1} s)",
+        out.join("summary.md").display(),
+        summary.wall_time_s
+    );
     let failed = summary.failed();
     if failed.is_empty() {
         Ok(())
     } else {
-        Err(Failure(1, format!("{} figure(s) failed: {}", failed.len(), failed.iter().map(|f| f.id.as_str()).collect::<Vec<_>>().join(", "))))
+        Err(Failure(
+            1,
+            format!(
+                "{} figure(s) failed: {}",
+                failed.len(),
+                failed.iter().map(|f| f.id.as_str()).collect::<Vec<_>>().join(", ")
+            ),
+        ))
     }
 }
 
@@ -514,14 +614,18 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
     let inputs = reports
         .iter()
         .map(|p| {
-            let text = std::fs::read_to_string(p).map_err(|e| Failure(2, format!("cannot read {}: {e}", p.display())))?;
-            let value = serde_json::from_str(&text).map_err(|e| Failure(2, format!("{}: {e}", p.display())))?;
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| Failure(2, format!("cannot read {}: {e}", p.display())))?;
+            let value = serde_json::from_str(&text)
+                .map_err(|e| Failure(2, format!("{}: {e}", p.display())))?;
             Ok((p.display().to_string(), value))
         })
         .collect::<Result<Vec<_>, Failure>>()?;
     let curves = noise_report::combine(&inputs).map_err(|e| Failure(2, e))?;
-    let text = serde_json::to_string_pretty(&serde_json::json!({ "curves": curves })).expect("serialisable");
-    report::write_atomic(&out, &text).map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
+    let text = serde_json::to_string_pretty(&serde_json::json!({ "curves": curves }))
+        .expect("serialisable");
+    report::write_atomic(&out, &text)
+        .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
     println!("noise-curves: {} curves into {}", curves.len(), out.display());
     Ok(())
 }
@@ -535,13 +639,21 @@ fn main() -> ExitCode {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };
             stress_command(grid, &methods, json, threads, table, known)
         }
-        Command::Sweep { scene, params, out, resume, shard, threads } => sweep_command(scene, params, out, resume, shard, threads),
+        Command::Sweep { scene, params, out, resume, shard, threads } => {
+            sweep_command(scene, params, out, resume, shard, threads)
+        }
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
-        Command::Compare { scene, methods, against, tolerance, json } => compare_command(scene, methods, against, tolerance, json),
+        Command::Compare { scene, methods, against, tolerance, json } => {
+            compare_command(scene, methods, against, tolerance, json)
+        }
         Command::Reproduce { out, threads, reduced } => reproduce_command(out, threads, reduced),
         Command::NoiseCurves { out, reports } => noise_curves_command(out, reports),
         Command::Version => {
-            println!("stickslip {} with SUNDIALS {}", env!("CARGO_PKG_VERSION"), sundials::version());
+            println!(
+                "stickslip {} with SUNDIALS {}",
+                env!("CARGO_PKG_VERSION"),
+                sundials::version()
+            );
             Ok(())
         }
     };

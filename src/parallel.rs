@@ -8,7 +8,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// `f(0)`, …, `f(count − 1)` on `threads` threads, in index order; `progress(done, count)`
 /// after each item.
-pub fn map<R: Send>(count: usize, threads: usize, progress: &(dyn Fn(usize, usize) + Sync), f: impl Fn(usize) -> R + Sync) -> Vec<R> {
+pub fn map<R: Send>(
+    count: usize,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    f: impl Fn(usize) -> R + Sync,
+) -> Vec<R> {
     match try_map(count, threads, progress, |i| Ok::<R, std::convert::Infallible>(f(i))) {
         Ok(results) => results,
         Err(never) => match never {},
@@ -37,11 +42,12 @@ pub fn try_map<R: Send, E: Send>(
         progress(done.fetch_add(1, Ordering::Relaxed) + 1, count);
         Some(result)
     };
-    let results: Vec<Option<Result<R, E>>> = match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build() {
-        Ok(pool) => pool.install(|| (0..count).into_par_iter().map(&one).collect()),
-        // No threads to be had: the same items, in order, on this one.
-        Err(_) => (0..count).map(&one).collect(),
-    };
+    let results: Vec<Option<Result<R, E>>> =
+        match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build() {
+            Ok(pool) => pool.install(|| (0..count).into_par_iter().map(&one).collect()),
+            // No threads to be had: the same items, in order, on this one.
+            Err(_) => (0..count).map(&one).collect(),
+        };
     // Skipped items all lie above the lowest failure, so the first error in index order is it.
     results.into_iter().flatten().collect()
 }

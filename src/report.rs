@@ -2,12 +2,12 @@
 //! CLI summary.
 
 use crate::analysis::asymptotics::AsymptoticsReport;
+use crate::analysis::claims::Claim;
 use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleReport, CycleStatus};
-use crate::analysis::shooting::ShootingReport;
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
-use crate::analysis::claims::Claim;
+use crate::analysis::shooting::ShootingReport;
 use crate::integrate::Stats;
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
@@ -134,12 +134,20 @@ impl Report {
         s += &format!(
             "scene {}: {}, ξ = {}, ε = {}, friction {}, {} law{}\n",
             self.name,
-            if m.inertia { format!("γ = {:e}", m.gamma) } else { "quasi-dynamic (no inertia)".into() },
+            if m.inertia {
+                format!("γ = {:e}", m.gamma)
+            } else {
+                "quasi-dynamic (no inertia)".into()
+            },
             m.xi,
             m.epsilon,
             m.friction,
             m.state_law,
-            if m.radiation_damping > 0.0 { format!(", radiation damping η = {:e}", m.radiation_damping) } else { String::new() }
+            if m.radiation_damping > 0.0 {
+                format!(", radiation damping η = {:e}", m.radiation_damping)
+            } else {
+                String::new()
+            }
         );
         s += &format!(
             "solver {} ({}), rtol {:e}, SUNDIALS {}; {} steps, {} RHS, {} Jacobians, {:.3} s\n",
@@ -159,7 +167,11 @@ impl Report {
                 h.omega_c,
                 h.period_c,
                 h.period_c_large_gamma,
-                if h.above_threshold { "above threshold: fixed point unstable" } else { "below threshold: fixed point stable" }
+                if h.above_threshold {
+                    "above threshold: fixed point unstable"
+                } else {
+                    "below threshold: fixed point stable"
+                }
             );
         }
         if let Some(c) = &self.cycle {
@@ -171,9 +183,15 @@ impl Report {
                         c.cycles_used,
                         c.spread.map_or(0.0, |s| s.period)
                     );
-                    s += &format!("  period          {:.10}\n  t0              {:.10}\n", v.period, v.t0);
+                    s += &format!(
+                        "  period          {:.10}\n  t0              {:.10}\n",
+                        v.period, v.t0
+                    );
                     match v.slip_half_width {
-                        Some(w) if m.inertia => s += &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma),
+                        Some(w) if m.inertia => {
+                            s +=
+                                &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma)
+                        }
                         Some(w) => s += &format!("  slip half-width {:.6e}\n", w),
                         None => {}
                     }
@@ -183,16 +201,29 @@ impl Report {
                     );
                 }
                 (CycleStatus::PeriodN, _) => {
-                    s += &format!("cycle: period-{} orbit, total period {:.10}\n", c.orbit.len(), c.orbit_period.unwrap_or(0.0));
+                    s += &format!(
+                        "cycle: period-{} orbit, total period {:.10}\n",
+                        c.orbit.len(),
+                        c.orbit_period.unwrap_or(0.0)
+                    );
                     for (i, o) in c.orbit.iter().enumerate() {
-                        s += &format!("  cycle {}: period {:.10}, ln v_max {:.9}\n", i + 1, o.period, o.ln_v_max);
+                        s += &format!(
+                            "  cycle {}: period {:.10}, ln v_max {:.9}\n",
+                            i + 1,
+                            o.period,
+                            o.ln_v_max
+                        );
                     }
                 }
-                (CycleStatus::FixedPoint, _) => s += "cycle: none; the oscillation dies out and the fixed point is stable\n",
-                _ => s += &format!(
+                (CycleStatus::FixedPoint, _) => {
+                    s += "cycle: none; the oscillation dies out and the fixed point is stable\n"
+                }
+                _ => {
+                    s += &format!(
                     "cycle: NOT converged after {} cycles / t = {:.6e} (see cycle.last_cycles)\n",
                     c.cycles_computed, c.time_integrated
-                ),
+                )
+                }
             }
         }
         if let Some(p) = &self.physical {
@@ -211,8 +242,21 @@ impl Report {
                         "shooting: converged in {} iterations (residual {:.1e}); period {:.10}, t0 {:.10}, ln v_max {:.9}\n",
                         o.newton_iterations, o.residual, o.period, o.t0, o.ln_v_max
                     );
-                    s += &format!("  section point (u, v, θ) = ({:.10}, 1, {:.10})\n", o.section_point[0], o.section_point[2]);
-                    let mu: Vec<String> = o.nontrivial().iter().map(|m| if m.im == 0.0 { format!("{:.6e}", m.re) } else { format!("{:.6e}{:+.6e}i", m.re, m.im) }).collect();
+                    s += &format!(
+                        "  section point (u, v, θ) = ({:.10}, 1, {:.10})\n",
+                        o.section_point[0], o.section_point[2]
+                    );
+                    let mu: Vec<String> = o
+                        .nontrivial()
+                        .iter()
+                        .map(|m| {
+                            if m.im == 0.0 {
+                                format!("{:.6e}", m.re)
+                            } else {
+                                format!("{:.6e}{:+.6e}i", m.re, m.im)
+                            }
+                        })
+                        .collect();
                     s += &format!(
                         "  Floquet multipliers: trivial 1{:+.1e}, others {} ({})\n",
                         o.multipliers[0].re - 1.0,
@@ -220,17 +264,30 @@ impl Report {
                         match o.stable {
                             Some(true) => "stable".to_string(),
                             Some(false) => "unstable".to_string(),
-                            None => format!("stability unknown: {}", o.multipliers_note.as_deref().unwrap_or("")),
+                            None => format!(
+                                "stability unknown: {}",
+                                o.multipliers_note.as_deref().unwrap_or("")
+                            ),
                         }
                     );
                 }
-                None => s += &format!("shooting: NOT converged: {}\n", r.failure.as_ref().map_or("?".to_string(), ToString::to_string)),
+                None => {
+                    s += &format!(
+                        "shooting: NOT converged: {}\n",
+                        r.failure.as_ref().map_or("?".to_string(), ToString::to_string)
+                    )
+                }
             }
             if let Some(pd) = &r.period_doubling {
-                s += &format!("  period doubling: multiplier {:.6}; {}\n", pd.multiplier, match &pd.doubled {
-                    Some(d) => format!("doubled orbit of period {:.10} ({})", d.period, pd.note),
-                    None => format!("doubled orbit not found ({})", pd.note),
-                });
+                s += &format!(
+                    "  period doubling: multiplier {:.6}; {}\n",
+                    pd.multiplier,
+                    match &pd.doubled {
+                        Some(d) =>
+                            format!("doubled orbit of period {:.10} ({})", d.period, pd.note),
+                        None => format!("doubled orbit not found ({})", pd.note),
+                    }
+                );
             }
         }
         if let Some(c) = &self.continuation {
@@ -243,16 +300,25 @@ impl Report {
                 if c.completed { String::new() } else { String::from(" (stopped)") }
             );
             if let (Some(first), Some(last)) = (c.points.first(), c.points.last()) {
-                s += &format!("  period {:.8} at {} … {:.8} at {}\n", first.orbit.period, first.value, last.orbit.period, last.value);
+                s += &format!(
+                    "  period {:.8} at {} … {:.8} at {}\n",
+                    first.orbit.period, first.value, last.orbit.period, last.value
+                );
             }
             if let Some(stop) = &c.stopped {
-                s += &format!("  stopped after {} (failed at {}): {}\n", stop.last_value, stop.failed_at, stop.reason);
+                s += &format!(
+                    "  stopped after {} (failed at {}): {}\n",
+                    stop.last_value, stop.failed_at, stop.reason
+                );
             }
             for f in &c.flips {
                 s += &format!("  period doubling between {} and {}\n", f.from, f.to);
             }
             if let Some(d) = c.period_per_decade.first() {
-                s += &format!("  period per decade of γ: {:.4} (fit over log10 γ = {} … {})\n", d.slope, d.log10_gamma_from, d.log10_gamma_to);
+                s += &format!(
+                    "  period per decade of γ: {:.4} (fit over log10 γ = {} … {})\n",
+                    d.slope, d.log10_gamma_from, d.log10_gamma_to
+                );
             }
         }
         if let Some(n) = &self.noise {
@@ -261,8 +327,13 @@ impl Report {
         if let Some(claims) = &self.paper {
             s += "paper's claims:\n";
             for c in claims {
-                let relative = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
-                s += &format!("  {:<9} {} — paper {}, ours {:.6}{relative}\n", c.verdict, c.claim, c.reference, c.ours);
+                let relative = c
+                    .relative_difference
+                    .map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+                s += &format!(
+                    "  {:<9} {} — paper {}, ours {:.6}{relative}\n",
+                    c.verdict, c.claim, c.reference, c.ours
+                );
             }
         }
         s
@@ -278,11 +349,15 @@ impl Report {
 pub fn write_atomic(path: &Path, text: &str) -> std::io::Result<()> {
     match std::fs::metadata(path) {
         Ok(m) if !m.is_file() && !m.is_dir() => return std::fs::write(path, text),
-        Ok(m) if m.is_file() && path.is_symlink() => return write_atomic(&std::fs::canonicalize(path)?, text),
+        Ok(m) if m.is_file() && path.is_symlink() => {
+            return write_atomic(&std::fs::canonicalize(path)?, text)
+        }
         _ => {}
     }
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().ok_or_else(|| std::io::Error::other("the output path has no file name"))?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| std::io::Error::other("the output path has no file name"))?;
     let tmp = dir.join(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()));
     let result = (|| {
         let mut file = std::fs::File::create(&tmp)?;
@@ -322,8 +397,12 @@ impl ModelReport {
     /// A readable summary for the terminal.
     pub fn summary(&self) -> String {
         let model = match &self.model {
-            OtherModel::SaddleNode { params, x0 } => format!("saddle-node, μ0 = {}, r = {}, x(0) = {x0}", params.mu0, params.r),
-            OtherModel::VanDerPol { params, initial } => format!("van der Pol, β = {}, a = {}, start {initial:?}", params.beta, params.a),
+            OtherModel::SaddleNode { params, x0 } => {
+                format!("saddle-node, μ0 = {}, r = {}, x(0) = {x0}", params.mu0, params.r)
+            }
+            OtherModel::VanDerPol { params, initial } => {
+                format!("van der Pol, β = {}, a = {}, start {initial:?}", params.beta, params.a)
+            }
         };
         format!("scene {}: {model}; {:.3} s\n{}", self.name, self.wall_time_s, self.noise.summary())
     }

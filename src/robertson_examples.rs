@@ -43,7 +43,8 @@ fn row(t: f64, y: &[f64], event: &StepEvent) -> Row {
 /// Jacobian, outputs at 0.4·10^k, k = 0..11, plus the root returns.
 pub fn cvode_example() -> Result<ExampleRun, SolverError> {
     let options = Options::new(1.0e-4, Tolerance::PerComponent(vec![1.0e-8, 1.0e-14, 1.0e-6]));
-    let mut solver = Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)?;
+    let mut solver =
+        Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)?;
     solver.set_roots(Some(roots()))?;
     let mut rows = Vec::new();
     let (mut tout, mut printed) = (0.4, 0);
@@ -70,7 +71,8 @@ pub fn arkode_example() -> Result<ExampleRun, SolverError> {
     options.max_steps = Some(100_000);
     let settings = ArkSettings { predictor_method: Some(1), ..ArkSettings::default() };
     let y0 = [1.0, 0.0, 0.0];
-    let mut solver = Solver::arkstep(Robertson, ArkMethod::default(), settings, 0.0, &y0, &options)?;
+    let mut solver =
+        Solver::arkstep(Robertson, ArkMethod::default(), settings, 0.0, &y0, &options)?;
     solver.set_roots(Some(roots()))?;
     let mut rows = vec![row(0.0, &y0, &StepEvent::Reached)];
     let mut tout = 0.4;
@@ -96,7 +98,13 @@ pub fn format_cvode_rows(rows: &[Row]) -> Vec<String> {
     let mut lines = Vec::new();
     for r in rows {
         let y: Vec<String> = r.y.iter().map(|v| format!("{:>14}", c_exponential(*v, 6))).collect();
-        lines.push(format!("At t = {}      y ={}  {}  {}", c_exponential(r.t, 4), y[0], y[1], y[2]));
+        lines.push(format!(
+            "At t = {}      y ={}  {}  {}",
+            c_exponential(r.t, 4),
+            y[0],
+            y[1],
+            y[2]
+        ));
         if let Some(info) = &r.roots {
             lines.push(format!("    rootsfound[] = {:>3} {:>3}", info[0], info[1]));
         }
@@ -108,8 +116,10 @@ pub fn format_cvode_rows(rows: &[Row]) -> Vec<String> {
 pub fn format_arkode_rows(rows: &[Row]) -> Vec<String> {
     let mut lines = Vec::new();
     for r in rows {
-        let cells: Vec<String> =
-            std::iter::once(r.t).chain(r.y).map(|v| format!("{:>12}", c_exponential(v, 5))).collect();
+        let cells: Vec<String> = std::iter::once(r.t)
+            .chain(r.y)
+            .map(|v| format!("{:>12}", c_exponential(v, 5)))
+            .collect();
         lines.push(format!("  {}", cells.join("  ")));
         if let Some(info) = &r.roots {
             lines.push(format!("      rootsfound[] = {:>3} {:>3}", info[0], info[1]));

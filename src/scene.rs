@@ -6,8 +6,8 @@ use crate::analysis::cycle::CycleOptions;
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
-use serde::{Deserialize, Serialize};
 pub use crate::solver::{Method, SolverSpec};
+use serde::{Deserialize, Serialize};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -278,7 +278,11 @@ pub enum AnyScene {
 
 /// Parses and validates a scene of any model kind (`"model": {"kind": ...}`).
 pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> {
-    let err = |field: &str, message: String| SceneError { source_name: source_name.into(), field: field.into(), message };
+    let err = |field: &str, message: String| SceneError {
+        source_name: source_name.into(),
+        field: field.into(),
+        message,
+    };
     let raw = parse_raw(text, &err)?;
     match raw.model.kind.as_deref() {
         None | Some("drr") => validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s))),
@@ -286,7 +290,10 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
     }
 }
 
-fn parse_raw(text: &str, err: &impl Fn(&str, String) -> SceneError) -> Result<RawScene, SceneError> {
+fn parse_raw(
+    text: &str,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<RawScene, SceneError> {
     let deserializer = &mut serde_json::Deserializer::from_str(text);
     serde_path_to_error::deserialize(deserializer).map_err(|e| {
         let path = e.path().to_string();
@@ -296,7 +303,12 @@ fn parse_raw(text: &str, err: &impl Fn(&str, String) -> SceneError) -> Result<Ra
 }
 
 /// Rejects the keys of `model` that the kind does not take.
-fn only_model_keys(m: &RawModel, kind: &str, allowed: &[&str], err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+fn only_model_keys(
+    m: &RawModel,
+    kind: &str,
+    allowed: &[&str],
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<(), SceneError> {
     let given = [
         ("gamma", m.gamma.is_some()),
         ("xi", m.xi.is_some()),
@@ -315,13 +327,22 @@ fn only_model_keys(m: &RawModel, kind: &str, allowed: &[&str], err: &impl Fn(&st
     ];
     for (name, present) in given {
         if present && !allowed.contains(&name) {
-            return Err(err(&format!("model.{name}"), format!("the {kind} model takes no \"{name}\"; its keys are {}", allowed.join(", "))));
+            return Err(err(
+                &format!("model.{name}"),
+                format!(
+                    "the {kind} model takes no \"{name}\"; its keys are {}",
+                    allowed.join(", ")
+                ),
+            ));
         }
     }
     Ok(())
 }
 
-fn validate_other(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<OtherScene, SceneError> {
+fn validate_other(
+    raw: RawScene,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<OtherScene, SceneError> {
     if raw.name.trim().is_empty() {
         return Err(err("name", "must not be empty".into()));
     }
@@ -348,7 +369,11 @@ fn validate_other(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> R
         }
         other => return Err(err("model.kind", format!("unknown kind \"{other}\"; use \"drr\" (default), \"saddle_node\" or \"van_der_pol\""))),
     };
-    for (field, present) in [("initial", raw.initial.is_some()), ("units", raw.units.is_some()), ("solver", raw.solver.is_some())] {
+    for (field, present) in [
+        ("initial", raw.initial.is_some()),
+        ("units", raw.units.is_some()),
+        ("solver", raw.solver.is_some()),
+    ] {
         if present {
             return Err(err(field, format!("the {kind} model takes no \"{field}\" (its start is model.x0{}; the noise analysis sets its own solver)", if kind == "van_der_pol" { "/y0" } else { "" })));
         }
@@ -372,7 +397,11 @@ fn validate_other(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> R
 
 /// Parses and validates a scene from JSON text. `source_name` names it in errors.
 pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
-    let err = |field: &str, message: String| SceneError { source_name: source_name.into(), field: field.into(), message };
+    let err = |field: &str, message: String| SceneError {
+        source_name: source_name.into(),
+        field: field.into(),
+        message,
+    };
     let raw = parse_raw(text, &err)?;
     if let Some(kind) = raw.model.kind.as_deref().filter(|k| *k != "drr") {
         return Err(err("model.kind", format!("\"{kind}\": this command needs a DRR scene; `stickslip run` runs {kind} scenes (noise analysis)")));
@@ -380,13 +409,30 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
     validate(raw, &err)
 }
 
-fn finite(field: &str, value: f64, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
-    if value.is_finite() { Ok(value) } else { Err(err(field, format!("{value} is not a finite number"))) }
+fn finite(
+    field: &str,
+    value: f64,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<f64, SceneError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(err(field, format!("{value} is not a finite number")))
+    }
 }
 
-fn positive(field: &str, value: f64, hint: &str, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
+fn positive(
+    field: &str,
+    value: f64,
+    hint: &str,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<f64, SceneError> {
     let v = finite(field, value, err)?;
-    if v > 0.0 { Ok(v) } else { Err(err(field, format!("{v} must be > 0 ({hint})"))) }
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(err(field, format!("{v} must be > 0 ({hint})")))
+    }
 }
 
 fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<Scene, SceneError> {
@@ -394,7 +440,21 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         return Err(err("name", "must not be empty".into()));
     }
     let m = &raw.model;
-    only_model_keys(m, "drr", &["gamma", "xi", "epsilon", "dimensional", "friction", "state_law", "radiation_damping", "inertia"], err)?;
+    only_model_keys(
+        m,
+        "drr",
+        &[
+            "gamma",
+            "xi",
+            "epsilon",
+            "dimensional",
+            "friction",
+            "state_law",
+            "radiation_damping",
+            "inertia",
+        ],
+        err,
+    )?;
     let inertia = m.inertia.unwrap_or(true);
     if !inertia {
         no_inertial_keys(m, err)?;
@@ -406,28 +466,45 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             } else {
                 1.0
             };
-            for (name, v) in [("k", d.k), ("mass", mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)] {
+            for (name, v) in
+                [("k", d.k), ("mass", mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)]
+            {
                 positive(&format!("model.dimensional.{name}"), v, "a physical parameter", err)?;
             }
             let gamma = if inertia { (d.d_c / d.v0) * (d.k / mass).sqrt() } else { f64::INFINITY };
             (gamma, d.k * d.d_c / d.a, (d.b - d.a) / d.a)
         }
         (Some(_), ..) => {
-            return Err(err("model", "give either gamma/xi/epsilon or dimensional, not both".into()));
+            return Err(err(
+                "model",
+                "give either gamma/xi/epsilon or dimensional, not both".into(),
+            ));
         }
         (None, None, Some(x), Some(e)) if !inertia => (f64::INFINITY, x, e),
         (None, Some(g), Some(x), Some(e)) => (g, x, e),
         (None, g, x, e) => {
             let g = if inertia { g } else { Some(f64::INFINITY) };
-            let missing: Vec<&str> =
-                [("gamma", g), ("xi", x), ("epsilon", e)].iter().filter(|(_, v)| v.is_none()).map(|(n, _)| *n).collect();
-            return Err(err("model", format!("missing {} (or give \"dimensional\": {{k, mass, a, b, d_c, v0}})", missing.join(", "))));
+            let missing: Vec<&str> = [("gamma", g), ("xi", x), ("epsilon", e)]
+                .iter()
+                .filter(|(_, v)| v.is_none())
+                .map(|(n, _)| *n)
+                .collect();
+            return Err(err(
+                "model",
+                format!(
+                    "missing {} (or give \"dimensional\": {{k, mass, a, b, d_c, v0}})",
+                    missing.join(", ")
+                ),
+            ));
         }
     };
     if inertia {
         let gamma = positive("model.gamma", gamma, "γ = (D_c/v0)·√(k/M), e.g. 1e3", err)?;
         if !(1e-100..=1e100).contains(&gamma) {
-            return Err(err("model.gamma", format!("{gamma:e} is outside 1e-100 … 1e100 (γ² must be a normal double)")));
+            return Err(err(
+                "model.gamma",
+                format!("{gamma:e} is outside 1e-100 … 1e100 (γ² must be a normal double)"),
+            ));
         }
     }
     let xi = positive("model.xi", xi, "ξ = k·D_c/A, of order one, e.g. 0.7", err)?;
@@ -435,15 +512,27 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let friction = match m.friction.clone().unwrap_or(RawFriction::Log) {
         RawFriction::Log => Friction::Log,
         RawFriction::Asinh => Friction::Asinh,
-        RawFriction::Power { alpha } => {
-            Friction::Power { alpha: positive("model.friction.power.alpha", alpha, "g_α(v) = (v^α − 1)/α, e.g. 0.31", err)? }
-        }
+        RawFriction::Power { alpha } => Friction::Power {
+            alpha: positive(
+                "model.friction.power.alpha",
+                alpha,
+                "g_α(v) = (v^α − 1)/α, e.g. 0.31",
+                err,
+            )?,
+        },
     };
     let state_law = match m.state_law.as_deref() {
         None => StateLaw::Slip,
         Some(name) => StateLaw::from_name(name).ok_or_else(|| {
-            let names: Vec<String> = StateLaw::ALL.iter().map(|(n, _)| format!("\"{n}\"")).collect();
-            err("model.state_law", format!("\"{name}\" is not a state law; use one of {} (default \"slip\")", names.join(", ")))
+            let names: Vec<String> =
+                StateLaw::ALL.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            err(
+                "model.state_law",
+                format!(
+                    "\"{name}\" is not a state law; use one of {} (default \"slip\")",
+                    names.join(", ")
+                ),
+            )
         })?,
     };
     let eta = radiation_damping(m, err)?;
@@ -458,16 +547,30 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
 
     let units = match raw.units.clone() {
         Some(u) => {
-            positive("units.time_scale", u.time_scale, "D_c/v0 in units.time_unit, e.g. 2.7 (years)", err)?;
+            positive(
+                "units.time_scale",
+                u.time_scale,
+                "D_c/v0 in units.time_unit, e.g. 2.7 (years)",
+                err,
+            )?;
             if u.time_scale > 1e100 {
-                return Err(err("units.time_scale", format!("{:e} is too large (physical times would overflow); at most 1e100", u.time_scale)));
+                return Err(err(
+                    "units.time_scale",
+                    format!(
+                        "{:e} is too large (physical times would overflow); at most 1e100",
+                        u.time_scale
+                    ),
+                ));
             }
             if u.time_unit.trim().is_empty() {
                 return Err(err("units.time_unit", "must name the unit, e.g. \"years\"".into()));
             }
             Some(u)
         }
-        None => m.dimensional.map(|d| Units { time_unit: "s (if the dimensional input is SI)".into(), time_scale: d.d_c / d.v0 }),
+        None => m.dimensional.map(|d| Units {
+            time_unit: "s (if the dimensional input is SI)".into(),
+            time_scale: d.d_c / d.v0,
+        }),
     };
 
     let initial = initial_state(&drr, raw.initial.as_ref(), err)?;
@@ -477,16 +580,38 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
     }
-    Ok(Scene { name: raw.name, description: raw.description, params, dimensional: m.dimensional, units, initial, solver, analyses })
+    Ok(Scene {
+        name: raw.name,
+        description: raw.description,
+        params,
+        dimensional: m.dimensional,
+        units,
+        initial,
+        solver,
+        analyses,
+    })
 }
 
 /// η from `model.radiation_damping` (dimensionless) or from `model.dimensional`'s shear
 /// modulus G and shear-wave speed c_s: η = G·v0/(2·c_s·A); 0 when neither is given.
-fn radiation_damping(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) -> Result<f64, SceneError> {
+fn radiation_damping(
+    m: &RawModel,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<f64, SceneError> {
     let from_medium = match m.dimensional {
         Some(Dimensional { shear_modulus: Some(g), shear_wave_speed: Some(c), a, v0, .. }) => {
-            let g = positive("model.dimensional.shear_modulus", g, "the shear modulus G, e.g. 3e10 (Pa)", err)?;
-            let c = positive("model.dimensional.shear_wave_speed", c, "the shear-wave speed c_s, e.g. 3e3 (m/s)", err)?;
+            let g = positive(
+                "model.dimensional.shear_modulus",
+                g,
+                "the shear modulus G, e.g. 3e10 (Pa)",
+                err,
+            )?;
+            let c = positive(
+                "model.dimensional.shear_wave_speed",
+                c,
+                "the shear-wave speed c_s, e.g. 3e3 (m/s)",
+                err,
+            )?;
             Some(g * v0 / (2.0 * c * a))
         }
         Some(Dimensional { shear_modulus: Some(_), shear_wave_speed: None, .. }) => {
@@ -506,29 +631,50 @@ fn radiation_damping(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) ->
         (None, None) => 0.0,
     };
     if !(0.0..=1e100).contains(&eta) || !eta.is_finite() {
-        return Err(err("model.radiation_damping", format!("{eta:e} must be in 0 … 1e100 (η = G·v0/(2·c_s·A) ≥ 0; 0 = no radiation damping)")));
+        return Err(err(
+            "model.radiation_damping",
+            format!(
+                "{eta:e} must be in 0 … 1e100 (η = G·v0/(2·c_s·A) ≥ 0; 0 = no radiation damping)"
+            ),
+        ));
     }
     Ok(eta)
 }
 
 /// Rejects the keys that only the inertial model takes when `"inertia": false`: γ (and the
 /// mass that defines it) mean nothing without inertia (a scene asks only for what it needs).
-fn no_inertial_keys(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+fn no_inertial_keys(
+    m: &RawModel,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<(), SceneError> {
     let why = "the quasi-dynamic model (\"inertia\": false) has no inertia, so no γ = (D_c/v0)·√(k/M): it is the γ → ∞ limit";
     if m.gamma.is_some() {
-        return Err(err("model.gamma", format!("{why}; drop \"gamma\" (or drop \"inertia\": false for the inertial model)")));
+        return Err(err(
+            "model.gamma",
+            format!("{why}; drop \"gamma\" (or drop \"inertia\": false for the inertial model)"),
+        ));
     }
     if m.dimensional.is_some_and(|d| d.mass.is_some()) {
-        return Err(err("model.dimensional.mass", format!("{why}; drop \"mass\" (or drop \"inertia\": false for the inertial model)")));
+        return Err(err(
+            "model.dimensional.mass",
+            format!("{why}; drop \"mass\" (or drop \"inertia\": false for the inertial model)"),
+        ));
     }
     Ok(())
 }
 
 /// Continuation of a quasi-dynamic scene: not in γ (it has none), and in η only towards η > 0.
-fn quasi_dynamic_continuation(c: Option<&ContinuationOptions>, raw: &[RawAnalysis], err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+fn quasi_dynamic_continuation(
+    c: Option<&ContinuationOptions>,
+    raw: &[RawAnalysis],
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<(), SceneError> {
     use crate::analysis::continuation::Parameter;
     let Some(c) = c else { return Ok(()) };
-    let index = raw.iter().position(|a| matches!(a, RawAnalysis::WithOptions(m) if m.contains_key("continuation"))).unwrap_or(0);
+    let index = raw
+        .iter()
+        .position(|a| matches!(a, RawAnalysis::WithOptions(m) if m.contains_key("continuation")))
+        .unwrap_or(0);
     let field = format!("analyses[{index}].continuation");
     match c.parameter {
         Parameter::Gamma => Err(err(&format!("{field}.parameter"), "the quasi-dynamic model (\"inertia\": false) has no γ to continue; use \"epsilon\", \"xi\" or \"radiation_damping\"".into())),
@@ -539,12 +685,21 @@ fn quasi_dynamic_continuation(c: Option<&ContinuationOptions>, raw: &[RawAnalysi
 
 /// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when
 /// the scene has another state law or radiation damping.
-fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, String) -> SceneError) -> Result<(), SceneError> {
+fn papers_model_only(
+    params: &DrrParams,
+    a: &Analyses,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<(), SceneError> {
     let inertial_only = [
         (a.noise.is_some(), "noise", "its forcing enters the inertial equation of motion"),
-        (a.lyapunov.is_some(), "lyapunov", "its eigenvalues are those of the inertial Jacobian in (u, v, θ)"),
+        (
+            a.lyapunov.is_some(),
+            "lyapunov",
+            "its eigenvalues are those of the inertial Jacobian in (u, v, θ)",
+        ),
     ];
-    if let Some((_, name, why)) = inertial_only.iter().find(|(asked, ..)| *asked && !params.inertia) {
+    if let Some((_, name, why)) = inertial_only.iter().find(|(asked, ..)| *asked && !params.inertia)
+    {
         return Err(err(
             "model.inertia",
             format!("the \"{name}\" analysis needs the inertial model ({why}); the quasi-dynamic model (\"inertia\": false) has no inertia: drop \"{name}\" or use an inertial model"),
@@ -555,14 +710,22 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
     }
     let slip_only = [
         (a.paper, "paper", "the paper's values are for its model"),
-        (a.asymptotics.is_some(), "asymptotics", "the slow flow, matching and slip scaling are derived for the slip law"),
+        (
+            a.asymptotics.is_some(),
+            "asymptotics",
+            "the slow flow, matching and slip scaling are derived for the slip law",
+        ),
     ];
     for (asked, name, why) in slip_only {
         if asked {
             if !params.inertia {
                 return Err(err("model.inertia", format!("the \"{name}\" analysis needs the inertial slip-law model without radiation damping ({why}); the quasi-dynamic model (\"inertia\": false) cannot run it: drop \"{name}\"")));
             }
-            let field = if params.state_law != StateLaw::Slip { "model.state_law" } else { "model.radiation_damping" };
+            let field = if params.state_law != StateLaw::Slip {
+                "model.state_law"
+            } else {
+                "model.radiation_damping"
+            };
             return Err(err(
                 field,
                 format!(
@@ -578,7 +741,11 @@ fn papers_model_only(params: &DrrParams, a: &Analyses, err: &impl Fn(&str, Strin
 
 /// The start: given values, with v (or u) completed on the slow manifold when missing.
 /// Default: v = 0.5, θ at its fixed-point value, u on the slow manifold.
-fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String) -> SceneError) -> Result<[f64; 3], SceneError> {
+fn initial_state(
+    drr: &Drr,
+    raw: Option<&RawInitial>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<[f64; 3], SceneError> {
     let theta_star = drr.fixed_point()[2];
     let (u, v, theta) = raw.map_or((None, None, None), |r| (r.u, r.v, r.theta));
     if !drr.params().inertia && u.is_some() && v.is_some() {
@@ -604,7 +771,10 @@ fn initial_state(drr: &Drr, raw: Option<&RawInitial>, err: &impl Fn(&str, String
     Ok([u, w, theta])
 }
 
-fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneError) -> Result<SolverSpec, SceneError> {
+fn solver_spec(
+    raw: Option<&RawSolver>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<SolverSpec, SceneError> {
     let method = match raw.and_then(|r| r.method.as_deref()) {
         None => Method::CvodeBdf,
         Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
@@ -615,7 +785,13 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
         Some(RawAtol::Scalar(a)) => [a; 3],
         Some(RawAtol::PerComponent(v)) => {
             let arr: [f64; 3] = v.clone().try_into().map_err(|_| {
-                err("solver.atol", format!("{v:?} has {} values; give one number or three (for u, ln v, θ)", v.len()))
+                err(
+                    "solver.atol",
+                    format!(
+                        "{v:?} has {} values; give one number or three (for u, ln v, θ)",
+                        v.len()
+                    ),
+                )
             })?;
             arr
         }
@@ -628,7 +804,9 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
     }
     let table = raw.and_then(|r| r.table.clone());
     let explicit_table = raw.and_then(|r| r.explicit_table.clone());
-    let check_table = |field: &str, name: &Option<String>, known: &mut dyn Iterator<Item = &'static str>| {
+    let check_table = |field: &str,
+                       name: &Option<String>,
+                       known: &mut dyn Iterator<Item = &'static str>| {
         let list: Vec<&str> = known.collect();
         match name {
             Some(n) if !list.contains(&n.as_str()) => {
@@ -639,13 +817,20 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
     };
     use crate::sundials::{DirkTable, ErkTable};
     match method {
-        Method::ArkodeDirk | Method::ArkodeImex => check_table("solver.table", &table, &mut DirkTable::names())?,
+        Method::ArkodeDirk | Method::ArkodeImex => {
+            check_table("solver.table", &table, &mut DirkTable::names())?
+        }
         Method::ArkodeErk => check_table("solver.table", &table, &mut ErkTable::names())?,
-        _ if table.is_some() => return Err(err("solver.table", format!("{} takes no Butcher table", method.name()))),
+        _ if table.is_some() => {
+            return Err(err("solver.table", format!("{} takes no Butcher table", method.name())))
+        }
         _ => {}
     }
     if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(err("solver.explicit_table", "only \"arkode-imex\" takes an explicit table".into()));
+        return Err(err(
+            "solver.explicit_table",
+            "only \"arkode-imex\" takes an explicit table".into(),
+        ));
     }
     check_table("solver.explicit_table", &explicit_table, &mut ErkTable::names())?;
     if method == Method::ArkodeImex && explicit_table.is_none() {
@@ -656,13 +841,20 @@ fn solver_spec(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneErro
         }
     }
     if raw.and_then(|r| r.max_steps).is_some() {
-        return Err(err("solver.max_steps", "set the step budget with {\"cycle\": {\"max_steps\": N}}".into()));
+        return Err(err(
+            "solver.max_steps",
+            "set the step budget with {\"cycle\": {\"max_steps\": N}}".into(),
+        ));
     }
     Ok(SolverSpec { method, rtol, atol, table, explicit_table })
 }
 
 /// `model`: (kind, dimension, γ² for the DRR), for the noise options.
-fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl Fn(&str, String) -> SceneError) -> Result<Analyses, SceneError> {
+fn analyses(
+    raw: &[RawAnalysis],
+    model: (&str, usize, Option<f64>),
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Analyses, SceneError> {
     let mut out = Analyses::default();
     if raw.is_empty() {
         return Err(err("analyses", format!("is empty; ask for at least one of {ANALYSIS_NAMES}")));
@@ -676,16 +868,29 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 (n.clone(), Some(v.clone()))
             }
             RawAnalysis::WithOptions(_) => {
-                return Err(err(&field, format!("an object entry must have exactly one key; use one of {ANALYSIS_NAMES}")));
+                return Err(err(
+                    &field,
+                    format!(
+                        "an object entry must have exactly one key; use one of {ANALYSIS_NAMES}"
+                    ),
+                ));
             }
         };
         let options_of = |what: &str| -> Result<serde_json::Value, SceneError> {
-            Ok(options.clone().unwrap_or(serde_json::Value::Object(Default::default()))).and_then(|v| {
-                if v.is_object() { Ok(v) } else { Err(err(&format!("{field}.{what}"), "options must be an object".into())) }
-            })
+            Ok(options.clone().unwrap_or(serde_json::Value::Object(Default::default()))).and_then(
+                |v| {
+                    if v.is_object() {
+                        Ok(v)
+                    } else {
+                        Err(err(&format!("{field}.{what}"), "options must be an object".into()))
+                    }
+                },
+            )
         };
         match name.as_str() {
-            "hopf" | "paper" if options.is_some() => return Err(err(&field, format!("\"{name}\" takes no options"))),
+            "hopf" | "paper" if options.is_some() => {
+                return Err(err(&field, format!("\"{name}\" takes no options")))
+            }
             "hopf" => out.hopf = true,
             "paper" => out.paper = true,
             "cycle" => {
@@ -695,23 +900,33 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
             }
             "trajectory" => {
                 let Some(v) = options.clone() else {
-                    return Err(err(&field, "\"trajectory\" needs a sampling spec: {\"trajectory\": {\"cycles\": N}}".into()));
+                    return Err(err(
+                        &field,
+                        "\"trajectory\" needs a sampling spec: {\"trajectory\": {\"cycles\": N}}"
+                            .into(),
+                    ));
                 };
-                let t: RawTrajectory =
-                    serde_json::from_value(v).map_err(|e| err(&format!("{field}.trajectory"), e.to_string()))?;
+                let t: RawTrajectory = serde_json::from_value(v)
+                    .map_err(|e| err(&format!("{field}.trajectory"), e.to_string()))?;
                 if t.cycles == 0 || t.cycles > 10_000 {
-                    return Err(err(&format!("{field}.trajectory.cycles"), format!("{} must be between 1 and 10000", t.cycles)));
+                    return Err(err(
+                        &format!("{field}.trajectory.cycles"),
+                        format!("{} must be between 1 and 10000", t.cycles),
+                    ));
                 }
                 out.trajectory_cycles = Some(t.cycles);
             }
             "asymptotics" => {
-                let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of("asymptotics")?)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.asymptotics")), e.message))?;
+                let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of(
+                    "asymptotics",
+                )?)
+                .map_err(|e| err(&e.path_below(&format!("{field}.asymptotics")), e.message))?;
                 out.asymptotics = Some(o);
             }
             "lyapunov" => {
-                let o = crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.lyapunov")), e.message))?;
+                let o =
+                    crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
+                        .map_err(|e| err(&e.path_below(&format!("{field}.lyapunov")), e.message))?;
                 out.lyapunov = Some(o);
             }
             "shooting" => {
@@ -725,7 +940,8 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                     return Err(err(&field, "\"continuation\" needs {\"parameter\": \"epsilon\", \"to\": 1.2, \"points\": 51}".into()));
                 };
                 let f = format!("{field}.continuation");
-                let c: RawContinuation = serde_json::from_value(v).map_err(|e| err(&f, e.to_string()))?;
+                let c: RawContinuation =
+                    serde_json::from_value(v).map_err(|e| err(&f, e.to_string()))?;
                 let parameter = match c.parameter.as_str() {
                     "epsilon" => Parameter::Epsilon,
                     "xi" => Parameter::Xi,
@@ -735,25 +951,44 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                 };
                 let to = finite(&format!("{f}.to"), c.to, err)?;
                 if parameter == Parameter::Eta && to < 0.0 {
-                    return Err(err(&format!("{f}.to"), format!("{to} must be ≥ 0 for radiation_damping")));
+                    return Err(err(
+                        &format!("{f}.to"),
+                        format!("{to} must be ≥ 0 for radiation_damping"),
+                    ));
                 }
                 if !matches!(parameter, Parameter::Epsilon | Parameter::Eta) && to <= 0.0 {
-                    return Err(err(&format!("{f}.to"), format!("{to} must be > 0 for {}", parameter.name())));
+                    return Err(err(
+                        &format!("{f}.to"),
+                        format!("{to} must be > 0 for {}", parameter.name()),
+                    ));
                 }
                 if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
-                    return Err(err(&format!("{f}.to"), format!("{to:e} is outside 1e-100 … 1e100")));
+                    return Err(err(
+                        &format!("{f}.to"),
+                        format!("{to:e} is outside 1e-100 … 1e100"),
+                    ));
                 }
                 if !(2..=100_000).contains(&c.points) {
-                    return Err(err(&format!("{f}.points"), format!("{} must be between 2 and 100000", c.points)));
+                    return Err(err(
+                        &format!("{f}.points"),
+                        format!("{} must be between 2 and 100000", c.points),
+                    ));
                 }
                 let log = c.log.unwrap_or(parameter == Parameter::Gamma);
                 if log && parameter == Parameter::Epsilon {
-                    return Err(err(&format!("{f}.log"), "ε can be negative: continue it on a linear grid (\"log\": false)".into()));
+                    return Err(err(
+                        &format!("{f}.log"),
+                        "ε can be negative: continue it on a linear grid (\"log\": false)".into(),
+                    ));
                 }
                 if log && parameter == Parameter::Eta {
-                    return Err(err(&format!("{f}.log"), "η can be 0: continue it on a linear grid (\"log\": false)".into()));
+                    return Err(err(
+                        &format!("{f}.log"),
+                        "η can be 0: continue it on a linear grid (\"log\": false)".into(),
+                    ));
                 }
-                out.continuation = Some(ContinuationOptions { parameter, to, points: c.points, log });
+                out.continuation =
+                    Some(ContinuationOptions { parameter, to, points: c.points, log });
             }
             "noise" => {
                 let Some(v) = options.clone() else {
@@ -765,22 +1000,39 @@ fn analyses(raw: &[RawAnalysis], model: (&str, usize, Option<f64>), err: &impl F
                     err(&format!("{field}.noise{sub}"), e.into_inner().to_string())
                 })?;
                 let (kind, dim, gamma2) = model;
-                noise_options::validate(&o, dim, kind, gamma2).map_err(|e| err(&e.path_below(&format!("{field}.noise")), e.message))?;
+                noise_options::validate(&o, dim, kind, gamma2)
+                    .map_err(|e| err(&e.path_below(&format!("{field}.noise")), e.message))?;
                 out.noise = Some(o);
             }
-            other => return Err(err(&field, format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"))),
+            other => {
+                return Err(err(
+                    &field,
+                    format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"),
+                ))
+            }
         }
     }
     if out.trajectory_cycles.is_some() && out.cycle.is_none() {
-        return Err(err("analyses", "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into()));
+        return Err(err(
+            "analyses",
+            "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into(),
+        ));
     }
-    for (asked, name) in [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")] {
+    for (asked, name) in
+        [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")]
+    {
         if asked && out.cycle.is_none() {
-            return Err(err("analyses", format!("\"{name}\" works on the limit cycle found by \"cycle\"; add \"cycle\"")));
+            return Err(err(
+                "analyses",
+                format!("\"{name}\" works on the limit cycle found by \"cycle\"; add \"cycle\""),
+            ));
         }
     }
     if out.paper && (out.cycle.is_none() || !out.hopf) {
-        return Err(err("analyses", "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into()));
+        return Err(err(
+            "analyses",
+            "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into(),
+        ));
     }
     Ok(out)
 }

@@ -5,8 +5,13 @@
 //! (analyses, the engine, library users): whoever needs an integrator names a method and gets
 //! a boxed [`Integrator`] of the same shape, whatever implements it.
 
-use crate::integrate::{ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p, SolverError};
-use crate::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
+use crate::integrate::{
+    ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p,
+    SolverError,
+};
+use crate::sundials::{
+    self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
+};
 use serde::Serialize;
 
 /// Integration methods a scene can ask for.
@@ -64,7 +69,11 @@ impl std::str::FromStr for Method {
     /// The method by its scene name (the one parser of method names: scenes and the CLI); the
     /// error names the valid ones.
     fn from_str(name: &str) -> Result<Self, MethodError> {
-        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, m)| *m).ok_or_else(|| MethodError::UnknownMethod { name: name.into() })
+        Self::ALL
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, m)| *m)
+            .ok_or_else(|| MethodError::UnknownMethod { name: name.into() })
     }
 }
 
@@ -111,7 +120,15 @@ pub enum MethodError {
 impl Method {
     /// Whether the method is meant for stiff problems.
     pub fn is_stiff(self) -> bool {
-        matches!(self, Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5 | Method::Rodas5p | Method::Extrapolation)
+        matches!(
+            self,
+            Method::CvodeBdf
+                | Method::ArkodeDirk
+                | Method::ArkodeImex
+                | Method::Radau5
+                | Method::Rodas5p
+                | Method::Extrapolation
+        )
     }
 }
 
@@ -148,7 +165,11 @@ impl MethodSettings {
     /// The Butcher tables of a scene's solver settings, for a system that is or is not
     /// autonomous.
     pub fn of(spec: &SolverSpec, autonomous: bool) -> Self {
-        MethodSettings { table: spec.table.clone(), explicit_table: spec.explicit_table.clone(), autonomous }
+        MethodSettings {
+            table: spec.table.clone(),
+            explicit_table: spec.explicit_table.clone(),
+            autonomous,
+        }
     }
 }
 
@@ -181,10 +202,20 @@ pub fn build<'s, S: ImexSystem + 's>(
     if method != Method::ArkodeImex {
         return build_ode(method, settings, system, t0, y0, options);
     }
-    let tables = check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
+    let tables =
+        check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let (default_i, default_e) = sundials::default_imex_tables();
-    let (implicit, explicit) = (tables.implicit.unwrap_or(default_i), tables.explicit.unwrap_or(default_e));
-    let integrator = Box::new(Solver::arkstep_imex(system, implicit, explicit, ark_settings(), t0, y0, options)?);
+    let (implicit, explicit) =
+        (tables.implicit.unwrap_or(default_i), tables.explicit.unwrap_or(default_e));
+    let integrator = Box::new(Solver::arkstep_imex(
+        system,
+        implicit,
+        explicit,
+        ark_settings(),
+        t0,
+        y0,
+        options,
+    )?);
     Ok(Built { integrator, tables: vec![implicit.name().into(), explicit.name().into()] })
 }
 
@@ -198,20 +229,36 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    let tables = check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
+    let tables =
+        check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
     let (dirk, erk) = (tables.implicit.unwrap_or_default(), tables.explicit.unwrap_or_default());
     let integrator: Box<dyn Integrator + 's> = match method {
-        Method::CvodeBdf => Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), t0, y0, options)?),
-        Method::CvodeAdams => Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), t0, y0, options)?),
-        Method::ArkodeDirk => Box::new(Solver::arkstep(system, ArkMethod::Dirk(dirk), dirk_settings(options), t0, y0, options)?),
-        Method::ArkodeErk => Box::new(Solver::arkstep(system, ArkMethod::Erk(erk), ark_settings(), t0, y0, options)?),
+        Method::CvodeBdf => {
+            Box::new(Solver::cvode(system, cvode(CvodeMethod::Bdf), t0, y0, options)?)
+        }
+        Method::CvodeAdams => {
+            Box::new(Solver::cvode(system, cvode(CvodeMethod::Adams), t0, y0, options)?)
+        }
+        Method::ArkodeDirk => Box::new(Solver::arkstep(
+            system,
+            ArkMethod::Dirk(dirk),
+            dirk_settings(options),
+            t0,
+            y0,
+            options,
+        )?),
+        Method::ArkodeErk => {
+            Box::new(Solver::arkstep(system, ArkMethod::Erk(erk), ark_settings(), t0, y0, options)?)
+        }
         Method::ArkodeImex => {
             let message = "arkode-imex needs a system split into explicit and implicit parts: implement ImexSystem and use solver::build";
             return Err(invalid(method, t0, y0, message.into()));
         }
         Method::Radau5 => Box::new(Radau5::new(system, t0, y0, options)?),
-        Method::Rodas5p if settings.autonomous => Box::new(Rodas5p::new(system, t0, y0, options)?.autonomous()),
+        Method::Rodas5p if settings.autonomous => {
+            Box::new(Rodas5p::new(system, t0, y0, options)?.autonomous())
+        }
         Method::Rodas5p => Box::new(Rodas5p::new(system, t0, y0, options)?),
         Method::Extrapolation => Box::new(Extrapolation::new(system, t0, y0, options)?),
     };
@@ -226,7 +273,13 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
 /// [`build_ode`] with the method's defaults (no Butcher table; the system is not assumed
 /// autonomous): the integrator alone. How the analyses that fix their own method (noise,
 /// the slow flow, the fast system) get theirs.
-pub fn build_default<'s, S: OdeSystem + 's>(method: Method, system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Box<dyn Integrator + 's>, SolverError> {
+pub fn build_default<'s, S: OdeSystem + 's>(
+    method: Method,
+    system: S,
+    t0: f64,
+    y0: &[f64],
+    options: &Options,
+) -> Result<Box<dyn Integrator + 's>, SolverError> {
     Ok(build_ode(method, &MethodSettings::default(), system, t0, y0, options)?.integrator)
 }
 
@@ -262,12 +315,23 @@ fn ark_settings() -> ArkSettings {
 /// Prothero–Robinson run less accurate (error 1.6e-9 → 6.8e-6 at rtol 1e-8).
 fn dirk_settings(options: &Options) -> ArkSettings {
     let fresh_jacobian = options.jacobian_max_age == Some(1);
-    ArkSettings { resize_every_step: fresh_jacobian, setup_every_stage: fresh_jacobian, ..ark_settings() }
+    ArkSettings {
+        resize_every_step: fresh_jacobian,
+        setup_every_stage: fresh_jacobian,
+        ..ark_settings()
+    }
 }
 
 /// Invalid input to [`build`], at the start.
 fn invalid(method: Method, t0: f64, y0: &[f64], message: String) -> SolverError {
-    SolverError { solver: method.name(), kind: ErrorKind::InvalidInput, t: t0, state: y0.to_vec(), flag: 0, message }
+    SolverError {
+        solver: method.name(),
+        kind: ErrorKind::InvalidInput,
+        t: t0,
+        state: y0.to_vec(),
+        flag: 0,
+        message,
+    }
 }
 
 /// The Butcher tables a method asked for by name (None: its default).
@@ -280,15 +344,25 @@ struct Tables {
 /// method that takes none, is an error naming the field (made an
 /// [`ErrorKind::InvalidInput`] by [`build`]).
 fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, MethodError> {
-    let dirk = |field: &'static str, name: &str| DirkTable::from_name(name).ok_or_else(|| MethodError::UnknownImplicitTable { field, name: name.into() });
-    let erk = |field: &'static str, name: &str| ErkTable::from_name(name).ok_or_else(|| MethodError::UnknownExplicitTable { field, name: name.into() });
+    let dirk = |field: &'static str, name: &str| {
+        DirkTable::from_name(name)
+            .ok_or_else(|| MethodError::UnknownImplicitTable { field, name: name.into() })
+    };
+    let erk = |field: &'static str, name: &str| {
+        ErkTable::from_name(name)
+            .ok_or_else(|| MethodError::UnknownExplicitTable { field, name: name.into() })
+    };
     let (table, explicit_table) = (settings.table.as_deref(), settings.explicit_table.as_deref());
     if explicit_table.is_some() && method != Method::ArkodeImex {
         return Err(MethodError::NoExplicitTable { method });
     }
     match method {
-        Method::ArkodeDirk => Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None }),
-        Method::ArkodeErk => Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? }),
+        Method::ArkodeDirk => {
+            Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None })
+        }
+        Method::ArkodeErk => {
+            Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? })
+        }
         Method::ArkodeImex => {
             let implicit = table.map(|n| dirk("table", n)).transpose()?;
             let paired = table.and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
@@ -344,7 +418,10 @@ mod tests {
         for (name, method) in Method::ALL {
             assert_eq!(name.parse::<Method>(), Ok(method));
             assert_eq!(format!("{method}"), name);
-            let mut integ = build(method, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).unwrap().integrator;
+            let mut integ =
+                build(method, &MethodSettings::default(), Decay, 0.0, &[1.0], &options())
+                    .unwrap()
+                    .integrator;
             let step = integ.advance(1.0, Task::Normal).unwrap();
             assert_eq!(step.t, 1.0, "{name}");
             let error = (integ.state()[0] - (-1f64).exp()).abs();
@@ -362,25 +439,55 @@ mod tests {
 
     #[test]
     fn tables_are_named_and_checked() {
-        let built = build(Method::ArkodeImex, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).unwrap();
+        let built =
+            build(Method::ArkodeImex, &MethodSettings::default(), Decay, 0.0, &[1.0], &options())
+                .unwrap();
         assert_eq!(built.tables.len(), 2);
-        let table = |name: &str| MethodSettings { table: Some(name.into()), ..MethodSettings::default() };
-        let error = |method, settings: MethodSettings| build(method, &settings, Decay, 0.0, &[1.0], &options()).err().map(|e| (e.kind, e.message));
+        let table =
+            |name: &str| MethodSettings { table: Some(name.into()), ..MethodSettings::default() };
+        let error = |method, settings: MethodSettings| {
+            build(method, &settings, Decay, 0.0, &[1.0], &options())
+                .err()
+                .map(|e| (e.kind, e.message))
+        };
         let (kind, message) = error(Method::ArkodeDirk, table("NO_SUCH_TABLE")).unwrap();
         assert_eq!(kind, ErrorKind::InvalidInput);
-        assert!(message.starts_with("table: unknown implicit table \"NO_SUCH_TABLE\""), "{message}");
+        assert!(
+            message.starts_with("table: unknown implicit table \"NO_SUCH_TABLE\""),
+            "{message}"
+        );
         let (kind, message) = error(Method::Radau5, table("ARK436L2SA_DIRK_6_3_4")).unwrap();
         assert_eq!(kind, ErrorKind::InvalidInput);
         assert!(message.contains("radau5 takes no Butcher table"), "{message}");
-        let explicit = MethodSettings { explicit_table: Some("ARK436L2SA_ERK_6_3_4".into()), ..MethodSettings::default() };
+        let explicit = MethodSettings {
+            explicit_table: Some("ARK436L2SA_ERK_6_3_4".into()),
+            ..MethodSettings::default()
+        };
         assert_eq!(error(Method::ArkodeDirk, explicit).map(|e| e.0), Some(ErrorKind::InvalidInput));
-        let pair = build(Method::ArkodeImex, &table("ARK436L2SA_DIRK_6_3_4"), Decay, 0.0, &[1.0], &options()).unwrap();
+        let pair = build(
+            Method::ArkodeImex,
+            &table("ARK436L2SA_DIRK_6_3_4"),
+            Decay,
+            0.0,
+            &[1.0],
+            &options(),
+        )
+        .unwrap();
         assert_eq!(pair.tables, ["ARK436L2SA_DIRK_6_3_4", "ARK436L2SA_ERK_6_3_4"]);
     }
 
     #[test]
     fn build_ode_refuses_imex() {
-        let error = build_ode(Method::ArkodeImex, &MethodSettings::default(), Decay, 0.0, &[1.0], &options()).err().unwrap();
+        let error = build_ode(
+            Method::ArkodeImex,
+            &MethodSettings::default(),
+            Decay,
+            0.0,
+            &[1.0],
+            &options(),
+        )
+        .err()
+        .unwrap();
         assert_eq!(error.kind, ErrorKind::InvalidInput);
         assert_eq!(error.solver, "arkode-imex");
     }

@@ -13,8 +13,8 @@
 use crate::analysis::cycle::CycleStatus;
 use crate::analysis::hopf;
 use crate::model::{Drr, DrrParams, Friction, StateLaw};
-use crate::{engine, parallel};
 use crate::scene::{self, Method};
+use crate::{engine, parallel};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -65,13 +65,19 @@ impl Cell {
         if !self.method.is_stiff() {
             Expectation::Limit("explicit method: its steps are stability-limited to ~1/γ², too much work at large γ")
         } else if self.method == Method::ArkodeImex {
-            Expectation::Limit("IMEX: only the plate drive is explicit; not part of the physical-region guarantee")
+            Expectation::Limit(
+                "IMEX: only the plate drive is explicit; not part of the physical-region guarantee",
+            )
         } else if self.rtol < 1e-12 {
-            Expectation::Limit("rtol below 1e-12: not attainable in double precision over the cycle's 17 decades")
+            Expectation::Limit(
+                "rtol below 1e-12: not attainable in double precision over the cycle's 17 decades",
+            )
         } else if self.method == Method::ArkodeDirk && self.eta > 0.0 && self.rtol < 1e-8 {
             Expectation::Limit("arkode-dirk with radiation damping below rtol 1e-8: SDIRK-5-3-4 (stage order 1) falls to order 2 on the quasi-static slip that damping creates, so its steps grow as rtol^(-1/2), ~400 k per cycle at rtol 1e-10, beyond the grid's 2 M steps (docs/robustness.md)")
         } else if self.gamma < 10.0 {
-            Expectation::Limit("γ < 10: no relaxation oscillation; transients of thousands of time units")
+            Expectation::Limit(
+                "γ < 10: no relaxation oscillation; transients of thousands of time units",
+            )
         } else if self.epsilon > 1.05 * eps_c {
             Expectation::Cycle
         } else if self.epsilon < 0.95 * eps_c {
@@ -91,13 +97,27 @@ impl Cell {
     /// A one-line key naming the cell, as in a known-failures file (the state law and η are
     /// named only when they are not the paper's slip law without damping).
     pub fn key(&self) -> String {
-        let start = self.start.map_or("manifold".to_string(), |[u, v, t]| format!("u={u:e},v={v:e},theta={t:e}"));
-        format!("gamma={:e} xi={} epsilon={} rtol={:e} start={start} method={}{}", self.gamma, self.xi, self.epsilon, self.rtol, self.method.name(), self.law_key())
+        let start = self
+            .start
+            .map_or("manifold".to_string(), |[u, v, t]| format!("u={u:e},v={v:e},theta={t:e}"));
+        format!(
+            "gamma={:e} xi={} epsilon={} rtol={:e} start={start} method={}{}",
+            self.gamma,
+            self.xi,
+            self.epsilon,
+            self.rtol,
+            self.method.name(),
+            self.law_key()
+        )
     }
 
     /// " state_law=… eta=…" for a model other than the paper's, "" otherwise.
     fn law_key(&self) -> String {
-        if self.state_law == StateLaw::Slip && self.eta == 0.0 { String::new() } else { format!(" state_law={} eta={:e}", self.state_law.name(), self.eta) }
+        if self.state_law == StateLaw::Slip && self.eta == 0.0 {
+            String::new()
+        } else {
+            format!(" state_law={} eta={:e}", self.state_law.name(), self.eta)
+        }
     }
 }
 
@@ -105,7 +125,11 @@ impl Cell {
 /// the new failures (not on the list) and the fixed ones (on the list but no longer failing).
 /// Both must be empty for a run to pass, so the list only ever shrinks as failures are fixed
 /// and no failure is ever counted as a pass.
-pub fn against_known(cells: &[Cell], outcomes: &[Outcome], known: &str) -> (Vec<String>, Vec<String>) {
+pub fn against_known(
+    cells: &[Cell],
+    outcomes: &[Outcome],
+    known: &str,
+) -> (Vec<String>, Vec<String>) {
     let known: std::collections::BTreeSet<&str> =
         known.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')).collect();
     let failing: std::collections::BTreeSet<String> = cells
@@ -116,15 +140,25 @@ pub fn against_known(cells: &[Cell], outcomes: &[Outcome], known: &str) -> (Vec<
         .collect();
     let new = failing.iter().filter(|k| !known.contains(k.as_str())).cloned().collect();
     let all: std::collections::BTreeSet<String> = cells.iter().map(Cell::key).collect();
-    let fixed = known.iter().filter(|k| all.contains(**k) && !failing.contains(**k)).map(|k| k.to_string()).collect();
+    let fixed = known
+        .iter()
+        .filter(|k| all.contains(**k) && !failing.contains(**k))
+        .map(|k| k.to_string())
+        .collect();
     (new, fixed)
 }
 
 /// Whether a cell's outcome fails its expectation (see [`Expectation`]).
 fn is_failure(cell: &Cell, outcome: &Outcome) -> bool {
     match cell.expectation() {
-        Expectation::Cycle => !matches!(outcome, Outcome::Ok { status: CycleStatus::Periodic | CycleStatus::PeriodN, .. }),
-        Expectation::Decay => !matches!(outcome, Outcome::Ok { status: CycleStatus::FixedPoint | CycleStatus::NotConverged, .. }),
+        Expectation::Cycle => !matches!(
+            outcome,
+            Outcome::Ok { status: CycleStatus::Periodic | CycleStatus::PeriodN, .. }
+        ),
+        Expectation::Decay => !matches!(
+            outcome,
+            Outcome::Ok { status: CycleStatus::FixedPoint | CycleStatus::NotConverged, .. }
+        ),
         Expectation::Limit(_) => false,
     }
 }
@@ -172,9 +206,11 @@ pub enum Grid {
 }
 
 /// The stiff methods the physical region guarantees (issue #13).
-const PHYSICAL_METHODS: [Method; 5] = [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
+const PHYSICAL_METHODS: [Method; 5] =
+    [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
 /// The models besides the paper's that the `laws` grid and the quick grid cover: (state law, η).
-const OTHER_LAWS: [(StateLaw, f64); 4] = [(StateLaw::Ageing, 0.0), (StateLaw::Ageing, 0.1), (StateLaw::Prz, 0.0), (StateLaw::Prz, 0.1)];
+const OTHER_LAWS: [(StateLaw, f64); 4] =
+    [(StateLaw::Ageing, 0.0), (StateLaw::Ageing, 0.1), (StateLaw::Prz, 0.0), (StateLaw::Prz, 0.1)];
 
 /// The cells of a grid.
 pub fn grid(kind: Grid) -> Vec<Cell> {
@@ -183,17 +219,19 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
         Grid::Laws => return laws_grid(),
         Grid::Quick | Grid::Full => {}
     }
-    let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) = if kind == Grid::Quick {
-        (vec![1.0, 1e4, 1e8], vec![0.2, 2.0], vec![0.1, 3.0, 5.0], vec![1e-4, 1e-10])
-    } else {
-        (
-            vec![1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6, 1e8, 1e10, 1e12],
-            vec![0.2, 0.7, 2.0],
-            vec![0.1, 0.72, 1.0, 3.0],
-            vec![1e-3, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13],
-        )
-    };
-    let starts: Vec<Option<[f64; 3]>> = vec![None, Some([0.0, 1e-30, 0.0]), Some([0.0, 1e30, 0.0]), Some([1e3, 1.0, -1e3])];
+    let (gammas, xis, epsilons, rtols): (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) =
+        if kind == Grid::Quick {
+            (vec![1.0, 1e4, 1e8], vec![0.2, 2.0], vec![0.1, 3.0, 5.0], vec![1e-4, 1e-10])
+        } else {
+            (
+                vec![1.0, 10.0, 1e2, 1e3, 1e4, 1e5, 1e6, 1e8, 1e10, 1e12],
+                vec![0.2, 0.7, 2.0],
+                vec![0.1, 0.72, 1.0, 3.0],
+                vec![1e-3, 1e-6, 1e-8, 1e-10, 1e-12, 1e-13],
+            )
+        };
+    let starts: Vec<Option<[f64; 3]>> =
+        vec![None, Some([0.0, 1e-30, 0.0]), Some([0.0, 1e30, 0.0]), Some([1e3, 1.0, -1e3])];
     let mut cells = Vec::new();
     for &gamma in &gammas {
         for &xi in &xis {
@@ -201,7 +239,16 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
                 for &rtol in &rtols {
                     for start in &starts {
                         for (_, method) in Method::ALL {
-                            cells.push(Cell { gamma, xi, epsilon, rtol, start: *start, method, state_law: StateLaw::Slip, eta: 0.0 });
+                            cells.push(Cell {
+                                gamma,
+                                xi,
+                                epsilon,
+                                rtol,
+                                start: *start,
+                                method,
+                                state_law: StateLaw::Slip,
+                                eta: 0.0,
+                            });
                         }
                     }
                 }
@@ -225,7 +272,16 @@ fn quick_law_cells() -> Vec<Cell> {
             for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
                 for start in [None, Some([0.0, 1e30, 0.0])] {
                     for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
-                        cells.push(Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law, eta });
+                        cells.push(Cell {
+                            gamma,
+                            xi,
+                            epsilon,
+                            rtol: 1e-6,
+                            start,
+                            method,
+                            state_law,
+                            eta,
+                        });
                     }
                 }
             }
@@ -245,7 +301,16 @@ fn quick_quasi_dynamic_cells() -> Vec<Cell> {
         for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
             for start in [None, Some([0.0, 1e-30, 0.0])] {
                 for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
-                    cells.push(Cell { gamma: f64::INFINITY, xi, epsilon, rtol: 1e-6, start, method, state_law, eta: 0.1 });
+                    cells.push(Cell {
+                        gamma: f64::INFINITY,
+                        xi,
+                        epsilon,
+                        rtol: 1e-6,
+                        start,
+                        method,
+                        state_law,
+                        eta: 0.1,
+                    });
                 }
             }
         }
@@ -263,11 +328,21 @@ fn laws_grid() -> Vec<Cell> {
                 for epsilon in [1.0, 2.0, 3.0, 5.0, 10.0] {
                     for rtol in [1e-6, 1e-10] {
                         for method in PHYSICAL_METHODS {
-                            let cell = Cell { gamma, xi, epsilon, rtol, start: None, method, state_law, eta };
+                            let cell = Cell {
+                                gamma,
+                                xi,
+                                epsilon,
+                                rtol,
+                                start: None,
+                                method,
+                                state_law,
+                                eta,
+                            };
                             // A point of the physical region (where radau5 must find the cycle);
                             // a method's own limit there stays in the grid as its own row.
                             let reference = Cell { method: Method::Radau5, ..cell };
-                            if epsilon <= 25.0 * xi && reference.expectation() == Expectation::Cycle {
+                            if epsilon <= 25.0 * xi && reference.expectation() == Expectation::Cycle
+                            {
                                 cells.push(cell);
                             }
                         }
@@ -291,7 +366,16 @@ fn physical_grid() -> Vec<Cell> {
                 }
                 for rtol in [1e-6, 1e-8, 1e-10] {
                     for method in PHYSICAL_METHODS {
-                        cells.push(Cell { gamma, xi, epsilon, rtol, start: None, method, state_law: StateLaw::Slip, eta: 0.0 });
+                        cells.push(Cell {
+                            gamma,
+                            xi,
+                            epsilon,
+                            rtol,
+                            start: None,
+                            method,
+                            state_law: StateLaw::Slip,
+                            eta: 0.0,
+                        });
                     }
                 }
             }
@@ -303,7 +387,11 @@ fn physical_grid() -> Vec<Cell> {
 fn scene_text(cell: &Cell) -> String {
     // A physical cell must find its cycle: room for slow transients and long periods far from
     // threshold (~900 at ε/ξ = 25). Elsewhere the grid's own limits bound the work.
-    let (time, max_steps) = if cell.expectation() == Expectation::Cycle { (30_000.0, 2_000_000) } else { (3000.0, 200_000) };
+    let (time, max_steps) = if cell.expectation() == Expectation::Cycle {
+        (30_000.0, 2_000_000)
+    } else {
+        (3000.0, 200_000)
+    };
     // A far-off start adds its own transient: launched at v0 the block slides ~v0/γ, and the
     // stick that follows lasts about as long as the plate takes to catch up (u0 likewise).
     let transient = cell.start.map_or(0.0, |[u, v, _]| u.abs() + v / cell.gamma);
@@ -316,7 +404,11 @@ fn scene_text(cell: &Cell) -> String {
             format!(r#""initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},"#)
         }
     });
-    let inertia = if cell.is_quasi_dynamic() { r#""inertia": false"#.to_string() } else { format!(r#""gamma": {:e}"#, cell.gamma) };
+    let inertia = if cell.is_quasi_dynamic() {
+        r#""inertia": false"#.to_string()
+    } else {
+        format!(r#""gamma": {:e}"#, cell.gamma)
+    };
     format!(
         r#"{{"name": "stress", "model": {{{inertia}, "xi": {}, "epsilon": {}, "state_law": "{}", "radiation_damping": {:e}}}, {initial}
             "solver": {{"method": "{}", "rtol": {:e}, "atol": {:e}}},
@@ -335,7 +427,8 @@ fn scene_text(cell: &Cell) -> String {
 pub fn run_cell(cell: &Cell) -> Outcome {
     let text = scene_text(cell);
     let outcome = std::panic::catch_unwind(|| {
-        let scene = scene::parse(&text, "stress").map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
+        let scene = scene::parse(&text, "stress")
+            .map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
         engine::run(&scene, serde_json::Value::Null).map_err(|e| (e.kind.label(), e.to_string()))
     });
     match outcome {
@@ -387,7 +480,11 @@ pub struct Summary {
 }
 
 /// Runs the grid on `threads` threads; `progress` is called after each cell.
-pub fn run(cells: &[Cell], threads: usize, progress: &(dyn Fn(usize, usize) + Sync)) -> (Vec<Outcome>, Summary) {
+pub fn run(
+    cells: &[Cell],
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (Vec<Outcome>, Summary) {
     let outcomes = parallel::map(cells.len(), threads, progress, |i| run_cell(&cells[i]));
     let summary = summarise(cells, &outcomes);
     (outcomes, summary)
@@ -411,7 +508,11 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
                 s.physical += 1;
                 if is_failure(cell, outcome) {
                     s.physical_failures += 1;
-                    s.failures.push(format!("physical cell without a cycle: {}: {}", cell.key(), describe(outcome)));
+                    s.failures.push(format!(
+                        "physical cell without a cycle: {}: {}",
+                        cell.key(),
+                        describe(outcome)
+                    ));
                 } else {
                     s.physical_ok += 1;
                 }
@@ -419,7 +520,11 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
             Expectation::Decay => {
                 if is_failure(cell, outcome) {
                     s.decay_failures += 1;
-                    s.failures.push(format!("below threshold, no decay: {}: {}", cell.key(), describe(outcome)));
+                    s.failures.push(format!(
+                        "below threshold, no decay: {}: {}",
+                        cell.key(),
+                        describe(outcome)
+                    ));
                 }
             }
             Expectation::Limit(reason) => {
@@ -432,7 +537,15 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
             Outcome::Ok { period, .. } => {
                 s.ok += 1;
                 if let Some(p) = period {
-                    let key = format!("γ={:e} ξ={} ε={} rtol={:e} start={:?}{}", cell.gamma, cell.xi, cell.epsilon, cell.rtol, cell.start, cell.law_key());
+                    let key = format!(
+                        "γ={:e} ξ={} ε={} rtol={:e} start={:?}{}",
+                        cell.gamma,
+                        cell.xi,
+                        cell.epsilon,
+                        cell.rtol,
+                        cell.start,
+                        cell.law_key()
+                    );
                     periods.entry(key).or_default().push((cell.method, *p));
                 }
             }
@@ -450,12 +563,21 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
         }
     }
     for (point, found) in periods {
-        let rtol: f64 = point.split("rtol=").nth(1).and_then(|r| r.split(' ').next()).and_then(|r| r.parse().ok()).unwrap_or(1e-8);
+        let rtol: f64 = point
+            .split("rtol=")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|r| r.parse().ok())
+            .unwrap_or(1e-8);
         let allowed = (1e3 * rtol).clamp(1e-7, 0.05);
-        let (lo, hi) = found.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| (lo.min(*p), hi.max(*p)));
+        let (lo, hi) =
+            found.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, p)| (lo.min(*p), hi.max(*p)));
         if found.len() > 1 && (hi - lo) > allowed * hi {
             s.inconsistent += 1;
-            s.defects.push(format!("{point}: periods {found:?} differ by {:.1e} (allowed {allowed:.0e})", (hi - lo) / hi));
+            s.defects.push(format!(
+                "{point}: periods {found:?} differ by {:.1e} (allowed {allowed:.0e})",
+                (hi - lo) / hi
+            ));
         }
     }
     s
@@ -465,7 +587,13 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
 /// errors by kind), then per start and per state law (with η), then the summary.
 pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String {
     let label = |o: &Outcome| match o {
-        Outcome::Ok { status, .. } => format!("ok:{}", serde_json::to_value(status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default()),
+        Outcome::Ok { status, .. } => format!(
+            "ok:{}",
+            serde_json::to_value(status)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default()
+        ),
         Outcome::Error { kind, .. } => kind.clone(),
         Outcome::Panic { .. } => "PANIC".into(),
     };
@@ -475,19 +603,41 @@ pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String 
     let mut rows: BTreeMap<(u64, usize), BTreeMap<String, usize>> = BTreeMap::new();
     let method_index = |m: Method| Method::ALL.iter().position(|(_, x)| *x == m).unwrap_or(0);
     for (cell, outcome) in cells.iter().zip(outcomes) {
-        *rows.entry((cell.gamma.to_bits(), method_index(cell.method))).or_default().entry(label(outcome)).or_default() += 1;
+        *rows
+            .entry((cell.gamma.to_bits(), method_index(cell.method)))
+            .or_default()
+            .entry(label(outcome))
+            .or_default() += 1;
     }
-    let mut out = format!("| γ | method | {} |\n|---|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
+    let mut out = format!(
+        "| γ | method | {} |\n|---|---|{}\n",
+        columns.join(" | "),
+        "---|".repeat(columns.len())
+    );
     let mut keys: Vec<&(u64, usize)> = rows.keys().collect();
     keys.sort_by(|a, b| f64::from_bits(a.0).total_cmp(&f64::from_bits(b.0)).then(a.1.cmp(&b.1)));
     for key in keys {
         let counts = &rows[key];
-        let cells: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
-        out += &format!("| {:e} | {} | {} |\n", f64::from_bits(key.0), Method::ALL[key.1].0, cells.join(" | "));
+        let cells: Vec<String> = columns
+            .iter()
+            .map(|c| counts.get(c).map_or(String::new(), |n| n.to_string()))
+            .collect();
+        out += &format!(
+            "| {:e} | {} | {} |\n",
+            f64::from_bits(key.0),
+            Method::ALL[key.1].0,
+            cells.join(" | ")
+        );
     }
-    let start_of = |cell: &Cell| cell.start.map_or("on the slow manifold (v = 0.5)".to_string(), |[u, v, t]| format!("u = {u:e}, v = {v:e}, θ = {t:e}"));
+    let start_of = |cell: &Cell| {
+        cell.start.map_or("on the slow manifold (v = 0.5)".to_string(), |[u, v, t]| {
+            format!("u = {u:e}, v = {v:e}, θ = {t:e}")
+        })
+    };
     out += &counts_by("start", cells, outcomes, &columns, &label, start_of);
-    out += &counts_by("state law", cells, outcomes, &columns, &label, |cell| format!("{}, η = {}", cell.state_law.name(), cell.eta));
+    out += &counts_by("state law", cells, outcomes, &columns, &label, |cell| {
+        format!("{}, η = {}", cell.state_law.name(), cell.eta)
+    });
     out += &format!(
         "\nCells {}, ok {}, typed errors {:?}, panics {}, non-finite {}, inconsistent {}.\n\
          Physical region: {} cells, {} converged cycles, {} failures. Below threshold: {} failures.\n",
@@ -510,14 +660,25 @@ pub fn table(cells: &[Cell], outcomes: &[Outcome], summary: &Summary) -> String 
 }
 
 /// A Markdown table of outcome counts (columns) per group of cells (`group_of`, rows).
-fn counts_by(title: &str, cells: &[Cell], outcomes: &[Outcome], columns: &[String], label: &impl Fn(&Outcome) -> String, group_of: impl Fn(&Cell) -> String) -> String {
+fn counts_by(
+    title: &str,
+    cells: &[Cell],
+    outcomes: &[Outcome],
+    columns: &[String],
+    label: &impl Fn(&Outcome) -> String,
+    group_of: impl Fn(&Cell) -> String,
+) -> String {
     let mut groups: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
     for (cell, outcome) in cells.iter().zip(outcomes) {
         *groups.entry(group_of(cell)).or_default().entry(label(outcome)).or_default() += 1;
     }
-    let mut out = format!("\n| {title} | {} |\n|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
+    let mut out =
+        format!("\n| {title} | {} |\n|---|{}\n", columns.join(" | "), "---|".repeat(columns.len()));
     for (group, counts) in groups {
-        let row: Vec<String> = columns.iter().map(|c| counts.get(c).map_or(String::new(), |n| n.to_string())).collect();
+        let row: Vec<String> = columns
+            .iter()
+            .map(|c| counts.get(c).map_or(String::new(), |n| n.to_string()))
+            .collect();
         out += &format!("| {group} | {} |\n", row.join(" | "));
     }
     out
@@ -531,9 +692,14 @@ mod tests {
     fn the_laws_grid_keeps_a_methods_limits_as_their_own_rows() {
         let cells = grid(Grid::Laws);
         assert_eq!(cells.len(), 3360);
-        let limits: Vec<&Cell> = cells.iter().filter(|c| matches!(c.expectation(), Expectation::Limit(_))).collect();
+        let limits: Vec<&Cell> =
+            cells.iter().filter(|c| matches!(c.expectation(), Expectation::Limit(_))).collect();
         assert!(!limits.is_empty());
-        assert!(limits.iter().all(|c| c.method == Method::ArkodeDirk && c.eta > 0.0 && c.rtol < 1e-8), "{}", limits[0].key());
+        assert!(
+            limits.iter().all(|c| c.method == Method::ArkodeDirk && c.eta > 0.0 && c.rtol < 1e-8),
+            "{}",
+            limits[0].key()
+        );
     }
 
     #[test]
@@ -541,7 +707,8 @@ mod tests {
         for kind in [Grid::Quick, Grid::Full, Grid::Physical, Grid::Laws] {
             for cell in grid(kind) {
                 let text = scene_text(&cell);
-                let scene = scene::parse(&text, "stress").unwrap_or_else(|e| panic!("{}: {e}\n{text}", cell.key()));
+                let scene = scene::parse(&text, "stress")
+                    .unwrap_or_else(|e| panic!("{}: {e}\n{text}", cell.key()));
                 assert_eq!(scene.params.inertia, !cell.is_quasi_dynamic(), "{}", cell.key());
             }
         }

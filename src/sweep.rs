@@ -7,8 +7,8 @@
 //! of an uninterrupted one. Rows are appended as points finish (one write per line); `merge`
 //! sorts them by index and checks that none is missing.
 
-use crate::{engine, parallel};
 use crate::scene;
+use crate::{engine, parallel};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -25,7 +25,8 @@ pub struct Axis {
 }
 
 /// The usage of `--param`, quoted by the errors that reject one.
-const AXIS_USAGE: &str = "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
+const AXIS_USAGE: &str =
+    "expected NAME=START:STOP:COUNT[:log], e.g. epsilon=0.71:1.2:51 or gamma=1e1:1e8:71:log";
 
 /// Why a sweep's arguments or base scene are refused; each message names the argument
 /// (`--param`, `--shard`) or the scene field at fault and the fix.
@@ -108,7 +109,8 @@ pub enum SweepError {
 
 /// Parses `NAME=START:STOP:COUNT[:log]`; the error says what is wrong.
 pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
-    let (name, range) = spec.split_once('=').ok_or_else(|| SweepError::AxisSyntax { spec: spec.into() })?;
+    let (name, range) =
+        spec.split_once('=').ok_or_else(|| SweepError::AxisSyntax { spec: spec.into() })?;
     if !["gamma", "xi", "epsilon", "radiation_damping", "alpha"].contains(&name) {
         return Err(SweepError::UnknownParameter { spec: spec.into(), name: name.into() });
     }
@@ -121,16 +123,29 @@ pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
     if parts.len() < 3 || parts.len() > 4 {
         return Err(SweepError::AxisSyntax { spec: spec.into() });
     }
-    let number = |s: &str| s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| SweepError::NotFinite { spec: spec.into(), value: s.into() });
+    let number = |s: &str| {
+        s.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| SweepError::NotFinite { spec: spec.into(), value: s.into() })
+    };
     let (start, stop) = (number(parts[0])?, number(parts[1])?);
-    let count: usize = parts[2].parse().ok().filter(|&n| n >= 1).ok_or_else(|| SweepError::BadCount { spec: spec.into(), count: parts[2].into() })?;
+    let count: usize = parts[2]
+        .parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| SweepError::BadCount { spec: spec.into(), count: parts[2].into() })?;
     if log && (start <= 0.0 || stop <= 0.0) {
         return Err(SweepError::LogNotPositive { spec: spec.into() });
     }
     let values = (0..count)
         .map(|i| {
             let f = if count == 1 { 0.0 } else { i as f64 / (count - 1) as f64 };
-            if log { 10f64.powf(start.log10() + f * (stop.log10() - start.log10())) } else { start + f * (stop - start) }
+            if log {
+                10f64.powf(start.log10() + f * (stop.log10() - start.log10()))
+            } else {
+                start + f * (stop - start)
+            }
         })
         .collect();
     Ok(Axis { name: name.into(), values })
@@ -142,11 +157,13 @@ pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
     for axis in axes {
         points = points
             .into_iter()
-            .flat_map(|p| axis.values.iter().map(move |&v| {
-                let mut q = p.clone();
-                q.insert(axis.name.clone(), v);
-                q
-            }))
+            .flat_map(|p| {
+                axis.values.iter().map(move |&v| {
+                    let mut q = p.clone();
+                    q.insert(axis.name.clone(), v);
+                    q
+                })
+            })
             .collect();
     }
     points
@@ -176,8 +193,11 @@ pub struct Shard {
 
 /// Parses `K/N` with 1 ≤ K ≤ N.
 pub fn parse_shard(spec: &str) -> Result<Shard, SweepError> {
-    let (k, n) = spec.split_once('/').ok_or_else(|| SweepError::ShardSyntax { spec: spec.into() })?;
-    let integer = |s: &str, part| s.parse::<usize>().map_err(|_| SweepError::ShardNotInteger { spec: spec.into(), part });
+    let (k, n) =
+        spec.split_once('/').ok_or_else(|| SweepError::ShardSyntax { spec: spec.into() })?;
+    let integer = |s: &str, part| {
+        s.parse::<usize>().map_err(|_| SweepError::ShardNotInteger { spec: spec.into(), part })
+    };
     let (k, n) = (integer(k, "K")?, integer(n, "N")?);
     if n == 0 || k == 0 || k > n {
         return Err(SweepError::ShardRange { spec: spec.into() });
@@ -225,11 +245,25 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");
-            let sections: serde_json::Map<String, serde_json::Value> = ["hopf", "cycle", "paper", "physical", "shooting", "continuation", "asymptotics", "lyapunov"]
-                .iter()
-                .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
-                .collect();
-            Row { index, params: params.clone(), report: Some(serde_json::Value::Object(sections)), error: None }
+            let sections: serde_json::Map<String, serde_json::Value> = [
+                "hopf",
+                "cycle",
+                "paper",
+                "physical",
+                "shooting",
+                "continuation",
+                "asymptotics",
+                "lyapunov",
+            ]
+            .iter()
+            .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
+            .collect();
+            Row {
+                index,
+                params: params.clone(),
+                report: Some(serde_json::Value::Object(sections)),
+                error: None,
+            }
         }
         Err(e) => Row { index, params: params.clone(), report: None, error: Some(e) },
     }
@@ -303,6 +337,7 @@ pub fn merge(inputs: &[&Path], total: Option<usize>) -> std::io::Result<(Vec<Row
             rows.entry(row.index).or_insert(row);
         }
     }
-    let missing = total.map_or_else(Vec::new, |n| (0..n).filter(|i| !rows.contains_key(i)).collect());
+    let missing =
+        total.map_or_else(Vec::new, |n| (0..n).filter(|i| !rows.contains_key(i)).collect());
     Ok((rows.into_values().collect(), missing))
 }

@@ -5,7 +5,9 @@ use stickslip::compare::{self, UserData};
 use stickslip::scene::{self, Method};
 
 fn fig1() -> scene::Scene {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/fig1.json")).unwrap();
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/fig1.json"))
+            .unwrap();
     scene::parse(&text, "fig1").unwrap()
 }
 
@@ -38,8 +40,16 @@ fn temp_dir(name: &str) -> std::path::PathBuf {
 }
 
 fn compare_cli(file: &std::path::Path, extra: &[&str]) -> (Option<i32>, String, String) {
-    let out = std::process::Command::new(EXE).args(["compare", FIG1, "--against", file.to_str().unwrap()]).args(extra).output().unwrap();
-    (out.status.code(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
+    let out = std::process::Command::new(EXE)
+        .args(["compare", FIG1, "--against", file.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
 /// A start on the fig1 limit cycle, between two slips.
@@ -57,17 +67,31 @@ fn on_cycle() -> [f64; 3] {
 fn accurate_ten_cycles() -> (Vec<f64>, Vec<[f64; 3]>) {
     let drr = stickslip::model::Drr::new(fig1().params);
     let y0 = on_cycle();
-    let spec = scene::SolverSpec { method: Method::Radau5, rtol: 1e-8, atol: [1e-8; 3], table: None, explicit_table: None };
+    let spec = scene::SolverSpec {
+        method: Method::Radau5,
+        rtol: 1e-8,
+        atol: [1e-8; 3],
+        table: None,
+        explicit_table: None,
+    };
     let (mut integ, _) = stickslip::engine::integrator(drr, &spec, &y0).unwrap();
-    let mut clock = stickslip::integrate::Clock::new(integ.as_mut(), stickslip::integrate::Time::new(0.0));
+    let mut clock =
+        stickslip::integrate::Clock::new(integ.as_mut(), stickslip::integrate::Time::new(0.0));
     let mut times = vec![0.0];
     while clock.now().to_f64() < 10.5 * 18.1 {
         clock.step().unwrap();
         times.push(clock.now().to_f64());
     }
-    let (a, _) = compare::trajectory::reference_states(drr, Method::Radau5, 1e-13, 0.0, y0, &times).unwrap();
-    let (b, _) = compare::trajectory::reference_states(drr, Method::Rodas5p, 1e-13, 0.0, y0, &times).unwrap();
-    let gap = a.iter().zip(&b).flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs() / y[k].abs().max(1.0))).fold(0.0, f64::max);
+    let (a, _) =
+        compare::trajectory::reference_states(drr, Method::Radau5, 1e-13, 0.0, y0, &times).unwrap();
+    let (b, _) =
+        compare::trajectory::reference_states(drr, Method::Rodas5p, 1e-13, 0.0, y0, &times)
+            .unwrap();
+    let gap = a
+        .iter()
+        .zip(&b)
+        .flat_map(|(x, y)| (0..3).map(move |k| (x[k] - y[k]).abs() / y[k].abs().max(1.0)))
+        .fold(0.0, f64::max);
     assert!(gap < 1e-7, "the two methods differ by {gap:e}");
     (times, a)
 }
@@ -137,15 +161,21 @@ fn user_files_are_validated() {
     let e = compare::read_user_data("t,u,v\n0,1,1\n").unwrap_err();
     assert_eq!(e, compare::InputError::MissingColumn { header: "t,u,v".into(), column: "theta" });
     assert!(e.to_string().contains("theta"), "{e}");
-    let e = compare::read_user_data("# a comment\n\nt,u,v,theta\n0,1,1,0\n1,1,x,0\n").unwrap_err().to_string();
+    let e = compare::read_user_data("# a comment\n\nt,u,v,theta\n0,1,1,0\n1,1,x,0\n")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("line 5: column v = \"x\""), "{e}");
     let e = compare::read_user_data("t,u,v,theta\n1,1,1,0\n0,1,1,0\n").unwrap_err().to_string();
     assert!(e.contains("line 3: column t = 0") && e.contains("increase"), "{e}");
-    let e = compare::read_user_data("t,u,v,theta\n# c\n0,1,1,0\n1,1,-0.3,0\n").unwrap_err().to_string();
+    let e =
+        compare::read_user_data("t,u,v,theta\n# c\n0,1,1,0\n1,1,-0.3,0\n").unwrap_err().to_string();
     assert!(e.contains("line 4: column v = -0.3 must be finite and > 0"), "{e}");
     let json = r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0.6], "theta": [0, 0]}"#;
     assert!(matches!(compare::read_user_data(json).unwrap(), UserData::Trajectory(_)));
-    let e = compare::read_user_data(r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0], "theta": [0, 0]}"#).unwrap_err().to_string();
+    let e =
+        compare::read_user_data(r#"{"t": [0, 1], "u": [0, 0.1], "v": [0.5, 0], "theta": [0, 0]}"#)
+            .unwrap_err()
+            .to_string();
     assert!(e.contains("index 1: column v = 0"), "{e}");
 }
 
@@ -155,14 +185,18 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     let ours = stickslip::engine::run(&s, serde_json::Value::Null).unwrap();
     let mut user: serde_json::Value = serde_json::from_str(&ours.to_json()).unwrap();
     user["cycle"]["period"] = serde_json::json!(18.1);
-    let UserData::Report(cycle) = compare::read_user_data(&user.to_string()).unwrap() else { panic!("a report") };
+    let UserData::Report(cycle) = compare::read_user_data(&user.to_string()).unwrap() else {
+        panic!("a report")
+    };
     let c = compare::against_report(&s, &cycle, 1e-6).unwrap();
-    let beyond: Vec<&str> = c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
+    let beyond: Vec<&str> =
+        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
     assert_eq!(beyond, vec!["period"]);
     assert_eq!(c.verdict, compare::Verdict::Disagrees);
     let e = compare::read_user_data(r#"{"cycle": {"perod": 18.1}}"#).unwrap_err().to_string();
     assert!(e.contains("perod"), "{e}");
-    let e = compare::read_user_data(r#"{"cycle": {"status": "periodic"}}"#).unwrap_err().to_string();
+    let e =
+        compare::read_user_data(r#"{"cycle": {"status": "periodic"}}"#).unwrap_err().to_string();
     assert!(e.contains("none of the compared keys"), "{e}");
     let e = compare::read_user_data(r#"{"cycle": {"period": "18.1"}}"#).unwrap_err().to_string();
     assert!(e.contains("cycle.period"), "{e}");
@@ -185,8 +219,16 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
 fn reference_error_by_cycle() {
     let (times, truth) = accurate_ten_cycles();
     let drr = stickslip::model::Drr::new(fig1().params);
-    let (clocked, _) = compare::trajectory::reference_states(drr, Method::Radau5, 1e-12, 0.0, truth[0], &times).unwrap();
-    let spec = scene::SolverSpec { method: Method::CvodeBdf, rtol: 1e-11, atol: [1e-13; 3], table: None, explicit_table: None };
+    let (clocked, _) =
+        compare::trajectory::reference_states(drr, Method::Radau5, 1e-12, 0.0, truth[0], &times)
+            .unwrap();
+    let spec = scene::SolverSpec {
+        method: Method::CvodeBdf,
+        rtol: 1e-11,
+        atol: [1e-13; 3],
+        table: None,
+        explicit_table: None,
+    };
     let (mut integ, _) = stickslip::engine::integrator(drr, &spec, &truth[0]).unwrap();
     let mut former = vec![truth[0]];
     for &t in &times[1..] {
@@ -199,8 +241,16 @@ fn reference_error_by_cycle() {
     let cycles = compare::trajectory::cycle_events(&times, &w, &origin).unwrap();
     for (k, c) in cycles.iter().enumerate() {
         let within = |r: &[[f64; 3]]| {
-            (0..times.len()).filter(|&i| times[i] >= c.start && times[i] < c.start + c.period).map(|i| (r[i][1] - truth[i][1]).abs()).fold(0.0, f64::max)
+            (0..times.len())
+                .filter(|&i| times[i] >= c.start && times[i] < c.start + c.period)
+                .map(|i| (r[i][1] - truth[i][1]).abs())
+                .fold(0.0, f64::max)
         };
-        println!("cycle {:>2}: |Δ ln v| clocked radau5 1e-12 {:.2e}, former cvode 1e-11 {:.2e}", k + 1, within(&clocked), within(&former));
+        println!(
+            "cycle {:>2}: |Δ ln v| clocked radau5 1e-12 {:.2e}, former cvode 1e-11 {:.2e}",
+            k + 1,
+            within(&clocked),
+            within(&former)
+        );
     }
 }

@@ -4,9 +4,12 @@
 //! the dense output, failures that need a method's own knobs) stays in each method's own tests
 //! (tests/radau5.rs, rodas5p.rs, extrapolation.rs, wrappers.rs).
 
-use stickslip::integrate::{ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Step, StepEvent, Task, Tolerance};
-use stickslip::solver::{self, Method, MethodSettings};
 use std::cell::Cell;
+use stickslip::integrate::{
+    ErrorKind, ImexSystem, Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Step,
+    StepEvent, Task, Tolerance,
+};
+use stickslip::solver::{self, Method, MethodSettings};
 
 /// y0' = y1, y1' = −y0 from (0, 1): y = (sin t, cos t). All of it implicit in the IMEX split.
 #[derive(Clone, Copy)]
@@ -70,7 +73,9 @@ fn methods() -> impl Iterator<Item = Method> {
 }
 
 fn build(method: Method, options: &Options) -> Box<dyn Integrator> {
-    solver::build(method, &MethodSettings::default(), Oscillator, 0.0, &[0.0, 1.0], options).unwrap_or_else(|e| panic!("{method}: {e}")).integrator
+    solver::build(method, &MethodSettings::default(), Oscillator, 0.0, &[0.0, 1.0], options)
+        .unwrap_or_else(|e| panic!("{method}: {e}"))
+        .integrator
 }
 
 fn error_at(integ: &dyn Integrator) -> f64 {
@@ -83,7 +88,11 @@ fn normal_task_returns_the_state_at_tout() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     for method in methods() {
         let mut integ = build(method, &options);
-        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 1.0, event: StepEvent::Reached }, "{method}");
+        assert_eq!(
+            integ.advance(1.0, Task::Normal).unwrap(),
+            Step { t: 1.0, event: StepEvent::Reached },
+            "{method}"
+        );
         assert_eq!(integ.t(), 1.0, "{method}");
         assert!(error_at(integ.as_ref()) < 1e-6, "{method}: error {:e}", error_at(integ.as_ref()));
         // The returned state is the interpolant's value there.
@@ -94,15 +103,31 @@ fn normal_task_returns_the_state_at_tout() {
         assert!(one.t > 1.0 && one.t < 10.0, "{method}: {one:?}");
         let end = integ.dense(one.t, 0).unwrap().to_vec();
         assert!((0..2).all(|i| (integ.state()[i] - end[i]).abs() <= 1e-14), "{method}");
-        assert_eq!(integ.advance(f64::NAN, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
-        assert_eq!(integ.dense(one.t + 1.0, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        assert_eq!(
+            integ.advance(f64::NAN, Task::Normal).unwrap_err().kind,
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
+        assert_eq!(
+            integ.dense(one.t + 1.0, 0).unwrap_err().kind,
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
         // An output time inside the last step takes no new step.
         let steps = integ.stats().steps;
         let inside = 0.5 * (1.0 + one.t);
-        assert_eq!(integ.advance(inside, Task::Normal).unwrap(), Step { t: inside, event: StepEvent::Reached }, "{method}");
+        assert_eq!(
+            integ.advance(inside, Task::Normal).unwrap(),
+            Step { t: inside, event: StepEvent::Reached },
+            "{method}"
+        );
         assert_eq!(integ.stats().steps, steps, "{method}");
         // An output time behind the last step is refused.
-        assert_eq!(integ.advance(0.5, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        assert_eq!(
+            integ.advance(0.5, Task::Normal).unwrap_err().kind,
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
     }
 }
 
@@ -121,7 +146,11 @@ fn check_interpolation(method: Method) {
     let one = integ.advance(10.0, Task::OneStep).unwrap();
     assert!(one.t > 1.0 && integ.stats().steps == steps + 1, "{method}: {one:?}");
     integ.reinit(0.0, &[0.0, 1.0]).unwrap();
-    assert_eq!(integ.dense(0.5, 0).unwrap_err().kind, ErrorKind::InvalidInput, "{method}: no step since the restart");
+    assert_eq!(
+        integ.dense(0.5, 0).unwrap_err().kind,
+        ErrorKind::InvalidInput,
+        "{method}: no step since the restart"
+    );
 }
 
 #[test]
@@ -133,16 +162,32 @@ fn dense_output_holds_the_last_step_only() {
 fn the_stop_time_and_max_step_options_and_backward_integration() {
     for method in methods() {
         // Options set at construction, as set_stop_time / set_max_step set them later.
-        let options = Options { stop_time: Some(0.75), max_step: Some(0.05), ..Options::new(1e-8, Tolerance::Scalar(1e-10)) };
+        let options = Options {
+            stop_time: Some(0.75),
+            max_step: Some(0.05),
+            ..Options::new(1e-8, Tolerance::Scalar(1e-10))
+        };
         let mut integ = build(method, &options);
-        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 0.75, event: StepEvent::StopTime }, "{method}");
+        assert_eq!(
+            integ.advance(1.0, Task::Normal).unwrap(),
+            Step { t: 0.75, event: StepEvent::StopTime },
+            "{method}"
+        );
         assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
         assert!(integ.stats().last_step <= 0.05 * (1.0 + 1e-12), "{method}: {:?}", integ.stats());
         assert_eq!(integ.advance(1.0, Task::Normal).unwrap().event, StepEvent::Reached, "{method}");
         // Backward in time: the same solution for t < 0.
         let mut backward = build(method, &Options::new(1e-8, Tolerance::Scalar(1e-10)));
-        assert_eq!(backward.advance(-1.0, Task::Normal).unwrap(), Step { t: -1.0, event: StepEvent::Reached }, "{method}");
-        assert!(error_at(backward.as_ref()) < 1e-6, "{method}: error {:e}", error_at(backward.as_ref()));
+        assert_eq!(
+            backward.advance(-1.0, Task::Normal).unwrap(),
+            Step { t: -1.0, event: StepEvent::Reached },
+            "{method}"
+        );
+        assert!(
+            error_at(backward.as_ref()) < 1e-6,
+            "{method}: error {:e}",
+            error_at(backward.as_ref())
+        );
         let end = backward.advance(-5.0, Task::OneStep).unwrap().t;
         assert!(end < -1.0 && backward.dense(end, 0).is_ok(), "{method}: {end}");
     }
@@ -154,10 +199,18 @@ fn the_stop_time_is_reached_exactly_then_disabled() {
     for method in methods() {
         let mut integ = build(method, &options);
         integ.set_stop_time(0.75).unwrap();
-        assert_eq!(integ.advance(1.0, Task::Normal).unwrap(), Step { t: 0.75, event: StepEvent::StopTime }, "{method}");
+        assert_eq!(
+            integ.advance(1.0, Task::Normal).unwrap(),
+            Step { t: 0.75, event: StepEvent::StopTime },
+            "{method}"
+        );
         assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
         assert_eq!(integ.advance(1.0, Task::Normal).unwrap().event, StepEvent::Reached, "{method}");
-        assert_eq!(integ.set_stop_time(f64::NAN).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        assert_eq!(
+            integ.set_stop_time(f64::NAN).unwrap_err().kind,
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
         // OneStep lands on a stop time exactly.
         integ.set_stop_time(1.5).unwrap();
         let last = loop {
@@ -184,7 +237,11 @@ fn the_max_step_can_be_changed_between_steps() {
         let mut t = integ.advance(10.0, Task::OneStep).unwrap().t;
         for _ in 0..20 {
             let next = integ.advance(10.0, Task::OneStep).unwrap().t;
-            assert!(next - t <= 1e-3 * (1.0 + 1e-12), "{method}: step {:e} above the limit", next - t);
+            assert!(
+                next - t <= 1e-3 * (1.0 + 1e-12),
+                "{method}: step {:e} above the limit",
+                next - t
+            );
             t = next;
         }
         assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
@@ -193,7 +250,11 @@ fn the_max_step_can_be_changed_between_steps() {
         integ.advance(t + 1.0, Task::Normal).unwrap();
         assert!(integ.stats().steps - steps < 100, "{method}: the limit was not lifted");
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-            assert_eq!(integ.set_max_step(Some(bad)).unwrap_err().kind, ErrorKind::InvalidInput, "{method}: {bad}");
+            assert_eq!(
+                integ.set_max_step(Some(bad)).unwrap_err().kind,
+                ErrorKind::InvalidInput,
+                "{method}: {bad}"
+            );
         }
     }
 }
@@ -212,9 +273,16 @@ fn reinit_restarts_and_statistics_accumulate() {
         assert_eq!(after.reinits, 1, "{method}");
         // ARKStep counts its explicit evaluations apart (all of ERK's).
         let rhs = |s: &stickslip::integrate::Stats| s.rhs_evals + s.rhs_evals_explicit;
-        assert!(after.steps > before.steps && rhs(&after) > rhs(&before), "{method}: {before:?} {after:?}");
+        assert!(
+            after.steps > before.steps && rhs(&after) > rhs(&before),
+            "{method}: {before:?} {after:?}"
+        );
         assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
-        assert_eq!(integ.reinit(0.0, &[1.0]).unwrap_err().kind, ErrorKind::InvalidInput, "{method}");
+        assert_eq!(
+            integ.reinit(0.0, &[1.0]).unwrap_err().kind,
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
     }
 }
 
@@ -227,14 +295,23 @@ fn failures_are_typed_errors_with_time_and_state() {
         let mut integ = build(method, &few);
         let e = integ.advance(100.0, Task::Normal).unwrap_err();
         assert_eq!(e.kind, ErrorKind::TooMuchWork, "{method}: {e}");
-        assert!(e.t > 0.0 && e.t < 100.0 && e.state.len() == 2 && e.state.iter().all(|x| x.is_finite()), "{method}: {e}");
+        assert!(
+            e.t > 0.0 && e.t < 100.0 && e.state.len() == 2 && e.state.iter().all(|x| x.is_finite()),
+            "{method}: {e}"
+        );
         assert_eq!(integ.stats().steps, 10, "{method}");
-        assert_eq!((integ.t(), integ.state()), (e.t, &e.state[..]), "{method}: the integrator stays where it failed");
+        assert_eq!(
+            (integ.t(), integ.state()),
+            (e.t, &e.state[..]),
+            "{method}: the integrator stays where it failed"
+        );
         // The budget is per call: the next call goes on.
         integ.advance(1.1 * e.t, Task::Normal).unwrap_or_else(|e| panic!("{method}: {e}"));
         // A right-hand side that is NaN from t = 0.5 on: smaller steps do not cure it.
         let nan = |from: f64| {
-            solver::build(method, &MethodSettings::default(), NanAfter(from), 0.0, &[1.0], &options).unwrap_or_else(|e| panic!("{method}: {e}")).integrator
+            solver::build(method, &MethodSettings::default(), NanAfter(from), 0.0, &[1.0], &options)
+                .unwrap_or_else(|e| panic!("{method}: {e}"))
+                .integrator
         };
         let mut integ = nan(0.5);
         let e = integ.advance(1.0, Task::Normal).unwrap_err();
@@ -244,15 +321,26 @@ fn failures_are_typed_errors_with_time_and_state() {
         // Where it failed: the last good point, before the NaN.
         assert!(e.t <= 0.5 && (e.state[0] - (-e.t).exp()).abs() < 1e-6, "{method}: {e}");
         // NaN at the initial point.
-        assert_eq!(nan(-1.0).advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::RhsFailure, "{method}");
+        assert_eq!(
+            nan(-1.0).advance(1.0, Task::Normal).unwrap_err().kind,
+            ErrorKind::RhsFailure,
+            "{method}"
+        );
         // Invalid input at construction.
         let bad = |y0: &[f64], t0: f64, options: &Options| {
-            solver::build(method, &MethodSettings::default(), Oscillator, t0, y0, options).map(|_| ()).unwrap_err().kind
+            solver::build(method, &MethodSettings::default(), Oscillator, t0, y0, options)
+                .map(|_| ())
+                .unwrap_err()
+                .kind
         };
         assert_eq!(bad(&[0.0], 0.0, &options), ErrorKind::InvalidInput, "{method}");
         assert_eq!(bad(&[f64::NAN, 0.0], 0.0, &options), ErrorKind::InvalidInput, "{method}");
         assert_eq!(bad(&[0.0, 0.0], f64::INFINITY, &options), ErrorKind::InvalidInput, "{method}");
-        assert_eq!(bad(&[0.0, 0.0], 0.0, &Options::new(-1.0, Tolerance::Scalar(1e-8))), ErrorKind::InvalidInput, "{method}");
+        assert_eq!(
+            bad(&[0.0, 0.0], 0.0, &Options::new(-1.0, Tolerance::Scalar(1e-8))),
+            ErrorKind::InvalidInput,
+            "{method}"
+        );
     }
 }
 
@@ -273,7 +361,18 @@ fn last_point_and_error(integ: &mut dyn Integrator) -> ((f64, Vec<f64>), SolverE
 #[test]
 fn a_failure_is_located_at_the_last_good_point_arkode_erk() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
-    let build = || solver::build(Method::ArkodeErk, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+    let build = || {
+        solver::build(
+            Method::ArkodeErk,
+            &MethodSettings::default(),
+            NanAfter(0.5),
+            0.0,
+            &[1.0],
+            &options,
+        )
+        .unwrap()
+        .integrator
+    };
     let mut integ = build();
     let e = integ.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
@@ -330,11 +429,23 @@ fn every_failure_is_located_at_the_last_accepted_step() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     let sundials6 = !stickslip::sundials::HEADER_VERSION.starts_with('7');
     for method in methods() {
-        let mut nan = solver::build(method, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+        let mut nan =
+            solver::build(method, &MethodSettings::default(), NanAfter(0.5), 0.0, &[1.0], &options)
+                .unwrap()
+                .integrator;
         let ((t, y), e) = last_point_and_error(&mut *nan);
         assert_eq!((e.t, &e.state), (t, &y), "{method}: {e}");
         assert!(t > 0.45 && t <= 0.5, "{method}: {t}");
-        let mut panic = solver::build(method, &MethodSettings::default(), PanicOnce::new(0.5), 0.0, &[1.0], &options).unwrap().integrator;
+        let mut panic = solver::build(
+            method,
+            &MethodSettings::default(),
+            PanicOnce::new(0.5),
+            0.0,
+            &[1.0],
+            &options,
+        )
+        .unwrap()
+        .integrator;
         let ((t, y), e) = last_point_and_error(&mut *panic);
         assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
         assert!(e.message.contains("the right-hand side refuses t = 0.5"), "{method}: {e}");
@@ -346,7 +457,9 @@ fn every_failure_is_located_at_the_last_accepted_step() {
         // one that reached past 0.5 (extrapolation's long steps: t = 0.148).
         assert!(t > 0.1 && t <= 0.5, "{method}: {t}");
         // Usable afterwards: it goes on from there.
-        let step = panic.advance(1.0, Task::Normal).unwrap_or_else(|e| panic!("{method} after the panic: {e}"));
+        let step = panic
+            .advance(1.0, Task::Normal)
+            .unwrap_or_else(|e| panic!("{method} after the panic: {e}"));
         assert_eq!(step.t, 1.0);
         assert!((panic.state()[0] - (-1.0f64).exp()).abs() < 1e-6, "{method}: {:?}", panic.state());
     }
@@ -379,7 +492,16 @@ fn a_panic_in_the_jacobian_is_an_error() {
     let options = Options::new(1e-6, Tolerance::Scalar(1e-10));
     let sundials6 = !stickslip::sundials::HEADER_VERSION.starts_with('7');
     for method in methods().filter(|m| m.is_stiff()) {
-        let mut integ = solver::build(method, &MethodSettings::default(), JacobianPanics, 0.0, &[1.0], &options).unwrap().integrator;
+        let mut integ = solver::build(
+            method,
+            &MethodSettings::default(),
+            JacobianPanics,
+            0.0,
+            &[1.0],
+            &options,
+        )
+        .unwrap()
+        .integrator;
         let ((t, y), e) = last_point_and_error(&mut *integ);
         assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
         assert!(e.message.contains("deliberate panic in the Jacobian"), "{method}: {e}");
@@ -395,7 +517,16 @@ fn a_panic_in_the_jacobian_is_an_error() {
 fn a_panic_in_dense_output_is_an_error() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     for method in methods() {
-        let mut integ = solver::build(method, &MethodSettings::default(), PanicOnce::new(-1.0), 0.0, &[1.0], &options).unwrap().integrator;
+        let mut integ = solver::build(
+            method,
+            &MethodSettings::default(),
+            PanicOnce::new(-1.0),
+            0.0,
+            &[1.0],
+            &options,
+        )
+        .unwrap()
+        .integrator;
         let e = integ.dense(0.0, 1).unwrap_err();
         assert_eq!(e.kind, ErrorKind::CallbackPanic, "{method}: {e}");
         assert!(e.message.contains("refuses t = 0"), "{method}: {e}");

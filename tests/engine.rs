@@ -34,9 +34,22 @@ fn the_papers_scenes_run_to_a_periodic_cycle() {
         assert!(c.spread.unwrap().period < 1e-7, "{name}: spread {:?}", c.spread);
         assert_eq!(report.sundials_version, stickslip::sundials::version());
         assert!(report.solver.stats.steps > 0 && report.wall_time_s > 0.0);
-        assert_eq!(report.solver.stats.step_underflow_warnings, 0, "{name}: time re-basing avoids t + h = t");
+        assert_eq!(
+            report.solver.stats.step_underflow_warnings, 0,
+            "{name}: time re-basing avoids t + h = t"
+        );
         let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
-        for key in ["period", "t0", "slip_half_width", "v_max", "ln_v_max", "v_min", "u_at_v_max", "theta_at_v_max", "converged"] {
+        for key in [
+            "period",
+            "t0",
+            "slip_half_width",
+            "v_max",
+            "ln_v_max",
+            "v_min",
+            "u_at_v_max",
+            "theta_at_v_max",
+            "converged",
+        ] {
             assert!(!json["cycle"][key].is_null(), "{name}: cycle.{key} missing");
         }
         assert_eq!(json["scene"]["name"], json["name"]);
@@ -75,7 +88,8 @@ fn cvode_arkode_and_radau5_agree_on_the_period_for_large_gamma() {
 
 #[test]
 fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
-    for method in ["cvode-bdf", "arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"] {
+    for method in ["cvode-bdf", "arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"]
+    {
         let solver = format!(r#""solver": {{"method": "{method}"}},"#);
         let r = run(&cycle_scene(1e8, 0.8, 1.0, &solver));
         let c = r.cycle.unwrap();
@@ -154,7 +168,10 @@ fn the_cycle_step_budget_is_the_analysis_error_naming_its_option() {
     assert_eq!(*analysis, "cycle");
     assert!(*t > 0.0 && t.is_finite(), "{t}");
     assert_eq!(error.kind.label(), "TooMuchWork", "counted with the integrators' step budgets");
-    assert!(error.message.contains("cycle.max_steps = 500") && error.message.contains("501 "), "{error}");
+    assert!(
+        error.message.contains("cycle.max_steps = 500") && error.message.contains("501 "),
+        "{error}"
+    );
     assert!(!error.is_bad_input());
     assert_eq!(error.state.len(), 3);
 }
@@ -191,7 +208,12 @@ fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
             r#"{{"name": "far", "model": {{"gamma": 1e4, "xi": 0.8, "epsilon": 1}}, "initial": {{"u": 0, "v": 1e-30, "theta": 0}},
                 "solver": {{"method": "{method}", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#
         ));
-        let period = report.cycle.unwrap().values.unwrap_or_else(|| panic!("{method}: no periodic cycle")).period;
+        let period = report
+            .cycle
+            .unwrap()
+            .values
+            .unwrap_or_else(|| panic!("{method}: no periodic cycle"))
+            .period;
         assert!((period - 31.8375089404).abs() < 1e-7 * period, "{method}: {period}");
     }
 }
@@ -215,11 +237,22 @@ fn far_off_starts_reach_the_cycle_far_from_threshold() {
                         "analyses": [{{"cycle": {{"max_time": 1e40}}}}]}}"#
                 ));
                 let cycle = report.cycle.unwrap();
-                let what = format!("{method} ξ = {xi}, ε = {epsilon} from (u, v, θ) = ({u:e}, {v:e}, {theta:e})");
-                let period = cycle.values.unwrap_or_else(|| panic!("{what}: no periodic cycle")).period;
-                assert!((period - reference).abs() < 1e-5 * reference, "{what}: period {period}, reference {reference}");
+                let what = format!(
+                    "{method} ξ = {xi}, ε = {epsilon} from (u, v, θ) = ({u:e}, {v:e}, {theta:e})"
+                );
+                let period =
+                    cycle.values.unwrap_or_else(|| panic!("{what}: no periodic cycle")).period;
+                assert!(
+                    (period - reference).abs() < 1e-5 * reference,
+                    "{what}: period {period}, reference {reference}"
+                );
                 if v > 1.0 {
-                    assert!(cycle.deep_sticks >= 1 && cycle.time_integrated > 1e21, "{what}: {} deep sticks in {:e}", cycle.deep_sticks, cycle.time_integrated);
+                    assert!(
+                        cycle.deep_sticks >= 1 && cycle.time_integrated > 1e21,
+                        "{what}: {} deep sticks in {:e}",
+                        cycle.deep_sticks,
+                        cycle.time_integrated
+                    );
                 }
             }
         }
@@ -243,10 +276,19 @@ fn a_start_that_lands_on_the_unstable_fixed_point_leaves_it() {
                 rtol / 100.0
             ));
             let cycle = report.cycle.unwrap();
-            let period = cycle.values.unwrap_or_else(|| panic!("{method} rtol {rtol:e}: no cycle ({:?})", cycle.status)).period;
+            let period = cycle
+                .values
+                .unwrap_or_else(|| panic!("{method} rtol {rtol:e}: no cycle ({:?})", cycle.status))
+                .period;
             let reference = 68.04034164421667; // data/reference/drr_cycles_far.json
-            assert!((period - reference).abs() < 1e3 * rtol * reference, "{method} rtol {rtol:e}: period {period}");
-            assert!(cycle.fixed_point_escapes >= 1, "{method} rtol {rtol:e}: the run did not come to rest at the fixed point");
+            assert!(
+                (period - reference).abs() < 1e3 * rtol * reference,
+                "{method} rtol {rtol:e}: period {period}"
+            );
+            assert!(
+                cycle.fixed_point_escapes >= 1,
+                "{method} rtol {rtol:e}: the run did not come to rest at the fixed point"
+            );
         }
     }
 }

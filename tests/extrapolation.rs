@@ -7,13 +7,14 @@
 //! every method).
 
 use stickslip::integrate::{
-    ErrorKind, Extrapolation, Integrator, JacobianMatrix, OdeSystem, Options, StepEvent, Task, Tolerance,
+    ErrorKind, Extrapolation, Integrator, JacobianMatrix, OdeSystem, Options, StepEvent, Task,
+    Tolerance,
 };
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::sundials::{CvodeSettings, Solver};
 
 mod common;
-use common::{Linear, NanAfter, Oscillator, Tan, VanDerPol, drr_cycles, observed_orders, sci};
+use common::{drr_cycles, observed_orders, sci, Linear, NanAfter, Oscillator, Tan, VanDerPol};
 
 /// Prothero–Robinson with a stiffness pulse: y' = −λ(t)(y − cos t) − sin t, exact y = cos t,
 /// λ(t) = 1 + 1e5·exp(−(t − 5)²): non-stiff at both ends, stiff around t = 5.
@@ -42,10 +43,21 @@ impl OdeSystem for StiffnessPulse {
 
 /// Integrates to `tend` with the constant step h and the fixed column k of the given scheme
 /// (the stop time makes the last step land on `tend` exactly) and returns y(tend).
-fn fixed_step<S: OdeSystem>(system: S, y0: &[f64], tend: f64, h: f64, k: usize, stiff: bool) -> Vec<f64> {
-    let options =
-        Options { stop_time: Some(tend), max_steps: Some(100_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
-    let mut solver = Extrapolation::new(system, 0.0, y0, &options).unwrap().force_scheme(stiff).fixed_step(h, k);
+fn fixed_step<S: OdeSystem>(
+    system: S,
+    y0: &[f64],
+    tend: f64,
+    h: f64,
+    k: usize,
+    stiff: bool,
+) -> Vec<f64> {
+    let options = Options {
+        stop_time: Some(tend),
+        max_steps: Some(100_000),
+        ..Options::new(1e-13, Tolerance::Scalar(1e-13))
+    };
+    let mut solver =
+        Extrapolation::new(system, 0.0, y0, &options).unwrap().force_scheme(stiff).fixed_step(h, k);
     let step = solver.advance(tend + 1.0, Task::Normal).unwrap();
     assert_eq!(step, stickslip::integrate::Step { t: tend, event: StepEvent::StopTime });
     assert_eq!(solver.stats().steps, (tend / h).round() as u64, "h = {h}");
@@ -56,9 +68,10 @@ fn fixed_step<S: OdeSystem>(system: S, y0: &[f64], tend: f64, h: f64, k: usize, 
 #[test]
 fn fixed_steps_give_the_orders_of_the_extrapolation_tableaux() {
     // Linearly implicit Euler: T_{k,k} has order k; modified midpoint: order 2k.
-    for (stiff, columns, steps) in
-        [(true, [2usize, 3, 4], [0.2, 0.1, 0.05, 0.025]), (false, [1, 2, 3], [0.5, 0.25, 0.125, 0.0625])]
-    {
+    for (stiff, columns, steps) in [
+        (true, [2usize, 3, 4], [0.2, 0.1, 0.05, 0.025]),
+        (false, [1, 2, 3], [0.5, 0.25, 0.125, 0.0625]),
+    ] {
         for first in [1usize, 2] {
             if !stiff && first == 2 {
                 continue;
@@ -68,7 +81,10 @@ fn fixed_steps_give_the_orders_of_the_extrapolation_tableaux() {
                 let errors: Vec<f64> = steps
                     .iter()
                     .map(|&h| {
-                        let options = Options { stop_time: Some(1.0), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
+                        let options = Options {
+                            stop_time: Some(1.0),
+                            ..Options::new(1e-13, Tolerance::Scalar(1e-13))
+                        };
                         let mut s = Extrapolation::new(Tan, 0.0, &[0.0], &options)
                             .unwrap()
                             .implicit_sequence(first)
@@ -87,7 +103,11 @@ fn fixed_steps_give_the_orders_of_the_extrapolation_tableaux() {
                 // The asymptotic value is approached from below (measured within 0.2 on the
                 // last halving).
                 let last = orders[orders.len() - 1];
-                assert!((last - expected).abs() < 0.25, "k = {k}: errors {}, orders {orders:?}", sci(&errors));
+                assert!(
+                    (last - expected).abs() < 0.25,
+                    "k = {k}: errors {}, orders {orders:?}",
+                    sci(&errors)
+                );
             }
         }
     }
@@ -133,7 +153,8 @@ fn the_error_decreases_consistently_with_the_tolerance() {
     ] {
         let mut errors = Vec::new();
         for &rtol in rtols {
-            let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(rtol)) };
+            let options =
+                Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(rtol)) };
             let mut solver = Extrapolation::new(Kepler, 0.0, &y0, &options).unwrap();
             if let Some(s) = stiff {
                 solver = solver.force_scheme(s);
@@ -176,17 +197,27 @@ fn the_error_decreases_consistently_with_the_tolerance() {
 fn van_der_pol_eps_1e6_against_the_test_set_and_cvode() {
     // Test Set for IVP Solvers (Mazzia & Magherini), problem VDPOL: reference at t = 2.
     let reference = [0.1706167732170483e1, -0.8928097010247975];
-    let options = Options { max_steps: Some(100_000), ..Options::new(1e-10, Tolerance::Scalar(1e-10)) };
-    let mut cvode = Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options).unwrap();
+    let options =
+        Options { max_steps: Some(100_000), ..Options::new(1e-10, Tolerance::Scalar(1e-10)) };
+    let mut cvode =
+        Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options)
+            .unwrap();
     cvode.advance(2.0, Task::Normal).unwrap();
     let theirs = cvode.state().to_vec();
     let c = cvode.stats();
-    println!("CVODE    {}: {} steps, {} RHS, {} LU", sci(&theirs), c.steps, c.rhs_evals, c.lin_setups);
+    println!(
+        "CVODE    {}: {} steps, {} RHS, {} LU",
+        sci(&theirs),
+        c.steps,
+        c.rhs_evals,
+        c.lin_setups
+    );
     // SEULEX's harmonic sequence 1, 2, 3, … and the default (Mathematica's) 2, 3, 4, …: measured
     // 3452 and 249 steps, 86 735 and 16 759 RHS, 24 741 and 2 069 LU.
     for first in [1usize, 2] {
-        let mut solver =
-            Extrapolation::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap().implicit_sequence(first);
+        let mut solver = Extrapolation::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options)
+            .unwrap()
+            .implicit_sequence(first);
         assert_eq!(solver.advance(2.0, Task::Normal).unwrap().event, StepEvent::Reached);
         assert_eq!(solver.t(), 2.0);
         let ours = solver.state().to_vec();
@@ -211,8 +242,16 @@ fn van_der_pol_eps_1e6_against_the_test_set_and_cvode() {
             let relative = |y: f64| ((y - reference[i]) / reference[i]).abs();
             // Measured (n_1 = 1): 1e-10 and 4e-10; (n_1 = 2): 1e-10 and 2e-10.
             assert!(relative(ours[i]) < 1e-8, "y{i} = {:e}: {:e}", ours[i], relative(ours[i]));
-            assert!(relative(theirs[i]) < 1e-6, "CVODE y{i} = {:e}: {:e}", theirs[i], relative(theirs[i]));
-            assert!(((ours[i] - theirs[i]) / theirs[i]).abs() < 1e-6, "Extrapolation and CVODE disagree on y{i}");
+            assert!(
+                relative(theirs[i]) < 1e-6,
+                "CVODE y{i} = {:e}: {:e}",
+                theirs[i],
+                relative(theirs[i])
+            );
+            assert!(
+                ((ours[i] - theirs[i]) / theirs[i]).abs() < 1e-6,
+                "Extrapolation and CVODE disagree on y{i}"
+            );
         }
         // Starts explicit, detects the stiffness at once; the two fast jumps are taken
         // explicitly (2 switches each).
@@ -228,7 +267,10 @@ fn van_der_pol_eps_1e6_against_the_test_set_and_cvode() {
 fn stiffness_switching_goes_both_ways() {
     // λ from 1 to 1e5 and back: explicit, linearly implicit through the pulse, explicit again.
     for rtol in [1e-6, 1e-8, 1e-10] {
-        let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(rtol * 1e-2)) };
+        let options = Options {
+            max_steps: Some(100_000),
+            ..Options::new(rtol, Tolerance::Scalar(rtol * 1e-2))
+        };
         let mut solver = Extrapolation::new(StiffnessPulse, 0.0, &[1.0], &options).unwrap();
         let mut segments: Vec<(bool, f64)> = Vec::new();
         while solver.t() < 10.0 {
@@ -257,14 +299,22 @@ fn stiffness_switching_goes_both_ways() {
             .filter(|(s, _)| !s.0)
             .map(|(s, end)| (end.min(6.5) - s.1.max(3.5)).max(0.0))
             .sum();
-        assert!(explicit_in_pulse < 1e-2, "explicit for {explicit_in_pulse} in [3.5, 6.5]: {segments:?}");
+        assert!(
+            explicit_in_pulse < 1e-2,
+            "explicit for {explicit_in_pulse} in [3.5, 6.5]: {segments:?}"
+        );
         assert!(segments.iter().any(|s| s.0 && s.1 < 3.5), "{segments:?}");
         assert!(err < 100.0 * rtol, "error {err:e}");
         assert!(s.steps < 1000, "{} steps", s.steps);
     }
     // A non-stiff problem never switches.
-    let mut solver =
-        Extrapolation::new(Oscillator, 0.0, &[0.0, 1.0], &Options::new(1e-8, Tolerance::Scalar(1e-8))).unwrap();
+    let mut solver = Extrapolation::new(
+        Oscillator,
+        0.0,
+        &[0.0, 1.0],
+        &Options::new(1e-8, Tolerance::Scalar(1e-8)),
+    )
+    .unwrap();
     solver.advance(20.0, Task::Normal).unwrap();
     assert_eq!((solver.switches(), solver.is_stiff()), (0, false));
     assert!((solver.state()[0] - 20f64.sin()).abs() < 1e-6);
@@ -278,19 +328,26 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
         for rtol in [1e-6, 1e-9] {
             let atol = rtol;
             let scale = |y: f64| rtol * y.abs() + atol;
-            let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
-            let mut solver =
-                Extrapolation::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &options).unwrap().force_scheme(stiff);
+            let options =
+                Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
+            let mut solver = Extrapolation::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &options)
+                .unwrap()
+                .force_scheme(stiff);
             let (mut samples, mut prev) = (Vec::new(), 0.0);
             let (mut residual, mut fd_mismatch, mut end_slope) = (0.0f64, 0.0f64, 0.0f64);
             while solver.t() < 3.0 {
                 let step = solver.advance(3.0, Task::OneStep).unwrap();
                 let end = solver.state().to_vec();
-                assert_eq!(solver.dense(step.t, 0).unwrap(), &end[..], "the interpolant ends at the step end");
+                assert_eq!(
+                    solver.dense(step.t, 0).unwrap(),
+                    &end[..],
+                    "the interpolant ends at the step end"
+                );
                 let mut f = [0.0; 2];
                 vdp.rhs(step.t, &end, &mut f);
                 let d = solver.dense(step.t, 1).unwrap().to_vec();
-                end_slope = end_slope.max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
+                end_slope = end_slope
+                    .max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
                 samples.push((step.t, end, true));
                 let h = step.t - prev;
                 for &theta in &between {
@@ -298,7 +355,8 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
                     let y = solver.dense(t, 0).unwrap().to_vec();
                     let d = solver.dense(t, 1).unwrap().to_vec();
                     vdp.rhs(t, &y, &mut f);
-                    residual = residual.max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
+                    residual = residual
+                        .max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
                     samples.push((t, y, false));
                     // dense(t, k + 1) is the derivative of dense(t, k), k = 0, 1, 2.
                     let delta = 1e-5 * h;
@@ -315,8 +373,13 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
                 }
                 prev = step.t;
             }
-            let tight = Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
-            let mut reference = stickslip::integrate::Radau5::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &tight).unwrap();
+            let tight = Options {
+                max_steps: Some(1_000_000),
+                ..Options::new(1e-13, Tolerance::Scalar(1e-13))
+            };
+            let mut reference =
+                stickslip::integrate::Radau5::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &tight)
+                    .unwrap();
             samples.sort_by(|a, b| a.0.total_cmp(&b.0));
             let (mut at_ends, mut inside) = (0.0f64, 0.0f64);
             for (t, y, is_end) in &samples {
@@ -341,8 +404,14 @@ fn dense_output_of_both_schemes_matches_a_tight_run() {
             // two orders of the steps' accuracy (Radau5's: 6.4, 12.8), unlike a cubic Hermite on
             // these long steps.
             let bound = if stiff { 100.0 } else { 40.0 };
-            assert!(inside < bound && inside < bound * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
-            assert!(fd_mismatch < 1e-5, "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}");
+            assert!(
+                inside < bound && inside < bound * at_ends.max(1.0),
+                "inside {inside}, ends {at_ends}"
+            );
+            assert!(
+                fd_mismatch < 1e-5,
+                "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}"
+            );
             if !stiff {
                 // ODEX's interpolant has f at the step ends as its slope.
                 assert!(end_slope < 1e-3, "{end_slope}");
@@ -375,8 +444,10 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
         let mut ours = Extrapolation::new(drr, 0.0, &y0, &options(rtol)).unwrap();
         let (steps, peaks) = drr_cycles(&mut ours, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let s = ours.stats();
-        let mut cvode = Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
-        let (cvode_steps, cvode_peaks) = drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let mut cvode =
+            Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
+        let (cvode_steps, cvode_peaks) =
+            drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let c = cvode.stats();
         println!(
             "DRR γ = 1e8, rtol {rtol:.0e}, t ∈ [0, 100]: Extrapolation {steps} steps ({} attempts, {} error-test and {} row \
@@ -435,7 +506,8 @@ fn dense_derivatives_restarts_jacobian_counts_and_both_schemes_backward() {
 
     // The linearly implicit scheme with a finite-difference Jacobian: n RHS calls per
     // Jacobian, counted apart; one LU per row.
-    let mut implicit = Extrapolation::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().force_scheme(true);
+    let mut implicit =
+        Extrapolation::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().force_scheme(true);
     implicit.advance(2.0, Task::Normal).unwrap();
     assert!(implicit.is_stiff() && (implicit.state()[0] - 2f64.sin()).abs() < 1e-7);
     let s = implicit.stats();
@@ -448,11 +520,20 @@ fn dense_derivatives_restarts_jacobian_counts_and_both_schemes_backward() {
     // Backward in time: y' = −y from y(0) = 1 to t = −1 gives e; both schemes.
     for stiff in [false, true] {
         let options = Options::new(1e-10, Tolerance::Scalar(1e-12));
-        let mut backward = Extrapolation::new(Linear(-1.0), 0.0, &[1.0], &options).unwrap().force_scheme(stiff);
+        let mut backward =
+            Extrapolation::new(Linear(-1.0), 0.0, &[1.0], &options).unwrap().force_scheme(stiff);
         backward.advance(-1.0, Task::Normal).unwrap();
-        assert!((backward.state()[0] - std::f64::consts::E).abs() < 1e-8, "{}", backward.state()[0]);
+        assert!(
+            (backward.state()[0] - std::f64::consts::E).abs() < 1e-8,
+            "{}",
+            backward.state()[0]
+        );
         let end = backward.advance(-5.0, Task::OneStep).unwrap().t;
-        assert!(end < -1.0 && backward.dense(end, 0).is_ok() && backward.dense(0.5 * (end - 1.0), 1).is_ok());
+        assert!(
+            end < -1.0
+                && backward.dense(end, 0).is_ok()
+                && backward.dense(0.5 * (end - 1.0), 1).is_ok()
+        );
     }
 }
 
@@ -503,15 +584,21 @@ fn failures_specific_to_extrapolation() {
     // linearly implicit Euler steps of h/2 with the default sequence 2, 3, 4, …: I/(h/2) − λ = 0)
     // at a fixed step: no escape.
     let h = 0.5;
-    let mut solver =
-        Extrapolation::new(Linear(2.0 / h), 0.0, &[1.0], &options).unwrap().force_scheme(true).fixed_step(h, 1);
+    let mut solver = Extrapolation::new(Linear(2.0 / h), 0.0, &[1.0], &options)
+        .unwrap()
+        .force_scheme(true)
+        .fixed_step(h, 1);
     let e = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::LinearSolver, "{e}");
     // Adaptive steps escape the same singularity by halving h.
-    let mut adaptive =
-        Extrapolation::new(Linear(2.0 / h), 0.0, &[1.0], &Options { initial_step: Some(h), ..options.clone() })
-            .unwrap()
-            .force_scheme(true);
+    let mut adaptive = Extrapolation::new(
+        Linear(2.0 / h),
+        0.0,
+        &[1.0],
+        &Options { initial_step: Some(h), ..options.clone() },
+    )
+    .unwrap()
+    .force_scheme(true);
     adaptive.advance(0.1, Task::Normal).unwrap();
     assert!((adaptive.state()[0] - 0.4f64.exp()).abs() < 1e-7);
 
@@ -521,7 +608,8 @@ fn failures_specific_to_extrapolation() {
     assert_eq!(e.kind, ErrorKind::StepUnderflow, "{e}");
 
     // A negative fixed step.
-    let mut solver = Extrapolation::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().fixed_step(-1.0, 2);
+    let mut solver =
+        Extrapolation::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().fixed_step(-1.0, 2);
     assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
 
     // Never a panic: blow-up, infinite f, extreme stiffness, tiny tolerances; each call returns
@@ -547,8 +635,12 @@ fn failures_specific_to_extrapolation() {
             s.advance(10.0, Task::Normal).map(|_| ())
         }),
         run(&|| {
-            let mut s =
-                Extrapolation::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &Options::new(1e-16, Tolerance::Scalar(0.0)))?;
+            let mut s = Extrapolation::new(
+                VanDerPol(1e-6),
+                0.0,
+                &[2.0, 0.0],
+                &Options::new(1e-16, Tolerance::Scalar(0.0)),
+            )?;
             s.advance(0.1, Task::Normal).map(|_| ())
         }),
     ];
@@ -586,7 +678,8 @@ fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
             "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 3e4, "max_steps": 2000000}}}}]}}"#
     );
     let scene = stickslip::scene::parse(&text, "deep-floor").unwrap();
-    let report = stickslip::engine::run(&scene, serde_json::Value::Null).unwrap_or_else(|e| panic!("{e}"));
+    let report =
+        stickslip::engine::run(&scene, serde_json::Value::Null).unwrap_or_else(|e| panic!("{e}"));
     let cycle = report.cycle.expect("the scene asks for the cycle");
     cycle.values.expect("a converged cycle").period
 }
@@ -600,6 +693,9 @@ fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
 fn deep_arrest_floor_switches_to_the_implicit_scheme() {
     for (gamma, reference) in [(1e10, 1268.799694186796), (1e11, 1363.868100581532)] {
         let period = deep_floor_period(gamma, 0.5, 10.0);
-        assert!((period - reference).abs() <= 1e-7 * reference, "γ = {gamma:e}: period {period} against {reference}");
+        assert!(
+            (period - reference).abs() <= 1e-7 * reference,
+            "γ = {gamma:e}: period {period} against {reference}"
+        );
     }
 }

@@ -4,7 +4,9 @@
 mod xml;
 
 use stickslip::figure::svg::{escape, px, Svg};
-use stickslip::figure::{Anchor, Axis, Dash, Figure, LegendPlace, Marker, Note, Panel, RefLine, Series, Style};
+use stickslip::figure::{
+    Anchor, Axis, Dash, Figure, LegendPlace, Marker, Note, Panel, RefLine, Series, Style,
+};
 use xml::check_well_formed;
 
 #[test]
@@ -37,21 +39,36 @@ fn the_checker_rejects_malformed_documents() {
     ] {
         assert!(check_well_formed(bad).is_err(), "{bad:?} passed");
     }
-    assert!(check_well_formed("<?xml version=\"1.0\"?>\n<!-- c --><svg a='1'>&#955;&#x3bb;<g/></svg>\n").is_ok());
+    assert!(check_well_formed(
+        "<?xml version=\"1.0\"?>\n<!-- c --><svg a='1'>&#955;&#x3bb;<g/></svg>\n"
+    )
+    .is_ok());
 }
-
 
 fn example() -> Figure {
     let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.05).collect();
     let v: Vec<f64> = t.iter().map(|t| (-t).exp() + 1e-3).collect();
-    let a = Panel::new("(a) decay & <growth>", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::log10("v").unit("v_{0}"))
-        .series(Series::new("e^{−t} + 10^{−3}", t.clone(), v, Style::line(0)))
-        .series(Series::new("points", vec![1.0, 2.0, 3.0], vec![0.5, 0.2, 0.05], Style::markers(1, Marker::Circle)))
-        .line(RefLine::horizontal(1e-3, "floor", Style::line(3)))
-        .note(Note::new(5.0, 0.1, "a \"note\"", Anchor::Start));
-    let b = Panel::new("(b) sine", Axis::linear("u").unit("D_{c}"), Axis::linear("θ").dimensionless())
-        .series(Series::new("sin", t.clone(), t.iter().map(|t| t.sin()).collect(), Style::line(2)).dash(Dash::Dashed))
-        .legend(LegendPlace::BottomLeft);
+    let a = Panel::new(
+        "(a) decay & <growth>",
+        Axis::linear("t").unit("D_{c}/v_{0}"),
+        Axis::log10("v").unit("v_{0}"),
+    )
+    .series(Series::new("e^{−t} + 10^{−3}", t.clone(), v, Style::line(0)))
+    .series(Series::new(
+        "points",
+        vec![1.0, 2.0, 3.0],
+        vec![0.5, 0.2, 0.05],
+        Style::markers(1, Marker::Circle),
+    ))
+    .line(RefLine::horizontal(1e-3, "floor", Style::line(3)))
+    .note(Note::new(5.0, 0.1, "a \"note\"", Anchor::Start));
+    let b =
+        Panel::new("(b) sine", Axis::linear("u").unit("D_{c}"), Axis::linear("θ").dimensionless())
+            .series(
+                Series::new("sin", t.clone(), t.iter().map(|t| t.sin()).collect(), Style::line(2))
+                    .dash(Dash::Dashed),
+            )
+            .legend(LegendPlace::BottomLeft);
     Figure::new("Test figure").columns(2).panel(a).panel(b).caption("γ = 10^{3}, ξ = 0.7; a caption long enough to wrap onto a second line when the figure is narrow, which this one is not really")
 }
 

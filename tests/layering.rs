@@ -26,7 +26,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("compare", &["engine", "integrate", "model", "report", "scene"]),
     ("stress", &["analysis", "engine", "model", "parallel", "scene"]),
     ("sweep", &["engine", "parallel", "report", "scene"]),
-    ("reproduce", &["analysis", "engine", "figure", "model", "parallel", "report", "scene", "sundials"]),
+    (
+        "reproduce",
+        &["analysis", "engine", "figure", "model", "parallel", "report", "scene", "sundials"],
+    ),
     ("cli", &[]),
 ];
 
@@ -52,10 +55,14 @@ fn files_of(src: &Path, module: &str) -> Vec<PathBuf> {
 /// The top-level modules named by `crate::` paths on one line of code (comments removed).
 fn crate_paths(line: &str) -> Vec<String> {
     let code = line.split("//").next().unwrap_or("");
-    let ident = |s: &str| s.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect::<String>();
+    let ident = |s: &str| {
+        s.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect::<String>()
+    };
     let mut out = Vec::new();
     for (i, _) in code.match_indices("crate::") {
-        if code[..i].ends_with('$') || code[..i].ends_with(|c: char| c.is_ascii_alphanumeric() || c == '_') {
+        if code[..i].ends_with('$')
+            || code[..i].ends_with(|c: char| c.is_ascii_alphanumeric() || c == '_')
+        {
             continue;
         }
         let rest = &code[i + "crate::".len()..];
@@ -88,7 +95,15 @@ fn graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
             for (n, line) in text.lines().enumerate() {
                 for used in crate_paths(line) {
                     if used != module {
-                        uses.entry(used).or_insert_with(|| format!("{}:{}", file.strip_prefix(src.parent().unwrap_or(src)).unwrap_or(&file).display(), n + 1));
+                        uses.entry(used).or_insert_with(|| {
+                            format!(
+                                "{}:{}",
+                                file.strip_prefix(src.parent().unwrap_or(src))
+                                    .unwrap_or(&file)
+                                    .display(),
+                                n + 1
+                            )
+                        });
                     }
                 }
             }
@@ -114,7 +129,8 @@ fn crate_paths_are_read_from_code_only() {
 
 #[test]
 fn every_module_uses_only_the_layers_before_it() {
-    let allowed: BTreeMap<&str, BTreeSet<&str>> = ALLOWED.iter().map(|(m, a)| (*m, a.iter().copied().collect())).collect();
+    let allowed: BTreeMap<&str, BTreeSet<&str>> =
+        ALLOWED.iter().map(|(m, a)| (*m, a.iter().copied().collect())).collect();
     let mut errors = Vec::new();
     for (module, uses) in graph(&src_dir()) {
         let Some(ok) = allowed.get(module.as_str()) else {
@@ -123,7 +139,9 @@ fn every_module_uses_only_the_layers_before_it() {
         };
         for (used, place) in uses {
             if !ok.contains(used.as_str()) {
-                errors.push(format!("{place}: `{module}` uses `crate::{used}`, which its layer may not"));
+                errors.push(format!(
+                    "{place}: `{module}` uses `crate::{used}`, which its layer may not"
+                ));
             }
         }
     }
@@ -134,7 +152,11 @@ fn every_module_uses_only_the_layers_before_it() {
 fn analyses_never_import_scene_engine_or_report() {
     let uses = &graph(&src_dir())["analysis"];
     for forbidden in ["engine", "scene", "report"] {
-        assert!(!uses.contains_key(forbidden), "{}: analysis imports crate::{forbidden}", uses[forbidden]);
+        assert!(
+            !uses.contains_key(forbidden),
+            "{}: analysis imports crate::{forbidden}",
+            uses[forbidden]
+        );
     }
 }
 
@@ -142,7 +164,12 @@ fn analyses_never_import_scene_engine_or_report() {
 fn the_module_graph_has_no_cycle() {
     let g = graph(&src_dir());
     // Depth-first search with colours: a grey node met again closes a cycle.
-    fn visit<'a>(g: &'a BTreeMap<String, BTreeMap<String, String>>, m: &'a str, grey: &mut Vec<&'a str>, done: &mut BTreeSet<&'a str>) -> Result<(), String> {
+    fn visit<'a>(
+        g: &'a BTreeMap<String, BTreeMap<String, String>>,
+        m: &'a str,
+        grey: &mut Vec<&'a str>,
+        done: &mut BTreeSet<&'a str>,
+    ) -> Result<(), String> {
         if done.contains(m) {
             return Ok(());
         }

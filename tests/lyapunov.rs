@@ -2,8 +2,8 @@
 //! finite-time exponents against an independent reference, finite differences of the
 //! Poincaré map.
 
-use stickslip::analysis::events;
 use stickslip::analysis::cycle_period::CyclePeriod;
+use stickslip::analysis::events;
 use stickslip::integrate::{Options, Radau5, Task, Tolerance};
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::report::Report;
@@ -15,7 +15,8 @@ fn run(text: &str) -> Report {
 }
 
 fn run_file(name: &str) -> Report {
-    run(&std::fs::read_to_string(format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap())
+    run(&std::fs::read_to_string(format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
+        .unwrap())
 }
 
 #[test]
@@ -24,7 +25,10 @@ fn fig5_transitions_and_the_eigenvalues_two_ways() {
     let l = r.lyapunov.unwrap();
     // The paper: complex at t_c − 4.6, real part through zero at t_c − 2.3 (both within 5 %).
     let (onset, zero) = (l.complex_onset_before_tc.unwrap(), l.zero_crossing_before_tc.unwrap());
-    assert!((onset - 4.6).abs() < 0.05 * 4.6 && (zero - 2.3).abs() < 0.05 * 2.3, "onset {onset}, zero {zero}");
+    assert!(
+        (onset - 4.6).abs() < 0.05 * 4.6 && (zero - 2.3).abs() < 0.05 * 2.3,
+        "onset {onset}, zero {zero}"
+    );
     assert!(zero > l.t0.unwrap(), "inside the stick, before v = 1");
     // The quasi-static formula is the large-γ limit; the polynomial agrees with the matrix.
     let q = l.quasi_static.as_ref().unwrap();
@@ -108,5 +112,8 @@ fn ftle_matches_finite_differences_of_the_poincare_map() {
     // integration noise. Their spread bounds the reference's own error.
     let (a, b) = (ln_mu2_by_differences(drr, x, 1e-2), ln_mu2_by_differences(drr, x, 1e-3));
     assert!((a - b).abs() < 0.15, "finite differences disagree: {a}, {b}");
-    assert!((ours - a).abs() < 0.05, "FTLE ln |μ₂| = {ours}, finite differences {a} (δ = 1e-2), {b} (δ = 1e-3)");
+    assert!(
+        (ours - a).abs() < 0.05,
+        "FTLE ln |μ₂| = {ours}, finite differences {a} (δ = 1e-2), {b} (δ = 1e-3)"
+    );
 }

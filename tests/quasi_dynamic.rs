@@ -43,12 +43,18 @@ fn quasi_dynamic_cycle_is_the_inertial_limit_with_every_stiff_method() {
     for (law, limit) in [("slip", 9.6180474670), ("ageing", 9.6891841756)] {
         let (p0, s0, v0) = cycle(&run(&scene(law, Some(1e8), "radau5", r#"["cycle"]"#)));
         assert!((p0 - limit).abs() < 1e-9 * limit, "{law}: inertial {p0} vs the docs' {limit}");
-        for (method, period_tol, slip_tol, v_tol) in
-            [("radau5", 1e-9, 1e-9, 3e-8), ("rodas5p", 1e-9, 1e-9, 3e-8), ("extrapolation", 1e-9, 1e-9, 3e-8), ("cvode-bdf", 1e-8, 2e-8, 1e-7)]
-        {
+        for (method, period_tol, slip_tol, v_tol) in [
+            ("radau5", 1e-9, 1e-9, 3e-8),
+            ("rodas5p", 1e-9, 1e-9, 3e-8),
+            ("extrapolation", 1e-9, 1e-9, 3e-8),
+            ("cvode-bdf", 1e-8, 2e-8, 1e-7),
+        ] {
             let (p, s, v) = cycle(&run(&scene(law, None, method, r#"["cycle"]"#)));
             let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * b;
-            assert!(close(p, p0, period_tol) && close(s, s0, slip_tol) && close(v, v0, v_tol), "{law} {method}: ({p}, {s}, {v}) vs inertial ({p0}, {s0}, {v0})");
+            assert!(
+                close(p, p0, period_tol) && close(s, s0, slip_tol) && close(v, v0, v_tol),
+                "{law} {method}: ({p}, {s}, {v}) vs inertial ({p0}, {s0}, {v0})"
+            );
         }
     }
 }
@@ -60,25 +66,44 @@ fn inertial_cycle_approaches_the_quasi_dynamic_one_as_one_over_gamma_squared() {
     // 100-fold per decade of γ.
     for (law, constant) in [("slip", 16.76), ("ageing", 125.19)] {
         let (limit, _, _) = cycle(&run(&scene(law, None, "radau5", r#"["cycle"]"#)));
-        let distance = |gamma: f64| (cycle(&run(&scene(law, Some(gamma), "radau5", r#"["cycle"]"#))).0 - limit).abs();
+        let distance = |gamma: f64| {
+            (cycle(&run(&scene(law, Some(gamma), "radau5", r#"["cycle"]"#))).0 - limit).abs()
+        };
         let (d3, d4) = (distance(1e3), distance(1e4));
         assert!((d3 / d4 - 100.0).abs() < 2.0, "{law}: {d3:e} at γ = 1e3, {d4:e} at 1e4");
-        assert!((d4 * 1e8 / constant - 1.0).abs() < 0.02, "{law}: {d4:e} at γ = 1e4, expected {constant}/γ²");
+        assert!(
+            (d4 * 1e8 / constant - 1.0).abs() < 0.02,
+            "{law}: {d4:e} at γ = 1e4, expected {constant}/γ²"
+        );
     }
 }
 
 #[test]
 fn shipped_scene_shooting_and_floquet() {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/quasi-dynamic.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/quasi-dynamic.json"
+    ))
+    .unwrap();
     let r = run(&text);
     assert!(!r.model.inertia && r.model.gamma == f64::INFINITY);
     let json: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
-    assert_eq!((&json["model"]["gamma"], &json["model"]["inertia"]), (&serde_json::Value::Null, &serde_json::Value::Bool(false)));
+    assert_eq!(
+        (&json["model"]["gamma"], &json["model"]["inertia"]),
+        (&serde_json::Value::Null, &serde_json::Value::Bool(false))
+    );
     let h = r.hopf.as_ref().unwrap();
-    assert!((h.epsilon_c - 0.85).abs() < 1e-15 && h.above_threshold && h.eigenvalues.len() == 2, "{h:?}");
+    assert!(
+        (h.epsilon_c - 0.85).abs() < 1e-15 && h.above_threshold && h.eigenvalues.len() == 2,
+        "{h:?}"
+    );
     let (period, _, _) = cycle(&r);
     let orbit = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap();
-    assert!((orbit.period - period).abs() < 1e-8 * period, "shooting {} vs cycle {period}", orbit.period);
+    assert!(
+        (orbit.period - period).abs() < 1e-8 * period,
+        "shooting {} vs cycle {period}",
+        orbit.period
+    );
     assert!(orbit.stable == Some(true) && orbit.trivial_multiplier_error < 1e-6, "{orbit:?}");
     // The non-trivial multipliers: the model's (0.1207293 at γ = 1e8 with inertia, where the
     // other is ~0) and the stabilisation's e^{−κ_G T}, κ_G = 1.
@@ -86,23 +111,36 @@ fn shipped_scene_shooting_and_floquet() {
     let inertial = run(&scene("slip", Some(1e8), "radau5", r#"["shooting"]"#));
     let physical = inertial.shooting.as_ref().unwrap().orbit.as_ref().unwrap().multipliers[1].re;
     assert!((m[0] - physical).abs() < 1e-5 * physical, "{m:?} vs inertial {physical}");
-    assert!((m[1] / (-orbit.period).exp() - 1.0).abs() < 1e-3, "{m:?} vs e^(−T) {:e}", (-orbit.period).exp());
+    assert!(
+        (m[1] / (-orbit.period).exp() - 1.0).abs() < 1e-3,
+        "{m:?} vs e^(−T) {:e}",
+        (-orbit.period).exp()
+    );
 }
 
 #[test]
 fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
-    let curve = run(&scene("slip", None, "radau5", r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.1, "points": 3}}]"#));
+    let curve = run(&scene(
+        "slip",
+        None,
+        "radau5",
+        r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.1, "points": 3}}]"#,
+    ));
     let c = curve.continuation.as_ref().unwrap();
     assert!(c.completed && c.points.last().unwrap().value == 0.1, "{c:?}");
     let direct = run(&scene("slip", None, "radau5", r#"["shooting"]"#).replace("0.05}", "0.1}"));
-    let (a, b) = (c.points.last().unwrap().orbit.period, direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period);
+    let (a, b) = (
+        c.points.last().unwrap().orbit.period,
+        direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period,
+    );
     assert!((a - b).abs() < 1e-7 * b, "continued {a} vs direct {b}");
 }
 
 #[test]
 fn below_the_threshold_the_oscillation_decays() {
     // ε_c = ξ + η = 0.85: at ε = 0.8 the fixed point is stable.
-    let r = run(&scene("ageing", None, "cvode-bdf", r#"["hopf", "cycle"]"#).replace("\"epsilon\": 1.0", "\"epsilon\": 0.8"));
+    let r = run(&scene("ageing", None, "cvode-bdf", r#"["hopf", "cycle"]"#)
+        .replace("\"epsilon\": 1.0", "\"epsilon\": 0.8"));
     assert!(!r.hopf.as_ref().unwrap().above_threshold);
     assert_eq!(r.cycle.as_ref().unwrap().status, CycleStatus::FixedPoint);
 }
@@ -134,14 +172,23 @@ fn scene_fields_are_validated_naming_the_field() {
         assert!(e.message.contains(hint), "{e}");
     }
     let with = |analyses: &str| {
-        let text = format!(r#"{{"name": "t", "model": {{{qd}, "radiation_damping": 0.05}}, "analyses": {analyses}}}"#);
+        let text = format!(
+            r#"{{"name": "t", "model": {{{qd}, "radiation_damping": 0.05}}, "analyses": {analyses}}}"#
+        );
         scene::parse(&text, "test")
     };
-    for analyses in [r#"["cycle", "lyapunov"]"#, r#"["cycle", "asymptotics"]"#, r#"["hopf", "cycle", "paper"]"#, r#"[{"noise": {"amplitudes": [0, 1e-3, 0]}}]"#] {
+    for analyses in [
+        r#"["cycle", "lyapunov"]"#,
+        r#"["cycle", "asymptotics"]"#,
+        r#"["hopf", "cycle", "paper"]"#,
+        r#"[{"noise": {"amplitudes": [0, 1e-3, 0]}}]"#,
+    ] {
         let e = with(analyses).expect_err(analyses);
         assert_eq!(e.field, "model.inertia", "{analyses}: {e}");
     }
-    let e = with(r#"["shooting", {"continuation": {"parameter": "gamma", "to": 1e3, "points": 3}}]"#).unwrap_err();
+    let e =
+        with(r#"["shooting", {"continuation": {"parameter": "gamma", "to": 1e3, "points": 3}}]"#)
+            .unwrap_err();
     assert_eq!(e.field, "analyses[1].continuation.parameter", "{e}");
     let e = with(r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0, "points": 3}}]"#).unwrap_err();
     assert_eq!(e.field, "analyses[1].continuation.to", "{e}");
@@ -151,5 +198,11 @@ fn scene_fields_are_validated_naming_the_field() {
         "test",
     )
     .unwrap();
-    assert!(!s.params.inertia && (s.params.xi - 0.02).abs() < 1e-15 && (s.params.eta - 1e-8).abs() < 1e-22, "{:?}", s.params);
+    assert!(
+        !s.params.inertia
+            && (s.params.xi - 0.02).abs() < 1e-15
+            && (s.params.eta - 1e-8).abs() < 1e-22,
+        "{:?}",
+        s.params
+    );
 }

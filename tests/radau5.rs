@@ -10,7 +10,10 @@ use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::sundials::{CvodeSettings, Solver};
 
 mod common;
-use common::{Linear, NanAfter, Oscillator, ProtheroRobinson, Tan, VanDerPol, drr_cycles, observed_orders, sci};
+use common::{
+    drr_cycles, observed_orders, sci, Linear, NanAfter, Oscillator, ProtheroRobinson, Tan,
+    VanDerPol,
+};
 
 /// Integrates to `tend` with the constant step h (the stop time makes the last step land on
 /// `tend` exactly) and returns y(tend).
@@ -33,8 +36,10 @@ fn fixed_step<S: OdeSystem>(system: S, y0: &[f64], tend: f64, h: f64) -> Vec<f64
 
 #[test]
 fn fixed_steps_converge_with_order_five_on_smooth_problems() {
-    let tan: Vec<f64> =
-        [0.2, 0.1, 0.05, 0.025].iter().map(|&h| (fixed_step(Tan, &[0.0], 1.0, h)[0] - 1f64.tan()).abs()).collect();
+    let tan: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
+        .iter()
+        .map(|&h| (fixed_step(Tan, &[0.0], 1.0, h)[0] - 1f64.tan()).abs())
+        .collect();
     let oscillator: Vec<f64> = [0.5, 0.25, 0.125, 0.0625]
         .iter()
         .map(|&h| {
@@ -45,7 +50,11 @@ fn fixed_steps_converge_with_order_five_on_smooth_problems() {
     for (name, errors) in [("tan", tan), ("oscillator", oscillator)] {
         let orders = observed_orders(&errors);
         println!("{name}: errors {}, observed orders {orders:.3?}", sci(&errors));
-        assert!(orders.iter().all(|p| (p - 5.0).abs() < 0.3), "{name}: errors {}, orders {orders:?}", sci(&errors));
+        assert!(
+            orders.iter().all(|p| (p - 5.0).abs() < 0.3),
+            "{name}: errors {}, orders {orders:?}",
+            sci(&errors)
+        );
     }
 }
 
@@ -68,11 +77,14 @@ fn van_der_pol_eps_1e6_to_eight_digits_against_the_test_set_and_cvode() {
     // Test Set for IVP Solvers (Mazzia & Magherini), problem VDPOL: reference at t = 2,
     // computed there with quadruple-precision RADAU5 (rtol = atol = h0 = 1.1e-18).
     let reference = [0.1706167732170483e1, -0.8928097010247975];
-    let options = Options { max_steps: Some(100_000), ..Options::new(1e-12, Tolerance::Scalar(1e-12)) };
+    let options =
+        Options { max_steps: Some(100_000), ..Options::new(1e-12, Tolerance::Scalar(1e-12)) };
     let mut radau = Radau5::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap();
     assert_eq!(radau.advance(2.0, Task::Normal).unwrap().event, StepEvent::Reached);
     assert_eq!(radau.t(), 2.0);
-    let mut cvode = Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options).unwrap();
+    let mut cvode =
+        Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options)
+            .unwrap();
     cvode.advance(2.0, Task::Normal).unwrap();
     let (ours, theirs) = (radau.state().to_vec(), cvode.state().to_vec());
     let s = radau.stats();
@@ -91,10 +103,22 @@ fn van_der_pol_eps_1e6_to_eight_digits_against_the_test_set_and_cvode() {
     for i in 0..2 {
         let relative = |y: f64| ((y - reference[i]) / reference[i]).abs();
         assert!(relative(ours[i]) < 1e-8, "Radau5 y{i} = {:e}: {:e}", ours[i], relative(ours[i]));
-        assert!(relative(theirs[i]) < 1e-8, "CVODE y{i} = {:e}: {:e}", theirs[i], relative(theirs[i]));
-        assert!(((ours[i] - theirs[i]) / theirs[i]).abs() < 1e-8, "Radau5 and CVODE disagree on y{i}");
+        assert!(
+            relative(theirs[i]) < 1e-8,
+            "CVODE y{i} = {:e}: {:e}",
+            theirs[i],
+            relative(theirs[i])
+        );
+        assert!(
+            ((ours[i] - theirs[i]) / theirs[i]).abs() < 1e-8,
+            "Radau5 and CVODE disagree on y{i}"
+        );
     }
-    assert_eq!((s.last_order, s.rhs_evals_jacobian), (5, 0), "analytic Jacobian: no RHS calls for it");
+    assert_eq!(
+        (s.last_order, s.rhs_evals_jacobian),
+        (5, 0),
+        "analytic Jacobian: no RHS calls for it"
+    );
     assert!(s.steps > 100 && s.step_attempts >= s.steps + s.err_test_fails);
     assert!(s.lin_setups <= s.step_attempts && s.jac_evals <= s.lin_setups, "{s:?}");
 }
@@ -108,14 +132,19 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
     for rtol in [1e-6, 1e-8] {
         let atol = rtol;
         let scale = |y: f64| rtol * y.abs() + atol;
-        let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
+        let options =
+            Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
         let mut solver = Radau5::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &options).unwrap();
         let (mut samples, mut prev) = (Vec::new(), 0.0);
         let (mut at_nodes, mut off_nodes, mut fd_mismatch) = (0.0f64, 0.0f64, 0.0f64);
         while solver.t() < 3.0 {
             let step = solver.advance(3.0, Task::OneStep).unwrap();
             let end = solver.state().to_vec();
-            assert_eq!(solver.dense(step.t, 0).unwrap(), &end[..], "the polynomial ends at the step end");
+            assert_eq!(
+                solver.dense(step.t, 0).unwrap(),
+                &end[..],
+                "the polynomial ends at the step end"
+            );
             samples.push((step.t, end, true));
             let h = step.t - prev;
             for (k, &theta) in nodes.iter().chain(&between).enumerate() {
@@ -125,7 +154,8 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
                 let mut f = [0.0; 2];
                 vdp.rhs(t, &y, &mut f);
                 // dy/dt of the interpolant against the right-hand side at the interpolant.
-                let residual = (0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max);
+                let residual =
+                    (0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max);
                 if k < nodes.len() {
                     at_nodes = at_nodes.max(residual);
                 } else {
@@ -146,7 +176,8 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
             prev = step.t;
         }
         // A much tighter run, interpolating at the same times (Normal task).
-        let tight = Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
+        let tight =
+            Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
         let mut reference = Radau5::new(VanDerPol(1.0), 0.0, &[2.0, 0.0], &tight).unwrap();
         samples.sort_by(|a, b| a.0.total_cmp(&b.0));
         let (mut at_ends, mut inside) = (0.0f64, 0.0f64);
@@ -167,13 +198,19 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
         );
         // Measured (rtol 1e-6, 1e-8): inside 6.4, 12.8 × tol over the whole run (mostly global
         // error; the cubic continuous output is of order 3 against the step's 5).
-        assert!(inside < 30.0 && inside < 20.0 * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
+        assert!(
+            inside < 30.0 && inside < 20.0 * at_ends.max(1.0),
+            "inside {inside}, ends {at_ends}"
+        );
         // At the collocation nodes the derivative is f up to the Newton tolerance (measured
         // ≤ 90 × tol); between nodes the defect of a stage-order-3 polynomial is O(h³)
         // (measured 450 and 5300 × tol; CVODE's interpolant: 390 and 1200 × tol).
         assert!(at_nodes < 500.0, "residual at nodes {at_nodes}");
         assert!(off_nodes < 2e4, "residual between nodes {off_nodes}");
-        assert!(fd_mismatch < 1e-6, "dense(t, 1) is not the derivative of dense(t, 0): {fd_mismatch:e}");
+        assert!(
+            fd_mismatch < 1e-6,
+            "dense(t, 1) is not the derivative of dense(t, 0): {fd_mismatch:e}"
+        );
     }
 }
 
@@ -200,8 +237,10 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
         let mut radau = Radau5::new(drr, 0.0, &y0, &options(rtol)).unwrap();
         let (steps, peaks) = drr_cycles(&mut radau, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let s = radau.stats();
-        let mut cvode = Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
-        let (cvode_steps, cvode_peaks) = drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let mut cvode =
+            Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
+        let (cvode_steps, cvode_peaks) =
+            drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let c = cvode.stats();
         println!(
             "DRR γ = 1e8, rtol {rtol:e}, t ∈ [0, 100]: Radau5 {steps} steps ({} attempts, {} rejected), {} RHS, \
@@ -274,12 +313,19 @@ fn failures_specific_to_radau5() {
     let e = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::LinearSolver, "{e}");
     // Adaptive steps escape the same singularity by halving h.
-    let mut adaptive = Radau5::new(Linear(gamma / h), 0.0, &[1.0], &Options { initial_step: Some(h), ..options.clone() }).unwrap();
+    let mut adaptive = Radau5::new(
+        Linear(gamma / h),
+        0.0,
+        &[1.0],
+        &Options { initial_step: Some(h), ..options.clone() },
+    )
+    .unwrap();
     adaptive.advance(0.1, Task::Normal).unwrap();
 
     // Newton limited to one iteration with a fixed, large step.
     let one_iteration = Options { max_nonlin_iters: Some(1), ..options.clone() };
-    let mut solver = Radau5::new(Oscillator, 0.0, &[0.0, 1.0], &one_iteration).unwrap().fixed_step(0.5);
+    let mut solver =
+        Radau5::new(Oscillator, 0.0, &[0.0, 1.0], &one_iteration).unwrap().fixed_step(0.5);
     assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::ConvergenceFailures);
 
     // Time too large for the steps the problem needs: t + h = t.

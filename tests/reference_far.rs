@@ -60,7 +60,8 @@ fn cvode_bdf_matches_the_far_table_at_rtol_1e_8() {
 /// deviation beyond the bound) and fails once with all of them.
 fn check_against_table(method: &str, rtol: f64) {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/reference/drr_cycles_far.json");
-    let table: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let table: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let rows = table["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 42);
     let keys = ["period", "ln_v_max", "t0"];
@@ -73,9 +74,16 @@ fn check_against_table(method: &str, rtol: f64) {
             continue;
         }
         checked += 1;
-        let (gamma, xi, epsilon) = (row["gamma"].as_f64().unwrap(), row["xi"].as_f64().unwrap(), row["epsilon"].as_f64().unwrap());
+        let (gamma, xi, epsilon) = (
+            row["gamma"].as_f64().unwrap(),
+            row["xi"].as_f64().unwrap(),
+            row["epsilon"].as_f64().unwrap(),
+        );
         let agreement = row["relative_agreement"]["period"].as_f64().unwrap();
-        assert!(agreement <= 1e-9, "γ = {gamma}: the two reference integrators disagree by {agreement}");
+        assert!(
+            agreement <= 1e-9,
+            "γ = {gamma}: the two reference integrators disagree by {agreement}"
+        );
         let point = format!("ξ={xi} ε={epsilon} γ={gamma:e}");
         let text = format!(
             r#"{{"name": "far", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
@@ -100,12 +108,20 @@ fn check_against_table(method: &str, rtol: f64) {
             let rel = (ours[k] - reference).abs() / reference.abs();
             worst[k] = worst[k].max(rel);
             if rel.is_nan() || rel >= bounds[k] {
-                failures.push(format!("{point}: {} = {} vs reference {reference} ({rel:.1e} > {:.0e})", keys[k], ours[k], bounds[k]));
+                failures.push(format!(
+                    "{point}: {} = {} vs reference {reference} ({rel:.1e} > {:.0e})",
+                    keys[k], ours[k], bounds[k]
+                ));
             }
         }
     }
     eprintln!("{method} rtol {rtol:e}: {checked} rows; worst relative deviations (period, ln v_max, t0): {:.1e}, {:.1e}, {:.1e}", worst[0], worst[1], worst[2]);
-    assert!(failures.is_empty(), "{method} at rtol {rtol:e}: {} failures of {checked} rows:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{method} at rtol {rtol:e}: {} failures of {checked} rows:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
 
 /// Radau5 at rtol 1e-4 from v = 1e30 (γ = 1e8, ξ = 2, ε = 5; a cell of `stickslip stress
@@ -123,9 +139,14 @@ fn radau5_from_v_1e30_at_rtol_1e_4_reaches_the_cycle() {
             rtol * 1e-2
         );
         let s = scene::parse(&text, "reference_far").unwrap();
-        let report = engine::run(&s, serde_json::Value::Null).unwrap_or_else(|e| panic!("{method}: {e} [{:?}]", e.kind));
+        let report = engine::run(&s, serde_json::Value::Null)
+            .unwrap_or_else(|e| panic!("{method}: {e} [{:?}]", e.kind));
         let c = report.cycle.unwrap();
-        c.values.unwrap_or_else(|| panic!("{method}: {:?} after {} cycles", c.status, c.cycles_computed)).period
+        c.values
+            .unwrap_or_else(|| {
+                panic!("{method}: {:?} after {} cycles", c.status, c.cycles_computed)
+            })
+            .period
     };
     let reference = run("rodas5p", 1e-10, "");
     let period = run("radau5", 1e-4, r#""initial": {"u": 0, "v": 1e30, "theta": 0},"#);

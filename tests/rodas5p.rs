@@ -5,13 +5,14 @@
 //! tests/radau5.rs.
 
 use stickslip::integrate::{
-    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, StepEvent, Task, Tolerance,
+    ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Radau5, Rodas5p, StepEvent, Task,
+    Tolerance,
 };
 use stickslip::model::{Drr, DrrParams, Friction};
 use stickslip::sundials::{CvodeSettings, Solver};
 
 mod common;
-use common::{Linear, NanAfter, Oscillator, Tan, VanDerPol, drr_cycles, observed_orders, sci};
+use common::{drr_cycles, observed_orders, sci, Linear, NanAfter, Oscillator, Tan, VanDerPol};
 
 /// A nonlinear system with every elementary differential of order ≤ 5 independent:
 /// y = φ(z) with z' = M z (rotation in (z1, z2), decay of z3) and φ(z) = (z1, z2 + z1²,
@@ -87,7 +88,11 @@ fn fixed_step<S: OdeSystem>(solver: Rodas5p<S>, tend: f64, h: f64) -> Vec<f64> {
 }
 
 fn fixed_options(tend: f64) -> Options {
-    Options { stop_time: Some(tend), max_steps: Some(100_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) }
+    Options {
+        stop_time: Some(tend),
+        max_steps: Some(100_000),
+        ..Options::new(1e-13, Tolerance::Scalar(1e-13))
+    }
 }
 
 fn rodas<S: OdeSystem>(system: S, y0: &[f64], tend: f64) -> Rodas5p<S> {
@@ -106,11 +111,21 @@ fn fixed_steps_converge_with_order_five_on_smooth_problems() {
         .collect();
     let oscillator: Vec<f64> = [0.5, 0.25, 0.125, 0.0625]
         .iter()
-        .map(|&h| distance(&fixed_step(rodas(Oscillator, &[0.0, 1.0], 2.0), 2.0, h), &[2f64.sin(), 2f64.cos()]))
+        .map(|&h| {
+            distance(
+                &fixed_step(rodas(Oscillator, &[0.0, 1.0], 2.0), 2.0, h),
+                &[2f64.sin(), 2f64.cos()],
+            )
+        })
         .collect();
     let warped: Vec<f64> = [0.4, 0.2, 0.1, 0.05]
         .iter()
-        .map(|&h| distance(&fixed_step(rodas(Warped, &Warped::exact(0.0), 2.0), 2.0, h), &Warped::exact(2.0)))
+        .map(|&h| {
+            distance(
+                &fixed_step(rodas(Warped, &Warped::exact(0.0), 2.0), 2.0, h),
+                &Warped::exact(2.0),
+            )
+        })
         .collect();
     // Non-autonomous: ∂f/∂t by a forward difference.
     let forced: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
@@ -119,12 +134,19 @@ fn fixed_steps_converge_with_order_five_on_smooth_problems() {
         .collect();
     // On linear problems only the stability function counts: it matches e^z to order 6 (the
     // tall-tree condition of order 6 holds), so the oscillator shows order 6.
-    for (name, errors, order) in
-        [("tan", tan, 5.0), ("oscillator", oscillator, 6.0), ("warped", warped, 5.0), ("forced", forced, 5.0)]
-    {
+    for (name, errors, order) in [
+        ("tan", tan, 5.0),
+        ("oscillator", oscillator, 6.0),
+        ("warped", warped, 5.0),
+        ("forced", forced, 5.0),
+    ] {
         let orders = observed_orders(&errors);
         println!("{name}: errors {}, observed orders {orders:.3?}", sci(&errors));
-        assert!(orders.iter().all(|p| (p - order).abs() < 0.35), "{name}: errors {}, orders {orders:?}", sci(&errors));
+        assert!(
+            orders.iter().all(|p| (p - order).abs() < 0.35),
+            "{name}: errors {}, orders {orders:?}",
+            sci(&errors)
+        );
     }
     // On an autonomous system the finite-difference ∂f/∂t is exactly zero: declaring the system
     // autonomous changes nothing but the number of right-hand-side calls.
@@ -137,8 +159,16 @@ fn fixed_steps_converge_with_order_five_on_smooth_problems() {
     assert_eq!(runs[0].state(), runs[1].state());
     let (a, b) = (runs[0].stats(), runs[1].stats());
     assert_eq!((a.steps, a.rhs_evals, a.jac_evals), (b.steps, b.rhs_evals, b.jac_evals));
-    assert_eq!(a.rhs_evals_jacobian, b.rhs_evals_jacobian + a.jac_evals, "one ∂f/∂t call per Jacobian");
-    assert_eq!(a.rhs_evals, 8 * a.steps + 1, "7 stages + f at the new point per step, f(t0, y0) once");
+    assert_eq!(
+        a.rhs_evals_jacobian,
+        b.rhs_evals_jacobian + a.jac_evals,
+        "one ∂f/∂t call per Jacobian"
+    );
+    assert_eq!(
+        a.rhs_evals,
+        8 * a.steps + 1,
+        "7 stages + f at the new point per step, f(t0, y0) once"
+    );
 }
 
 #[test]
@@ -148,10 +178,16 @@ fn fixed_steps_on_stiff_prothero_robinson_do_not_collapse() {
     for lambda in [1e3, 1e6] {
         let errors: Vec<f64> = [0.2, 0.1, 0.05, 0.025]
             .iter()
-            .map(|&h| (fixed_step(rodas(ProtheroRobinson(lambda), &[1.0], 1.0), 1.0, h)[0] - 1f64.cos()).abs())
+            .map(|&h| {
+                (fixed_step(rodas(ProtheroRobinson(lambda), &[1.0], 1.0), 1.0, h)[0] - 1f64.cos())
+                    .abs()
+            })
             .collect();
         let orders = observed_orders(&errors);
-        println!("Prothero–Robinson λ = {lambda:e}: errors {}, observed orders {orders:.3?}", sci(&errors));
+        println!(
+            "Prothero–Robinson λ = {lambda:e}: errors {}, observed orders {orders:.3?}",
+            sci(&errors)
+        );
         // Measured: λ = 1e3 errors 2.5e-8 … 1.6e-12 (orders 3.5, 3.9, 6.5 through the
         // transition hλ ~ 1); λ = 1e6 errors 3.3e-11 … 5.6e-14 (orders 3.10, 3.06, 3.04: the
         // error behaves like h³/λ, the same with an exact ∂f/∂t through the autonomised form).
@@ -165,17 +201,24 @@ fn van_der_pol_eps_1e6_against_the_test_set() {
     // Test Set for IVP Solvers (Mazzia & Magherini), problem VDPOL: reference at t = 2.
     let reference = [0.1706167732170483e1, -0.8928097010247975];
     for rtol in [1e-6, 1e-8, 1e-10] {
-        let options = Options { max_steps: Some(1_000_000), ..Options::new(rtol, Tolerance::Scalar(rtol)) };
-        let mut rodas = Rodas5p::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap().autonomous();
+        let options =
+            Options { max_steps: Some(1_000_000), ..Options::new(rtol, Tolerance::Scalar(rtol)) };
+        let mut rodas =
+            Rodas5p::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap().autonomous();
         assert_eq!(rodas.advance(2.0, Task::Normal).unwrap().event, StepEvent::Reached);
         assert_eq!(rodas.t(), 2.0);
         let mut radau = Radau5::new(VanDerPol(1e-6), 0.0, &[2.0, 0.0], &options).unwrap();
         radau.advance(2.0, Task::Normal).unwrap();
-        let mut cvode = Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options).unwrap();
+        let mut cvode =
+            Solver::cvode(VanDerPol(1e-6), CvodeSettings::default(), 0.0, &[2.0, 0.0], &options)
+                .unwrap();
         cvode.advance(2.0, Task::Normal).unwrap();
         let ours = rodas.state().to_vec();
-        let relative: Vec<f64> = (0..2).map(|i| ((ours[i] - reference[i]) / reference[i]).abs()).collect();
-        let rel = |y: &[f64]| (0..2).map(|i| ((y[i] - reference[i]) / reference[i]).abs()).fold(0.0, f64::max);
+        let relative: Vec<f64> =
+            (0..2).map(|i| ((ours[i] - reference[i]) / reference[i]).abs()).collect();
+        let rel = |y: &[f64]| {
+            (0..2).map(|i| ((y[i] - reference[i]) / reference[i]).abs()).fold(0.0, f64::max)
+        };
         let (s, r, c) = (rodas.stats(), radau.stats(), cvode.stats());
         println!(
             "rtol = atol = {rtol:e}: Rodas5P {} (relative errors {:.1e}, {:.1e}): {} steps ({} attempts, {} rejected), \
@@ -199,7 +242,10 @@ fn van_der_pol_eps_1e6_against_the_test_set() {
             c.lin_setups
         );
         assert_eq!((s.last_order, s.rhs_evals_jacobian, s.nonlin_iters), (5, 0, 0));
-        assert!(s.step_attempts == s.steps + s.err_test_fails && s.lin_setups == s.step_attempts, "{s:?}");
+        assert!(
+            s.step_attempts == s.steps + s.err_test_fails && s.lin_setups == s.step_attempts,
+            "{s:?}"
+        );
         assert_eq!(s.jac_evals, s.steps, "one Jacobian per step, kept across rejections: {s:?}");
         assert_eq!(
             s.rhs_evals,
@@ -219,7 +265,8 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
     for rtol in [1e-6, 1e-8] {
         let atol = rtol;
         let scale = |y: f64| rtol * y.abs() + atol;
-        let options = Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
+        let options =
+            Options { max_steps: Some(100_000), ..Options::new(rtol, Tolerance::Scalar(atol)) };
         let mut solver = Rodas5p::new(vdp, 0.0, &[2.0, 0.0], &options).unwrap();
         let (mut samples, mut prev) = (Vec::new(), 0.0);
         let (mut defect, mut fd_mismatch) = (0.0f64, 0.0f64);
@@ -227,11 +274,18 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
         while solver.t() < 3.0 {
             let step = solver.advance(3.0, Task::OneStep).unwrap();
             let end = solver.state().to_vec();
-            assert_eq!(solver.dense(step.t, 0).unwrap(), &end[..], "the continuous output ends at the step end");
+            assert_eq!(
+                solver.dense(step.t, 0).unwrap(),
+                &end[..],
+                "the continuous output ends at the step end"
+            );
             // ... and starts at the previous step end (up to rounding in θ).
             let start = solver.dense(prev, 0).unwrap().to_vec();
             for i in 0..2 {
-                assert!((start[i] - previous_end[i]).abs() <= 1e-13 * (1.0 + previous_end[i].abs()), "{start:?}");
+                assert!(
+                    (start[i] - previous_end[i]).abs() <= 1e-13 * (1.0 + previous_end[i].abs()),
+                    "{start:?}"
+                );
             }
             previous_end = end.clone();
             samples.push((step.t, end, true));
@@ -242,7 +296,8 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
                 let d = solver.dense(t, 1).unwrap().to_vec();
                 let mut f = [0.0; 2];
                 vdp.rhs(t, &y, &mut f);
-                defect = defect.max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
+                defect = defect
+                    .max((0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max));
                 samples.push((t, y.clone(), false));
                 // dense(t, k + 1) is the derivative of dense(t, k).
                 let delta = 1e-5 * h;
@@ -260,7 +315,8 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
             prev = step.t;
         }
         // A much tighter run, interpolating at the same times (Normal task).
-        let tight = Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
+        let tight =
+            Options { max_steps: Some(1_000_000), ..Options::new(1e-13, Tolerance::Scalar(1e-13)) };
         let mut reference = Radau5::new(vdp, 0.0, &[2.0, 0.0], &tight).unwrap();
         samples.sort_by(|a, b| a.0.total_cmp(&b.0));
         let (mut at_ends, mut inside) = (0.0f64, 0.0f64);
@@ -282,9 +338,15 @@ fn dense_output_matches_a_tight_run_and_the_right_hand_side() {
         // Measured (rtol 1e-6, 1e-8): inside 1.74, 2.60 × tol against 1.63, 2.53 at the step ends
         // (the order-4 continuous output adds almost nothing to the global error); the defect
         // of the interpolant 35 and 94 × tol (Radau5's cubic: 450 and 5300 between its nodes).
-        assert!(inside < 10.0 && inside < 2.0 * at_ends.max(1.0), "inside {inside}, ends {at_ends}");
+        assert!(
+            inside < 10.0 && inside < 2.0 * at_ends.max(1.0),
+            "inside {inside}, ends {at_ends}"
+        );
         assert!(defect < 1e3, "defect {defect}");
-        assert!(fd_mismatch < 1e-5, "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}");
+        assert!(
+            fd_mismatch < 1e-5,
+            "dense(t, k + 1) is not the derivative of dense(t, k): {fd_mismatch:e}"
+        );
     }
 }
 
@@ -304,7 +366,12 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
             Err(e) => break e,
         }
     };
-    println!("DRR γ = 1e8 without re-basing: {:?} at t = {} after {} steps", error.kind, error.t, plain.stats().steps);
+    println!(
+        "DRR γ = 1e8 without re-basing: {:?} at t = {} after {} steps",
+        error.kind,
+        error.t,
+        plain.stats().steps
+    );
     assert_eq!(error.kind, ErrorKind::StepUnderflow, "{error}");
     assert!(error.t > 5.0 && error.t < 5.1 && error.state.iter().all(|v| v.is_finite()), "{error}");
 
@@ -313,10 +380,13 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
         let (steps, peaks) = drr_cycles(&mut rodas, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let s = rodas.stats();
         let mut radau = Radau5::new(drr, 0.0, &y0, &options(rtol)).unwrap();
-        let (radau_steps, radau_peaks) = drr_cycles(&mut radau, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let (radau_steps, radau_peaks) =
+            drr_cycles(&mut radau, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let r = radau.stats();
-        let mut cvode = Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
-        let (cvode_steps, cvode_peaks) = drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
+        let mut cvode =
+            Solver::cvode(drr, CvodeSettings::default(), 0.0, &y0, &options(rtol)).unwrap();
+        let (cvode_steps, cvode_peaks) =
+            drr_cycles(&mut cvode, 100.0).unwrap_or_else(|e| panic!("{e}"));
         let c = cvode.stats();
         println!(
             "DRR γ = 1e8, rtol {rtol:e}, t ∈ [0, 100]: Rodas5P {steps} steps ({} attempts, {} rejected), {} RHS, \
@@ -395,7 +465,8 @@ fn failures_specific_to_rodas5p() {
     // A singular matrix: y' = λy with λ = 1/(γh) exactly (fixed step, no escape).
     let h = 0.5;
     let gamma = 0.21193756319429014;
-    let mut solver = Rodas5p::new(Linear(1.0 / (gamma * h)), 0.0, &[1.0], &options).unwrap().fixed_step(h);
+    let mut solver =
+        Rodas5p::new(Linear(1.0 / (gamma * h)), 0.0, &[1.0], &options).unwrap().fixed_step(h);
     let e = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(e.kind, ErrorKind::LinearSolver, "{e}");
     // Adaptive steps escape the same singularity by halving h.
@@ -404,7 +475,8 @@ fn failures_specific_to_rodas5p() {
     adaptive.advance(0.1, Task::Normal).unwrap();
 
     // Repeated error-test failures: a tiny budget of rejections with a huge first step.
-    let strict = Options { max_err_test_fails: Some(1), initial_step: Some(10.0), ..options.clone() };
+    let strict =
+        Options { max_err_test_fails: Some(1), initial_step: Some(10.0), ..options.clone() };
     let mut solver = Rodas5p::new(Tan, 0.0, &[0.0], &strict).unwrap();
     assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::ErrorTestFailures);
     // ... or a minimum step that is too large.
@@ -433,7 +505,10 @@ fn failures_specific_to_rodas5p() {
             jac.set(0, 0, f64::INFINITY);
         }
     }
-    let e = Rodas5p::new(BadJacobian, 0.0, &[1.0], &options).unwrap().advance(1.0, Task::Normal).unwrap_err();
+    let e = Rodas5p::new(BadJacobian, 0.0, &[1.0], &options)
+        .unwrap()
+        .advance(1.0, Task::Normal)
+        .unwrap_err();
     assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
 
     // A negative fixed step.
@@ -441,16 +516,22 @@ fn failures_specific_to_rodas5p() {
     assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
 }
 
-
 /// A cell of `stickslip stress` (PRZ law, rtol 1e-6) with Rodas5P finds the cycle that Radau5
 /// finds on the same scene, within the grid's 1e3·rtol.
-fn prz_cell_agrees_with_radau5(gamma: f64, xi: f64, epsilon: f64, eta: f64, start: Option<[f64; 3]>) {
+fn prz_cell_agrees_with_radau5(
+    gamma: f64,
+    xi: f64,
+    epsilon: f64,
+    eta: f64,
+    start: Option<[f64; 3]>,
+) {
     use stickslip::analysis::cycle::CycleStatus;
     use stickslip::model::StateLaw;
     use stickslip::scene::Method;
     use stickslip::stress::{run_cell, Cell, Outcome};
     let period = |method| {
-        let cell = Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law: StateLaw::Prz, eta };
+        let cell =
+            Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law: StateLaw::Prz, eta };
         match run_cell(&cell) {
             Outcome::Ok { status: CycleStatus::Periodic, period: Some(p) } => p,
             other => panic!("{}: {other:?}", cell.key()),
@@ -490,11 +571,16 @@ fn prz_deep_arrest_at_gamma_1e12() {
 fn nonfinite_stage_far_above_the_arrest_floor_steps_down_to_it() {
     use stickslip::integrate::{Clock, Time};
     use stickslip::model::StateLaw;
-    let params = DrrParams { state_law: StateLaw::Prz, ..DrrParams::new(1e12, 0.7, 10.0, Friction::Log) };
+    let params =
+        DrrParams { state_law: StateLaw::Prz, ..DrrParams::new(1e12, 0.7, 10.0, Friction::Log) };
     let y0 = [1045.0786662477906, -390.3242177672276, -324.7411122203327];
     let floor = -(0.7 * y0[0] + y0[2]);
-    let options = Options { initial_step: Some(3.482098609744186e-14), ..Options::new(1e-6, Tolerance::Scalar(1e-8)) };
-    let mut rodas = Rodas5p::new(Drr::new(params), 6.61760292161855e-14, &y0, &options).unwrap().autonomous();
+    let options = Options {
+        initial_step: Some(3.482098609744186e-14),
+        ..Options::new(1e-6, Tolerance::Scalar(1e-8))
+    };
+    let mut rodas =
+        Rodas5p::new(Drr::new(params), 6.61760292161855e-14, &y0, &options).unwrap().autonomous();
     let mut clock = Clock::new(&mut rodas, Time::new(2296.05));
     let mut steps = 0;
     while (clock.state()[1] - floor).abs() > 1e-3 {
@@ -503,7 +589,13 @@ fn nonfinite_stage_far_above_the_arrest_floor_steps_down_to_it() {
         assert!(steps < 1000, "not on the floor after 1000 steps: {:?}", clock.state());
     }
     let y = clock.state().to_vec();
-    assert!(clock.now().since(Time::new(2296.05)) < 1e-150, "the fall is a layer of 1e-193 time units");
-    assert!((y[0] - y0[0]).abs() < 1e-12 * y0[0] && (y[2] - y0[2]).abs() < 1e-9, "{y:?} from {y0:?}");
+    assert!(
+        clock.now().since(Time::new(2296.05)) < 1e-150,
+        "the fall is a layer of 1e-193 time units"
+    );
+    assert!(
+        (y[0] - y0[0]).abs() < 1e-12 * y0[0] && (y[2] - y0[2]).abs() < 1e-9,
+        "{y:?} from {y0:?}"
+    );
     assert!(clock.integrator().stats().nonfinite_rhs > 0, "the start has a non-finite stage");
 }

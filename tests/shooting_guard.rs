@@ -10,7 +10,11 @@ use stickslip::{engine, scene};
 
 /// The earthquake case (ξ = 0.8, ε = 1) under the ageing law at `gamma`, shooting with `method`.
 fn ageing_earthquake(gamma: f64, method: &str) -> scene::Scene {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/earthquake-ageing.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/earthquake-ageing.json"
+    ))
+    .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["model"]["gamma"] = gamma.into();
     v["solver"]["method"] = method.into();
@@ -45,13 +49,23 @@ fn cvode_ageing_multipliers_at_gamma_1e8_agree_with_radau5() {
     // multiplier 0.0414). Radau5 gives 0.0544152 (DP), 0.0544180 by the map's differences.
     let s = ageing_earthquake(1e8, "cvode-bdf");
     let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
-    assert!(orbit.trivial_multiplier_error > 0.5, "the failure this test is about is gone: {orbit:?}");
+    assert!(
+        orbit.trivial_multiplier_error > 0.5,
+        "the failure this test is about is gone: {orbit:?}"
+    );
     assert_ne!(orbit.multipliers_source, MultiplierSource::SectionJacobian);
     match orbit.multipliers_source {
-        MultiplierSource::Unresolved => assert!(orbit.stable.is_none() && orbit.nontrivial().is_empty(), "{orbit:?}"),
+        MultiplierSource::Unresolved => {
+            assert!(orbit.stable.is_none() && orbit.nontrivial().is_empty(), "{orbit:?}")
+        }
         _ => {
             let mu = orbit.nontrivial()[0];
-            assert!((mu.re - 0.054418).abs() < 1e-3 && mu.im == 0.0, "{:?} ({:?})", orbit.multipliers, orbit.multipliers_note);
+            assert!(
+                (mu.re - 0.054418).abs() < 1e-3 && mu.im == 0.0,
+                "{:?} ({:?})",
+                orbit.multipliers,
+                orbit.multipliers_note
+            );
             assert_eq!(orbit.stable, Some(true));
         }
     }
@@ -72,7 +86,12 @@ fn forcing_the_check_on_a_resolved_orbit_keeps_its_numbers() {
     let x = [plain.section_point[0], plain.section_point[2]];
     let mut integ = engine::variational_integrator(drr, &s.solver, &[x[0], 0.0, x[1]]).unwrap();
     let checked = shooting::newton(integ.as_mut(), &drr, x, 1, &settings).unwrap().orbit.unwrap();
-    assert_eq!(checked.multipliers_source, MultiplierSource::SectionJacobianChecked, "{:?}", checked.multipliers_note);
+    assert_eq!(
+        checked.multipliers_source,
+        MultiplierSource::SectionJacobianChecked,
+        "{:?}",
+        checked.multipliers_note
+    );
     let c = checked.multipliers_check.unwrap();
     assert!(c.differences_spread < 1e-4 && c.section_jacobian_difference < 1e-4, "{c:?}");
     assert_eq!(checked.stable, Some(true));

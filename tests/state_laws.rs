@@ -41,8 +41,10 @@ fn ageing_earthquake_cycle_agrees_across_independent_integrators() {
     // failed in the deep stick, v ≈ 1e-9 … 1e-14, until it got a fresh Jacobian at every
     // step) and the three one-step methods agree.
     let text = scene_file("earthquake-ageing.json");
-    let reports: Vec<Report> =
-        ["radau5", "rodas5p", "extrapolation", "cvode-bdf"].iter().map(|m| run(&with_method(&text, m))).collect();
+    let reports: Vec<Report> = ["radau5", "rodas5p", "extrapolation", "cvode-bdf"]
+        .iter()
+        .map(|m| run(&with_method(&text, m)))
+        .collect();
     let periods: Vec<f64> = reports.iter().map(period).collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
     let r = &reports[0];
@@ -60,21 +62,28 @@ fn ageing_cycle_agrees_across_cvode_radau5_and_rodas5p_at_gamma_1e3() {
     // stick (docs/state-laws.md).
     let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.8, "epsilon": 1.0, "state_law": "ageing"},
                    "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#;
-    let periods: Vec<f64> = ["cvode-bdf", "radau5", "rodas5p"].iter().map(|m| period(&run(&with_method(text, m)))).collect();
+    let periods: Vec<f64> = ["cvode-bdf", "radau5", "rodas5p"]
+        .iter()
+        .map(|m| period(&run(&with_method(text, m))))
+        .collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
 }
 
 #[test]
 fn damped_ageing_earthquake_agrees_across_integrators_and_damping_shortens_the_cycle() {
     let text = scene_file("earthquake-ageing-damped.json");
-    let reports: Vec<Report> = ["radau5", "rodas5p"].iter().map(|m| run(&with_method(&text, m))).collect();
+    let reports: Vec<Report> =
+        ["radau5", "rodas5p"].iter().map(|m| run(&with_method(&text, m))).collect();
     let periods: Vec<f64> = reports.iter().map(period).collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
     assert_eq!(reports[0].model.radiation_damping, 1e-8);
     let undamped = period(&run(&scene_file("earthquake-ageing.json")));
     let v_max = reports[0].cycle.as_ref().unwrap().values.unwrap().v_max;
     // η v_max = O(1) at the peak: the damping caps the slip speed and shortens the cycle.
-    assert!(periods[0] < 0.9 * undamped && (1.0..20.0).contains(&(1e-8 * v_max)), "{periods:?} vs {undamped}, v_max {v_max:e}");
+    assert!(
+        periods[0] < 0.9 * undamped && (1.0..20.0).contains(&(1e-8 * v_max)),
+        "{periods:?} vs {undamped}, v_max {v_max:e}"
+    );
 }
 
 #[test]
@@ -93,7 +102,13 @@ fn shooting_and_continuation_run_with_the_ageing_law_and_damping() {
                    "analyses": ["shooting", {"continuation": {"parameter": "epsilon", "to": 1.1, "points": 3}}]}"#;
     let r = run(text);
     let shot = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period;
-    let cycle = period(&run(&with_method(&text.replace(r#""shooting", {"continuation": {"parameter": "epsilon", "to": 1.1, "points": 3}}"#, r#""cycle""#), "rodas5p")));
+    let cycle = period(&run(&with_method(
+        &text.replace(
+            r#""shooting", {"continuation": {"parameter": "epsilon", "to": 1.1, "points": 3}}"#,
+            r#""cycle""#,
+        ),
+        "rodas5p",
+    )));
     assert!((shot - cycle).abs() < 1e-7 * cycle, "shooting {shot} vs cycle (rodas5p) {cycle}");
     let curve = r.continuation.as_ref().unwrap();
     assert_eq!(curve.points.len(), 3, "{curve:?}");
@@ -125,19 +140,34 @@ fn parse_error(model: &str, analyses: &str) -> scene::SceneError {
 
 #[test]
 fn scene_fields_are_validated_naming_the_field_and_the_valid_values() {
-    let e = parse_error(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "aging"}"#, r#"["hopf"]"#);
+    let e = parse_error(
+        r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "aging"}"#,
+        r#"["hopf"]"#,
+    );
     assert_eq!(e.field, "model.state_law");
     assert!(e.message.contains("\"slip\", \"ageing\", \"prz\""), "{e}");
-    let e = parse_error(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "radiation_damping": -0.1}"#, r#"["hopf"]"#);
+    let e = parse_error(
+        r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "radiation_damping": -0.1}"#,
+        r#"["hopf"]"#,
+    );
     assert_eq!(e.field, "model.radiation_damping");
-    let dimensional = r#""dimensional": {"k": 1e6, "mass": 1e3, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9"#;
+    let dimensional =
+        r#""dimensional": {"k": 1e6, "mass": 1e3, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9"#;
     let e = parse_error(&format!(r#"{{{dimensional}, "shear_modulus": 3e10}}}}"#), r#"["hopf"]"#);
     assert_eq!(e.field, "model.dimensional.shear_wave_speed");
-    let e = parse_error(&format!(r#"{{{dimensional}, "shear_modulus": 3e10, "shear_wave_speed": 3e3}}, "radiation_damping": 1e-8}}"#), r#"["hopf"]"#);
+    let e = parse_error(
+        &format!(
+            r#"{{{dimensional}, "shear_modulus": 3e10, "shear_wave_speed": 3e3}}, "radiation_damping": 1e-8}}"#
+        ),
+        r#"["hopf"]"#,
+    );
     assert_eq!(e.field, "model.radiation_damping");
     for (model, field) in [
         (r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "ageing"}"#, "model.state_law"),
-        (r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "radiation_damping": 0.1}"#, "model.radiation_damping"),
+        (
+            r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "radiation_damping": 0.1}"#,
+            "model.radiation_damping",
+        ),
     ] {
         // "noise" (its drift is Drr's right-hand side; tests/noise.rs) and "lyapunov" (the
         // Jacobian of any law; `lyapunov_runs_with_every_state_law` below) run with every
@@ -158,7 +188,11 @@ fn radiation_damping_from_the_shear_modulus_and_wave_speed() {
     let s = scene::parse(text, "test").unwrap();
     assert!((s.params.eta - 1e-8).abs() < 1e-22, "{}", s.params.eta);
     assert_eq!(s.params.state_law, StateLaw::Prz);
-    let plain = scene::parse(r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 1}, "analyses": ["hopf"]}"#, "test").unwrap();
+    let plain = scene::parse(
+        r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 1}, "analyses": ["hopf"]}"#,
+        "test",
+    )
+    .unwrap();
     assert_eq!((plain.params.state_law, plain.params.eta), (StateLaw::Slip, 0.0));
 }
 
@@ -170,13 +204,17 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
                  "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": {analyses}}}"#
         )
     };
-    let curve = run(&scene(0.0, r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.0005, "points": 2}}]"#));
+    let curve = run(&scene(
+        0.0,
+        r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.0005, "points": 2}}]"#,
+    ));
     let c = curve.continuation.as_ref().unwrap();
     assert!(c.completed, "{c:?}");
     let end = c.points.last().unwrap();
     assert_eq!(end.value, 0.0005);
     let direct = run(&scene(0.0005, r#"["shooting"]"#));
-    let (a, b) = (end.orbit.period, direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period);
+    let (a, b) =
+        (end.orbit.period, direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period);
     assert!((a - b).abs() < 1e-7 * b, "continued {a} vs direct {b}");
     // η v_max = O(1) at γ = 1e3 (v_max ≈ 8e3): the period drops from 26.99 to 19.41.
     assert!(b < 0.8 * c.points[0].orbit.period, "{b} vs {}", c.points[0].orbit.period);

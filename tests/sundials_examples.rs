@@ -40,7 +40,10 @@ fn counter(text: &str, label: &str) -> f64 {
 
 fn assert_within_10_percent(what: &str, ours: u64, theirs: f64) {
     let ratio = ours as f64 / theirs;
-    assert!((0.9..=1.1).contains(&ratio), "{what}: ours {ours}, SUNDIALS' example {theirs} (ratio {ratio:.3})");
+    assert!(
+        (0.9..=1.1).contains(&ratio),
+        "{what}: ours {ours}, SUNDIALS' example {theirs} (ratio {ratio:.3})"
+    );
 }
 
 #[test]
@@ -56,8 +59,16 @@ fn cvode_reproduces_cv_roberts_dns() {
     }
     assert_within_10_percent("steps", run.stats.steps, counter(&out, "Steps"));
     assert_within_10_percent("RHS evaluations", run.stats.rhs_evals, counter(&out, "RHS fn evals"));
-    assert_within_10_percent("Jacobian evaluations", run.stats.jac_evals, counter(&out, "Jac fn evals"));
-    assert_within_10_percent("root evaluations", run.stats.root_evals, counter(&out, "Root fn evals"));
+    assert_within_10_percent(
+        "Jacobian evaluations",
+        run.stats.jac_evals,
+        counter(&out, "Jac fn evals"),
+    );
+    assert_within_10_percent(
+        "root evaluations",
+        run.stats.root_evals,
+        counter(&out, "Root fn evals"),
+    );
 }
 
 #[test]
@@ -77,7 +88,15 @@ fn arkode_reproduces_ark_robertson_root() {
     }
     assert_within_10_percent("steps", run.stats.steps, counter(&out, "Internal solver steps"));
     assert_within_10_percent("step attempts", run.stats.step_attempts, counter(&out, "attempted"));
-    assert_within_10_percent("implicit RHS evaluations", run.stats.rhs_evals, counter(&out, "Fi ="));
-    assert_within_10_percent("Jacobian evaluations", run.stats.jac_evals, counter(&out, "Jacobian evaluations"));
+    assert_within_10_percent(
+        "implicit RHS evaluations",
+        run.stats.rhs_evals,
+        counter(&out, "Fi ="),
+    );
+    assert_within_10_percent(
+        "Jacobian evaluations",
+        run.stats.jac_evals,
+        counter(&out, "Jacobian evaluations"),
+    );
     assert_eq!(run.stats.rhs_evals_explicit, 0, "fully implicit: no explicit RHS");
 }

@@ -26,7 +26,14 @@ fn scene(d: &Path) -> PathBuf {
 
 fn sweep(scene: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     Command::new(EXE)
-        .args(["sweep", scene.to_str().unwrap(), "--param", "epsilon=0.72:1.2:7", "--param", "gamma=1e1:1e4:3:log"])
+        .args([
+            "sweep",
+            scene.to_str().unwrap(),
+            "--param",
+            "epsilon=0.72:1.2:7",
+            "--param",
+            "gamma=1e1:1e4:3:log",
+        ])
         .args(["--out", out.to_str().unwrap()])
         .args(extra)
         .output()
@@ -61,13 +68,24 @@ fn a_killed_and_resumed_sweep_yields_the_uninterrupted_rows() {
     std::fs::write(&killed, lines[..8].join("\n") + "\n" + partial).unwrap();
     let resumed = sweep(&s, &killed, &["--resume", "--threads", "1"]);
     assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
-    assert!(String::from_utf8_lossy(&resumed.stdout).contains("13 points run"), "{}", String::from_utf8_lossy(&resumed.stdout));
+    assert!(
+        String::from_utf8_lossy(&resumed.stdout).contains("13 points run"),
+        "{}",
+        String::from_utf8_lossy(&resumed.stdout)
+    );
     assert_eq!(sorted_rows(&killed), reference, "nothing lost, nothing repeated, same rows");
 
     // A real kill of a running sweep, then resume.
     let real = d.join("real.jsonl");
     let mut child = Command::new(EXE)
-        .args(["sweep", s.to_str().unwrap(), "--param", "epsilon=0.72:1.2:7", "--param", "gamma=1e1:1e4:3:log"])
+        .args([
+            "sweep",
+            s.to_str().unwrap(),
+            "--param",
+            "epsilon=0.72:1.2:7",
+            "--param",
+            "gamma=1e1:1e4:3:log",
+        ])
         .args(["--out", real.to_str().unwrap(), "--threads", "1"])
         .spawn()
         .unwrap();
@@ -90,14 +108,28 @@ fn shards_merge_into_the_full_sweep() {
         assert!(sweep(&s, part, &["--shard", &format!("{}/3", k + 1)]).status.success());
     }
     let merged = d.join("merged.jsonl");
-    let mut args = vec!["merge".to_string(), "--out".into(), merged.display().to_string(), "--total".into(), "21".into()];
+    let mut args = vec![
+        "merge".to_string(),
+        "--out".into(),
+        merged.display().to_string(),
+        "--total".into(),
+        "21".into(),
+    ];
     args.extend(parts.iter().map(|p| p.display().to_string()));
     assert!(Command::new(EXE).args(&args).output().unwrap().status.success());
-    let merged_rows: Vec<String> = std::fs::read_to_string(&merged).unwrap().lines().map(String::from).collect();
+    let merged_rows: Vec<String> =
+        std::fs::read_to_string(&merged).unwrap().lines().map(String::from).collect();
     assert_eq!(merged_rows, sorted_rows(&full));
     // A missing shard is reported.
     let out = Command::new(EXE)
-        .args(["merge", "--out", d.join("m2").to_str().unwrap(), "--total", "21", parts[0].to_str().unwrap()])
+        .args([
+            "merge",
+            "--out",
+            d.join("m2").to_str().unwrap(),
+            "--total",
+            "21",
+            parts[0].to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
@@ -114,11 +146,22 @@ fn a_sweep_over_the_radiation_damping_sets_eta() {
     std::fs::write(&s, r#"{"name": "eta", "model": {"gamma": 100, "xi": 0.7, "epsilon": 1.2, "state_law": "ageing"}, "analyses": ["hopf"]}"#).unwrap();
     let out = d.join("eta.jsonl");
     let r = Command::new(EXE)
-        .args(["sweep", s.to_str().unwrap(), "--param", "radiation_damping=0:0.2:3", "--out", out.to_str().unwrap()])
+        .args([
+            "sweep",
+            s.to_str().unwrap(),
+            "--param",
+            "radiation_damping=0:0.2:3",
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let rows: Vec<serde_json::Value> = std::fs::read_to_string(&out).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let rows: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(rows.len(), 3);
     let (gamma, xi) = (100.0f64, 0.7f64);
     let g = gamma * gamma;
@@ -137,7 +180,12 @@ fn bad_sweep_arguments_exit_2() {
     let d = dir("bad");
     let s = scene(&d);
     let out = d.join("o.jsonl");
-    for args in [["--param", "delta=1:2:3"], ["--param", "epsilon=1:2"], ["--param", "gamma=0:1e3:3:log"], ["--shard", "4/3"]] {
+    for args in [
+        ["--param", "delta=1:2:3"],
+        ["--param", "epsilon=1:2"],
+        ["--param", "gamma=0:1e3:3:log"],
+        ["--shard", "4/3"],
+    ] {
         let mut all = vec!["sweep", s.to_str().unwrap(), "--out", out.to_str().unwrap()];
         if args[0] == "--shard" {
             all.extend(["--param", "epsilon=1:2:2"]);

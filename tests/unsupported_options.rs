@@ -48,7 +48,9 @@ fn options_a_method_does_not_have_are_errors() {
     }
     // What each method does have is accepted.
     assert!(Extrapolation::new(VanDerPol(1e-3), 0.0, &y0, &with(|o| o.max_order = Some(8))).is_ok());
-    assert!(Radau5::new(VanDerPol(1e-3), 0.0, &y0, &with(|o| o.max_nonlin_iters = Some(10))).is_ok());
+    assert!(
+        Radau5::new(VanDerPol(1e-3), 0.0, &y0, &with(|o| o.max_nonlin_iters = Some(10))).is_ok()
+    );
 }
 
 /// VDPOL (ε = 1e-6) to t = 2 at rtol 1e-8 in one call: thousands of steps, more than SUNDIALS'
@@ -60,7 +62,17 @@ fn the_default_step_budget_finishes_a_whole_stiff_integration() {
     let system = || VanDerPol(1e-6);
     let mut solvers: Vec<Box<dyn Integrator>> = vec![
         Box::new(Solver::cvode(system(), CvodeSettings::default(), 0.0, &y0, &options).unwrap()),
-        Box::new(Solver::arkstep(system(), ArkMethod::default(), ArkSettings::default(), 0.0, &y0, &options).unwrap()),
+        Box::new(
+            Solver::arkstep(
+                system(),
+                ArkMethod::default(),
+                ArkSettings::default(),
+                0.0,
+                &y0,
+                &options,
+            )
+            .unwrap(),
+        ),
         Box::new(Radau5::new(system(), 0.0, &y0, &options).unwrap()),
         Box::new(Rodas5p::new(system(), 0.0, &y0, &options).unwrap()),
         Box::new(Extrapolation::new(system(), 0.0, &y0, &options).unwrap()),
@@ -69,12 +81,23 @@ fn the_default_step_budget_finishes_a_whole_stiff_integration() {
         solver.advance(2.0, Task::Normal).unwrap_or_else(|e| panic!("{}: {e}", solver.name()));
         let reference = [0.1706167732170483e1, -0.8928097010247975e0];
         let error = (solver.state()[0] - reference[0]).abs() / reference[0].abs();
-        assert!(error < 1e-5, "{}: y1 = {} against the Test Set's {}", solver.name(), solver.state()[0], reference[0]);
+        assert!(
+            error < 1e-5,
+            "{}: y1 = {} against the Test Set's {}",
+            solver.name(),
+            solver.state()[0],
+            reference[0]
+        );
     }
     // CVODE, Radau5 and Rodas5P take more than SUNDIALS' 500 steps.
     for solver in &solvers[..4] {
         if solver.name() != "ARKStep" {
-            assert!(solver.stats().steps > 500, "{}: {} steps", solver.name(), solver.stats().steps);
+            assert!(
+                solver.stats().steps > 500,
+                "{}: {} steps",
+                solver.name(),
+                solver.stats().steps
+            );
         }
     }
     let limited = Options { max_steps: Some(500), ..options };

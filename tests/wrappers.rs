@@ -6,7 +6,9 @@ use stickslip::integrate::{
 };
 use stickslip::model::robertson::Robertson;
 use stickslip::robertson_examples as robertson;
-use stickslip::sundials::{self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver};
+use stickslip::sundials::{
+    self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
+};
 
 mod common;
 use common::{Oscillator, ProtheroRobinson};
@@ -82,7 +84,8 @@ fn all_methods(system: fn() -> Decay, options: &Options) -> Vec<Solver<Decay>> {
         Solver::cvode(system(), bdf, 0.0, &y0, options).unwrap(),
         Solver::cvode(system(), adams, 0.0, &y0, options).unwrap(),
         Solver::arkstep(system(), ArkMethod::default(), ark, 0.0, &y0, options).unwrap(),
-        Solver::arkstep(system(), ArkMethod::Erk(ErkTable::default()), ark, 0.0, &y0, options).unwrap(),
+        Solver::arkstep(system(), ArkMethod::Erk(ErkTable::default()), ark, 0.0, &y0, options)
+            .unwrap(),
     ]
 }
 
@@ -103,7 +106,11 @@ fn every_method_solves_decay_to_tolerance() {
         let error = (solver.state()[0] - (-2.0f64).exp()).abs();
         assert!(error < 1e-8, "{}: error {error:e}", solver.name());
         let stats = solver.stats();
-        assert!(stats.steps > 0 && stats.step_attempts >= stats.steps, "{}: {stats:?}", solver.name());
+        assert!(
+            stats.steps > 0 && stats.step_attempts >= stats.steps,
+            "{}: {stats:?}",
+            solver.name()
+        );
         assert!(stats.rhs_evals + stats.rhs_evals_explicit > 0);
         assert!(stats.last_order >= 1, "{}: order {}", solver.name(), stats.last_order);
     }
@@ -116,12 +123,17 @@ fn adams_and_erk_solve_an_oscillator() {
     let erk = ArkMethod::Erk(ErkTable::from_name("DORMAND_PRINCE_7_4_5").unwrap());
     let mut solvers = vec![
         Solver::cvode(Oscillator, adams, 0.0, &[0.0, 1.0], &options).unwrap(),
-        Solver::arkstep(Oscillator, erk, ArkSettings::default(), 0.0, &[0.0, 1.0], &options).unwrap(),
+        Solver::arkstep(Oscillator, erk, ArkSettings::default(), 0.0, &[0.0, 1.0], &options)
+            .unwrap(),
     ];
     for solver in &mut solvers {
         solver.advance(10.0, Task::Normal).unwrap();
         let (x, v) = (solver.state()[0], solver.state()[1]);
-        assert!((x - 10f64.sin()).abs() < 1e-7 && (v - 10f64.cos()).abs() < 1e-7, "{}", solver.name());
+        assert!(
+            (x - 10f64.sin()).abs() < 1e-7 && (v - 10f64.cos()).abs() < 1e-7,
+            "{}",
+            solver.name()
+        );
     }
     assert_eq!(solvers[1].stats().jac_evals, 0, "an explicit method builds no Jacobian");
 }
@@ -131,9 +143,16 @@ fn imex_splits_stiff_and_nonstiff_parts() {
     let (implicit, explicit) = sundials::default_imex_tables();
     let mut options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     options.max_steps = Some(100_000);
-    let mut solver =
-        Solver::arkstep_imex(ProtheroRobinson(1e6), implicit, explicit, ArkSettings::default(), 0.0, &[1.0], &options)
-            .unwrap();
+    let mut solver = Solver::arkstep_imex(
+        ProtheroRobinson(1e6),
+        implicit,
+        explicit,
+        ArkSettings::default(),
+        0.0,
+        &[1.0],
+        &options,
+    )
+    .unwrap();
     solver.advance(3.0, Task::Normal).unwrap();
     assert!((solver.state()[0] - 3f64.cos()).abs() < 1e-7);
     let stats = solver.stats();
@@ -149,8 +168,15 @@ fn dirk_tables_are_selectable_by_name() {
     assert!(DirkTable::from_name("NO_SUCH_TABLE").is_none());
     let table = DirkTable::from_name("ESDIRK547L2SA2_7_4_5").unwrap();
     assert_eq!(table.name(), "ESDIRK547L2SA2_7_4_5");
-    let mut solver = Solver::arkstep(Decay(50.0), ArkMethod::Dirk(table), ArkSettings::default(), 0.0, &[1.0], &tight())
-        .unwrap();
+    let mut solver = Solver::arkstep(
+        Decay(50.0),
+        ArkMethod::Dirk(table),
+        ArkSettings::default(),
+        0.0,
+        &[1.0],
+        &tight(),
+    )
+    .unwrap();
     solver.advance(0.1, Task::Normal).unwrap();
     assert!((solver.state()[0] - (-5.0f64).exp()).abs() < 1e-9);
     assert_eq!(solver.stats().last_order, 5);
@@ -168,8 +194,12 @@ fn finite_difference_jacobian_when_none_is_given() {
         }
     }
     let options = Options::new(1e-6, Tolerance::PerComponent(vec![1e-10, 1e-14, 1e-8]));
-    let mut fd = Solver::cvode(NoJacobian, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options).unwrap();
-    let mut exact = Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options).unwrap();
+    let mut fd =
+        Solver::cvode(NoJacobian, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)
+            .unwrap();
+    let mut exact =
+        Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)
+            .unwrap();
     fd.advance(40.0, Task::Normal).unwrap();
     exact.advance(40.0, Task::Normal).unwrap();
     assert!((fd.state()[0] - exact.state()[0]).abs() < 1e-5);
@@ -179,7 +209,8 @@ fn finite_difference_jacobian_when_none_is_given() {
 
 #[test]
 fn roots_with_directions_and_replacement_between_calls() {
-    let mut solver = Solver::cvode(Oscillator, CvodeSettings::default(), 0.0, &[0.0, 1.0], &tight()).unwrap();
+    let mut solver =
+        Solver::cvode(Oscillator, CvodeSettings::default(), 0.0, &[0.0, 1.0], &tight()).unwrap();
     // x = sin t rising through zero only: t = 2π, 4π (not π, 3π).
     solver.set_roots(Some(Roots::new(1, |_t, y, g| g[0] = y[0]).with_directions(vec![1]))).unwrap();
     let mut found = Vec::new();
@@ -193,7 +224,9 @@ fn roots_with_directions_and_replacement_between_calls() {
         assert!((t - exact).abs() < 1e-7, "root {t} vs {exact}");
     }
     // Replace by v = cos t falling through zero: t = 4π + π/2.
-    solver.set_roots(Some(Roots::new(1, |_t, y, g| g[0] = y[1]).with_directions(vec![-1]))).unwrap();
+    solver
+        .set_roots(Some(Roots::new(1, |_t, y, g| g[0] = y[1]).with_directions(vec![-1])))
+        .unwrap();
     let step = solver.advance(20.0, Task::Normal).unwrap();
     assert_eq!(step.event, StepEvent::Root(vec![-1]));
     assert!((step.t - 4.5 * std::f64::consts::PI).abs() < 1e-7);
@@ -205,7 +238,8 @@ fn roots_with_directions_and_replacement_between_calls() {
 
 #[test]
 fn dense_output_inside_the_last_step() {
-    let mut solver = Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    let mut solver =
+        Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
     let mut step = solver.advance(5.0, Task::OneStep).unwrap();
     while step.t < 1.0 {
         step = solver.advance(5.0, Task::OneStep).unwrap();
@@ -225,7 +259,8 @@ fn dense_output_inside_the_last_step() {
 fn stop_time_is_honoured() {
     let mut options = tight();
     options.stop_time = Some(1.25);
-    let mut solver = Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &options).unwrap();
+    let mut solver =
+        Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &options).unwrap();
     let step = solver.advance(10.0, Task::Normal).unwrap();
     assert_eq!(step.event, StepEvent::StopTime);
     assert_eq!(step.t, 1.25);
@@ -244,8 +279,16 @@ fn reinit_restarts_and_statistics_keep_running() {
         assert!((solver.state()[0] - 2.0 * (-1.0f64).exp()).abs() < 1e-8, "{}", solver.name());
         let total = solver.stats();
         assert_eq!(total.reinits, 1);
-        assert!(total.steps > first.steps, "{}: steps {} then {}", solver.name(), first.steps, total.steps);
-        assert!(total.rhs_evals + total.rhs_evals_explicit > first.rhs_evals + first.rhs_evals_explicit);
+        assert!(
+            total.steps > first.steps,
+            "{}: steps {} then {}",
+            solver.name(),
+            first.steps,
+            total.steps
+        );
+        assert!(
+            total.rhs_evals + total.rhs_evals_explicit > first.rhs_evals + first.rhs_evals_explicit
+        );
         // The second segment is a copy of the first (same ODE shifted in t and scaled): the
         // running total must be close to twice the first count, not to once or thrice.
         let ratio = total.steps as f64 / first.steps as f64;
@@ -259,7 +302,9 @@ fn stability_limit_detection_can_be_switched_on() {
     let mut options = Options::new(1e-6, Tolerance::PerComponent(vec![1e-10, 1e-14, 1e-8]));
     options.max_steps = Some(20_000);
     let mut with = Solver::cvode(Robertson, settings, 0.0, &[1.0, 0.0, 0.0], &options).unwrap();
-    let mut without = Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options).unwrap();
+    let mut without =
+        Solver::cvode(Robertson, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)
+            .unwrap();
     with.advance(4e5, Task::Normal).unwrap();
     without.advance(4e5, Task::Normal).unwrap();
     let (a, b) = (with.state()[0], without.state()[0]);
@@ -269,25 +314,35 @@ fn stability_limit_detection_can_be_switched_on() {
 #[test]
 fn panic_in_rhs_becomes_an_error() {
     let system = || Faulty { from: 0.5, panic: true };
-    let mut solver = Solver::cvode(system(), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    let mut solver =
+        Solver::cvode(system(), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
     let error = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(error.kind, ErrorKind::CallbackPanic);
     assert!(error.message.contains("deliberate panic"), "{error}");
     assert!(error.t > 0.4 && error.t <= 0.5 + 1e-12, "t = {}", error.t);
     assert_eq!(error.state.len(), 1);
-    let mut ark =
-        Solver::arkstep(system(), ArkMethod::default(), ArkSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    let mut ark = Solver::arkstep(
+        system(),
+        ArkMethod::default(),
+        ArkSettings::default(),
+        0.0,
+        &[1.0],
+        &tight(),
+    )
+    .unwrap();
     assert_eq!(ark.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::CallbackPanic);
 }
 
 #[test]
 fn panic_in_root_and_jacobian_becomes_an_error() {
-    let mut solver = Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
-    solver.set_roots(Some(Roots::new(1, |t, _y, g| {
-        assert!(t < 0.3, "deliberate panic in g");
-        g[0] = 1.0;
-    })))
-    .unwrap();
+    let mut solver =
+        Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    solver
+        .set_roots(Some(Roots::new(1, |t, _y, g| {
+            assert!(t < 0.3, "deliberate panic in g");
+            g[0] = 1.0;
+        })))
+        .unwrap();
     let error = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(error.kind, ErrorKind::CallbackPanic, "{error}");
 
@@ -306,7 +361,8 @@ fn panic_in_root_and_jacobian_becomes_an_error() {
             panic!("deliberate panic in the Jacobian");
         }
     }
-    let mut solver = Solver::cvode(BadJacobian, CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    let mut solver =
+        Solver::cvode(BadJacobian, CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
     let error = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(error.kind, ErrorKind::CallbackPanic, "{error}");
     assert!(error.message.contains("Jacobian"));
@@ -317,14 +373,22 @@ fn nan_from_rhs_is_an_error_not_a_hang() {
     // NaN from the very first call, and NaN after t = 0.5 (retried with smaller steps first).
     for from in [-1.0, 0.5] {
         let system = || Faulty { from, panic: false };
-        let mut cvode = Solver::cvode(system(), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+        let mut cvode =
+            Solver::cvode(system(), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
         let error = cvode.advance(1.0, Task::Normal).unwrap_err();
         assert_eq!(error.kind, ErrorKind::RhsFailure, "{error}");
         assert!(error.message.contains("non-finite"), "{error}");
         assert!(cvode.stats().nonfinite_rhs > 0);
         assert!(error.state.iter().all(|v| v.is_finite()));
-        let mut ark = Solver::arkstep(system(), ArkMethod::default(), ArkSettings::default(), 0.0, &[1.0], &tight())
-            .unwrap();
+        let mut ark = Solver::arkstep(
+            system(),
+            ArkMethod::default(),
+            ArkSettings::default(),
+            0.0,
+            &[1.0],
+            &tight(),
+        )
+        .unwrap();
         assert_eq!(ark.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::RhsFailure);
     }
 }
@@ -333,7 +397,8 @@ fn nan_from_rhs_is_an_error_not_a_hang() {
 fn too_much_work_is_typed_and_located() {
     let mut options = tight();
     options.max_steps = Some(20);
-    let mut solver = Solver::cvode(Oscillator, CvodeSettings::default(), 0.0, &[0.0, 1.0], &options).unwrap();
+    let mut solver =
+        Solver::cvode(Oscillator, CvodeSettings::default(), 0.0, &[0.0, 1.0], &options).unwrap();
     let error = solver.advance(1000.0, Task::Normal).unwrap_err();
     assert_eq!(error.kind, ErrorKind::TooMuchWork);
     assert!(error.t > 0.0 && error.t < 1000.0);
@@ -390,17 +455,39 @@ fn step_underflow_stops_at_the_first_warning() {
     let t0 = 1e10;
     let solvers = [
         Solver::cvode(Fast, CvodeSettings::default(), t0, &[0.0], &options).unwrap(),
-        Solver::arkstep(Fast, ArkMethod::default(), ArkSettings::default(), t0, &[0.0], &options).unwrap(),
-        Solver::arkstep(Fast, ArkMethod::Erk(ErkTable::default()), ArkSettings::default(), t0, &[0.0], &options)
+        Solver::arkstep(Fast, ArkMethod::default(), ArkSettings::default(), t0, &[0.0], &options)
             .unwrap(),
+        Solver::arkstep(
+            Fast,
+            ArkMethod::Erk(ErkTable::default()),
+            ArkSettings::default(),
+            t0,
+            &[0.0],
+            &options,
+        )
+        .unwrap(),
     ];
     for mut solver in solvers {
         let error = solver.advance(t0 + 1e-3, Task::Normal).unwrap_err();
         assert_eq!(error.kind, ErrorKind::StepUnderflow, "{}: {error}", solver.name());
-        assert!(error.message.contains("t + h = t"), "{}: SUNDIALS' warning is quoted: {error}", solver.name());
+        assert!(
+            error.message.contains("t + h = t"),
+            "{}: SUNDIALS' warning is quoted: {error}",
+            solver.name()
+        );
         let stats = solver.stats();
-        assert_eq!(stats.step_underflow_warnings, 1, "{}: stopped at the first warning", solver.name());
-        assert!(stats.steps < 1000, "{}: {} steps, far from the budget", solver.name(), stats.steps);
+        assert_eq!(
+            stats.step_underflow_warnings,
+            1,
+            "{}: stopped at the first warning",
+            solver.name()
+        );
+        assert!(
+            stats.steps < 1000,
+            "{}: {} steps, far from the budget",
+            solver.name(),
+            stats.steps
+        );
     }
 }
 
@@ -425,10 +512,14 @@ fn bad_input_is_rejected_with_the_field_named() {
     assert!(error.message.contains("components"), "{error}");
     let error = Solver::cvode(Decay(1.0), s, 0.0, &[f64::NAN], &tight()).unwrap_err();
     assert!(error.message.contains("y0[0]"), "{error}");
-    let error = Solver::arkstep(Decay(1.0), ArkMethod::default(), ArkSettings::default(), 0.0, &y0, &Options {
-        max_order: Some(3),
-        ..tight()
-    })
+    let error = Solver::arkstep(
+        Decay(1.0),
+        ArkMethod::default(),
+        ArkSettings::default(),
+        0.0,
+        &y0,
+        &Options { max_order: Some(3), ..tight() },
+    )
     .unwrap_err();
     assert!(error.message.contains("max_order"), "{error}");
     let mut solver = Solver::cvode(Decay(1.0), s, 0.0, &y0, &tight()).unwrap();
@@ -440,8 +531,11 @@ fn bad_input_is_rejected_with_the_field_named() {
 
 #[test]
 fn non_finite_root_values_fail_cleanly() {
-    let mut solver = Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
-    solver.set_roots(Some(Roots::new(1, |t, _y, g| g[0] = if t > 0.2 { f64::NAN } else { 1.0 }))).unwrap();
+    let mut solver =
+        Solver::cvode(Decay(1.0), CvodeSettings::default(), 0.0, &[1.0], &tight()).unwrap();
+    solver
+        .set_roots(Some(Roots::new(1, |t, _y, g| g[0] = if t > 0.2 { f64::NAN } else { 1.0 })))
+        .unwrap();
     let error = solver.advance(1.0, Task::Normal).unwrap_err();
     assert_eq!(error.kind, ErrorKind::RootFunctionFailure, "{error}");
     assert!(error.message.contains("NaN"), "{error}");
@@ -452,7 +546,10 @@ fn robertson_stats_match_the_c_example_exactly() {
     // Same library, same settings, same arithmetic: the counts are not just within 10 %.
     let run = robertson::cvode_example().unwrap();
     assert_eq!((run.stats.steps, run.stats.rhs_evals, run.stats.jac_evals), (542, 754, 11));
-    assert_eq!((run.stats.err_test_fails, run.stats.lin_setups, run.stats.root_evals), (22, 107, 570));
+    assert_eq!(
+        (run.stats.err_test_fails, run.stats.lin_setups, run.stats.root_evals),
+        (22, 107, 570)
+    );
     assert_eq!(run.stats.nonlin_iters, 751);
     assert_eq!(run.stats.last_order, 4);
     // ARKODE's counts differ between major versions: the C example prints these with Debian

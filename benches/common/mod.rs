@@ -30,18 +30,14 @@ pub fn benchmarking() -> bool {
 
 /// Where the C binary goes: cargo's per-target scratch directory when it provides one.
 fn scratch_dir() -> PathBuf {
-    option_env!("CARGO_TARGET_TMPDIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(std::env::temp_dir)
+    option_env!("CARGO_TARGET_TMPDIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir)
 }
 
 /// Compiles benches/c/`name`.c once, with the compiler flags `flags` and the link flags
 /// `libs`, and returns the binary's path (`name` in the scratch directory). `$CC` overrides
 /// the compiler; `$SUNDIALS_INCLUDE_DIR` and `$SUNDIALS_LIBRARY_DIR` add search paths.
 pub fn compile_c(name: &str, flags: &[&str], libs: &[&str]) -> PathBuf {
-    let source = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("benches/c")
-        .join(format!("{name}.c"));
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/c").join(format!("{name}.c"));
     let dir = scratch_dir();
     std::fs::create_dir_all(&dir)
         .unwrap_or_else(|e| panic!("cannot create {}: {e}", dir.display()));
@@ -54,19 +50,12 @@ pub fn compile_c(name: &str, flags: &[&str], libs: &[&str]) -> PathBuf {
     }
     if let Some(lib) = std::env::var_os("SUNDIALS_LIBRARY_DIR") {
         let lib = PathBuf::from(lib);
-        cmd.arg("-L")
-            .arg(&lib)
-            .arg(format!("-Wl,-rpath,{}", lib.display()));
+        cmd.arg("-L").arg(&lib).arg(format!("-Wl,-rpath,{}", lib.display()));
     }
     cmd.args(libs);
-    let status = cmd
-        .status()
-        .unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
-    assert!(
-        status.success(),
-        "compiling {} failed: {cmd:?}",
-        source.display()
-    );
+    let status =
+        cmd.status().unwrap_or_else(|e| panic!("cannot run the C compiler `{compiler}`: {e}"));
+    assert!(status.success(), "compiling {} failed: {cmd:?}", source.display());
     binary
 }
 
@@ -90,9 +79,7 @@ pub fn run_c(binary: &Path, args: &[&str]) -> String {
 /// A nanosecond total `value` the C program printed in its output `out`.
 pub fn c_nanos(value: &str, out: &str) -> Duration {
     Duration::from_nanos(
-        value
-            .parse()
-            .unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")),
+        value.parse().unwrap_or_else(|e| panic!("bad C timing output {out:?}: {e}")),
     )
 }
 
@@ -107,10 +94,7 @@ pub fn c_singles(binary: &Path, args: &[&str]) -> Vec<Duration> {
 
 /// The counter `name` of the C program's `check` output (`name value` pairs).
 pub fn counter(c: &HashMap<String, String>, name: &str) -> u64 {
-    c.get(name)
-        .unwrap_or_else(|| panic!("C check output lacks {name}"))
-        .parse()
-        .expect("counter")
+    c.get(name).unwrap_or_else(|| panic!("C check output lacks {name}")).parse().expect("counter")
 }
 
 /// Asserts that the Rust side (`rust_side`, e.g. "Rust wrapper") ran CVODE exactly as the C

@@ -157,7 +157,13 @@ pub const WRAPPER_ROUNDS_DOC: (usize, usize) = (WRAPPER_ROUNDS, WRAPPER_RUNS);
 /// of the C program and one of this benchmark in `--cell` mode, both doing one warm-up and
 /// WRAPPER_RUNS timed runs, so that both sides see the same machine load and the same process
 /// life cycle; the minimum of each side over all rounds.
-fn wrapper_vs_c(c: &std::path::Path, gamma: f64, rtol: f64, start: &Start, limit_s: u64) -> Result<WrapperRow, String> {
+fn wrapper_vs_c(
+    c: &std::path::Path,
+    gamma: f64,
+    rtol: f64,
+    start: &Start,
+    limit_s: u64,
+) -> Result<WrapperRow, String> {
     let (mut lib, mut cmin) = (f64::INFINITY, f64::INFINITY);
     let me = std::env::current_exe().map_err(|e| format!("this benchmark's path: {e}"))?;
     for _ in 0..WRAPPER_ROUNDS {
@@ -169,10 +175,20 @@ fn wrapper_vs_c(c: &std::path::Path, gamma: f64, rtol: f64, start: &Start, limit
             .output()
             .map_err(|e| format!("{}: {e}", me.display()))?;
         let text = String::from_utf8_lossy(&out.stdout);
-        let t: f64 = text.trim().parse().map_err(|_| format!("--cell printed {text:?}: {}", String::from_utf8_lossy(&out.stderr)))?;
+        let t: f64 = text.trim().parse().map_err(|_| {
+            format!("--cell printed {text:?}: {}", String::from_utf8_lossy(&out.stderr))
+        })?;
         lib = lib.min(t);
     }
-    Ok(WrapperRow { gamma, rtol, library_s: lib, c_s: cmin, ratio: lib / cmin, rounds: WRAPPER_ROUNDS, runs_per_round: WRAPPER_RUNS })
+    Ok(WrapperRow {
+        gamma,
+        rtol,
+        library_s: lib,
+        c_s: cmin,
+        ratio: lib / cmin,
+        rounds: WRAPPER_ROUNDS,
+        runs_per_round: WRAPPER_RUNS,
+    })
 }
 
 /// Our methods at γ: the stiff ones everywhere, the explicit ones only at γ = 1e1.
@@ -203,7 +219,9 @@ pub struct Args {
 }
 
 fn list(s: &str) -> Vec<f64> {
-    s.split(',').map(|x| x.trim().parse().unwrap_or_else(|_| panic!("not a number list: {s}"))).collect()
+    s.split(',')
+        .map(|x| x.trim().parse().unwrap_or_else(|_| panic!("not a number list: {s}")))
+        .collect()
 }
 
 fn parse_args() -> Args {
@@ -289,7 +307,8 @@ fn run_ours(name: &str, method: Method, gamma: f64, rtol: f64, start: &Start, ar
             row.ok = true;
             row.measured = Some(m);
             row.counts = c;
-            row.time_per_cycle_s = Some(times.iter().copied().fold(f64::INFINITY, f64::min) / protocol::CYCLES as f64);
+            row.time_per_cycle_s =
+                Some(times.iter().copied().fold(f64::INFINITY, f64::min) / protocol::CYCLES as f64);
             row.runs = Some(times.len() as u64);
         }
         Err(e) => row.error = Some(e),
@@ -300,27 +319,44 @@ fn run_ours(name: &str, method: Method, gamma: f64, rtol: f64, start: &Start, ar
 /// The relative errors of `x` against `r`.
 pub fn relative(x: &Measured, r: &Measured) -> Errors {
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-    Errors { period: rel(x.period, r.period), t0: rel(x.t0, r.t0), ln_v_max: rel(x.ln_v_max, r.ln_v_max) }
+    Errors {
+        period: rel(x.period, r.period),
+        t0: rel(x.t0, r.t0),
+        ln_v_max: rel(x.ln_v_max, r.ln_v_max),
+    }
 }
 
 /// The row of data/reference/drr_cycles.json at (ξ, ε) = (0.8, 1) and γ, as Measured (t0
 /// included).
 fn drr_cycles_row(gamma: f64) -> Option<Measured> {
-    let text = std::fs::read_to_string(peers::root().join("data/reference/drr_cycles.json")).ok()?;
+    let text =
+        std::fs::read_to_string(peers::root().join("data/reference/drr_cycles.json")).ok()?;
     let table: serde_json::Value = serde_json::from_str(&text).ok()?;
     let row = table["rows"].as_array()?.iter().find(|r| {
-        r["xi"].as_f64() == Some(protocol::XI) && r["epsilon"].as_f64() == Some(protocol::EPSILON) && r["gamma"].as_f64() == Some(gamma)
+        r["xi"].as_f64() == Some(protocol::XI)
+            && r["epsilon"].as_f64() == Some(protocol::EPSILON)
+            && r["gamma"].as_f64() == Some(gamma)
     })?;
     let r = &row["reference"];
-    Some(Measured { period: r["period"].as_f64()?, t0: r["t0"].as_f64()?, ln_v_max: r["ln_v_max"].as_f64()? })
+    Some(Measured {
+        period: r["period"].as_f64()?,
+        t0: r["t0"].as_f64()?,
+        ln_v_max: r["ln_v_max"].as_f64()?,
+    })
 }
 
 /// The start and the reference at γ.
 fn reference(gamma: f64) -> Result<Reference, String> {
     let start = protocol::settle(gamma)?;
-    let (a, _, _) = protocol::run_ours(Method::Radau5, gamma, 1e-14, &start).map_err(|e| format!("reference radau5: {e}"))?;
-    let (b, _, _) = protocol::run_ours(Method::Rodas5p, gamma, 1e-13, &start).map_err(|e| format!("reference rodas5p: {e}"))?;
-    let values = Measured { period: 0.5 * (a.period + b.period), t0: 0.5 * (a.t0 + b.t0), ln_v_max: 0.5 * (a.ln_v_max + b.ln_v_max) };
+    let (a, _, _) = protocol::run_ours(Method::Radau5, gamma, 1e-14, &start)
+        .map_err(|e| format!("reference radau5: {e}"))?;
+    let (b, _, _) = protocol::run_ours(Method::Rodas5p, gamma, 1e-13, &start)
+        .map_err(|e| format!("reference rodas5p: {e}"))?;
+    let values = Measured {
+        period: 0.5 * (a.period + b.period),
+        t0: 0.5 * (a.t0 + b.t0),
+        ln_v_max: 0.5 * (a.ln_v_max + b.ln_v_max),
+    };
     let agreement = Errors {
         period: (a.period - b.period).abs() / values.period.abs(),
         t0: (a.t0 - b.t0).abs() / values.t0.abs(),
@@ -354,7 +390,10 @@ fn main() {
         let start = protocol::settle(1e3).expect("settling at γ = 1e3");
         let row = run_ours("radau5", Method::Radau5, 1e3, 1e-6, &start, &Args { runs: 1, ..args });
         assert!(row.ok, "{:?}", row.error);
-        eprintln!("work_precision smoke test: radau5 at γ = 1e3, rtol 1e-6 ran ({:?})", row.measured);
+        eprintln!(
+            "work_precision smoke test: radau5 at γ = 1e3, rtol 1e-6 ran ({:?})",
+            row.measured
+        );
         return;
     }
     if let Some(cell) = &args.cell {
@@ -365,7 +404,8 @@ fn main() {
         let start = Start { y0, period: f64::NAN };
         let mut best = f64::INFINITY;
         for k in 0..=runs {
-            let (_, _, t) = protocol::run_ours(Method::CvodeBdf, gamma, rtol, &start).unwrap_or_else(|e| panic!("{e}"));
+            let (_, _, t) = protocol::run_ours(Method::CvodeBdf, gamma, rtol, &start)
+                .unwrap_or_else(|e| panic!("{e}"));
             if k > 0 {
                 best = best.min(t.as_secs_f64() / protocol::CYCLES as f64);
             }
@@ -378,20 +418,43 @@ fn main() {
         // wrapper-against-C measurement at γ = 1e8 is taken anew first.
         let mut results = report::read().unwrap_or_else(|e| panic!("{e}"));
         if args.wrapper_only {
-            let c = common::compile_c("earthquake_cvode", &["-O3", "-ffp-contract=off"], common::CVODE_DENSE_LIBS);
+            let c = common::compile_c(
+                "earthquake_cvode",
+                &["-O3", "-ffp-contract=off"],
+                common::CVODE_DENSE_LIBS,
+            );
             // The start again (deterministic) rather than read back: serde_json's float parsing
             // is not exact to the last bit, and CVODE's loose-tolerance runs depend on it.
-            let stored = results.references.iter().find(|r| r.gamma == 1e8).expect("γ = 1e8 in the results");
+            let stored =
+                results.references.iter().find(|r| r.gamma == 1e8).expect("γ = 1e8 in the results");
             let start = protocol::settle(1e8).unwrap_or_else(|e| panic!("{e}"));
-            let close = start.y0.iter().zip(&stored.start.y0).all(|(a, b)| (a - b).abs() <= 1e-15 * a.abs().max(1.0));
-            assert!(close, "the start {:?} is not the stored {:?}: measure the whole grid again", start.y0, stored.start.y0);
-            let mut rtols: Vec<f64> = results.rows.iter().filter(|w| w.gamma == 1e8 && w.method == "cvode-bdf").map(|w| w.rtol).collect();
+            let close = start
+                .y0
+                .iter()
+                .zip(&stored.start.y0)
+                .all(|(a, b)| (a - b).abs() <= 1e-15 * a.abs().max(1.0));
+            assert!(
+                close,
+                "the start {:?} is not the stored {:?}: measure the whole grid again",
+                start.y0, stored.start.y0
+            );
+            let mut rtols: Vec<f64> = results
+                .rows
+                .iter()
+                .filter(|w| w.gamma == 1e8 && w.method == "cvode-bdf")
+                .map(|w| w.rtol)
+                .collect();
             rtols.dedup();
             results.wrapper.clear();
             for rtol in rtols {
                 match wrapper_vs_c(&c, 1e8, rtol, &start, args.limit_s) {
                     Ok(w) => {
-                        eprintln!("  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}", w.library_s * 1e3, w.c_s * 1e3, w.ratio);
+                        eprintln!(
+                            "  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}",
+                            w.library_s * 1e3,
+                            w.c_s * 1e3,
+                            w.ratio
+                        );
                         results.wrapper.push(w);
                     }
                     Err(e) => eprintln!("  wrapper/C rtol {rtol:.0e}: not measured ({e})"),
@@ -404,14 +467,16 @@ fn main() {
                 "load_average_end": report::load_average(),
             });
             if args.write {
-                report::write_wrapper(&results.wrapper, measured.clone()).unwrap_or_else(|e| panic!("writing wrapper.json: {e}"));
+                report::write_wrapper(&results.wrapper, measured.clone())
+                    .unwrap_or_else(|e| panic!("writing wrapper.json: {e}"));
             }
             results.machine["wrapper_measured"] = measured;
         }
         let analysis = report::analyse(&results);
         eprintln!("{}", analysis.summary);
         if args.write {
-            report::write(&results, &analysis, false).unwrap_or_else(|e| panic!("writing the results: {e}"));
+            report::write(&results, &analysis, false)
+                .unwrap_or_else(|e| panic!("writing the results: {e}"));
         }
         return;
     }
@@ -420,12 +485,21 @@ fn main() {
     let mut programs = Vec::new();
     if args.peers {
         if args.wants("c-cvode-bdf") {
-            let c = common::compile_c("earthquake_cvode", &["-O3", "-ffp-contract=off"], common::CVODE_DENSE_LIBS);
+            let c = common::compile_c(
+                "earthquake_cvode",
+                &["-O3", "-ffp-contract=off"],
+                common::CVODE_DENSE_LIBS,
+            );
             programs.push(peers::Program::C(c));
         }
         if peers::RUST_PEERS.iter().any(|m| args.wants(m)) {
             match peers::build_rust_peers() {
-                Ok(binary) => programs.extend(peers::RUST_PEERS.iter().filter(|m| args.wants(m)).map(|m| peers::Program::Rust(binary.clone(), m))),
+                Ok(binary) => programs.extend(
+                    peers::RUST_PEERS
+                        .iter()
+                        .filter(|m| args.wants(m))
+                        .map(|m| peers::Program::Rust(binary.clone(), m)),
+                ),
                 Err(e) => panic!("{e}"),
             }
         }
@@ -433,7 +507,10 @@ fn main() {
             let versions = peers::scipy_versions().unwrap_or_else(|e| panic!("{e}"));
             machine["python"] = versions;
             programs.extend(
-                peers::SCIPY_PEERS.iter().filter(|m| args.wants(&format!("scipy-{}", m.to_lowercase()))).map(|m| peers::Program::Scipy(m)),
+                peers::SCIPY_PEERS
+                    .iter()
+                    .filter(|m| args.wants(&format!("scipy-{}", m.to_lowercase())))
+                    .map(|m| peers::Program::Scipy(m)),
             );
         }
     }
@@ -459,7 +536,15 @@ fn main() {
         }
         for program in &programs {
             for &rtol in &args.rtols {
-                for mut row in peers::run(program, gamma, rtol, &r.start, args.runs, args.budget_s, args.limit_s) {
+                for mut row in peers::run(
+                    program,
+                    gamma,
+                    rtol,
+                    &r.start,
+                    args.runs,
+                    args.budget_s,
+                    args.limit_s,
+                ) {
                     row.errors = row.measured.map(|m| relative(&m, &r.values));
                     print_row(&row);
                     rows.push(row);
@@ -467,12 +552,23 @@ fn main() {
             }
         }
         // The wrapper against plain C (the target is stated at γ = 1e8).
-        let c_binary = programs.iter().find_map(|p| if let peers::Program::C(b) = p { Some(b.clone()) } else { None });
+        let c_binary = programs.iter().find_map(|p| {
+            if let peers::Program::C(b) = p {
+                Some(b.clone())
+            } else {
+                None
+            }
+        });
         if let (Some(c), true) = (c_binary, gamma == 1e8 && args.wants("cvode-bdf")) {
             for &rtol in &args.rtols {
                 match wrapper_vs_c(&c, gamma, rtol, &r.start, args.limit_s) {
                     Ok(w) => {
-                        eprintln!("  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}", w.library_s * 1e3, w.c_s * 1e3, w.ratio);
+                        eprintln!(
+                            "  wrapper/C rtol {rtol:.0e}: {:.4} / {:.4} ms per cycle = {:.3}",
+                            w.library_s * 1e3,
+                            w.c_s * 1e3,
+                            w.ratio
+                        );
                         wrapper.push(w);
                     }
                     Err(e) => eprintln!("  wrapper/C rtol {rtol:.0e}: not measured ({e})"),
@@ -489,10 +585,19 @@ fn main() {
     } else {
         format!("cargo run --release --example work_precision -- {}", extra.join(" "))
     };
-    let results = report::Results { machine, command, runs: args.runs, budget_s: args.budget_s, references, rows, wrapper };
+    let results = report::Results {
+        machine,
+        command,
+        runs: args.runs,
+        budget_s: args.budget_s,
+        references,
+        rows,
+        wrapper,
+    };
     let analysis = report::analyse(&results);
     eprintln!("{}", analysis.summary);
     if args.write {
-        report::write(&results, &analysis, true).unwrap_or_else(|e| panic!("writing the results: {e}"));
+        report::write(&results, &analysis, true)
+            .unwrap_or_else(|e| panic!("writing the results: {e}"));
     }
 }

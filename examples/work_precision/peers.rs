@@ -42,7 +42,8 @@ impl Program {
 }
 
 /// The Rust peers (benches/peers), in the order of the tables.
-pub const RUST_PEERS: [&str; 5] = ["de-radau5", "de-bdf", "diffsol-bdf", "diffsol-esdirk34", "diffsol-tr-bdf2"];
+pub const RUST_PEERS: [&str; 5] =
+    ["de-radau5", "de-bdf", "diffsol-bdf", "diffsol-esdirk34", "diffsol-tr-bdf2"];
 /// The scipy methods.
 pub const SCIPY_PEERS: [&str; 3] = ["LSODA", "Radau", "BDF"];
 
@@ -71,7 +72,10 @@ pub fn scipy_versions() -> Result<serde_json::Value, String> {
         .output()
         .map_err(|e| format!("cannot run python3: {e}"))?;
     if !out.status.success() {
-        return Err(format!("scipy_peer.py --version failed: {}", String::from_utf8_lossy(&out.stderr)));
+        return Err(format!(
+            "scipy_peer.py --version failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
     }
     serde_json::from_slice(&out.stdout).map_err(|e| format!("scipy_peer.py --version: {e}"))
 }
@@ -93,14 +97,25 @@ fn json_line(cmd: Command, limit_s: u64) -> Result<serde_json::Value, String> {
         format!(
             "no JSON line ({}); stderr: {}",
             out.status,
-            String::from_utf8_lossy(&out.stderr).lines().rev().take(3).collect::<Vec<_>>().join(" | ")
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .rev()
+                .take(3)
+                .collect::<Vec<_>>()
+                .join(" | ")
         )
     })?;
     serde_json::from_str(line).map_err(|e| format!("bad JSON line {line:?}: {e}"))
 }
 
 /// Reads a peer's JSON line into a row.
-fn row_from(program: &Program, setting: &str, gamma: f64, rtol: f64, line: Result<serde_json::Value, String>) -> Row {
+fn row_from(
+    program: &Program,
+    setting: &str,
+    gamma: f64,
+    rtol: f64,
+    line: Result<serde_json::Value, String>,
+) -> Row {
     let mut row = Row::new(&program.name(), "peer", setting, gamma, rtol);
     match line {
         Err(e) => row.error = Some(e),
@@ -126,7 +141,8 @@ fn row_from(program: &Program, setting: &str, gamma: f64, rtol: f64, line: Resul
                     _ => row.error = Some(format!("incomplete result line {v}")),
                 }
             } else {
-                row.error = Some(v["error"].as_str().unwrap_or("failed without a reason").to_string());
+                row.error =
+                    Some(v["error"].as_str().unwrap_or("failed without a reason").to_string());
             }
         }
     }
@@ -134,7 +150,15 @@ fn row_from(program: &Program, setting: &str, gamma: f64, rtol: f64, line: Resul
 }
 
 /// The command line of one run of `program` (`setting`: "default" or "tuned").
-fn command(program: &Program, setting: &str, gamma: f64, rtol: f64, start: &Start, runs: usize, budget_s: f64) -> Command {
+fn command(
+    program: &Program,
+    setting: &str,
+    gamma: f64,
+    rtol: f64,
+    start: &Start,
+    runs: usize,
+    budget_s: f64,
+) -> Command {
     let atol = protocol::atol(rtol);
     let [u0, w0, th0] = start.y0;
     let common = |cmd: &mut Command| {
@@ -151,9 +175,15 @@ fn command(program: &Program, setting: &str, gamma: f64, rtol: f64, start: &Star
         }
         Program::Rust(binary, method) => {
             let mut cmd = Command::new(binary);
-            cmd.args([method, &setting]).args([gamma, XI, EPSILON, rtol, atol].map(|x| format!("{x:e}")));
+            cmd.args([method, &setting])
+                .args([gamma, XI, EPSILON, rtol, atol].map(|x| format!("{x:e}")));
             common(&mut cmd);
-            cmd.args([start.t_end().to_string(), CYCLES.to_string(), runs.to_string(), budget_s.to_string()]);
+            cmd.args([
+                start.t_end().to_string(),
+                CYCLES.to_string(),
+                runs.to_string(),
+                budget_s.to_string(),
+            ]);
             cmd
         }
         Program::Scipy(method) => {
@@ -162,7 +192,12 @@ fn command(program: &Program, setting: &str, gamma: f64, rtol: f64, start: &Star
                 .args([method, &setting])
                 .args([gamma, XI, EPSILON, rtol, atol].map(|x| format!("{x:e}")));
             common(&mut cmd);
-            cmd.args([start.t_end().to_string(), CYCLES.to_string(), runs.to_string(), budget_s.to_string()]);
+            cmd.args([
+                start.t_end().to_string(),
+                CYCLES.to_string(),
+                runs.to_string(),
+                budget_s.to_string(),
+            ]);
             cmd
         }
     }
@@ -170,16 +205,34 @@ fn command(program: &Program, setting: &str, gamma: f64, rtol: f64, start: &Star
 
 /// The plain-C program's minimum time per cycle over `runs` timed runs (after its warm-up) of
 /// one grid cell, with no time budget (the wrapper-against-C measurement).
-pub fn c_min_time(binary: &Path, gamma: f64, rtol: f64, start: &Start, runs: usize, limit_s: u64) -> Result<f64, String> {
+pub fn c_min_time(
+    binary: &Path,
+    gamma: f64,
+    rtol: f64,
+    start: &Start,
+    runs: usize,
+    limit_s: u64,
+) -> Result<f64, String> {
     let program = Program::C(binary.to_path_buf());
     let line = json_line(command(&program, "default", gamma, rtol, start, runs, 1e9), limit_s)?;
-    line["time_per_cycle_s"].as_f64().ok_or_else(|| line["error"].as_str().unwrap_or("no time").to_string())
+    line["time_per_cycle_s"]
+        .as_f64()
+        .ok_or_else(|| line["error"].as_str().unwrap_or("no time").to_string())
 }
 
 /// One grid cell of a peer: its defaults, and if they fail, its tuned setting (both rows are
 /// kept). The C program has only the engine's settings.
-pub fn run(program: &Program, gamma: f64, rtol: f64, start: &Start, runs: usize, budget_s: f64, limit_s: u64) -> Vec<Row> {
-    let settings: &[&str] = if program.tunable() { &["default", "tuned"] } else { &["engine settings"] };
+pub fn run(
+    program: &Program,
+    gamma: f64,
+    rtol: f64,
+    start: &Start,
+    runs: usize,
+    budget_s: f64,
+    limit_s: u64,
+) -> Vec<Row> {
+    let settings: &[&str] =
+        if program.tunable() { &["default", "tuned"] } else { &["engine settings"] };
     let mut rows = Vec::new();
     for &setting in settings {
         let arg = if setting == "tuned" { "tuned" } else { "default" };

@@ -103,10 +103,16 @@ pub fn settle(gamma: f64) -> Result<Start, String> {
     let y0 = [drr.manifold_u(w, theta), w, theta];
     let spec = spec(Method::Radau5, 1e-12);
     let (mut integ, _) = engine::integrator(drr, &spec, &y0).map_err(|e| e.to_string())?;
-    let settings = cycle::CycleSettings { trajectory_cycles: 1, ..cycle::CycleSettings::defaults(1e-12, atol(1e-12)) };
+    let settings = cycle::CycleSettings {
+        trajectory_cycles: 1,
+        ..cycle::CycleSettings::defaults(1e-12, atol(1e-12))
+    };
     let stable = hopf::analyse(&drr).max_real_part < 0.0;
-    let report = cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| e.to_string())?;
-    let values = report.values.ok_or_else(|| format!("γ = {gamma:e}: the settling run did not converge ({:?})", report.status))?;
+    let report =
+        cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| e.to_string())?;
+    let values = report.values.ok_or_else(|| {
+        format!("γ = {gamma:e}: the settling run did not converge ({:?})", report.status)
+    })?;
     let tr = report.trajectory.last().ok_or("no trajectory kept")?;
     let target = (1.0 - LEAD) * values.period;
     let i = tr.t.iter().rposition(|&t| t <= target).ok_or("empty trajectory")?;
@@ -125,22 +131,38 @@ pub fn spec(method: Method, rtol: f64) -> SolverSpec {
 
 /// One run of one of our methods from `start` through CYCLES cycles: the means, the
 /// counters, and the time of the whole run (integrator creation included).
-pub fn run_ours(method: Method, gamma: f64, rtol: f64, start: &Start) -> Result<(Measured, Counts, Duration), String> {
+pub fn run_ours(
+    method: Method,
+    gamma: f64,
+    rtol: f64,
+    start: &Start,
+) -> Result<(Measured, Counts, Duration), String> {
     let drr = drr(gamma);
     let stable = hopf::analyse(&drr).max_real_part < 0.0;
-    let settings = cycle::CycleSettings { settle: 1000, max_cycles: CYCLES, ..cycle::CycleSettings::defaults(rtol, atol(rtol)) };
+    let settings = cycle::CycleSettings {
+        settle: 1000,
+        max_cycles: CYCLES,
+        ..cycle::CycleSettings::defaults(rtol, atol(rtol))
+    };
     let spec = spec(method, rtol);
     let clock = Instant::now();
     let (mut integ, _) = engine::integrator(drr, &spec, &start.y0).map_err(|e| e.to_string())?;
-    let report = cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| e.to_string())?;
+    let report =
+        cycle::analyse(integ.as_mut(), &drr, &settings, stable).map_err(|e| e.to_string())?;
     let stats = integ.stats();
     let elapsed = clock.elapsed();
     let cycles = &report.last_cycles;
     if cycles.len() != CYCLES {
-        return Err(format!("{} cycles closed ({:?}), {CYCLES} expected", cycles.len(), report.status));
+        return Err(format!(
+            "{} cycles closed ({:?}), {CYCLES} expected",
+            cycles.len(),
+            report.status
+        ));
     }
-    let mean = |f: fn(&cycle::CycleValues) -> f64| cycles.iter().map(f).sum::<f64>() / CYCLES as f64;
-    let measured = Measured { period: mean(|c| c.period), t0: mean(|c| c.t0), ln_v_max: mean(|c| c.ln_v_max) };
+    let mean =
+        |f: fn(&cycle::CycleValues) -> f64| cycles.iter().map(f).sum::<f64>() / CYCLES as f64;
+    let measured =
+        Measured { period: mean(|c| c.period), t0: mean(|c| c.t0), ln_v_max: mean(|c| c.ln_v_max) };
     if ![measured.period, measured.t0, measured.ln_v_max].iter().all(|v| v.is_finite()) {
         return Err(format!("non-finite cycle values {measured:?}"));
     }

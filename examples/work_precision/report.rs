@@ -43,7 +43,8 @@ pub struct Analysis {
 
 /// Line that separates the generated part of docs/work-precision.md from the hand-written
 /// notes the runner keeps.
-pub const NOTES_MARKER: &str = "<!-- Hand-written notes below this line are kept when the benchmark rewrites this file. -->";
+pub const NOTES_MARKER: &str =
+    "<!-- Hand-written notes below this line are kept when the benchmark rewrites this file. -->";
 
 /// Homemade methods (issue #6's goal is about these).
 const HOMEMADE: [&str; 3] = ["radau5", "rodas5p", "extrapolation"];
@@ -60,7 +61,9 @@ fn first_line(program: &str, args: &[&str]) -> String {
 
 /// The 1, 5 and 15 minute load averages.
 pub fn load_average() -> String {
-    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
+    std::fs::read_to_string("/proc/loadavg")
+        .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_default()
 }
 
 /// The version of `package` in benches/peers/Cargo.lock.
@@ -79,11 +82,20 @@ fn locked_version(package: &str) -> Option<String> {
 pub fn machine() -> Value {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
     let field = |name: &str| {
-        cpuinfo.lines().find(|l| l.starts_with(name)).and_then(|l| l.split_once(':')).map(|(_, v)| v.trim().to_string()).unwrap_or_default()
+        cpuinfo
+            .lines()
+            .find(|l| l.starts_with(name))
+            .and_then(|l| l.split_once(':'))
+            .map(|(_, v)| v.trim().to_string())
+            .unwrap_or_default()
     };
     let os = std::fs::read_to_string("/etc/os-release")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("PRETTY_NAME=")).map(|l| l[12..].trim_matches('"').to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("PRETTY_NAME="))
+                .map(|l| l[12..].trim_matches('"').to_string())
+        })
         .unwrap_or_default();
     json!({
         "cpu": field("model name"),
@@ -139,13 +151,24 @@ impl Quantity {
 
 /// A method's successful cells at γ: (rtol, error, seconds per cycle, RHS evaluations per
 /// cycle), errors below the reference's accuracy raised to it.
-fn points(rows: &[Row], method: &str, gamma: f64, q: Quantity, floor: f64) -> Vec<(f64, f64, f64, Option<f64>)> {
+fn points(
+    rows: &[Row],
+    method: &str,
+    gamma: f64,
+    q: Quantity,
+    floor: f64,
+) -> Vec<(f64, f64, f64, Option<f64>)> {
     let mut p: Vec<_> = rows
         .iter()
         .filter(|r| r.ok && r.method == method && r.gamma == gamma)
         .filter_map(|r| {
             let e = q.of(r.errors.as_ref()?).max(floor);
-            Some((r.rtol, e, r.time_per_cycle_s?, r.counts.rhs.map(|n| n as f64 / protocol::CYCLES as f64)))
+            Some((
+                r.rtol,
+                e,
+                r.time_per_cycle_s?,
+                r.counts.rhs.map(|n| n as f64 / protocol::CYCLES as f64),
+            ))
         })
         .collect();
     p.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -212,7 +235,9 @@ fn targets(floor: f64) -> Vec<f64> {
     (3..=11).map(|k| 10f64.powi(-k)).filter(|&e| e >= 3.0 * floor).collect()
 }
 
-fn best_of<'a>(times: impl Iterator<Item = (&'a str, Option<(f64, bool)>)>) -> Option<(&'a str, f64)> {
+fn best_of<'a>(
+    times: impl Iterator<Item = (&'a str, Option<(f64, bool)>)>,
+) -> Option<(&'a str, f64)> {
     times.filter_map(|(m, t)| t.map(|t| (m, t.0))).min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
@@ -224,7 +249,11 @@ pub fn analyse(results: &Results) -> Analysis {
     let mut summary = String::new();
     let mut svgs = Vec::new();
     let methods_at = |gamma: f64| -> Vec<String> {
-        order.iter().filter(|m| rows.iter().any(|r| &r.method == *m && r.gamma == gamma)).cloned().collect()
+        order
+            .iter()
+            .filter(|m| rows.iter().any(|r| &r.method == *m && r.gamma == gamma))
+            .cloned()
+            .collect()
     };
 
     // Targets at γ = 1e8 first.
@@ -260,10 +289,13 @@ pub fn analyse(results: &Results) -> Analysis {
         );
         let mut ratios = Vec::new();
         for w in results.wrapper.iter().filter(|w| w.gamma == 1e8) {
-            let find = |m: &str| rows.iter().find(|r| r.gamma == 1e8 && r.method == m && r.rtol == w.rtol && r.ok);
+            let find = |m: &str| {
+                rows.iter().find(|r| r.gamma == 1e8 && r.method == m && r.rtol == w.rtol && r.ok)
+            };
             let (grid, same, diff) = match (find("cvode-bdf"), find("c-cvode-bdf")) {
                 (Some(a), Some(b)) => {
-                    let grid = a.time_per_cycle_s.unwrap_or(f64::NAN) / b.time_per_cycle_s.unwrap_or(f64::NAN);
+                    let grid = a.time_per_cycle_s.unwrap_or(f64::NAN)
+                        / b.time_per_cycle_s.unwrap_or(f64::NAN);
                     let diff = match (a.measured, b.measured) {
                         (Some(x), Some(y)) => {
                             let e = crate::relative(&x, &y);
@@ -271,7 +303,11 @@ pub fn analyse(results: &Results) -> Analysis {
                         }
                         _ => f64::NAN,
                     };
-                    (format!("{grid:.3}"), if a.counts == b.counts { "yes" } else { "**no**" }, format!("{diff:.1e}"))
+                    (
+                        format!("{grid:.3}"),
+                        if a.counts == b.counts { "yes" } else { "**no**" },
+                        format!("{diff:.1e}"),
+                    )
                 }
                 _ => ("—".into(), "—", "—".into()),
             };
@@ -306,7 +342,8 @@ pub fn analyse(results: &Results) -> Analysis {
         }
         // Best stickslip method against LSODA at LSODA's own points.
         let ours: Vec<&str> = Method::ALL.iter().map(|(n, _)| *n).collect();
-        let our_points: Vec<(&str, Vec<_>)> = ours.iter().map(|m| (*m, points(rows, m, 1e8, Quantity::Period, floor))).collect();
+        let our_points: Vec<(&str, Vec<_>)> =
+            ours.iter().map(|m| (*m, points(rows, m, 1e8, Quantity::Period, floor))).collect();
         let lsoda = points(rows, "scipy-lsoda", 1e8, Quantity::Period, floor);
         let _ = writeln!(
             md,
@@ -314,15 +351,25 @@ pub fn analyse(results: &Results) -> Analysis {
              tolerance where LSODA ran, the fastest of our methods at LSODA's period error:\n"
         );
         if lsoda.is_empty() {
-            let _ = writeln!(md, "LSODA did not run at γ = 1e8 at any tolerance (see the failures below).\n");
+            let _ = writeln!(
+                md,
+                "LSODA did not run at γ = 1e8 at any tolerance (see the failures below).\n"
+            );
             let _ = writeln!(summary, "LSODA at γ = 1e8: no successful run");
         } else {
             let _ = writeln!(md, "| LSODA rtol | period error | LSODA ms/cycle | best stickslip | its ms/cycle | ratio |\n|---|---|---|---|---|---|");
             let mut lr = Vec::new();
             for &(rtol, e, t, _) in &lsoda {
-                if let Some((m, tb)) = best_of(our_points.iter().map(|(m, p)| (*m, time_at(p, e)))) {
+                if let Some((m, tb)) = best_of(our_points.iter().map(|(m, p)| (*m, time_at(p, e))))
+                {
                     lr.push(t / tb);
-                    let _ = writeln!(md, "| {rtol:.0e} | {e:.1e} | {} | {m} | {} | {:.0}× |", ms(t), ms(tb), t / tb);
+                    let _ = writeln!(
+                        md,
+                        "| {rtol:.0e} | {e:.1e} | {} | {m} | {} | {:.0}× |",
+                        ms(t),
+                        ms(tb),
+                        t / tb
+                    );
                 }
             }
             if !lr.is_empty() {
@@ -345,17 +392,37 @@ pub fn analyse(results: &Results) -> Analysis {
              with no special settings.** Time per cycle at matched period error (interpolated; ≤: the method's cheapest \
              run is already that accurate):\n"
         );
-        let all: Vec<(String, Vec<_>)> = methods_at(1e8).into_iter().map(|m| { let p = points(rows, &m, 1e8, Quantity::Period, floor); (m, p) }).collect();
+        let all: Vec<(String, Vec<_>)> = methods_at(1e8)
+            .into_iter()
+            .map(|m| {
+                let p = points(rows, &m, 1e8, Quantity::Period, floor);
+                (m, p)
+            })
+            .collect();
         let _ = writeln!(md, "| period error | best homemade | ms/cycle | fastest other | ms/cycle | other / homemade |\n|---|---|---|---|---|---|");
         let mut verdicts = Vec::new();
         for k in 5..=9 {
             let e = 10f64.powi(-k);
-            let homemade = best_of(all.iter().filter(|(m, _)| HOMEMADE.contains(&m.as_str())).map(|(m, p)| (m.as_str(), time_at(p, e))));
-            let other = best_of(all.iter().filter(|(m, _)| !HOMEMADE.contains(&m.as_str())).map(|(m, p)| (m.as_str(), time_at(p, e))));
+            let homemade = best_of(
+                all.iter()
+                    .filter(|(m, _)| HOMEMADE.contains(&m.as_str()))
+                    .map(|(m, p)| (m.as_str(), time_at(p, e))),
+            );
+            let other = best_of(
+                all.iter()
+                    .filter(|(m, _)| !HOMEMADE.contains(&m.as_str()))
+                    .map(|(m, p)| (m.as_str(), time_at(p, e))),
+            );
             match (homemade, other) {
                 (Some((hm, ht)), Some((om, ot))) => {
                     verdicts.push((e, ot / ht));
-                    let _ = writeln!(md, "| {e:.0e} | {hm} | {} | {om} | {} | {:.2} |", ms(ht), ms(ot), ot / ht);
+                    let _ = writeln!(
+                        md,
+                        "| {e:.0e} | {hm} | {} | {om} | {} | {:.2} |",
+                        ms(ht),
+                        ms(ot),
+                        ot / ht
+                    );
                 }
                 (Some((hm, ht)), None) => {
                     verdicts.push((e, f64::INFINITY));
@@ -392,7 +459,10 @@ pub fn analyse(results: &Results) -> Analysis {
         let floor = r.agreement.period.max(1e-16);
         let ts = targets(floor);
         let methods = methods_at(g);
-        let pts: Vec<(String, Vec<_>)> = methods.iter().map(|m| (m.clone(), points(rows, m, g, Quantity::Period, floor))).collect();
+        let pts: Vec<(String, Vec<_>)> = methods
+            .iter()
+            .map(|m| (m.clone(), points(rows, m, g, Quantity::Period, floor)))
+            .collect();
         let ours: Vec<&str> = Method::ALL.iter().map(|(n, _)| *n).collect();
         let _ = writeln!(md, "### γ = {}\n", gamma_label(g));
         let _ = write!(md, "| method |");
@@ -407,10 +477,20 @@ pub fn analyse(results: &Results) -> Analysis {
         for (m, p) in &pts {
             let _ = write!(md, "| {m} |");
             for &e in &ts {
-                let best = best_of(pts.iter().filter(|(n, _)| ours.contains(&n.as_str())).map(|(n, q)| (n.as_str(), time_at(q, e))));
+                let best = best_of(
+                    pts.iter()
+                        .filter(|(n, _)| ours.contains(&n.as_str()))
+                        .map(|(n, q)| (n.as_str(), time_at(q, e))),
+                );
                 match (time_at(p, e), best) {
                     (Some((t, bound)), Some((_, b))) => {
-                        let _ = write!(md, " {}{} ({:.2}) |", if bound { "≤" } else { "" }, ms(t), t / b);
+                        let _ = write!(
+                            md,
+                            " {}{} ({:.2}) |",
+                            if bound { "≤" } else { "" },
+                            ms(t),
+                            t / b
+                        );
                     }
                     (Some((t, bound)), None) => {
                         let _ = write!(md, " {}{} |", if bound { "≤" } else { "" }, ms(t));
@@ -426,9 +506,14 @@ pub fn analyse(results: &Results) -> Analysis {
         // Diagrams: time per cycle against each error, and RHS evaluations against the period
         // error; ours solid, the peers dashed; 7 palette colours × markers tell 17 series apart.
         let style = |i: usize, m: &str| {
-            let marker = [Marker::Circle, Marker::Square, Marker::Triangle][(i / figure::series::PALETTE.len()) % 3];
+            let marker = [Marker::Circle, Marker::Square, Marker::Triangle]
+                [(i / figure::series::PALETTE.len()) % 3];
             let s = Style::line(i).marker(marker);
-            if ours.contains(&m) { s } else { s.dash(Dash::Dashed) }
+            if ours.contains(&m) {
+                s
+            } else {
+                s.dash(Dash::Dashed)
+            }
         };
         let mut panels = Vec::new();
         for (k, q) in [Quantity::Period, Quantity::T0, Quantity::LnVMax].into_iter().enumerate() {
@@ -440,14 +525,23 @@ pub fn analyse(results: &Results) -> Analysis {
             .max(1e-16);
             let mut panel = Panel::new(
                 format!("({}) time per cycle vs error in {}", ["a", "b", "c"][k], q.label()),
-                Axis::log10(format!("relative error in {} (reference accuracy {floor_q:.0e})", q.label())).dimensionless(),
+                Axis::log10(format!(
+                    "relative error in {} (reference accuracy {floor_q:.0e})",
+                    q.label()
+                ))
+                .dimensionless(),
                 Axis::log10("time per cycle").unit("s"),
             )
             .legend(if k == 0 { LegendPlace::Auto } else { LegendPlace::Hidden });
             for (i, m) in methods.iter().enumerate() {
                 let p = points(rows, m, g, q, floor_q);
                 if !p.is_empty() {
-                    panel = panel.series(Series::new(m.as_str(), p.iter().map(|p| p.1).collect(), p.iter().map(|p| p.2).collect(), style(i, m)));
+                    panel = panel.series(Series::new(
+                        m.as_str(),
+                        p.iter().map(|p| p.1).collect(),
+                        p.iter().map(|p| p.2).collect(),
+                        style(i, m),
+                    ));
                 }
             }
             panels.push(panel);
@@ -459,16 +553,27 @@ pub fn analyse(results: &Results) -> Analysis {
         )
         .legend(LegendPlace::Hidden);
         for (i, m) in methods.iter().enumerate() {
-            let p: Vec<(f64, f64)> = points(rows, m, g, Quantity::Period, floor).iter().filter_map(|p| Some((p.1, p.3?))).collect();
+            let p: Vec<(f64, f64)> = points(rows, m, g, Quantity::Period, floor)
+                .iter()
+                .filter_map(|p| Some((p.1, p.3?)))
+                .collect();
             if !p.is_empty() {
-                panel = panel.series(Series::new(m.as_str(), p.iter().map(|p| p.0).collect(), p.iter().map(|p| p.1).collect(), style(i, m)));
+                panel = panel.series(Series::new(
+                    m.as_str(),
+                    p.iter().map(|p| p.0).collect(),
+                    p.iter().map(|p| p.1).collect(),
+                    style(i, m),
+                ));
             }
         }
         panels.push(panel);
         let name = format!("gamma-{}.svg", gamma_label(g));
-        let _ = writeln!(md, "![work–precision at γ = {}](work-precision/{name})\n", gamma_label(g));
+        let _ =
+            writeln!(md, "![work–precision at γ = {}](work-precision/{name})\n", gamma_label(g));
         let figure = panels.into_iter().fold(
-            Figure::new(format!("Work against precision, γ = {}, ξ = 0.8, ε = 1", gamma_label(g))).columns(2).panel_size(620.0, 460.0),
+            Figure::new(format!("Work against precision, γ = {}, ξ = 0.8, ε = 1", gamma_label(g)))
+                .columns(2)
+                .panel_size(620.0, 460.0),
             Figure::panel,
         );
         let figure = figure.caption(
@@ -495,7 +600,8 @@ pub fn analyse(results: &Results) -> Analysis {
         let floor = r.agreement.period.max(1e-16);
         let ts: Vec<f64> = targets(floor).into_iter().filter(|&e| e <= 1e-4).collect();
         let cvode = points(rows, "cvode-bdf", g, Quantity::Period, floor);
-        let rust_peers: Vec<(&str, Vec<_>)> = RUST_PEERS.iter().map(|m| (*m, points(rows, m, g, Quantity::Period, floor))).collect();
+        let rust_peers: Vec<(&str, Vec<_>)> =
+            RUST_PEERS.iter().map(|m| (*m, points(rows, m, g, Quantity::Period, floor))).collect();
         let _ = writeln!(md, "### γ = {}\n", gamma_label(g));
         let _ = write!(md, "| method |");
         for e in &ts {
@@ -514,7 +620,8 @@ pub fn analyse(results: &Results) -> Analysis {
                     let _ = write!(md, " |");
                     continue;
                 };
-                let ratio = |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{:.2}", x / t));
+                let ratio =
+                    |x: Option<f64>| x.map_or("—".to_string(), |x| format!("{:.2}", x / t));
                 let c = time_at(&cvode, e).map(|x| x.0);
                 let peer = best_of(rust_peers.iter().map(|(n, q)| (*n, time_at(q, e))));
                 let _ = write!(
@@ -561,9 +668,19 @@ pub fn analyse(results: &Results) -> Analysis {
                 continue;
             }
             seen.push((r.gamma, &r.method));
-            let rtols: Vec<String> =
-                tuned.iter().filter(|t| t.gamma == r.gamma && t.method == r.method).map(|t| format!("{:.0e}", t.rtol)).collect();
-            let _ = writeln!(md, "| {} | {} | {} | {} |", gamma_label(r.gamma), r.method, rtols.join(", "), r.tuning.as_deref().unwrap_or(""));
+            let rtols: Vec<String> = tuned
+                .iter()
+                .filter(|t| t.gamma == r.gamma && t.method == r.method)
+                .map(|t| format!("{:.0e}", t.rtol))
+                .collect();
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} |",
+                gamma_label(r.gamma),
+                r.method,
+                rtols.join(", "),
+                r.tuning.as_deref().unwrap_or("")
+            );
         }
     }
     let _ = writeln!(md);
@@ -672,7 +789,9 @@ fn header(results: &Results) -> String {
         "| γ | start (u, ln v, θ) | period | t0 | ln v_max | agreement: period, t0, ln v_max | drr_cycles.json − ours: period, ln v_max |\n|---|---|---|---|---|---|---|"
     );
     for r in &results.references {
-        let d = r.drr_cycles_table.map_or("—".to_string(), |d| format!("{:.1e}, {:.1e}", d.period, d.ln_v_max));
+        let d = r
+            .drr_cycles_table
+            .map_or("—".to_string(), |d| format!("{:.1e}, {:.1e}", d.period, d.ln_v_max));
         let _ = writeln!(
             md,
             "| {} | ({:.6}, {:.6}, {:.6}) | {:.13} | {:.10} | {:.12} | {:.1e}, {:.1e}, {:.1e} | {} |",
@@ -704,15 +823,20 @@ pub fn read() -> Result<Results, String> {
         let path = dir.join(name);
         match std::fs::read_to_string(&path) {
             Ok(text) => Ok(Some(text)),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound && name == "wrapper.json" => Ok(None),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound && name == "wrapper.json" => {
+                Ok(None)
+            }
             Err(e) => Err(format!("{}: {e}", path.display())),
         }
     };
     let text = parse("results.json")?.unwrap_or_default();
-    let mut results: Results = serde_json::from_str(&text).map_err(|e| format!("results.json: {e}"))?;
+    let mut results: Results =
+        serde_json::from_str(&text).map_err(|e| format!("results.json: {e}"))?;
     if let Some(text) = parse("wrapper.json")? {
-        let w: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("wrapper.json: {e}"))?;
-        results.wrapper = serde_json::from_value(w["wrapper"].clone()).map_err(|e| format!("wrapper.json: {e}"))?;
+        let w: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| format!("wrapper.json: {e}"))?;
+        results.wrapper = serde_json::from_value(w["wrapper"].clone())
+            .map_err(|e| format!("wrapper.json: {e}"))?;
         results.machine["wrapper_measured"] = w["measured"].clone();
     }
     Ok(results)
@@ -723,7 +847,10 @@ pub fn read() -> Result<Results, String> {
 pub fn write_wrapper(wrapper: &[crate::WrapperRow], measured: Value) -> std::io::Result<()> {
     let path = peers::root().join("docs/work-precision/wrapper.json");
     let json = json!({ "measured": measured, "wrapper": wrapper });
-    std::fs::write(&path, serde_json::to_string_pretty(&json).map_err(std::io::Error::other)? + "\n")?;
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&json).map_err(std::io::Error::other)? + "\n",
+    )?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
@@ -735,7 +862,10 @@ pub fn write(results: &Results, analysis: &Analysis, with_results: bool) -> std:
     let dir = docs.join("work-precision");
     std::fs::create_dir_all(&dir)?;
     if with_results {
-        std::fs::write(dir.join("results.json"), serde_json::to_string_pretty(results).map_err(std::io::Error::other)? + "\n")?;
+        std::fs::write(
+            dir.join("results.json"),
+            serde_json::to_string_pretty(results).map_err(std::io::Error::other)? + "\n",
+        )?;
         // A full run measures the wrapper itself: an older separate measurement is stale.
         match std::fs::remove_file(dir.join("wrapper.json")) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
@@ -752,6 +882,11 @@ pub fn write(results: &Results, analysis: &Analysis, with_results: bool) -> std:
         .unwrap_or_else(|| "\n\n## Notes\n\n(none yet)\n".into());
     let text = format!("{}{}{NOTES_MARKER}{notes}", header(results), analysis.markdown);
     std::fs::write(&path, text)?;
-    eprintln!("wrote {} and {} diagrams{}", path.display(), analysis.svgs.len(), if with_results { " and results.json" } else { "" });
+    eprintln!(
+        "wrote {} and {} diagrams{}",
+        path.display(),
+        analysis.svgs.len(),
+        if with_results { " and results.json" } else { "" }
+    );
     Ok(())
 }

@@ -54,7 +54,11 @@ impl Verdict {
 
     /// A qualitative claim's verdict.
     pub fn holds(holds: bool) -> Self {
-        if holds { Verdict::Holds } else { Verdict::DoesNotHold }
+        if holds {
+            Verdict::Holds
+        } else {
+            Verdict::DoesNotHold
+        }
     }
 }
 
@@ -94,25 +98,65 @@ pub struct Claim {
 }
 
 impl Claim {
-    fn new(claim: &str, source: Source, reference: f64, ours: f64, criterion: String, verdict: Verdict, note: String) -> Self {
+    fn new(
+        claim: &str,
+        source: Source,
+        reference: f64,
+        ours: f64,
+        criterion: String,
+        verdict: Verdict,
+        note: String,
+    ) -> Self {
         let difference = ours - reference;
         let relative_difference = (reference != 0.0).then(|| difference / reference.abs());
-        Claim { claim: claim.into(), source, reference, ours, difference, relative_difference, criterion, verdict, note }
+        Claim {
+            claim: claim.into(),
+            source,
+            reference,
+            ours,
+            difference,
+            relative_difference,
+            criterion,
+            verdict,
+            note,
+        }
     }
 
     /// Agrees within `tol` relative, roughly within 4·`tol`, disagrees otherwise.
-    pub fn relative(claim: &str, source: Source, reference: f64, ours: f64, tol: f64, note: String) -> Self {
+    pub fn relative(
+        claim: &str,
+        source: Source,
+        reference: f64,
+        ours: f64,
+        tol: f64,
+        note: String,
+    ) -> Self {
         let d = ((ours - reference) / reference).abs();
         let verdict = grade(d, tol);
-        let criterion = format!("agrees if |ours − reference| ≤ {} % of |reference|, roughly if ≤ {} %", pct(tol), pct(4.0 * tol));
+        let criterion = format!(
+            "agrees if |ours − reference| ≤ {} % of |reference|, roughly if ≤ {} %",
+            pct(tol),
+            pct(4.0 * tol)
+        );
         Self::new(claim, source, reference, ours, criterion, verdict, note)
     }
 
     /// Agrees within `tol` absolute, roughly within 4·`tol`, disagrees otherwise. `why` says
     /// where the tolerance comes from.
-    pub fn absolute(claim: &str, source: Source, reference: f64, ours: f64, tol: f64, why: &str, note: String) -> Self {
+    pub fn absolute(
+        claim: &str,
+        source: Source,
+        reference: f64,
+        ours: f64,
+        tol: f64,
+        why: &str,
+        note: String,
+    ) -> Self {
         let verdict = grade((ours - reference).abs(), tol);
-        let criterion = format!("agrees if |ours − reference| ≤ {tol:.3e} ({why}), roughly if ≤ {:.3e}", 4.0 * tol);
+        let criterion = format!(
+            "agrees if |ours − reference| ≤ {tol:.3e} ({why}), roughly if ≤ {:.3e}",
+            4.0 * tol
+        );
         Self::new(claim, source, reference, ours, criterion, verdict, note)
     }
 
@@ -125,7 +169,15 @@ impl Claim {
     /// A lower bound: agrees if ours ≥ reference, disagrees otherwise.
     pub fn at_least(claim: &str, source: Source, reference: f64, ours: f64, note: String) -> Self {
         let verdict = if ours >= reference { Verdict::Agrees } else { Verdict::Disagrees };
-        Self::new(claim, source, reference, ours, "agrees if ours ≥ reference".into(), verdict, note)
+        Self::new(
+            claim,
+            source,
+            reference,
+            ours,
+            "agrees if ours ≥ reference".into(),
+            verdict,
+            note,
+        )
     }
 
     /// Every real number of the claim (for the finiteness check).
@@ -156,7 +208,13 @@ fn pct(x: f64) -> String {
     let e = format!("{p:.2e}");
     let (mantissa, exponent) = e.split_once('e').expect("{:e} has an exponent");
     let exponent: i32 = exponent.parse().expect("{:e}'s exponent is an integer");
-    let trim = |s: &str| if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s.to_string() };
+    let trim = |s: &str| {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s.to_string()
+        }
+    };
     if exponent >= -3 {
         let rounded: f64 = e.parse().expect("{:e} parses back");
         trim(&format!("{rounded:.*}", (2 - exponent).max(0) as usize))
@@ -170,7 +228,8 @@ pub fn summary_lines(claims: &[Claim]) -> String {
     claims
         .iter()
         .map(|c| {
-            let rel = c.relative_difference.map_or(String::new(), |r| format!(", {:+.1} %", 100.0 * r));
+            let rel =
+                c.relative_difference.map_or(String::new(), |r| format!(", {:+.1} %", 100.0 * r));
             format!(
                 "  {:<9} {} — {} {}, ours {} (Δ {:+.3e}{rel})\n",
                 c.verdict,
@@ -189,7 +248,11 @@ pub fn summary_lines(claims: &[Claim]) -> String {
 }
 
 fn short(x: f64) -> String {
-    if x != 0.0 && (x.abs() >= 1e5 || x.abs() < 1e-3) { format!("{x:.4e}") } else { format!("{x:.5}") }
+    if x != 0.0 && (x.abs() >= 1e5 || x.abs() < 1e-3) {
+        format!("{x:.4e}")
+    } else {
+        format!("{x:.5}")
+    }
 }
 
 #[cfg(test)]
@@ -198,16 +261,40 @@ mod tests {
 
     #[test]
     fn verdicts_follow_the_stated_tolerance() {
-        assert_eq!(Claim::relative("x", Source::Paper, 2.5, 2.55, 0.05, String::new()).verdict, "agrees");
-        assert_eq!(Claim::relative("x", Source::Paper, 2.5, 2.106, 0.05, String::new()).verdict, "roughly");
-        assert_eq!(Claim::relative("x", Source::Paper, 28.0, 56.4, 0.05, String::new()).verdict, "disagrees");
-        assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.3, 0.1, "test", String::new()).verdict, "roughly");
-        assert_eq!(Claim::absolute("x", Source::Prediction, 0.0, 0.5, 0.1, "test", String::new()).verdict, "disagrees");
+        assert_eq!(
+            Claim::relative("x", Source::Paper, 2.5, 2.55, 0.05, String::new()).verdict,
+            "agrees"
+        );
+        assert_eq!(
+            Claim::relative("x", Source::Paper, 2.5, 2.106, 0.05, String::new()).verdict,
+            "roughly"
+        );
+        assert_eq!(
+            Claim::relative("x", Source::Paper, 28.0, 56.4, 0.05, String::new()).verdict,
+            "disagrees"
+        );
+        assert_eq!(
+            Claim::absolute("x", Source::Prediction, 0.0, 0.3, 0.1, "test", String::new()).verdict,
+            "roughly"
+        );
+        assert_eq!(
+            Claim::absolute("x", Source::Prediction, 0.0, 0.5, 0.1, "test", String::new()).verdict,
+            "disagrees"
+        );
         let n = Claim::negative("c < 0", Source::Paper, -0.2, String::new());
         assert_eq!((n.verdict.as_str(), n.relative_difference), ("agrees", None));
-        assert_eq!(Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict, "disagrees");
-        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict, "agrees");
-        assert_eq!(Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict, "disagrees");
+        assert_eq!(
+            Claim::negative("c < 0", Source::Paper, 0.0, String::new()).verdict,
+            "disagrees"
+        );
+        assert_eq!(
+            Claim::at_least("v ≥ 10", Source::Paper, 10.0, 46.7, String::new()).verdict,
+            "agrees"
+        );
+        assert_eq!(
+            Claim::at_least("v ≥ 10", Source::Paper, 10.0, 1.3, String::new()).verdict,
+            "disagrees"
+        );
     }
 
     #[test]
@@ -233,6 +320,9 @@ mod tests {
             assert_eq!(pct(x), want, "{x}");
         }
         let c = Claim::relative("x", Source::Check, 2.0, 2.0, 1e-6, String::new());
-        assert_eq!(c.criterion, "agrees if |ours − reference| ≤ 1e-4 % of |reference|, roughly if ≤ 4e-4 %");
+        assert_eq!(
+            c.criterion,
+            "agrees if |ours − reference| ≤ 1e-4 % of |reference|, roughly if ≤ 4e-4 %"
+        );
     }
 }

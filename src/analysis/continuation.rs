@@ -150,7 +150,11 @@ pub struct ContinuationReport {
 impl ContinuationReport {
     /// The report of a continuation that could not start: no orbit at the scene's parameters,
     /// for the reason shooting gave (`why`).
-    pub fn not_started(settings: &ContinuationSettings, base: &DrrParams, why: Option<&NoOrbit>) -> Self {
+    pub fn not_started(
+        settings: &ContinuationSettings,
+        base: &DrrParams,
+        why: Option<&NoOrbit>,
+    ) -> Self {
         let from = settings.parameter.get(base);
         let why = why.map_or(String::new(), ToString::to_string);
         ContinuationReport {
@@ -159,7 +163,11 @@ impl ContinuationReport {
             to: settings.to,
             completed: false,
             points: Vec::new(),
-            stopped: Some(Stop { last_value: from, failed_at: from, reason: format!("no periodic orbit at the start: {why}") }),
+            stopped: Some(Stop {
+                last_value: from,
+                failed_at: from,
+                reason: format!("no periodic orbit at the start: {why}"),
+            }),
             flips: Vec::new(),
             period_per_decade: Vec::new(),
         }
@@ -174,7 +182,11 @@ fn grid(from: f64, to: f64, points: usize, log: bool) -> Vec<f64> {
     (0..n)
         .map(|i| {
             let s = i as f64 / (n - 1) as f64;
-            if log { 10f64.powf(from.log10() + s * (to.log10() - from.log10())) } else { from + s * (to - from) }
+            if log {
+                10f64.powf(from.log10() + s * (to.log10() - from.log10()))
+            } else {
+                from + s * (to - from)
+            }
         })
         .collect()
 }
@@ -205,7 +217,13 @@ enum Rejected {
 }
 
 /// One corrector attempt at `value` from the predicted section point.
-fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationSettings, value: f64, x: [f64; 2]) -> Result<PeriodicOrbit, Rejected> {
+fn correct(
+    factory: &mut Factory<'_>,
+    base: &DrrParams,
+    settings: &ContinuationSettings,
+    value: f64,
+    x: [f64; 2],
+) -> Result<PeriodicOrbit, Rejected> {
     let drr = Drr::new(settings.parameter.set(base, value));
     let y0 = [x[0], 0.0, x[1]];
     let mut integ = factory(drr, y0).map_err(AnalysisError::from)?;
@@ -213,13 +231,19 @@ fn correct(factory: &mut Factory<'_>, base: &DrrParams, settings: &ContinuationS
 }
 
 /// Runs the continuation from `start`, the orbit at the scene's parameters `base`.
-pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: PeriodicOrbit, settings: &ContinuationSettings) -> ContinuationReport {
+pub fn run(
+    factory: &mut Factory<'_>,
+    base: &DrrParams,
+    start: PeriodicOrbit,
+    settings: &ContinuationSettings,
+) -> ContinuationReport {
     let par = settings.parameter;
     let from = par.get(base);
     let to_coordinate = |v: f64| if settings.log { v.log10() } else { v };
     let from_coordinate = |c: f64| if settings.log { 10f64.powf(c) } else { c };
     let targets = grid(from, settings.to, settings.points, settings.log);
-    let spacing = (to_coordinate(settings.to) - to_coordinate(from)).abs() / (targets.len() - 1) as f64;
+    let spacing =
+        (to_coordinate(settings.to) - to_coordinate(from)).abs() / (targets.len() - 1) as f64;
     let mut points = vec![CurvePoint { value: from, orbit: start, substeps: 0 }];
     let mut flips = Vec::new();
     let mut stopped = None;
@@ -236,24 +260,35 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: PeriodicOrbit, se
         loop {
             let remaining = goal - current.0;
             let h = remaining.signum() * step.min(remaining.abs());
-            let next = if (remaining.abs() - h.abs()).abs() <= 1e-12 * spacing { goal } else { current.0 + h };
+            let next = if (remaining.abs() - h.abs()).abs() <= 1e-12 * spacing {
+                goal
+            } else {
+                current.0 + h
+            };
             let predicted = match previous {
                 Some((c, x)) if (current.0 - c).abs() > 0.0 => {
                     let r = (next - current.0) / (current.0 - c);
-                    [current.1[0] + r * (current.1[0] - x[0]), current.1[1] + r * (current.1[1] - x[1])]
+                    [
+                        current.1[0] + r * (current.1[0] - x[0]),
+                        current.1[1] + r * (current.1[1] - x[1]),
+                    ]
                 }
                 _ => current.1,
             };
             let value = if next == goal { target } else { from_coordinate(next) };
-            let attempt = correct(factory, base, settings, value, predicted).and_then(|orbit| match jump(&last, &orbit) {
-                Some(why) => Err(why),
-                None => Ok(orbit),
+            let attempt = correct(factory, base, settings, value, predicted).and_then(|orbit| {
+                match jump(&last, &orbit) {
+                    Some(why) => Err(why),
+                    None => Ok(orbit),
+                }
             });
             match attempt {
                 Ok(orbit) => {
                     substeps += 1;
                     let quick = orbit.newton_iterations <= 3;
-                    if let (Some(a), Some(b)) = (last.negative_real_multiplier(), orbit.negative_real_multiplier()) {
+                    if let (Some(a), Some(b)) =
+                        (last.negative_real_multiplier(), orbit.negative_real_multiplier())
+                    {
                         // Both near −1 (multipliers ~0 at large γ are noise, not a flip).
                         if (a + 1.0).signum() != (b + 1.0).signum() && a.abs().min(b.abs()) > 0.5 {
                             flips.push(Flip { from: from_coordinate(current.0), to: value });
@@ -280,14 +315,19 @@ pub fn run(factory: &mut Factory<'_>, base: &DrrParams, start: PeriodicOrbit, se
                         } else {
                             String::new()
                         };
-                        stopped = Some(Stop { last_value: from_coordinate(current.0), failed_at: value, reason: format!("{why}{hint}") });
+                        stopped = Some(Stop {
+                            last_value: from_coordinate(current.0),
+                            failed_at: value,
+                            reason: format!("{why}{hint}"),
+                        });
                         break 'grid;
                     }
                 }
             }
         }
     }
-    let period_per_decade = if par == Parameter::Gamma { decade_slopes(&points) } else { Vec::new() };
+    let period_per_decade =
+        if par == Parameter::Gamma { decade_slopes(&points) } else { Vec::new() };
     ContinuationReport {
         parameter: par,
         from,
@@ -305,7 +345,10 @@ fn jump(last: &PeriodicOrbit, next: &PeriodicOrbit) -> Option<Rejected> {
     let range = |o: &PeriodicOrbit| o.ln_v_max - o.ln_v_min;
     let dt = (next.period - last.period).abs() / last.period;
     let dr = (range(next) - range(last)).abs() / range(last);
-    (dt > 0.1 || dr > 0.1).then(|| Rejected::Jump { period: (last.period, next.period), range: (range(last), range(next)) })
+    (dt > 0.1 || dr > 0.1).then(|| Rejected::Jump {
+        period: (last.period, next.period),
+        range: (range(last), range(next)),
+    })
 }
 
 /// Least-squares slope of period against log10 γ.
@@ -331,10 +374,13 @@ fn decade_slopes(points: &[CurvePoint]) -> Vec<DecadeSlope> {
     let all: Vec<&CurvePoint> = points.iter().collect();
     let mut out: Vec<DecadeSlope> = slope(&all).into_iter().collect();
     let lo = points.iter().map(|p| p.value.log10()).fold(f64::INFINITY, f64::min).ceil() as i64;
-    let hi = points.iter().map(|p| p.value.log10()).fold(f64::NEG_INFINITY, f64::max).floor() as i64;
+    let hi =
+        points.iter().map(|p| p.value.log10()).fold(f64::NEG_INFINITY, f64::max).floor() as i64;
     for d in lo..hi {
-        let within: Vec<&CurvePoint> =
-            points.iter().filter(|p| (d as f64 - 1e-9..=(d + 1) as f64 + 1e-9).contains(&p.value.log10())).collect();
+        let within: Vec<&CurvePoint> = points
+            .iter()
+            .filter(|p| (d as f64 - 1e-9..=(d + 1) as f64 + 1e-9).contains(&p.value.log10()))
+            .collect();
         out.extend(slope(&within));
     }
     out

@@ -39,26 +39,38 @@ impl CyclePeriod {
     pub fn from_cycle(cycle: &CycleReport) -> Result<Self, AnalysisError> {
         let none = |reason: String| AnalysisError::NoLimitCycle { reason };
         if cycle.status != CycleStatus::Periodic {
-            return Err(none(format!("the cycle analysis found no period-1 limit cycle (status {:?})", cycle.status)));
+            return Err(none(format!(
+                "the cycle analysis found no period-1 limit cycle (status {:?})",
+                cycle.status
+            )));
         }
-        let tr = cycle.trajectory.last().ok_or_else(|| none("the cycle analysis recorded no trajectory".into()))?;
+        let tr = cycle
+            .trajectory
+            .last()
+            .ok_or_else(|| none("the cycle analysis recorded no trajectory".into()))?;
         let n = tr.t.len();
         if n < 8 || tr.v.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
-            return Err(none(format!("the recorded cycle has {n} samples or a velocity that is not positive and finite")));
+            return Err(none(format!(
+                "the recorded cycle has {n} samples or a velocity that is not positive and finite"
+            )));
         }
         let period = tr.t[n - 1];
         let argmax = (0..n).fold(0, |b, i| if tr.v[i] > tr.v[b] { i } else { b });
         let argmin = (0..n).fold(0, |b, i| if tr.v[i] < tr.v[b] { i } else { b });
         if argmin <= argmax {
-            return Err(none("the v minimum does not follow the slip in the recorded cycle".into()));
+            return Err(none(
+                "the v minimum does not follow the slip in the recorded cycle".into(),
+            ));
         }
         // From the v minimum to the end of the cycle, then the start of the cycle (one period
         // later) up to the v minimum; t = 0 and t = period are the same state. Times from the
         // peak are differences of the recorded times (the period is added only to the stick's
         // part, far from the peak, so the slip keeps the recorded resolution).
         let t_peak = tr.t[argmax];
-        let order: Vec<(usize, f64)> =
-            (argmin..n).map(|i| (i, (tr.t[i] - period) - t_peak)).chain((1..=argmin).map(|i| (i, tr.t[i] - t_peak))).collect();
+        let order: Vec<(usize, f64)> = (argmin..n)
+            .map(|i| (i, (tr.t[i] - period) - t_peak))
+            .chain((1..=argmin).map(|i| (i, tr.t[i] - t_peak)))
+            .collect();
         let s: Vec<f64> = order.iter().map(|&(_, s)| s).collect();
         let u: Vec<f64> = order.iter().map(|&(i, _)| tr.u[i]).collect();
         let w: Vec<f64> = order.iter().map(|&(i, _)| tr.v[i].ln()).collect();
@@ -66,7 +78,9 @@ impl CyclePeriod {
         let peak = n - argmin + argmax - 1;
         // The cycle ends at its upward crossing of v = 1 (a located event, t = period).
         let up = n - 1 - argmin;
-        let down = (peak..s.len()).find(|&k| w[k] < 0.0).ok_or_else(|| none("no downward crossing of v = 1 after the peak".into()))?;
+        let down = (peak..s.len())
+            .find(|&k| w[k] < 0.0)
+            .ok_or_else(|| none("no downward crossing of v = 1 after the peak".into()))?;
         Ok(CyclePeriod { period, s, u, w, theta, peak, up, down })
     }
 

@@ -24,7 +24,11 @@ impl InvalidOption {
 
     /// The field's full path below `base` (e.g. "analyses[2].noise"), as a scene names it.
     pub fn path_below(&self, base: &str) -> String {
-        if self.field.is_empty() { base.to_string() } else { format!("{base}.{}", self.field) }
+        if self.field.is_empty() {
+            base.to_string()
+        } else {
+            format!("{base}.{}", self.field)
+        }
     }
 }
 
@@ -114,8 +118,12 @@ impl AnalysisError {
     /// [`to_string`](ToString::to_string)'s.
     pub fn message_under(&self, analysis: &str) -> String {
         match self {
-            Self::Failed { analysis: a, t, state, message } if *a == analysis => failed_at(t, state, message),
-            Self::Budget { analysis: a, t, state, message } if *a == analysis => out_of_budget_at(t, state, message),
+            Self::Failed { analysis: a, t, state, message } if *a == analysis => {
+                failed_at(t, state, message)
+            }
+            Self::Budget { analysis: a, t, state, message } if *a == analysis => {
+                out_of_budget_at(t, state, message)
+            }
             other => other.to_string(),
         }
     }
@@ -169,7 +177,9 @@ impl AnalysisError {
     /// no limit cycle, not applicable or not converged. Failures stay errors.
     pub fn into_note(self) -> Result<String, AnalysisError> {
         match self {
-            Self::NotApplicable { .. } | Self::NoLimitCycle { .. } | Self::NotConverged { .. } => Ok(self.to_string()),
+            Self::NotApplicable { .. } | Self::NoLimitCycle { .. } | Self::NotConverged { .. } => {
+                Ok(self.to_string())
+            }
             other => Err(other),
         }
     }
@@ -185,19 +195,38 @@ mod tests {
             analysis: "cycle",
             t: 5.5,
             state: vec![1.0, 2.0, 3.0],
-            message: "501 CVODE steps without settling on a cycle (cycle.max_steps = 500; raise it)".into(),
+            message:
+                "501 CVODE steps without settling on a cycle (cycle.max_steps = 500; raise it)"
+                    .into(),
         };
         let alone = budget.to_string();
         assert_eq!(alone, "cycle ran out of its budget at t = 5.5e0 (state [1.0, 2.0, 3.0]): 501 CVODE steps without settling on a cycle (cycle.max_steps = 500; raise it)");
         assert_eq!(budget.message_under("cycle"), alone["cycle ".len()..]);
-        assert_eq!(budget.message_under("asymptotics"), alone, "a part of another analysis keeps its name");
-        let failed = AnalysisError::Failed { analysis: "noise", t: 1.0, state: vec![], message: "no event".into() };
+        assert_eq!(
+            budget.message_under("asymptotics"),
+            alone,
+            "a part of another analysis keeps its name"
+        );
+        let failed = AnalysisError::Failed {
+            analysis: "noise",
+            t: 1.0,
+            state: vec![],
+            message: "no event".into(),
+        };
         assert_eq!(failed.to_string(), "noise failed at t = 1e0 (state []): no event");
         assert_eq!(failed.message_under("noise"), "failed at t = 1e0 (state []): no event");
-        let part = AnalysisError::Failed { analysis: "the 2D slow flow", t: 1.0, state: vec![], message: "left".into() };
+        let part = AnalysisError::Failed {
+            analysis: "the 2D slow flow",
+            t: 1.0,
+            state: vec![],
+            message: "left".into(),
+        };
         assert_eq!(part.message_under("asymptotics"), part.to_string());
         let refused = AnalysisError::NonFinite { path: "cycle.period".into() };
-        assert_eq!(refused.message_under("cycle"), "a non-finite number at cycle.period; refusing to report it");
+        assert_eq!(
+            refused.message_under("cycle"),
+            "a non-finite number at cycle.period; refusing to report it"
+        );
         let note = AnalysisError::NoLimitCycle { reason: "none".into() };
         assert_eq!(note.message_under("lyapunov"), "none");
     }

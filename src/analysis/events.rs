@@ -72,7 +72,9 @@ pub fn hermite(a: Knot, b: Knot, t: f64) -> f64 {
     let h = b.t - a.t;
     let s = (t - a.t) / h;
     let (s2, s3) = (s * s, s * s * s);
-    (2.0 * s3 - 3.0 * s2 + 1.0) * a.x + (s3 - 2.0 * s2 + s) * h * a.dx + (-2.0 * s3 + 3.0 * s2) * b.x
+    (2.0 * s3 - 3.0 * s2 + 1.0) * a.x
+        + (s3 - 2.0 * s2 + s) * h * a.dx
+        + (-2.0 * s3 + 3.0 * s2) * b.x
         + (s3 - s2) * h * b.dx
 }
 
@@ -104,7 +106,8 @@ mod tests {
     fn hermite_is_exact_for_cubics() {
         let f = |t: f64| t * t * t - 2.0 * t + 0.5;
         let df = |t: f64| 3.0 * t * t - 2.0;
-        let (a, b) = (Knot { t: 0.3, x: f(0.3), dx: df(0.3) }, Knot { t: 1.7, x: f(1.7), dx: df(1.7) });
+        let (a, b) =
+            (Knot { t: 0.3, x: f(0.3), dx: df(0.3) }, Knot { t: 1.7, x: f(1.7), dx: df(1.7) });
         for t in [0.3, 0.8, 1.1, 1.7] {
             assert!((hermite(a, b, t) - f(t)).abs() < 1e-14);
         }

@@ -129,7 +129,11 @@ impl<'a> ser::Serializer for &'a mut Walker {
     fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> Result<(), Never> {
         Ok(())
     }
-    fn serialize_newtype_struct<T: Serialize + ?Sized>(self, _: &'static str, value: &T) -> Result<(), Never> {
+    fn serialize_newtype_struct<T: Serialize + ?Sized>(
+        self,
+        _: &'static str,
+        value: &T,
+    ) -> Result<(), Never> {
         value.serialize(self)
     }
     fn serialize_newtype_variant<T: Serialize + ?Sized>(
@@ -151,7 +155,13 @@ impl<'a> ser::Serializer for &'a mut Walker {
     fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
         Ok(Compound { walker: self, index: 0, key: None })
     }
-    fn serialize_tuple_variant(self, _: &'static str, _: u32, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
+    fn serialize_tuple_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+        _: usize,
+    ) -> Result<Compound<'a>, Never> {
         Ok(Compound { walker: self, index: 0, key: None })
     }
     fn serialize_map(self, _: Option<usize>) -> Result<Compound<'a>, Never> {
@@ -160,7 +170,13 @@ impl<'a> ser::Serializer for &'a mut Walker {
     fn serialize_struct(self, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
         Ok(Compound { walker: self, index: 0, key: None })
     }
-    fn serialize_struct_variant(self, _: &'static str, _: u32, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
+    fn serialize_struct_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+        _: usize,
+    ) -> Result<Compound<'a>, Never> {
         Ok(Compound { walker: self, index: 0, key: None })
     }
 }
@@ -189,7 +205,12 @@ macro_rules! sequence_like {
     )*};
 }
 
-sequence_like!(SerializeSeq::serialize_element, SerializeTuple::serialize_element, SerializeTupleStruct::serialize_field, SerializeTupleVariant::serialize_field);
+sequence_like!(
+    SerializeSeq::serialize_element,
+    SerializeTuple::serialize_element,
+    SerializeTupleStruct::serialize_field,
+    SerializeTupleVariant::serialize_field
+);
 
 impl ser::SerializeMap for Compound<'_> {
     type Ok = ();
@@ -249,9 +270,17 @@ mod tests {
 
     #[test]
     fn names_the_first_non_finite_number() {
-        let ok = Outer { name: "a".into(), inner: Inner { values: vec![1.0, 2.0], pair: Some([0.0, 1.0]) }, extra: None };
+        let ok = Outer {
+            name: "a".into(),
+            inner: Inner { values: vec![1.0, 2.0], pair: Some([0.0, 1.0]) },
+            extra: None,
+        };
         assert_eq!(first_non_finite(&ok, "x"), None);
-        let bad = Outer { name: "a".into(), inner: Inner { values: vec![1.0, f64::NAN], pair: None }, extra: None };
+        let bad = Outer {
+            name: "a".into(),
+            inner: Inner { values: vec![1.0, f64::NAN], pair: None },
+            extra: None,
+        };
         assert_eq!(first_non_finite(&bad, "x").as_deref(), Some("x.inner.values[1]"));
         let flat = Outer {
             name: "a".into(),

@@ -20,7 +20,12 @@ pub struct Fit {
 
 /// Fits y ≈ Σ c_k basis[k](x) over the points; None if there are fewer points than terms, the
 /// basis is rank deficient on them, or a value is not finite.
-pub fn least_squares(model: &str, x: &[f64], y: &[f64], basis: &[&dyn Fn(f64) -> f64]) -> Option<Fit> {
+pub fn least_squares(
+    model: &str,
+    x: &[f64],
+    y: &[f64],
+    basis: &[&dyn Fn(f64) -> f64],
+) -> Option<Fit> {
     let (n, m) = (x.len(), basis.len());
     if n < m || m == 0 || n != y.len() {
         return None;
@@ -90,7 +95,14 @@ pub fn power_limit(model: &str, x: &[f64], y: &[f64]) -> Option<PowerLimit> {
     }
     let p = 0.5 * (lo + hi);
     let f = at(p)?;
-    Some(PowerLimit { model: model.into(), limit: f.coefficients[0], amplitude: f.coefficients[1], exponent: p, residual_rms: f.residual_rms, points: f.points })
+    Some(PowerLimit {
+        model: model.into(),
+        limit: f.coefficients[0],
+        amplitude: f.coefficients[1],
+        exponent: p,
+        residual_rms: f.residual_rms,
+        points: f.points,
+    })
 }
 
 #[cfg(test)]
@@ -101,7 +113,8 @@ mod tests {
     fn recovers_an_exact_model_and_refuses_too_few_points() {
         let x: Vec<f64> = (1..8).map(|k| (10f64).powi(k).ln()).collect();
         let y: Vec<f64> = x.iter().map(|l| 2.0 + 0.5 * l - 1.5 * l.ln()).collect();
-        let f = least_squares("a + b L + c ln L", &x, &y, &[&|_| 1.0, &|l| l, &|l: f64| l.ln()]).unwrap();
+        let f = least_squares("a + b L + c ln L", &x, &y, &[&|_| 1.0, &|l| l, &|l: f64| l.ln()])
+            .unwrap();
         for (got, want) in f.coefficients.iter().zip([2.0, 0.5, -1.5]) {
             assert!((got - want).abs() < 1e-9, "{:?}", f.coefficients);
         }

@@ -67,7 +67,11 @@ pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
     let g = p.gamma * p.gamma;
     let (_, f1) = p.friction.eval(0.0);
     let kappa = p.state_law.steady_rate();
-    (kappa + g * (f1 + p.eta) / p.xi, g * (1.0 + kappa * (p.eta - p.epsilon * f1) / p.xi), g * kappa)
+    (
+        kappa + g * (f1 + p.eta) / p.xi,
+        g * (1.0 + kappa * (p.eta - p.epsilon * f1) / p.xi),
+        g * kappa,
+    )
 }
 
 /// Coefficients (b, c) of the quasi-dynamic model's characteristic polynomial λ² + bλ + c at
@@ -188,13 +192,22 @@ mod tests {
 
     /// Two eigenvalue lists agree, once sorted, within `tolerance` × (1 + |λ|) (relative) or
     /// `tolerance` (absolute, `relative` false).
-    fn assert_same_eigenvalues(mut ours: Vec<[f64; 2]>, mut reference: Vec<[f64; 2]>, tolerance: f64, relative: bool, what: &str) {
+    fn assert_same_eigenvalues(
+        mut ours: Vec<[f64; 2]>,
+        mut reference: Vec<[f64; 2]>,
+        tolerance: f64,
+        relative: bool,
+        what: &str,
+    ) {
         let key = |a: &[f64; 2], b: &[f64; 2]| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1]));
         reference.sort_by(key);
         ours.sort_by(key);
         for (a, b) in ours.iter().zip(&reference) {
             let scale = if relative { 1.0 + b[0].hypot(b[1]) } else { 1.0 };
-            assert!((a[0] - b[0]).abs() < tolerance * scale && (a[1] - b[1]).abs() < tolerance * scale, "{what}: {ours:?} vs {reference:?}");
+            assert!(
+                (a[0] - b[0]).abs() < tolerance * scale && (a[1] - b[1]).abs() < tolerance * scale,
+                "{what}: {ours:?} vs {reference:?}"
+            );
         }
     }
 
@@ -202,18 +215,38 @@ mod tests {
     /// largest real part of its numerically computed eigenvalues crosses 0 (bisection) to 1e-9,
     /// and the imaginary part there to 1e-7. Returns the derived report.
     fn assert_threshold_matches_the_eigenvalues(base: DrrParams) -> HopfReport {
-        let max_re = |p: DrrParams| matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max);
+        let max_re = |p: DrrParams| {
+            matrix_eigenvalues(&Drr::new(p)).iter().map(|e| e[0]).fold(f64::NEG_INFINITY, f64::max)
+        };
         let derived = analyse(&Drr::new(base));
         let (mut lo, mut hi) = (0.0, 20.0);
-        assert!(max_re(DrrParams { epsilon: lo, ..base }) < 0.0 && max_re(DrrParams { epsilon: hi, ..base }) > 0.0);
+        assert!(
+            max_re(DrrParams { epsilon: lo, ..base }) < 0.0
+                && max_re(DrrParams { epsilon: hi, ..base }) > 0.0
+        );
         for _ in 0..60 {
             let mid = 0.5 * (lo + hi);
-            if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 { lo = mid } else { hi = mid }
+            if max_re(DrrParams { epsilon: mid, ..base }) < 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
         }
         let eps = 0.5 * (lo + hi);
-        assert!((eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c, "{base:?}: {eps} vs {}", derived.epsilon_c);
-        let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base })).iter().map(|e| e[1]).fold(0.0, f64::max);
-        assert!((omega - derived.omega_c).abs() < 1e-7 * derived.omega_c, "{base:?}: ω {omega} vs {}", derived.omega_c);
+        assert!(
+            (eps - derived.epsilon_c).abs() < 1e-9 * derived.epsilon_c,
+            "{base:?}: {eps} vs {}",
+            derived.epsilon_c
+        );
+        let omega = matrix_eigenvalues(&Drr::new(DrrParams { epsilon: eps, ..base }))
+            .iter()
+            .map(|e| e[1])
+            .fold(0.0, f64::max);
+        assert!(
+            (omega - derived.omega_c).abs() < 1e-7 * derived.omega_c,
+            "{base:?}: ω {omega} vs {}",
+            derived.omega_c
+        );
         derived
     }
 
@@ -223,8 +256,18 @@ mod tests {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.0, 0.05, 0.8] {
                     for gamma in [1.0, 3.0, 10.0, 100.0] {
-                        let d = Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.72, friction) });
-                        assert_same_eigenvalues(analyse(&d).eigenvalues, matrix_eigenvalues(&d), 1e-9, true, &format!("{friction:?} {state_law:?} η={eta} γ={gamma}"));
+                        let d = Drr::new(DrrParams {
+                            state_law,
+                            eta,
+                            ..DrrParams::new(gamma, 0.7, 0.72, friction)
+                        });
+                        assert_same_eigenvalues(
+                            analyse(&d).eigenvalues,
+                            matrix_eigenvalues(&d),
+                            1e-9,
+                            true,
+                            &format!("{friction:?} {state_law:?} η={eta} γ={gamma}"),
+                        );
                     }
                 }
             }
@@ -243,7 +286,11 @@ mod tests {
             assert!(above.max_real_part > 0.0 && above.above_threshold, "γ={gamma}: {above:?}");
             let at = analyse(&drr(gamma, 0.7, ec, Friction::Log));
             let slow = at.eigenvalues.iter().find(|e| e[1] > 0.0).unwrap();
-            assert!((slow[1] - at.omega_c).abs() < 1e-8 * at.omega_c, "γ={gamma}: {slow:?} vs ω_c {}", at.omega_c);
+            assert!(
+                (slow[1] - at.omega_c).abs() < 1e-8 * at.omega_c,
+                "γ={gamma}: {slow:?} vs ω_c {}",
+                at.omega_c
+            );
         }
         let large = analyse(&drr(1e8, 0.8, 1.0, Friction::Log));
         assert!((large.period_c - large.period_c_large_gamma).abs() < 1e-12 * large.period_c);
@@ -259,7 +306,11 @@ mod tests {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.0, 0.1, 1.0] {
                     for gamma in [2.0, 10.0, 50.0] {
-                        assert_threshold_matches_the_eigenvalues(DrrParams { state_law, eta, ..DrrParams::new(gamma, 0.7, 0.0, friction) });
+                        assert_threshold_matches_the_eigenvalues(DrrParams {
+                            state_law,
+                            eta,
+                            ..DrrParams::new(gamma, 0.7, 0.0, friction)
+                        });
                     }
                 }
             }
@@ -270,14 +321,27 @@ mod tests {
     fn the_three_state_laws_share_the_threshold_and_frequency() {
         for friction in frictions() {
             for gamma in [10.0, 1e3, 1e8] {
-                let at = |state_law| analyse(&Drr::new(DrrParams { state_law, ..DrrParams::new(gamma, 0.8, 1.0, friction) }));
+                let at = |state_law| {
+                    analyse(&Drr::new(DrrParams {
+                        state_law,
+                        ..DrrParams::new(gamma, 0.8, 1.0, friction)
+                    }))
+                };
                 let slip = at(StateLaw::Slip);
                 for law in [StateLaw::Ageing, StateLaw::Prz] {
                     let other = at(law);
                     let close = |a: f64, b: f64| (a - b).abs() <= 1e-14 * a.abs().max(b.abs());
-                    assert!(close(other.epsilon_c, slip.epsilon_c) && close(other.omega_c, slip.omega_c), "{friction:?} {law:?} γ={gamma}: {other:?} vs {slip:?}");
+                    assert!(
+                        close(other.epsilon_c, slip.epsilon_c)
+                            && close(other.omega_c, slip.omega_c),
+                        "{friction:?} {law:?} γ={gamma}: {other:?} vs {slip:?}"
+                    );
                     for (a, b) in other.eigenvalues.iter().zip(&slip.eigenvalues) {
-                        assert!((a[0] - b[0]).abs() <= 1e-13 * b[0].hypot(b[1]) && (a[1] - b[1]).abs() <= 1e-13 * b[0].hypot(b[1]), "{friction:?} {law:?} γ={gamma}");
+                        assert!(
+                            (a[0] - b[0]).abs() <= 1e-13 * b[0].hypot(b[1])
+                                && (a[1] - b[1]).abs() <= 1e-13 * b[0].hypot(b[1]),
+                            "{friction:?} {law:?} γ={gamma}"
+                        );
                     }
                 }
             }
@@ -294,29 +358,55 @@ mod tests {
         for friction in frictions() {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.01, 0.1, 1.0] {
-                    let base = DrrParams { state_law, ..DrrParams::quasi_dynamic(0.7, 0.0, eta, friction) };
+                    let base = DrrParams {
+                        state_law,
+                        ..DrrParams::quasi_dynamic(0.7, 0.0, eta, friction)
+                    };
                     // Eigenvalues at ε = 1.3: the reported pair and −κ_G.
                     let at = Drr::new(DrrParams { epsilon: 1.3, ..base });
                     let mut ours = analyse(&at).eigenvalues;
                     ours.push([-CONSTRAINT_RELAXATION_RATE, 0.0]);
-                    assert_same_eigenvalues(ours, matrix_eigenvalues(&at), 1e-10, false, &format!("{friction:?} {state_law:?} η={eta}"));
+                    assert_same_eigenvalues(
+                        ours,
+                        matrix_eigenvalues(&at),
+                        1e-10,
+                        false,
+                        &format!("{friction:?} {state_law:?} η={eta}"),
+                    );
                     let derived = assert_threshold_matches_the_eigenvalues(base);
                     // The inertial threshold at γ = 1e6 is the quasi-dynamic one to O(1/γ²).
-                    let inertial = analyse(&Drr::new(DrrParams { gamma: 1e6, inertia: true, ..base }));
-                    assert!((inertial.epsilon_c - derived.epsilon_c).abs() < 1e-10 && (inertial.omega_c - derived.omega_c).abs() < 1e-10, "{friction:?} {state_law:?} η={eta}: {inertial:?} vs {derived:?}");
+                    let inertial =
+                        analyse(&Drr::new(DrrParams { gamma: 1e6, inertia: true, ..base }));
+                    assert!(
+                        (inertial.epsilon_c - derived.epsilon_c).abs() < 1e-10
+                            && (inertial.omega_c - derived.omega_c).abs() < 1e-10,
+                        "{friction:?} {state_law:?} η={eta}: {inertial:?} vs {derived:?}"
+                    );
                 }
             }
         }
         let qd = analyse(&Drr::new(DrrParams::quasi_dynamic(0.8, 1.0, 0.05, Friction::Log)));
-        assert!((qd.epsilon_c - 0.85).abs() < 1e-15 && (qd.omega_c - (0.8f64 / 1.05).sqrt()).abs() < 1e-15 && qd.above_threshold, "{qd:?}");
+        assert!(
+            (qd.epsilon_c - 0.85).abs() < 1e-15
+                && (qd.omega_c - (0.8f64 / 1.05).sqrt()).abs() < 1e-15
+                && qd.above_threshold,
+            "{qd:?}"
+        );
     }
 
     #[test]
     fn damping_raises_the_threshold_by_eta_over_f1_at_large_gamma() {
         for eta in [0.0, 0.3, 2.0] {
-            let h = analyse(&Drr::new(DrrParams { eta, ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log) }));
+            let h = analyse(&Drr::new(DrrParams {
+                eta,
+                ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log)
+            }));
             assert!((h.epsilon_c - (0.8 + eta)).abs() < 1e-12, "η={eta}: {}", h.epsilon_c);
-            assert!((h.omega_c - (0.8 / (1.0 + eta)).sqrt()).abs() < 1e-12, "η={eta}: {}", h.omega_c);
+            assert!(
+                (h.omega_c - (0.8 / (1.0 + eta)).sqrt()).abs() < 1e-12,
+                "η={eta}: {}",
+                h.omega_c
+            );
         }
     }
 }

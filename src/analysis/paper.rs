@@ -4,9 +4,9 @@
 //! Reference: Pomeau & Le Berre, "Critical speed-up vs critical slow-down" (eq. tauc, eq. to,
 //! the slip duration "about 2.5/γ", and the earthquake case τ = 28, i.e. 75 years).
 
+use super::claims::{Claim, Source};
 use super::cycle::CycleValues;
 use super::hopf::HopfReport;
-use super::claims::{Claim, Source};
 use crate::model::{DrrParams, Friction};
 
 /// A claim of the paper with its verdict: agrees within 5 %, roughly within 20 %, else

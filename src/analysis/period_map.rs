@@ -197,7 +197,11 @@ impl Progress {
     /// by ±5e-14 around w = 0 (CVODE), which ended the return 0.97 after its start, and Newton
     /// then converged on the arrest's crossing as the section point (t0 one period, multipliers
     /// 574 … 3e5 in fig1c-extended at 5 of 41 points).
-    fn completed(&mut self, clock: &mut Clock, next: &Sample) -> Result<Option<Return>, SolverError> {
+    fn completed(
+        &mut self,
+        clock: &mut Clock,
+        next: &Sample,
+    ) -> Result<Option<Return>, SolverError> {
         let prev = &self.prev;
         if !self.down_seen && self.peak.is_some() && next.y[W] < -self.floor {
             self.down_seen = true;
@@ -228,12 +232,18 @@ impl Progress {
         if !(out_of_time || self.steps > self.limits.max_steps) {
             return Ok(());
         }
-        let limit = if out_of_time { format!("t = {:e}", self.limits.max_time) } else { format!("{} steps", self.limits.max_steps) };
+        let limit = if out_of_time {
+            format!("t = {:e}", self.limits.max_time)
+        } else {
+            format!("{} steps", self.limits.max_steps)
+        };
         Err(AnalysisError::Budget {
             analysis: "the return to the section v = 1",
             t: clock.now().to_f64(),
             state: next.y.to_vec(),
-            message: format!("no return within {limit} (the orbit may have decayed to the fixed point)"),
+            message: format!(
+                "no return within {limit} (the orbit may have decayed to the fixed point)"
+            ),
         })
     }
 
@@ -243,10 +253,12 @@ impl Progress {
     fn due_cut(&mut self, next: &Sample) -> Option<f64> {
         let prev = &self.prev;
         let crosses = |level: f64, up: bool, down: bool| {
-            (up && prev.y[W] < level && next.y[W] >= level) || (down && prev.y[W] >= level && next.y[W] < level)
+            (up && prev.y[W] < level && next.y[W] >= level)
+                || (down && prev.y[W] >= level && next.y[W] < level)
         };
         let cut_level = self.cut_level;
-        let (level, count) = if cut_level > 0.0 && self.cuts == 0 && crosses(cut_level, true, false) {
+        let (level, count) = if cut_level > 0.0 && self.cuts == 0 && crosses(cut_level, true, false)
+        {
             (cut_level, 1)
         } else if cut_level > 0.0 && self.cuts == 1 && crosses(cut_level, false, true) {
             (cut_level, 2)
@@ -263,14 +275,22 @@ impl Progress {
     /// products and the integration restarts there with Φ = I; after a v maximum, the clock
     /// re-bases at the first safe step end above v = 1; otherwise the step end becomes the
     /// previous sample.
-    fn cut_or_rebase(&mut self, clock: &mut Clock, drr: &Drr, next: Sample) -> Result<(), SolverError> {
+    fn cut_or_rebase(
+        &mut self,
+        clock: &mut Clock,
+        drr: &Drr,
+        next: Sample,
+    ) -> Result<(), SolverError> {
         if let Some(level) = self.due_cut(&next) {
             let (t, y, velocity, phi) = crossing(clock, (self.prev.t, next.t), level)?;
-            if restart_safe(drr, self.limits.w_tolerance, &y, velocity[W].abs().max(self.rise_rate)) {
+            if restart_safe(drr, self.limits.w_tolerance, &y, velocity[W].abs().max(self.rise_rate))
+            {
                 self.fundamental = phi * self.fundamental;
                 self.section_jacobian = section_map(&phi, &velocity) * self.section_jacobian;
                 let at = clock.global(t);
-                clock.reinit(at, &Variational::<Drr, 3>::initial(&y)).map_err(|e| in_global_time(clock, e))?;
+                clock
+                    .reinit(at, &Variational::<Drr, 3>::initial(&y))
+                    .map_err(|e| in_global_time(clock, e))?;
                 self.rebase_pending = false;
                 // Back on w = 0 at the arrest's cut: the fall below −floor must be seen anew
                 // (the step that crossed may have ended below it already).
@@ -281,7 +301,10 @@ impl Progress {
                 return Ok(());
             }
         }
-        if self.rebase_pending && next.y[W] > 0.0 && restart_safe(drr, self.limits.w_tolerance, &next.y, self.rise_rate) {
+        if self.rebase_pending
+            && next.y[W] > 0.0
+            && restart_safe(drr, self.limits.w_tolerance, &next.y, self.rise_rate)
+        {
             self.rebase_pending = false;
             clock.rebase().map_err(|e| in_global_time(clock, e))?;
             self.prev = Sample { t: 0.0, ..next };

@@ -13,20 +13,29 @@ pub fn decimate(x: &[f64], columns: &[&[f64]], max_points: usize) -> Vec<usize> 
         return (0..n).collect();
     }
     let range = |c: &[f64]| {
-        let (lo, hi) = c.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-        if hi > lo { hi - lo } else { 1.0 }
+        let (lo, hi) = c
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        if hi > lo {
+            hi - lo
+        } else {
+            1.0
+        }
     };
     let mut coords: Vec<(&[f64], f64)> = vec![(x, range(x))];
     coords.extend(columns.iter().map(|c| (*c, range(c))));
     let mut arc = vec![0.0; n];
     for i in 1..n {
-        let step: f64 = coords.iter().map(|(c, r)| ((c[i] - c[i - 1]) / r).powi(2)).sum::<f64>().sqrt();
+        let step: f64 =
+            coords.iter().map(|(c, r)| ((c[i] - c[i - 1]) / r).powi(2)).sum::<f64>().sqrt();
         arc[i] = arc[i - 1] + step;
     }
     // Extrema of each spacing column and the two ends are always kept.
     let mut keep: Vec<usize> = vec![0, n - 1];
     for c in columns {
-        let arg = |better: fn(f64, f64) -> bool| (0..n).fold(0, |b, i| if better(c[i], c[b]) { i } else { b });
+        let arg = |better: fn(f64, f64) -> bool| {
+            (0..n).fold(0, |b, i| if better(c[i], c[b]) { i } else { b })
+        };
         keep.push(arg(|a, b| a > b));
         keep.push(arg(|a, b| a < b));
     }

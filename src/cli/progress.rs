@@ -43,8 +43,12 @@ impl Progress {
         let mut count = self.count();
         if self.terminal {
             let elapsed = self.started.elapsed().as_secs_f64();
-            let eta = count.started.elapsed().as_secs_f64() / done.max(1) as f64 * total.saturating_sub(done) as f64;
-            eprint!("\r\x1b[K{}: {done}/{total} {}, {elapsed:.0} s, ETA {eta:.0} s", self.label, self.unit);
+            let eta = count.started.elapsed().as_secs_f64() / done.max(1) as f64
+                * total.saturating_sub(done) as f64;
+            eprint!(
+                "\r\x1b[K{}: {done}/{total} {}, {elapsed:.0} s, ETA {eta:.0} s",
+                self.label, self.unit
+            );
             count.line_open = true;
         }
         if done >= total {
@@ -71,7 +75,11 @@ impl stickslip::reproduce::Progress for Progress {
             eprint!("\r\x1b[K");
             count.line_open = false;
         }
-        eprintln!("{} [{index}/{total}] {:.0} s: {what}", self.label, self.started.elapsed().as_secs_f64());
+        eprintln!(
+            "{} [{index}/{total}] {:.0} s: {what}",
+            self.label,
+            self.started.elapsed().as_secs_f64()
+        );
         count.started = Instant::now();
     }
 

@@ -1,8 +1,8 @@
 //! Reading a user's file: a trajectory (CSV or JSON columns) or a report (JSON with a
 //! `cycle` object). Every error names where (file line, or JSON path), the column and the value.
 
-use serde::Deserialize;
 use serde::de::IgnoredAny;
+use serde::Deserialize;
 
 /// A user's trajectory.
 #[derive(Debug, Clone, PartialEq)]
@@ -235,7 +235,8 @@ pub enum InputError {
 /// JSON paths for JSON), naming the column and the value.
 pub fn read_user_data(text: &str) -> Result<UserData, InputError> {
     if text.trim_start().starts_with('{') {
-        let json: serde_json::Value = serde_json::from_str(text).map_err(|e| InputError::Json(e.to_string()))?;
+        let json: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| InputError::Json(e.to_string()))?;
         if json.get("cycle").is_some() {
             let report: UserReport = serde_path_to_error::deserialize(&json).map_err(|e| {
                 let path = e.path().to_string();
@@ -258,31 +259,55 @@ fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputErr
             .ok_or(InputError::MissingArray { column })?
             .iter()
             .enumerate()
-            .map(|(index, x)| x.as_f64().ok_or_else(|| InputError::JsonNotNumber { column, index, value: x.to_string() }))
+            .map(|(index, x)| {
+                x.as_f64().ok_or_else(|| InputError::JsonNotNumber {
+                    column,
+                    index,
+                    value: x.to_string(),
+                })
+            })
             .collect()
     };
     let (t, u, v, theta) = (column("t")?, column("u")?, column("v")?, column("theta")?);
     if [u.len(), v.len(), theta.len()].iter().any(|&n| n != t.len()) {
-        return Err(InputError::LengthMismatch { lengths: [t.len(), u.len(), v.len(), theta.len()] });
+        return Err(InputError::LengthMismatch {
+            lengths: [t.len(), u.len(), v.len(), theta.len()],
+        });
     }
     let y = (0..t.len()).map(|i| [u[i], v[i], theta[i]]).collect();
     Ok(Trajectory { t, y, origin: (0..u.len()).map(|i| format!("index {i}")).collect() })
 }
 
 fn read_csv(text: &str) -> Result<Trajectory, InputError> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let (_, header) = lines.next().ok_or(InputError::Empty)?;
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_lowercase()).collect();
     let index = |column: &'static str| {
-        names.iter().position(|n| n == column).ok_or_else(|| InputError::MissingColumn { header: header.into(), column })
+        names
+            .iter()
+            .position(|n| n == column)
+            .ok_or_else(|| InputError::MissingColumn { header: header.into(), column })
     };
-    let cols = [("t", index("t")?), ("u", index("u")?), ("v", index("v")?), ("theta", index("theta")?)];
+    let cols =
+        [("t", index("t")?), ("u", index("u")?), ("v", index("v")?), ("theta", index("theta")?)];
     let mut trajectory = Trajectory { t: Vec::new(), y: Vec::new(), origin: Vec::new() };
     for (n, line) in lines {
         let cells: Vec<&str> = line.split(',').collect();
         let value = |(column, c): (&'static str, usize)| -> Result<f64, InputError> {
-            let cell = cells.get(c).ok_or(InputError::MissingCell { line: n + 1, column, cells: cells.len(), header: names.len() })?;
-            cell.trim().parse::<f64>().map_err(|_| InputError::CsvNotNumber { line: n + 1, column, cell: cell.trim().into() })
+            let cell = cells.get(c).ok_or(InputError::MissingCell {
+                line: n + 1,
+                column,
+                cells: cells.len(),
+                header: names.len(),
+            })?;
+            cell.trim().parse::<f64>().map_err(|_| InputError::CsvNotNumber {
+                line: n + 1,
+                column,
+                cell: cell.trim().into(),
+            })
         };
         trajectory.t.push(value(cols[0])?);
         trajectory.y.push([value(cols[1])?, value(cols[2])?, value(cols[3])?]);
@@ -302,11 +327,19 @@ fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
             return Err(InputError::TimeNotFinite { at: at.clone(), t });
         }
         if i > 0 && t <= trajectory.t[i - 1] {
-            return Err(InputError::TimeNotIncreasing { at: at.clone(), t, previous: trajectory.t[i - 1] });
+            return Err(InputError::TimeNotIncreasing {
+                at: at.clone(),
+                t,
+                previous: trajectory.t[i - 1],
+            });
         }
         for k in [0, 2] {
             if !y[k].is_finite() {
-                return Err(InputError::NotFinite { at: at.clone(), column: names[k], value: y[k] });
+                return Err(InputError::NotFinite {
+                    at: at.clone(),
+                    column: names[k],
+                    value: y[k],
+                });
             }
         }
         if !(y[1].is_finite() && y[1] > 0.0) {

@@ -10,7 +10,9 @@ pub mod input;
 pub mod trajectory;
 
 pub use input::{read_user_data, InputError, Trajectory, UserCycle, UserData};
-pub use trajectory::{against_trajectory, CompareError, SamplingError, TrajectoryComparison, Verdict};
+pub use trajectory::{
+    against_trajectory, CompareError, SamplingError, TrajectoryComparison, Verdict,
+};
 
 use crate::engine::{self, EngineError};
 use crate::report::Report;
@@ -18,7 +20,16 @@ use crate::scene::{Method, Scene, SolverSpec};
 use serde::Serialize;
 
 /// Quantities compared between methods or against a user's report (cycle keys).
-const QUANTITIES: [&str; 8] = ["period", "t0", "slip_half_width", "ln_v_max", "ln_v_min", "u_at_v_max", "theta_at_v_max", "slip"];
+const QUANTITIES: [&str; 8] = [
+    "period",
+    "t0",
+    "slip_half_width",
+    "ln_v_max",
+    "ln_v_min",
+    "u_at_v_max",
+    "theta_at_v_max",
+    "slip",
+];
 
 /// The scale a difference in `key` is measured against: the value itself for durations and
 /// the slip (positive, with their own units), max(|value|, 1) for ln v, u and θ (offsets).
@@ -74,7 +85,11 @@ pub struct MethodComparison {
 fn median(mut x: Vec<f64>) -> f64 {
     x.sort_by(f64::total_cmp);
     let n = x.len();
-    if n % 2 == 1 { x[n / 2] } else { 0.5 * (x[n / 2 - 1] + x[n / 2]) }
+    if n % 2 == 1 {
+        x[n / 2]
+    } else {
+        0.5 * (x[n / 2 - 1] + x[n / 2])
+    }
 }
 
 /// Runs `scene` once per method (same tolerances, default tables) and compares the cycle.
@@ -89,7 +104,10 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
         s.analyses.noise = None;
         match engine::run(&s, serde_json::Value::Null) {
             Ok(r) => {
-                let status = r.cycle.as_ref().map_or("no cycle analysis".into(), |c| format!("{:?}", c.status));
+                let status = r
+                    .cycle
+                    .as_ref()
+                    .map_or("no cycle analysis".into(), |c| format!("{:?}", c.status));
                 runs.push((method.name().to_string(), status));
                 times.push((method.name().to_string(), Some(r.wall_time_s)));
                 reports.push(Some(r));
@@ -114,7 +132,9 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
             let (spread, outliers) = if present.len() >= 2 {
                 let mid = median(present.clone());
                 let scale = scale(key, mid);
-                let (lo, hi) = present.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+                let (lo, hi) = present
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
                 let outliers = values
                     .iter()
                     .filter(|(_, v)| v.is_some_and(|v| (v - mid).abs() > allowed * scale))
@@ -159,7 +179,11 @@ pub struct ReportComparison {
 }
 
 /// Compares the `cycle` keys a user's report has with the reference run of the scene.
-pub fn against_report(scene: &Scene, user: &UserCycle, tolerance: f64) -> Result<ReportComparison, EngineError> {
+pub fn against_report(
+    scene: &Scene,
+    user: &UserCycle,
+    tolerance: f64,
+) -> Result<ReportComparison, EngineError> {
     let mut s = scene.clone();
     s.solver.method = Method::CvodeBdf;
     s.solver.table = None;
@@ -173,11 +197,21 @@ pub fn against_report(scene: &Scene, user: &UserCycle, tolerance: f64) -> Result
             let theirs = user.get(key)?;
             let mine = quantity(&ours, key)?;
             let deviation = (theirs - mine).abs() / scale(key, mine);
-            Some(ReportRow { quantity: key.into(), user: theirs, reference: mine, deviation, beyond_tolerance: deviation.is_nan() || deviation > tolerance })
+            Some(ReportRow {
+                quantity: key.into(),
+                user: theirs,
+                reference: mine,
+                deviation,
+                beyond_tolerance: deviation.is_nan() || deviation > tolerance,
+            })
         })
         .collect();
     Ok(ReportComparison {
-        verdict: if rows.iter().any(|r| r.beyond_tolerance) { Verdict::Disagrees } else { Verdict::Agrees },
+        verdict: if rows.iter().any(|r| r.beyond_tolerance) {
+            Verdict::Disagrees
+        } else {
+            Verdict::Agrees
+        },
         tolerance,
         reference: format!("the scene's cycle analysis with cvode-bdf at rtol {:e}", s.solver.rtol),
         rows,

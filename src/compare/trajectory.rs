@@ -154,7 +154,14 @@ fn state_deviation(user: &[f64; 3], reference: &[f64; 3]) -> [f64; 3] {
 
 /// The state (u, w = ln v, θ) at `times` (any order, all ≥ `start`), integrated by
 /// `method` through a [`Clock`] from (start, y0). Returns the states and the re-bases made.
-pub fn reference_states(drr: Drr, method: Method, rtol: f64, start: f64, y0: [f64; 3], times: &[f64]) -> Result<(Vec<[f64; 3]>, u64), SolverError> {
+pub fn reference_states(
+    drr: Drr,
+    method: Method,
+    rtol: f64,
+    start: f64,
+    y0: [f64; 3],
+    times: &[f64],
+) -> Result<(Vec<[f64; 3]>, u64), SolverError> {
     let mut order: Vec<usize> = (0..times.len()).collect();
     order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
     let spec = SolverSpec { method, rtol, atol: [rtol; 3], table: None, explicit_table: None };
@@ -183,8 +190,20 @@ pub fn reference_states(drr: Drr, method: Method, rtol: f64, start: f64, y0: [f6
 
 /// The Radau5 step ends (global time, (u, w, θ)) from (start, y0) to past `end`, through a
 /// [`Clock`].
-fn reference_steps(drr: Drr, rtol: f64, start: f64, y0: [f64; 3], end: f64) -> Result<(Vec<f64>, Vec<[f64; 3]>), SolverError> {
-    let spec = SolverSpec { method: Method::Radau5, rtol, atol: [rtol; 3], table: None, explicit_table: None };
+fn reference_steps(
+    drr: Drr,
+    rtol: f64,
+    start: f64,
+    y0: [f64; 3],
+    end: f64,
+) -> Result<(Vec<f64>, Vec<[f64; 3]>), SolverError> {
+    let spec = SolverSpec {
+        method: Method::Radau5,
+        rtol,
+        atol: [rtol; 3],
+        table: None,
+        explicit_table: None,
+    };
     let (mut integ, _) = engine::integrator(drr, &spec, &y0)?;
     let mut clock = Clock::new(integ.as_mut(), Time::new(start));
     let (mut times, mut states) = (vec![start], vec![y0]);
@@ -199,23 +218,46 @@ fn reference_steps(drr: Drr, rtol: f64, start: f64, y0: [f64; 3], end: f64) -> R
 
 /// Linear interpolation of the time where w crosses `level` between samples i and i + 1;
 /// an error if the samples are too far apart in w to locate it.
-fn crossing(t: &[f64], w: &[f64], i: usize, level: f64, event: &'static str, origin: &[String]) -> Result<f64, SamplingError> {
+fn crossing(
+    t: &[f64],
+    w: &[f64],
+    i: usize,
+    level: f64,
+    event: &'static str,
+    origin: &[String],
+) -> Result<f64, SamplingError> {
     if (w[i + 1] - w[i]).abs() > MAX_EVENT_JUMP {
-        return Err(SamplingError::Event { from: origin[i].clone(), to: origin[i + 1].clone(), ln_v: [w[i], w[i + 1]], event });
+        return Err(SamplingError::Event {
+            from: origin[i].clone(),
+            to: origin[i + 1].clone(),
+            ln_v: [w[i], w[i + 1]],
+            event,
+        });
     }
     Ok(t[i] + (level - w[i]) / (w[i + 1] - w[i]) * (t[i + 1] - t[i]))
 }
 
 /// The complete cycles of a sampled trajectory (t, w = ln v). `origin` names the samples for
 /// messages.
-pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<CycleEvents>, SamplingError> {
+pub fn cycle_events(
+    t: &[f64],
+    w: &[f64],
+    origin: &[String],
+) -> Result<Vec<CycleEvents>, SamplingError> {
     let ups: Vec<usize> = (0..t.len() - 1).filter(|&i| w[i] < 0.0 && w[i + 1] >= 0.0).collect();
-    let times = ups.iter().map(|&i| crossing(t, w, i, 0.0, "upward crossing of v = 1", origin)).collect::<Result<Vec<_>, _>>()?;
+    let times = ups
+        .iter()
+        .map(|&i| crossing(t, w, i, 0.0, "upward crossing of v = 1", origin))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut cycles = Vec::new();
     for k in 0..ups.len().saturating_sub(1) {
         let (a, b) = (ups[k] + 1, ups[k + 1]);
         let j = (a..=b).max_by(|&x, &y| w[x].total_cmp(&w[y])).expect("a non-empty range");
-        if j == 0 || j + 1 >= t.len() || w[j] - w[j - 1] > MAX_PEAK_DROP || w[j] - w[j + 1] > MAX_PEAK_DROP {
+        if j == 0
+            || j + 1 >= t.len()
+            || w[j] - w[j - 1] > MAX_PEAK_DROP
+            || w[j] - w[j + 1] > MAX_PEAK_DROP
+        {
             return Err(SamplingError::Peak { at: origin[j].clone(), cycle: k + 1, ln_v: w[j] });
         }
         // The parabola through the three samples around the maximum.
@@ -233,9 +275,10 @@ pub fn cycle_events(t: &[f64], w: &[f64], origin: &[String]) -> Result<Vec<Cycle
         let rise = (a.saturating_sub(1)..j).rev().find(|&i| w[i] < level);
         let fall = (j..b).find(|&i| w[i + 1] < level);
         let slip_half_width = match (rise, fall) {
-            (Some(r), Some(f)) => {
-                Some(crossing(t, w, f, level, "half maximum", origin)? - crossing(t, w, r, level, "half maximum", origin)?)
-            }
+            (Some(r), Some(f)) => Some(
+                crossing(t, w, f, level, "half maximum", origin)?
+                    - crossing(t, w, r, level, "half maximum", origin)?,
+            ),
             _ => None,
         };
         cycles.push(CycleEvents {
@@ -318,7 +361,11 @@ impl From<SolverError> for CompareError {
 /// Compares a user's trajectory with the reference of `scene`'s model, cycle by cycle (see
 /// the module docs). Fails with [`CompareError::Reference`] also when the reference's own
 /// accuracy is not below tolerance/10 (its verdict would not mean anything).
-pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> Result<TrajectoryComparison, CompareError> {
+pub fn against_trajectory(
+    scene: &Scene,
+    user: &Trajectory,
+    tolerance: f64,
+) -> Result<TrajectoryComparison, CompareError> {
     let drr = Drr::new(scene.params);
     let rtol = (tolerance / 100.0).min(1e-12);
     let start = user.t[0];
@@ -326,7 +373,8 @@ pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> R
     let uw: Vec<[f64; 3]> = user.y.iter().map(|y| [y[0], y[1].ln(), y[2]]).collect();
     let (reference, rebases) = reference_states(drr, Method::Radau5, rtol, start, y0, &user.t)?;
     let (check, _) = reference_states(drr, Method::Rodas5p, rtol / 10.0, start, y0, &user.t)?;
-    let accuracy = reference.iter().zip(&check).flat_map(|(a, b)| state_deviation(a, b)).fold(0.0, f64::max);
+    let accuracy =
+        reference.iter().zip(&check).flat_map(|(a, b)| state_deviation(a, b)).fold(0.0, f64::max);
     let reference_info = ReferenceInfo {
         method: format!("radau5 through the re-basing clock, rtol {rtol:e}, atol {rtol:e}, from the first sample; accuracy: its largest difference from rodas5p at rtol {:e}", rtol / 10.0),
         rtol,
@@ -345,21 +393,33 @@ pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> R
     let ref_cycles = match cycle_events(&user.t, &w_ref, &user.origin) {
         Ok(c) => c,
         Err(_) => {
-            let (fine, states) = reference_steps(drr, rtol, start, y0, *user.t.last().expect("two samples"))?;
+            let (fine, states) =
+                reference_steps(drr, rtol, start, y0, *user.t.last().expect("two samples"))?;
             let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
-            let origin: Vec<String> = fine.iter().map(|t| format!("reference at t = {t}")).collect();
+            let origin: Vec<String> =
+                fine.iter().map(|t| format!("reference at t = {t}")).collect();
             cycle_events(&fine, &w, &origin).map_err(CompareError::UnresolvedReference)?
         }
     };
     let mut reasons = Vec::new();
     if user_cycles.len() != ref_cycles.len() {
-        reasons.push(format!("{} complete cycles against the reference's {} over the same span", user_cycles.len(), ref_cycles.len()));
+        reasons.push(format!(
+            "{} complete cycles against the reference's {} over the same span",
+            user_cycles.len(),
+            ref_cycles.len()
+        ));
     }
     let mut per_cycle = Vec::new();
     for (k, (u, r)) in user_cycles.iter().zip(&ref_cycles).enumerate() {
         let mut push = |name: &str, user: f64, reference: f64, relative: bool| {
             let scale = if relative { reference.abs() } else { 1.0 };
-            per_cycle.push(QuantityDeviation { quantity: name.into(), cycle: k + 1, user, reference, deviation: (user - reference).abs() / scale });
+            per_cycle.push(QuantityDeviation {
+                quantity: name.into(),
+                cycle: k + 1,
+                user,
+                reference,
+                deviation: (user - reference).abs() / scale,
+            });
         };
         push("period", u.period, r.period, true);
         push("t0", u.t0, r.t0, true);
@@ -368,8 +428,15 @@ pub fn against_trajectory(scene: &Scene, user: &Trajectory, tolerance: f64) -> R
         }
         push("ln_v_max", u.ln_v_max, r.ln_v_max, false);
     }
-    let worst = |name: &str| per_cycle.iter().filter(|q| q.quantity == name).max_by(|a, b| a.deviation.total_cmp(&b.deviation)).cloned();
-    let worst_per_quantity: Vec<QuantityDeviation> = ["period", "t0", "slip_half_width", "ln_v_max"].iter().filter_map(|n| worst(n)).collect();
+    let worst = |name: &str| {
+        per_cycle
+            .iter()
+            .filter(|q| q.quantity == name)
+            .max_by(|a, b| a.deviation.total_cmp(&b.deviation))
+            .cloned()
+    };
+    let worst_per_quantity: Vec<QuantityDeviation> =
+        ["period", "t0", "slip_half_width", "ln_v_max"].iter().filter_map(|n| worst(n)).collect();
     for q in worst_per_quantity.iter().filter(|q| q.deviation > tolerance) {
         reasons.push(format!(
             "{} differs by {:.2e} in cycle {} (yours {}, reference {})",

@@ -28,7 +28,13 @@ pub struct Figure {
 impl Figure {
     /// An empty figure with a title; one column of 480 × 340 px panels.
     pub fn new(title: impl Into<String>) -> Self {
-        Self { title: title.into(), panels: Vec::new(), columns: 1, panel_size: (480.0, 340.0), caption: Vec::new() }
+        Self {
+            title: title.into(),
+            panels: Vec::new(),
+            columns: 1,
+            panel_size: (480.0, 340.0),
+            caption: Vec::new(),
+        }
     }
 
     /// Adds a panel.
@@ -58,33 +64,70 @@ impl Figure {
     /// The SVG document; checked to be well-formed before it is returned.
     pub fn to_svg(&self) -> Result<String, FigureError> {
         if self.panels.is_empty() {
-            return Err(FigureError::Empty { panel: format!("{} (the figure has no panel)", text::plain(&self.title)) });
+            return Err(FigureError::Empty {
+                panel: format!("{} (the figure has no panel)", text::plain(&self.title)),
+            });
         }
         let cols = self.columns.min(self.panels.len());
         let rows = self.panels.len().div_ceil(cols);
         let (pw, ph) = self.panel_size;
         let width = cols as f64 * pw;
         let title_h = if self.title.is_empty() { 0.0 } else { TITLE_FONT + 14.0 };
-        let caption_lines: Vec<String> = self.caption.iter().flat_map(|c| wrap(c, width - 24.0, CAPTION_FONT)).collect();
-        let caption_h = if caption_lines.is_empty() { 0.0 } else { 8.0 + caption_lines.len() as f64 * (CAPTION_FONT + 4.0) };
+        let caption_lines: Vec<String> =
+            self.caption.iter().flat_map(|c| wrap(c, width - 24.0, CAPTION_FONT)).collect();
+        let caption_h = if caption_lines.is_empty() {
+            0.0
+        } else {
+            8.0 + caption_lines.len() as f64 * (CAPTION_FONT + 4.0)
+        };
         let height = title_h + rows as f64 * ph + caption_h + 6.0;
         let mut doc = Svg::new(width, height, &text::plain(&self.title));
-        doc.empty("rect", &[("x", "0".into()), ("y", "0".into()), ("width", px(width)), ("height", px(height)), ("fill", "white".into())]);
+        doc.empty(
+            "rect",
+            &[
+                ("x", "0".into()),
+                ("y", "0".into()),
+                ("width", px(width)),
+                ("height", px(height)),
+                ("fill", "white".into()),
+            ],
+        );
         if !self.title.is_empty() {
-            let size = (TITLE_FONT * ((width - 24.0) / text::width(&self.title, TITLE_FONT)).min(1.0)).max(9.0);
+            let size = (TITLE_FONT
+                * ((width - 24.0) / text::width(&self.title, TITLE_FONT)).min(1.0))
+            .max(9.0);
             doc.text_markup(
-                &[("x", px(width / 2.0)), ("y", px(8.0 + TITLE_FONT)), ("text-anchor", "middle".into()), ("font-size", px(size)), ("font-weight", "bold".into()), ("fill", "#222222".into())],
+                &[
+                    ("x", px(width / 2.0)),
+                    ("y", px(8.0 + TITLE_FONT)),
+                    ("text-anchor", "middle".into()),
+                    ("font-size", px(size)),
+                    ("font-weight", "bold".into()),
+                    ("fill", "#222222".into()),
+                ],
                 &text::to_svg(&self.title),
             );
         }
         for (i, p) in self.panels.iter().enumerate() {
             let (r, c) = (i / cols, i % cols);
-            p.render(&mut doc, c as f64 * pw, title_h + r as f64 * ph, pw, ph, &format!("clip{i}"))?;
+            p.render(
+                &mut doc,
+                c as f64 * pw,
+                title_h + r as f64 * ph,
+                pw,
+                ph,
+                &format!("clip{i}"),
+            )?;
         }
         let y0 = title_h + rows as f64 * ph + 8.0;
         for (k, line) in caption_lines.iter().enumerate() {
             doc.text_markup(
-                &[("x", "12".into()), ("y", px(y0 + CAPTION_FONT + k as f64 * (CAPTION_FONT + 4.0))), ("font-size", px(CAPTION_FONT)), ("fill", "#444444".into())],
+                &[
+                    ("x", "12".into()),
+                    ("y", px(y0 + CAPTION_FONT + k as f64 * (CAPTION_FONT + 4.0))),
+                    ("font-size", px(CAPTION_FONT)),
+                    ("fill", "#444444".into()),
+                ],
                 &text::to_svg(line),
             );
         }
@@ -94,7 +137,8 @@ impl Figure {
     /// Writes the SVG to `path` (atomically: see [`crate::report::write_atomic`]).
     pub fn write(&self, path: &Path) -> Result<(), FigureError> {
         let svg = self.to_svg()?;
-        crate::report::write_atomic(path, &svg).map_err(|source| FigureError::Io { path: path.display().to_string(), source })
+        crate::report::write_atomic(path, &svg)
+            .map_err(|source| FigureError::Io { path: path.display().to_string(), source })
     }
 }
 
@@ -124,7 +168,11 @@ mod tests {
 
     #[test]
     fn errors_name_the_panel() {
-        let f = Figure::new("bad").panel(Panel::new("(c) empty", Axis::linear("x").unit("m"), Axis::linear("y").unit("m")));
+        let f = Figure::new("bad").panel(Panel::new(
+            "(c) empty",
+            Axis::linear("x").unit("m"),
+            Axis::linear("y").unit("m"),
+        ));
         let e = f.to_svg().unwrap_err();
         assert!(e.to_string().contains("(c) empty"), "{e}");
         assert!(Figure::new("none").to_svg().is_err());

@@ -95,8 +95,21 @@ pub struct Band {
 
 impl Band {
     /// A band of the `i`-th palette colour at 25 % opacity.
-    pub fn new(label: impl Into<String>, x: Vec<f64>, lo: Vec<f64>, hi: Vec<f64>, i: usize) -> Self {
-        Self { label: label.into(), x, lo, hi, colour: super::series::colour(i).into(), opacity: 0.25 }
+    pub fn new(
+        label: impl Into<String>,
+        x: Vec<f64>,
+        lo: Vec<f64>,
+        hi: Vec<f64>,
+        i: usize,
+    ) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            lo,
+            hi,
+            colour: super::series::colour(i).into(),
+            opacity: 0.25,
+        }
     }
 }
 
@@ -223,14 +236,27 @@ struct Rect {
 
 impl Rect {
     fn contains(&self, p: (f64, f64), margin: f64) -> bool {
-        p.0 >= self.x - margin && p.0 <= self.x + self.w + margin && p.1 >= self.y - margin && p.1 <= self.y + self.h + margin
+        p.0 >= self.x - margin
+            && p.0 <= self.x + self.w + margin
+            && p.1 >= self.y - margin
+            && p.1 <= self.y + self.h + margin
     }
 }
 
 impl Panel {
     /// An empty panel with a title and its two axes.
     pub fn new(title: impl Into<String>, x: Axis, y: Axis) -> Self {
-        Self { title: title.into(), x, y, series: Vec::new(), lines: Vec::new(), bands: Vec::new(), notes: Vec::new(), legend: LegendPlace::Auto, grid: true }
+        Self {
+            title: title.into(),
+            x,
+            y,
+            series: Vec::new(),
+            lines: Vec::new(),
+            bands: Vec::new(),
+            notes: Vec::new(),
+            legend: LegendPlace::Auto,
+            grid: true,
+        }
     }
 
     /// Adds a series.
@@ -268,10 +294,16 @@ impl Panel {
         let panel = || text::plain(&self.title);
         for (axis, a) in [("x", &self.x), ("y", &self.y)] {
             if a.unit == Unit::Unset {
-                return Err(FigureError::MissingUnit { panel: panel(), axis, label: text::plain(&a.label) });
+                return Err(FigureError::MissingUnit {
+                    panel: panel(),
+                    axis,
+                    label: text::plain(&a.label),
+                });
             }
             if let Some((lo, hi)) = a.range {
-                if !(lo.is_finite() && hi.is_finite() && lo < hi) || (a.kind == ScaleKind::Log10 && lo <= 0.0) {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi)
+                    || (a.kind == ScaleKind::Log10 && lo <= 0.0)
+                {
                     return Err(FigureError::BadRange { panel: panel(), axis, lo, hi });
                 }
             }
@@ -279,16 +311,33 @@ impl Panel {
         for b in &self.bands {
             let series = || text::plain(&b.label);
             if b.lo.len() != b.x.len() || b.hi.len() != b.x.len() {
-                return Err(FigureError::LengthMismatch { panel: panel(), series: series(), x: b.x.len(), y: b.lo.len().min(b.hi.len()) });
+                return Err(FigureError::LengthMismatch {
+                    panel: panel(),
+                    series: series(),
+                    x: b.x.len(),
+                    y: b.lo.len().min(b.hi.len()),
+                });
             }
             for (index, ((&x, &lo), &hi)) in b.x.iter().zip(&b.lo).zip(&b.hi).enumerate() {
                 for y in [lo, hi] {
                     if !x.is_finite() || !y.is_finite() {
-                        return Err(FigureError::NonFinite { panel: panel(), series: series(), index, x, y });
+                        return Err(FigureError::NonFinite {
+                            panel: panel(),
+                            series: series(),
+                            index,
+                            x,
+                            y,
+                        });
                     }
                     for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
                         if a.kind == ScaleKind::Log10 && value <= 0.0 {
-                            return Err(FigureError::NonPositiveOnLog { panel: panel(), series: series(), axis, index, value });
+                            return Err(FigureError::NonPositiveOnLog {
+                                panel: panel(),
+                                series: series(),
+                                axis,
+                                index,
+                                value,
+                            });
                         }
                     }
                 }
@@ -300,15 +349,32 @@ impl Panel {
         for s in &self.series {
             let series = || text::plain(&s.label);
             if s.x.len() != s.y.len() {
-                return Err(FigureError::LengthMismatch { panel: panel(), series: series(), x: s.x.len(), y: s.y.len() });
+                return Err(FigureError::LengthMismatch {
+                    panel: panel(),
+                    series: series(),
+                    x: s.x.len(),
+                    y: s.y.len(),
+                });
             }
             for (index, (&x, &y)) in s.x.iter().zip(&s.y).enumerate() {
                 if !x.is_finite() || !y.is_finite() {
-                    return Err(FigureError::NonFinite { panel: panel(), series: series(), index, x, y });
+                    return Err(FigureError::NonFinite {
+                        panel: panel(),
+                        series: series(),
+                        index,
+                        x,
+                        y,
+                    });
                 }
                 for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
                     if a.kind == ScaleKind::Log10 && value <= 0.0 {
-                        return Err(FigureError::NonPositiveOnLog { panel: panel(), series: series(), axis, index, value });
+                        return Err(FigureError::NonPositiveOnLog {
+                            panel: panel(),
+                            series: series(),
+                            axis,
+                            index,
+                            value,
+                        });
                     }
                 }
             }
@@ -316,10 +382,22 @@ impl Panel {
         for l in &self.lines {
             let (axis, a) = if l.vertical { ("x", &self.x) } else { ("y", &self.y) };
             if !l.value.is_finite() {
-                return Err(FigureError::NonFinite { panel: panel(), series: text::plain(&l.label), index: 0, x: l.value, y: l.value });
+                return Err(FigureError::NonFinite {
+                    panel: panel(),
+                    series: text::plain(&l.label),
+                    index: 0,
+                    x: l.value,
+                    y: l.value,
+                });
             }
             if a.kind == ScaleKind::Log10 && l.value <= 0.0 {
-                return Err(FigureError::NonPositiveOnLog { panel: panel(), series: text::plain(&l.label), axis, index: 0, value: l.value });
+                return Err(FigureError::NonPositiveOnLog {
+                    panel: panel(),
+                    series: text::plain(&l.label),
+                    axis,
+                    index: 0,
+                    value: l.value,
+                });
             }
         }
         Ok(())
@@ -333,7 +411,13 @@ impl Panel {
             .flat_map(|s| if along_x { s.x.iter() } else { s.y.iter() })
             .copied()
             .chain(self.lines.iter().filter(|l| l.vertical == along_x).map(|l| l.value))
-            .chain(self.bands.iter().flat_map(|b| if along_x { b.x.clone() } else { b.lo.iter().chain(&b.hi).copied().collect() }));
+            .chain(self.bands.iter().flat_map(|b| {
+                if along_x {
+                    b.x.clone()
+                } else {
+                    b.lo.iter().chain(&b.hi).copied().collect()
+                }
+            }));
         values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
     }
 
@@ -347,7 +431,15 @@ impl Panel {
 
     /// Draws the panel into the rectangle (x0, y0, w, h) of `svg`; `id` must be unique in
     /// the figure (it names the clip path).
-    pub fn render(&self, svg: &mut Svg, x0: f64, y0: f64, w: f64, h: f64, id: &str) -> Result<(), FigureError> {
+    pub fn render(
+        &self,
+        svg: &mut Svg,
+        x0: f64,
+        y0: f64,
+        w: f64,
+        h: f64,
+        id: &str,
+    ) -> Result<(), FigureError> {
         self.validate()?;
         let (xlo, xhi) = self.axis_range(true);
         let (ylo, yhi) = self.axis_range(false);
@@ -356,7 +448,11 @@ impl Panel {
         let bottom = TICK_LEN + 4.0 + TICK_FONT + 8.0 + LABEL_FONT + 6.0;
         let ph = h - top - bottom;
         let y_ticks = scale::ticks(self.y.kind, ylo, yhi, ((ph / 45.0) as usize).clamp(3, 8));
-        let y_label_w = y_ticks.iter().filter_map(|t| t.label.as_deref()).map(|l| text::width(l, TICK_FONT)).fold(0.0, f64::max);
+        let y_label_w = y_ticks
+            .iter()
+            .filter_map(|t| t.label.as_deref())
+            .map(|l| text::width(l, TICK_FONT))
+            .fold(0.0, f64::max);
         let left = TICK_LEN + 4.0 + y_label_w + 8.0 + LABEL_FONT + 4.0;
         let mut right = 14.0;
         let mut pw = w - left - right;
@@ -372,37 +468,70 @@ impl Panel {
         // Room for the last x label's right half.
         if let Some(last) = x_ticks.iter().rev().find(|t| t.label.is_some()) {
             let sx = Scale { kind: self.x.kind, lo: xlo, hi: xhi, px_lo: 0.0, px_hi: pw };
-            let overhang = text::width(last.label.as_deref().unwrap_or(""), TICK_FONT) / 2.0 - (pw - sx.map(last.value));
+            let overhang = text::width(last.label.as_deref().unwrap_or(""), TICK_FONT) / 2.0
+                - (pw - sx.map(last.value));
             right = right.max(overhang + 4.0);
             pw = w - left - right;
         }
         let plot = Rect { x: x0 + left, y: y0 + top, w: pw, h: ph };
-        let sx = Scale { kind: self.x.kind, lo: xlo, hi: xhi, px_lo: plot.x, px_hi: plot.x + plot.w };
-        let sy = Scale { kind: self.y.kind, lo: ylo, hi: yhi, px_lo: plot.y + plot.h, px_hi: plot.y };
+        let sx =
+            Scale { kind: self.x.kind, lo: xlo, hi: xhi, px_lo: plot.x, px_hi: plot.x + plot.w };
+        let sy =
+            Scale { kind: self.y.kind, lo: ylo, hi: yhi, px_lo: plot.y + plot.h, px_hi: plot.y };
 
         svg.open("g", &[("class", "panel".into())]);
         // Title: shrunk to fit the panel's width if needed.
         if !self.title.is_empty() {
             let avail = w - 16.0;
-            let size = (TITLE_FONT * (avail / text::width(&self.title, TITLE_FONT)).min(1.0)).max(8.0);
+            let size =
+                (TITLE_FONT * (avail / text::width(&self.title, TITLE_FONT)).min(1.0)).max(8.0);
             svg.text_markup(
-                &[("x", px(x0 + 8.0)), ("y", px(y0 + 10.0 + TITLE_FONT)), ("font-size", px(size)), ("font-weight", "bold".into()), ("fill", INK.into())],
+                &[
+                    ("x", px(x0 + 8.0)),
+                    ("y", px(y0 + 10.0 + TITLE_FONT)),
+                    ("font-size", px(size)),
+                    ("font-weight", "bold".into()),
+                    ("fill", INK.into()),
+                ],
                 &text::to_svg(&self.title),
             );
         }
         if self.grid {
             for t in x_ticks.iter().filter(|t| t.label.is_some()) {
                 let x = sx.map(t.value);
-                svg.empty("line", &[("x1", px(x)), ("x2", px(x)), ("y1", px(plot.y)), ("y2", px(plot.y + plot.h)), ("stroke", "#e3e3e3".into()), ("stroke-width", "0.8".into())]);
+                svg.empty(
+                    "line",
+                    &[
+                        ("x1", px(x)),
+                        ("x2", px(x)),
+                        ("y1", px(plot.y)),
+                        ("y2", px(plot.y + plot.h)),
+                        ("stroke", "#e3e3e3".into()),
+                        ("stroke-width", "0.8".into()),
+                    ],
+                );
             }
             for t in y_ticks.iter().filter(|t| t.label.is_some()) {
                 let y = sy.map(t.value);
-                svg.empty("line", &[("x1", px(plot.x)), ("x2", px(plot.x + plot.w)), ("y1", px(y)), ("y2", px(y)), ("stroke", "#e3e3e3".into()), ("stroke-width", "0.8".into())]);
+                svg.empty(
+                    "line",
+                    &[
+                        ("x1", px(plot.x)),
+                        ("x2", px(plot.x + plot.w)),
+                        ("y1", px(y)),
+                        ("y2", px(y)),
+                        ("stroke", "#e3e3e3".into()),
+                        ("stroke-width", "0.8".into()),
+                    ],
+                );
             }
         }
         svg.open("defs", &[]);
         svg.open("clipPath", &[("id", id.into())]);
-        svg.empty("rect", &[("x", px(plot.x)), ("y", px(plot.y)), ("width", px(plot.w)), ("height", px(plot.h))]);
+        svg.empty(
+            "rect",
+            &[("x", px(plot.x)), ("y", px(plot.y)), ("width", px(plot.w)), ("height", px(plot.h))],
+        );
         svg.close();
         svg.close();
         // Pixel samples of everything drawn, to place the legend where it hides the least.
@@ -414,11 +543,28 @@ impl Panel {
             for edge in [upper.clone().collect::<Vec<_>>(), lower.clone().collect()] {
                 sample_runs(&clip_and_thin(&edge, &plot), &mut occupied);
             }
-            let poly = clip_polygon(&upper.chain(lower).collect::<Vec<_>>(), &Rect { x: plot.x - 2.0, y: plot.y - 2.0, w: plot.w + 4.0, h: plot.h + 4.0 });
+            let poly = clip_polygon(
+                &upper.chain(lower).collect::<Vec<_>>(),
+                &Rect { x: plot.x - 2.0, y: plot.y - 2.0, w: plot.w + 4.0, h: plot.h + 4.0 },
+            );
             if poly.len() >= 3 {
-                let mut d: String = poly.iter().enumerate().map(|(i, p)| format!("{}{} {}", if i == 0 { "M" } else { "L" }, px(p.0), px(p.1))).collect();
+                let mut d: String = poly
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        format!("{}{} {}", if i == 0 { "M" } else { "L" }, px(p.0), px(p.1))
+                    })
+                    .collect();
                 d.push('Z');
-                svg.empty("path", &[("d", d), ("fill", b.colour.clone()), ("fill-opacity", format!("{}", b.opacity.clamp(0.0, 1.0))), ("stroke", "none".into())]);
+                svg.empty(
+                    "path",
+                    &[
+                        ("d", d),
+                        ("fill", b.colour.clone()),
+                        ("fill-opacity", format!("{}", b.opacity.clamp(0.0, 1.0))),
+                        ("stroke", "none".into()),
+                    ],
+                );
             }
         }
         for l in &self.lines {
@@ -432,7 +578,8 @@ impl Panel {
             draw_path(svg, &[vec![a, b]], &l.style);
         }
         for s in &self.series {
-            let pts: Vec<(f64, f64)> = s.x.iter().zip(&s.y).map(|(&x, &y)| (sx.map(x), sy.map(y))).collect();
+            let pts: Vec<(f64, f64)> =
+                s.x.iter().zip(&s.y).map(|(&x, &y)| (sx.map(x), sy.map(y))).collect();
             if s.style.width > 0.0 {
                 let runs = clip_and_thin(&pts, &plot);
                 sample_runs(&runs, &mut occupied);
@@ -446,16 +593,40 @@ impl Panel {
             }
         }
         svg.close();
-        svg.empty("rect", &[("x", px(plot.x)), ("y", px(plot.y)), ("width", px(plot.w)), ("height", px(plot.h)), ("fill", "none".into()), ("stroke", INK.into()), ("stroke-width", "1".into())]);
+        svg.empty(
+            "rect",
+            &[
+                ("x", px(plot.x)),
+                ("y", px(plot.y)),
+                ("width", px(plot.w)),
+                ("height", px(plot.h)),
+                ("fill", "none".into()),
+                ("stroke", INK.into()),
+                ("stroke-width", "1".into()),
+            ],
+        );
         self.draw_ticks(svg, &plot, &sx, &sy, &x_ticks, &y_ticks);
         // Axis titles.
         svg.text_markup(
-            &[("x", px(plot.x + plot.w / 2.0)), ("y", px(y0 + h - 8.0)), ("text-anchor", "middle".into()), ("font-size", px(LABEL_FONT)), ("fill", INK.into())],
+            &[
+                ("x", px(plot.x + plot.w / 2.0)),
+                ("y", px(y0 + h - 8.0)),
+                ("text-anchor", "middle".into()),
+                ("font-size", px(LABEL_FONT)),
+                ("fill", INK.into()),
+            ],
             &text::to_svg(&self.x.title()),
         );
         let (yx, yy) = (x0 + 4.0 + LABEL_FONT * 0.8, plot.y + plot.h / 2.0);
         svg.text_markup(
-            &[("x", px(yx)), ("y", px(yy)), ("transform", format!("rotate(-90 {} {})", px(yx), px(yy))), ("text-anchor", "middle".into()), ("font-size", px(LABEL_FONT)), ("fill", INK.into())],
+            &[
+                ("x", px(yx)),
+                ("y", px(yy)),
+                ("transform", format!("rotate(-90 {} {})", px(yx), px(yy))),
+                ("text-anchor", "middle".into()),
+                ("font-size", px(LABEL_FONT)),
+                ("fill", INK.into()),
+            ],
             &text::to_svg(&self.y.title()),
         );
         for n in &self.notes {
@@ -475,9 +646,16 @@ impl Panel {
             while x_start + (x - p.0) < x0 {
                 x += 1.0;
             }
-            occupied.extend((0..=(wd / 4.0) as usize).map(|i| (x_start + 4.0 * i as f64, p.1 - 4.0)));
+            occupied
+                .extend((0..=(wd / 4.0) as usize).map(|i| (x_start + 4.0 * i as f64, p.1 - 4.0)));
             svg.text_markup(
-                &[("x", px(x)), ("y", px(p.1)), ("text-anchor", anchor.into()), ("font-size", px(SMALL_FONT)), ("fill", n.colour.clone())],
+                &[
+                    ("x", px(x)),
+                    ("y", px(p.1)),
+                    ("text-anchor", anchor.into()),
+                    ("font-size", px(SMALL_FONT)),
+                    ("fill", n.colour.clone()),
+                ],
                 &text::to_svg(&n.text),
             );
         }
@@ -486,15 +664,39 @@ impl Panel {
         Ok(())
     }
 
-    fn draw_ticks(&self, svg: &mut Svg, plot: &Rect, sx: &Scale, sy: &Scale, x_ticks: &[Tick], y_ticks: &[Tick]) {
+    fn draw_ticks(
+        &self,
+        svg: &mut Svg,
+        plot: &Rect,
+        sx: &Scale,
+        sy: &Scale,
+        x_ticks: &[Tick],
+        y_ticks: &[Tick],
+    ) {
         let base = plot.y + plot.h;
         for t in x_ticks {
             let x = sx.map(t.value);
             let len = if t.label.is_some() { TICK_LEN } else { TICK_LEN * 0.6 };
-            svg.empty("line", &[("x1", px(x)), ("x2", px(x)), ("y1", px(base)), ("y2", px(base + len)), ("stroke", INK.into()), ("stroke-width", "1".into())]);
+            svg.empty(
+                "line",
+                &[
+                    ("x1", px(x)),
+                    ("x2", px(x)),
+                    ("y1", px(base)),
+                    ("y2", px(base + len)),
+                    ("stroke", INK.into()),
+                    ("stroke-width", "1".into()),
+                ],
+            );
             if let Some(l) = &t.label {
                 svg.text_markup(
-                    &[("x", px(x)), ("y", px(base + TICK_LEN + 3.0 + TICK_FONT)), ("text-anchor", "middle".into()), ("font-size", px(TICK_FONT)), ("fill", INK.into())],
+                    &[
+                        ("x", px(x)),
+                        ("y", px(base + TICK_LEN + 3.0 + TICK_FONT)),
+                        ("text-anchor", "middle".into()),
+                        ("font-size", px(TICK_FONT)),
+                        ("fill", INK.into()),
+                    ],
                     &text::to_svg(l),
                 );
             }
@@ -502,10 +704,26 @@ impl Panel {
         for t in y_ticks {
             let y = sy.map(t.value);
             let len = if t.label.is_some() { TICK_LEN } else { TICK_LEN * 0.6 };
-            svg.empty("line", &[("x1", px(plot.x - len)), ("x2", px(plot.x)), ("y1", px(y)), ("y2", px(y)), ("stroke", INK.into()), ("stroke-width", "1".into())]);
+            svg.empty(
+                "line",
+                &[
+                    ("x1", px(plot.x - len)),
+                    ("x2", px(plot.x)),
+                    ("y1", px(y)),
+                    ("y2", px(y)),
+                    ("stroke", INK.into()),
+                    ("stroke-width", "1".into()),
+                ],
+            );
             if let Some(l) = &t.label {
                 svg.text_markup(
-                    &[("x", px(plot.x - TICK_LEN - 3.0)), ("y", px(y + TICK_FONT * 0.35)), ("text-anchor", "end".into()), ("font-size", px(TICK_FONT)), ("fill", INK.into())],
+                    &[
+                        ("x", px(plot.x - TICK_LEN - 3.0)),
+                        ("y", px(y + TICK_FONT * 0.35)),
+                        ("text-anchor", "end".into()),
+                        ("font-size", px(TICK_FONT)),
+                        ("fill", INK.into()),
+                    ],
                     &text::to_svg(l),
                 );
             }
@@ -518,7 +736,9 @@ impl Panel {
             .iter()
             .map(|s| (s.label.as_str(), Swatch::Line(&s.style)))
             .chain(self.lines.iter().map(|l| (l.label.as_str(), Swatch::Line(&l.style))))
-            .chain(self.bands.iter().map(|b| (b.label.as_str(), Swatch::Fill(&b.colour, b.opacity))))
+            .chain(
+                self.bands.iter().map(|b| (b.label.as_str(), Swatch::Fill(&b.colour, b.opacity))),
+            )
             .filter(|(l, _)| !l.is_empty())
             .collect();
         if entries.is_empty() || self.legend == LegendPlace::Hidden {
@@ -526,7 +746,8 @@ impl Panel {
         }
         let line_h = SMALL_FONT + 5.0;
         let label_w = entries.iter().map(|(l, _)| text::width(l, SMALL_FONT)).fold(0.0, f64::max);
-        let (lw, lh) = (8.0 + 24.0 + 6.0 + label_w + 8.0, 6.0 + entries.len() as f64 * line_h + 2.0);
+        let (lw, lh) =
+            (8.0 + 24.0 + 6.0 + label_w + 8.0, 6.0 + entries.len() as f64 * line_h + 2.0);
         let pad = 6.0;
         let corner = |place: LegendPlace| -> (f64, f64) {
             let (l, r) = (plot.x + pad, plot.x + plot.w - pad - lw);
@@ -561,7 +782,19 @@ impl Panel {
             place => corner(place),
         };
         svg.open("g", &[("class", "legend".into())]);
-        svg.empty("rect", &[("x", px(x)), ("y", px(y)), ("width", px(lw)), ("height", px(lh)), ("fill", "white".into()), ("fill-opacity", "0.88".into()), ("stroke", "#999999".into()), ("stroke-width", "0.8".into())]);
+        svg.empty(
+            "rect",
+            &[
+                ("x", px(x)),
+                ("y", px(y)),
+                ("width", px(lw)),
+                ("height", px(lh)),
+                ("fill", "white".into()),
+                ("fill-opacity", "0.88".into()),
+                ("stroke", "#999999".into()),
+                ("stroke-width", "0.8".into()),
+            ],
+        );
         for (i, (label, swatch)) in entries.iter().enumerate() {
             let cy = y + 6.0 + line_h * (i as f64 + 0.5);
             match swatch {
@@ -575,11 +808,23 @@ impl Panel {
                 }
                 Swatch::Fill(colour, opacity) => svg.empty(
                     "rect",
-                    &[("x", px(x + 8.0)), ("y", px(cy - 5.0)), ("width", "24".into()), ("height", "10".into()), ("fill", colour.to_string()), ("fill-opacity", format!("{}", opacity.clamp(0.0, 1.0)))],
+                    &[
+                        ("x", px(x + 8.0)),
+                        ("y", px(cy - 5.0)),
+                        ("width", "24".into()),
+                        ("height", "10".into()),
+                        ("fill", colour.to_string()),
+                        ("fill-opacity", format!("{}", opacity.clamp(0.0, 1.0))),
+                    ],
                 ),
             }
             svg.text_markup(
-                &[("x", px(x + 38.0)), ("y", px(cy + SMALL_FONT * 0.35)), ("font-size", px(SMALL_FONT)), ("fill", INK.into())],
+                &[
+                    ("x", px(x + 38.0)),
+                    ("y", px(cy + SMALL_FONT * 0.35)),
+                    ("font-size", px(SMALL_FONT)),
+                    ("fill", INK.into()),
+                ],
                 &text::to_svg(label),
             );
         }
@@ -598,9 +843,15 @@ fn clip_polygon(poly: &[(f64, f64)], r: &Rect) -> Vec<(f64, f64)> {
     type Edge = (fn(&(f64, f64), &Rect) -> bool, fn((f64, f64), (f64, f64), &Rect) -> (f64, f64));
     let edges: [Edge; 4] = [
         (|p, r| p.0 >= r.x, |a, b, r| (r.x, a.1 + (b.1 - a.1) * (r.x - a.0) / (b.0 - a.0))),
-        (|p, r| p.0 <= r.x + r.w, |a, b, r| (r.x + r.w, a.1 + (b.1 - a.1) * (r.x + r.w - a.0) / (b.0 - a.0))),
+        (
+            |p, r| p.0 <= r.x + r.w,
+            |a, b, r| (r.x + r.w, a.1 + (b.1 - a.1) * (r.x + r.w - a.0) / (b.0 - a.0)),
+        ),
         (|p, r| p.1 >= r.y, |a, b, r| (a.0 + (b.0 - a.0) * (r.y - a.1) / (b.1 - a.1), r.y)),
-        (|p, r| p.1 <= r.y + r.h, |a, b, r| (a.0 + (b.0 - a.0) * (r.y + r.h - a.1) / (b.1 - a.1), r.y + r.h)),
+        (
+            |p, r| p.1 <= r.y + r.h,
+            |a, b, r| (a.0 + (b.0 - a.0) * (r.y + r.h - a.1) / (b.1 - a.1), r.y + r.h),
+        ),
     ];
     let mut out = poly.to_vec();
     for (inside, cross) in edges {
@@ -623,7 +874,10 @@ fn clip_polygon(poly: &[(f64, f64)], r: &Rect) -> Vec<(f64, f64)> {
 
 /// Whether neighbouring labelled x ticks would print over each other.
 fn labels_overlap(ticks: &[Tick], sx: &Scale) -> bool {
-    let labelled: Vec<(f64, f64)> = ticks.iter().filter_map(|t| t.label.as_ref().map(|l| (sx.map(t.value), text::width(l, TICK_FONT)))).collect();
+    let labelled: Vec<(f64, f64)> = ticks
+        .iter()
+        .filter_map(|t| t.label.as_ref().map(|l| (sx.map(t.value), text::width(l, TICK_FONT))))
+        .collect();
     labelled.windows(2).any(|w| (w[1].0 - w[0].0).abs() < (w[0].1 + w[1].1) / 2.0 + 10.0)
 }
 
@@ -631,7 +885,8 @@ fn labels_overlap(ticks: &[Tick], sx: &Scale) -> bool {
 fn clip_segment(a: (f64, f64), b: (f64, f64), r: &Rect) -> Option<((f64, f64), (f64, f64))> {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
-    for (p, q) in [(-dx, a.0 - r.x), (dx, r.x + r.w - a.0), (-dy, a.1 - r.y), (dy, r.y + r.h - a.1)] {
+    for (p, q) in [(-dx, a.0 - r.x), (dx, r.x + r.w - a.0), (-dy, a.1 - r.y), (dy, r.y + r.h - a.1)]
+    {
         if p == 0.0 {
             if q < 0.0 {
                 return None;
@@ -739,16 +994,69 @@ fn draw_marker(svg: &mut Svg, p: (f64, f64), m: Marker, style: &Style) {
     let r = style.marker_size / 2.0;
     let c = style.colour.clone();
     match m {
-        Marker::Circle => svg.empty("circle", &[("cx", px(p.0)), ("cy", px(p.1)), ("r", px(r)), ("fill", c)]),
-        Marker::OpenCircle => svg.empty("circle", &[("cx", px(p.0)), ("cy", px(p.1)), ("r", px(r)), ("fill", "white".into()), ("stroke", c), ("stroke-width", "1.2".into())]),
-        Marker::Square => svg.empty("rect", &[("x", px(p.0 - r * 0.9)), ("y", px(p.1 - r * 0.9)), ("width", px(1.8 * r)), ("height", px(1.8 * r)), ("fill", c)]),
+        Marker::Circle => {
+            svg.empty("circle", &[("cx", px(p.0)), ("cy", px(p.1)), ("r", px(r)), ("fill", c)])
+        }
+        Marker::OpenCircle => svg.empty(
+            "circle",
+            &[
+                ("cx", px(p.0)),
+                ("cy", px(p.1)),
+                ("r", px(r)),
+                ("fill", "white".into()),
+                ("stroke", c),
+                ("stroke-width", "1.2".into()),
+            ],
+        ),
+        Marker::Square => svg.empty(
+            "rect",
+            &[
+                ("x", px(p.0 - r * 0.9)),
+                ("y", px(p.1 - r * 0.9)),
+                ("width", px(1.8 * r)),
+                ("height", px(1.8 * r)),
+                ("fill", c),
+            ],
+        ),
         Marker::Triangle => svg.empty(
             "path",
-            &[("d", format!("M{} {}L{} {}L{} {}Z", px(p.0), px(p.1 - 1.2 * r), px(p.0 + 1.05 * r), px(p.1 + 0.65 * r), px(p.0 - 1.05 * r), px(p.1 + 0.65 * r))), ("fill", c)],
+            &[
+                (
+                    "d",
+                    format!(
+                        "M{} {}L{} {}L{} {}Z",
+                        px(p.0),
+                        px(p.1 - 1.2 * r),
+                        px(p.0 + 1.05 * r),
+                        px(p.1 + 0.65 * r),
+                        px(p.0 - 1.05 * r),
+                        px(p.1 + 0.65 * r)
+                    ),
+                ),
+                ("fill", c),
+            ],
         ),
         Marker::Cross => svg.empty(
             "path",
-            &[("d", format!("M{} {}L{} {}M{} {}L{} {}", px(p.0 - r), px(p.1 - r), px(p.0 + r), px(p.1 + r), px(p.0 - r), px(p.1 + r), px(p.0 + r), px(p.1 - r))), ("stroke", c), ("stroke-width", "1.4".into()), ("fill", "none".into())],
+            &[
+                (
+                    "d",
+                    format!(
+                        "M{} {}L{} {}M{} {}L{} {}",
+                        px(p.0 - r),
+                        px(p.1 - r),
+                        px(p.0 + r),
+                        px(p.1 + r),
+                        px(p.0 - r),
+                        px(p.1 + r),
+                        px(p.0 + r),
+                        px(p.1 - r)
+                    ),
+                ),
+                ("stroke", c),
+                ("stroke-width", "1.4".into()),
+                ("fill", "none".into()),
+            ],
         ),
     }
 }
@@ -764,8 +1072,14 @@ mod tests {
     #[test]
     fn segments_are_clipped_to_the_plot() {
         let r = rect();
-        assert_eq!(clip_segment((10.0, 10.0), (20.0, 20.0), &r), Some(((10.0, 10.0), (20.0, 20.0))));
-        assert_eq!(clip_segment((-10.0, 10.0), (10.0, 10.0), &r), Some(((0.0, 10.0), (10.0, 10.0))));
+        assert_eq!(
+            clip_segment((10.0, 10.0), (20.0, 20.0), &r),
+            Some(((10.0, 10.0), (20.0, 20.0)))
+        );
+        assert_eq!(
+            clip_segment((-10.0, 10.0), (10.0, 10.0), &r),
+            Some(((0.0, 10.0), (10.0, 10.0)))
+        );
         assert_eq!(clip_segment((-10.0, -10.0), (-1.0, 60.0), &r), None);
         // A segment from far away keeps its direction.
         let (a, b) = clip_segment((50.0, 25.0), (50.0 + 1e12, 25.0 + 1e12), &r).unwrap();
@@ -798,20 +1112,32 @@ mod tests {
     #[test]
     fn bad_data_is_a_typed_error_naming_panel_and_series() {
         let p = |x: Vec<f64>, y: Vec<f64>, yaxis: Axis| {
-            Panel::new("(a) test", Axis::linear("t").unit("s"), yaxis).series(Series::new("data", x, y, Style::line(0)))
+            Panel::new("(a) test", Axis::linear("t").unit("s"), yaxis).series(Series::new(
+                "data",
+                x,
+                y,
+                Style::line(0),
+            ))
         };
-        let e = p(vec![1.0, 2.0], vec![1.0, f64::NAN], Axis::linear("v").dimensionless()).validate().unwrap_err();
+        let e = p(vec![1.0, 2.0], vec![1.0, f64::NAN], Axis::linear("v").dimensionless())
+            .validate()
+            .unwrap_err();
         assert!(matches!(e, FigureError::NonFinite { index: 1, .. }), "{e}");
         assert!(e.to_string().contains("(a) test") && e.to_string().contains("data"));
-        let e = p(vec![1.0, 2.0], vec![1.0, 0.0], Axis::log10("v").dimensionless()).validate().unwrap_err();
+        let e = p(vec![1.0, 2.0], vec![1.0, 0.0], Axis::log10("v").dimensionless())
+            .validate()
+            .unwrap_err();
         assert!(matches!(e, FigureError::NonPositiveOnLog { axis: "y", index: 1, .. }), "{e}");
-        let e = p(vec![1.0], vec![1.0, 2.0], Axis::linear("v").dimensionless()).validate().unwrap_err();
+        let e =
+            p(vec![1.0], vec![1.0, 2.0], Axis::linear("v").dimensionless()).validate().unwrap_err();
         assert!(matches!(e, FigureError::LengthMismatch { x: 1, y: 2, .. }), "{e}");
         let e = p(vec![1.0], vec![1.0], Axis::linear("v")).validate().unwrap_err();
         assert!(matches!(e, FigureError::MissingUnit { axis: "y", .. }), "{e}");
         let e = p(vec![], vec![], Axis::linear("v").dimensionless()).validate().unwrap_err();
         assert!(matches!(e, FigureError::Empty { .. }), "{e}");
-        let e = p(vec![1.0], vec![1.0], Axis::log10("v").dimensionless().range(0.0, 1.0)).validate().unwrap_err();
+        let e = p(vec![1.0], vec![1.0], Axis::log10("v").dimensionless().range(0.0, 1.0))
+            .validate()
+            .unwrap_err();
         assert!(matches!(e, FigureError::BadRange { .. }), "{e}");
         assert!(p(vec![1.0], vec![1.0], Axis::log10("v").dimensionless()).validate().is_ok());
     }
@@ -835,7 +1161,13 @@ mod tests {
         let x: Vec<f64> = (0..20).map(f64::from).collect();
         let mid: Vec<f64> = x.iter().map(|x| x.sin() + 2.0).collect();
         let p = Panel::new("(a) band", Axis::linear("t").unit("s"), Axis::log10("v").unit("m/s"))
-            .band(Band::new("mean ± σ", x.clone(), mid.iter().map(|m| m - 0.5).collect(), mid.iter().map(|m| m + 0.5).collect(), 0))
+            .band(Band::new(
+                "mean ± σ",
+                x.clone(),
+                mid.iter().map(|m| m - 0.5).collect(),
+                mid.iter().map(|m| m + 0.5).collect(),
+                0,
+            ))
             .series(Series::new("mean", x.clone(), mid.clone(), Style::line(0)));
         let mut svg = Svg::new(400.0, 300.0, "t");
         p.render(&mut svg, 0.0, 0.0, 400.0, 300.0, "c0").unwrap();
@@ -845,7 +1177,9 @@ mod tests {
         let bad = Panel::new("(b) bad", Axis::linear("t").unit("s"), Axis::log10("v").unit("m/s"))
             .band(Band::new("σ", x.clone(), vec![0.0; 20], mid.clone(), 0));
         assert!(matches!(bad.validate(), Err(FigureError::NonPositiveOnLog { .. })));
-        let short = Panel::new("(c) short", Axis::linear("t").unit("s"), Axis::linear("v").unit("m/s")).band(Band::new("σ", x, vec![0.0; 3], mid, 0));
+        let short =
+            Panel::new("(c) short", Axis::linear("t").unit("s"), Axis::linear("v").unit("m/s"))
+                .band(Band::new("σ", x, vec![0.0; 3], mid, 0));
         assert!(matches!(short.validate(), Err(FigureError::LengthMismatch { .. })));
     }
 

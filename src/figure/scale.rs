@@ -220,14 +220,21 @@ pub fn format_linear(v: f64, step: f64) -> String {
     }
     // Decimals needed by the step (e.g. 0.25 needs 2).
     let mut decimals = (-step_exp).max(0) as usize;
-    while decimals < 12 && ((step * 10f64.powi(decimals as i32)).round() - step * 10f64.powi(decimals as i32)).abs() > 1e-6 {
+    while decimals < 12
+        && ((step * 10f64.powi(decimals as i32)).round() - step * 10f64.powi(decimals as i32)).abs()
+            > 1e-6
+    {
         decimals += 1;
     }
     minus(&format!("{v:.decimals$}"))
 }
 
 fn trim_decimals(s: &str) -> String {
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s.to_string() }
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s.to_string()
+    }
 }
 
 #[cfg(test)]
@@ -250,9 +257,15 @@ mod tests {
             for target in [3, 5, 8] {
                 let s = nice_step(span, target);
                 let m = s / 10f64.powf(s.log10().floor());
-                assert!([1.0, 2.0, 5.0, 10.0].iter().any(|n| (m - n).abs() < 1e-9), "{span} {target} → {s}");
+                assert!(
+                    [1.0, 2.0, 5.0, 10.0].iter().any(|n| (m - n).abs() < 1e-9),
+                    "{span} {target} → {s}"
+                );
                 let n = span / s;
-                assert!(n > target as f64 / 3.0 && n < target as f64 * 2.5, "{span} {target} → {n} intervals");
+                assert!(
+                    n > target as f64 / 3.0 && n < target as f64 * 2.5,
+                    "{span} {target} → {n} intervals"
+                );
             }
         }
     }
@@ -268,12 +281,19 @@ mod tests {
         assert_eq!(labels(&t), ["−20", "−15", "−10", "−5"].map(String::from));
         // 0.1 + 0.2 style rounding never shows up in labels.
         let t = linear_ticks(0.0, 0.7, 7);
-        assert_eq!(labels(&t), ["0.0", "0.1", "0.2", "0.3", "0.4", "0.5", "0.6", "0.7"].map(String::from));
+        assert_eq!(
+            labels(&t),
+            ["0.0", "0.1", "0.2", "0.3", "0.4", "0.5", "0.6", "0.7"].map(String::from)
+        );
         // Large magnitudes: m×10^k markup.
         let t = linear_ticks(0.0, 3e6, 3);
         assert_eq!(labels(&t), ["0", "10^{6}", "2×10^{6}", "3×10^{6}"].map(String::from));
         let t = linear_ticks(1.5e-5, 3.5e-5, 4);
-        assert_eq!(labels(&t), ["1.5×10^{−5}", "2×10^{−5}", "2.5×10^{−5}", "3×10^{−5}", "3.5×10^{−5}"].map(String::from));
+        assert_eq!(
+            labels(&t),
+            ["1.5×10^{−5}", "2×10^{−5}", "2.5×10^{−5}", "3×10^{−5}", "3.5×10^{−5}"]
+                .map(String::from)
+        );
         // Every tick is inside the range, including its ends.
         for t in linear_ticks(0.2, 0.8, 6) {
             assert!(t.value >= 0.2 - 1e-12 && t.value <= 0.8 + 1e-12);

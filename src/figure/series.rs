@@ -4,7 +4,8 @@
 /// The Okabe–Ito palette without its yellow (too pale on paper), ordered so that neighbours
 /// differ in lightness as well as hue: blue, vermillion, bluish green, black, reddish purple,
 /// orange, sky blue.
-pub const PALETTE: [&str; 7] = ["#0072B2", "#D55E00", "#009E73", "#000000", "#CC79A7", "#E69F00", "#56B4E9"];
+pub const PALETTE: [&str; 7] =
+    ["#0072B2", "#D55E00", "#009E73", "#000000", "#CC79A7", "#E69F00", "#56B4E9"];
 
 /// The `i`-th palette colour (cycling).
 pub fn colour(i: usize) -> &'static str {
@@ -76,7 +77,13 @@ pub struct Style {
 impl Style {
     /// A solid line of the `i`-th palette colour.
     pub fn line(i: usize) -> Self {
-        Self { colour: colour(i).into(), width: 1.6, dash: Dash::Solid, marker: None, marker_size: 6.0 }
+        Self {
+            colour: colour(i).into(),
+            width: 1.6,
+            dash: Dash::Solid,
+            marker: None,
+            marker_size: 6.0,
+        }
     }
 
     /// Markers only, of the `i`-th palette colour.

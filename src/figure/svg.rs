@@ -23,7 +23,11 @@ pub fn escape(text: &str) -> String {
 pub fn px(x: f64) -> String {
     let s = format!("{x:.2}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" || s.is_empty() { "0".into() } else { s.into() }
+    if s == "-0" || s.is_empty() {
+        "0".into()
+    } else {
+        s.into()
+    }
 }
 
 /// An SVG document being written: elements are opened, filled and closed in order; attribute

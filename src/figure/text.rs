@@ -95,7 +95,8 @@ pub fn width(label: &str, font_size: f64) -> f64 {
         .into_iter()
         .map(|(k, t)| {
             let scale = if k == Shift::Normal { 1.0 } else { 0.72 };
-            t.chars().map(|c| if c == ' ' || c == '.' || c == ',' { 0.3 } else { 0.6 }).sum::<f64>() * scale
+            t.chars().map(|c| if c == ' ' || c == '.' || c == ',' { 0.3 } else { 0.6 }).sum::<f64>()
+                * scale
         })
         .sum::<f64>()
         * font_size

@@ -7,7 +7,9 @@ pub enum ErrorKind {
     #[error("too much work: max_steps reached before the output time (raise max_steps)")]
     TooMuchWork,
     /// The requested accuracy is below what double precision allows at this state.
-    #[error("accuracy not attainable: tolerances too tight for double precision (loosen rtol/atol)")]
+    #[error(
+        "accuracy not attainable: tolerances too tight for double precision (loosen rtol/atol)"
+    )]
     AccuracyNotAttainable,
     /// The local error test failed repeatedly, or with |h| = min_step.
     #[error("repeated local error-test failures (singularity or tolerances too tight?)")]
@@ -59,7 +61,11 @@ pub struct SolverError {
 }
 
 fn detail(message: &str) -> String {
-    if message.is_empty() { String::new() } else { format!(" — {message}") }
+    if message.is_empty() {
+        String::new()
+    } else {
+        format!(" — {message}")
+    }
 }
 
 /// The text of a caught panic's payload (a `&str` or `String` message), for

@@ -131,7 +131,15 @@ fn product_error(a: f64, b: f64, p: f64) -> f64 {
 /// by u·h‖J‖ relative: with h‖J‖ ~ 1e6 that breaks the linear invariants of f (e.g. the mass
 /// balance y₂ = y₃ + y₄ of E5) by 1e-10 per step, far above an atol of 1e-24. The residual
 /// from d and J themselves restores x to working accuracy.
-pub(super) fn solve_refined(a: &[f64], ip: &[usize], jac: &[f64], d: f64, b: &[f64], x: &mut [f64], r: &mut [f64]) {
+pub(super) fn solve_refined(
+    a: &[f64],
+    ip: &[usize],
+    jac: &[f64],
+    d: f64,
+    b: &[f64],
+    x: &mut [f64],
+    r: &mut [f64],
+) {
     let n = b.len();
     with_small_n!(n, {
         solve_real_n(a, ip, n, x);
@@ -149,7 +157,14 @@ pub(super) fn solve_refined(a: &[f64], ip: &[usize], jac: &[f64], d: f64, b: &[f
 /// The residual r = b − d·x + J·x of [`solve_refined`], each product's rounding error
 /// (`error(a, b, fl(a·b))`) and each sum's carried in a compensation term.
 #[inline(always)]
-fn residual(jac: &[f64], d: f64, b: &[f64], x: &[f64], r: &mut [f64], error: impl Fn(f64, f64, f64) -> f64) {
+fn residual(
+    jac: &[f64],
+    d: f64,
+    b: &[f64],
+    x: &[f64],
+    r: &mut [f64],
+    error: impl Fn(f64, f64, f64) -> f64,
+) {
     let n = b.len();
     let jac = &jac[..n * n];
     for i in 0..n {
@@ -258,6 +273,11 @@ mod tests {
         let (mut refined, mut r) = (b, [0.0; 4]);
         solve_refined(&w, &ip, &jac, d, &b, &mut refined, &mut r);
         assert!(balance(&refined) < 1e-14, "refined: {:e}", balance(&refined));
-        assert!(balance(&plain) > 100.0 * balance(&refined), "plain {:e}, refined {:e}", balance(&plain), balance(&refined));
+        assert!(
+            balance(&plain) > 100.0 * balance(&refined),
+            "plain {:e}, refined {:e}",
+            balance(&plain),
+            balance(&refined)
+        );
     }
 }

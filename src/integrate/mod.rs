@@ -15,14 +15,14 @@ mod stats;
 mod stepper;
 
 pub use clock::{Clock, ClockStep, Time};
-pub use error::{ErrorKind, SolverError};
 pub(crate) use error::panic_message;
+pub use error::{ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{Options, Tolerance, DEFAULT_MAX_STEPS};
-pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
 #[cfg(test)]
 pub(crate) use problem::jacobian_against_differences;
+pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
 pub use radau5::Radau5;
 pub use rodas5p::Rodas5p;
 pub use stats::Stats;

@@ -131,14 +131,21 @@ impl Roots {
 
 impl std::fmt::Debug for Roots {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Roots").field("count", &self.count).field("directions", &self.directions).finish()
+        f.debug_struct("Roots")
+            .field("count", &self.count)
+            .field("directions", &self.directions)
+            .finish()
     }
 }
 
 /// Test support: the system's analytic Jacobian beside central differences of its right-hand
 /// side at y, with step `step(y_col)` per column, as (row, col, analytic, difference).
 #[cfg(test)]
-pub(crate) fn jacobian_against_differences(system: &impl OdeSystem, y: &[f64], step: impl Fn(f64) -> f64) -> Vec<(usize, usize, f64, f64)> {
+pub(crate) fn jacobian_against_differences(
+    system: &impl OdeSystem,
+    y: &[f64],
+    step: impl Fn(f64) -> f64,
+) -> Vec<(usize, usize, f64, f64)> {
     let n = system.dim();
     let mut storage = vec![0.0; n * n];
     let mut jac = JacobianMatrix::new(&mut storage, n);

@@ -36,10 +36,7 @@
 
 use super::linalg::{lu_real, rms, solve_real};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
-use super::{
-    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
-    Tolerance,
-};
+use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
 const NAME: &str = "Radau5";
 /// Safety factor of the step-size control.
@@ -254,7 +251,11 @@ pub struct Radau5<S: OdeSystem> {
 
 impl<S: OdeSystem> std::fmt::Debug for Radau5<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Radau5").field("n", &self.n).field("t", &self.core.t_out).field("t_internal", &self.core.x).finish()
+        f.debug_struct("Radau5")
+            .field("n", &self.n)
+            .field("t", &self.core.t_out)
+            .field("t_internal", &self.core.x)
+            .finish()
     }
 }
 
@@ -278,7 +279,8 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
     let (ar, ai, ip) = (&mut ar[..n * n], &mut ai[..n * n], &mut ip[..n]);
     for k in 0..n {
         // Column k, and the columns right of it.
-        let ((left_r, right_r), (left_i, right_i)) = (ar.split_at_mut((k + 1) * n), ai.split_at_mut((k + 1) * n));
+        let ((left_r, right_r), (left_i, right_i)) =
+            (ar.split_at_mut((k + 1) * n), ai.split_at_mut((k + 1) * n));
         let (cr, ci) = (&mut left_r[k * n..], &mut left_i[k * n..]);
         let mut p = k;
         let mut big = cr[k].abs() + ci[k].abs();
@@ -311,7 +313,9 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
         for (col_r, col_i) in right_r.chunks_exact_mut(n).zip(right_i.chunks_exact_mut(n)) {
             let (tr, ti) = (col_r[k], col_i[k]);
             if tr != 0.0 || ti != 0.0 {
-                for (((xr, xi), &ar_), &ai_) in col_r[k + 1..].iter_mut().zip(col_i[k + 1..].iter_mut()).zip(mr).zip(mi) {
+                for (((xr, xi), &ar_), &ai_) in
+                    col_r[k + 1..].iter_mut().zip(col_i[k + 1..].iter_mut()).zip(mr).zip(mi)
+                {
                     *xr += ar_ * tr - ai_ * ti;
                     *xi += ar_ * ti + ai_ * tr;
                 }
@@ -333,7 +337,9 @@ fn solve_complex(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64],
         }
         let ((hr, tr_), (hi, ti_)) = (br.split_at_mut(k + 1), bi.split_at_mut(k + 1));
         let (tr, ti) = (hr[k], hi[k]);
-        for (((xr, xi), &mr), &mi) in tr_.iter_mut().zip(ti_.iter_mut()).zip(&cr[k + 1..]).zip(&ci[k + 1..]) {
+        for (((xr, xi), &mr), &mi) in
+            tr_.iter_mut().zip(ti_.iter_mut()).zip(&cr[k + 1..]).zip(&ci[k + 1..])
+        {
             *xr += mr * tr - mi * ti;
             *xi += mr * ti + mi * tr;
         }
@@ -353,7 +359,16 @@ fn solve_complex(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64],
 
 /// Evaluates the k-th time derivative of the collocation polynomial at t into `out`.
 #[allow(clippy::too_many_arguments)]
-fn interpolate(c: &Coeffs, w: &Work, y: &[f64], x: f64, hold: f64, t: f64, k: u32, out: &mut [f64]) {
+fn interpolate(
+    c: &Coeffs,
+    w: &Work,
+    y: &[f64],
+    x: f64,
+    hold: f64,
+    t: f64,
+    k: u32,
+    out: &mut [f64],
+) {
     let s = (t - x) / hold;
     let (b, cc) = (c.c2m1, c.c1m1);
     for i in 0..out.len() {
@@ -377,15 +392,22 @@ impl<S: OdeSystem> Radau5<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
-        core.reject_unsupported(&[("max_order", options.max_order.is_some(), "the order is fixed at 5")])?;
+        let core =
+            Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+        core.reject_unsupported(&[(
+            "max_order",
+            options.max_order.is_some(),
+            "the order is fixed at 5",
+        )])?;
         // RADAU5's tolerance transformation.
         let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![rtol * a / options.rtol; n],
             Tolerance::PerComponent(v) => v.iter().map(|a| rtol * a / options.rtol).collect(),
         };
-        let fnewt = options.nonlin_conv_coef.unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
+        let fnewt = options
+            .nonlin_conv_coef
+            .unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
         let mut solver = Self {
             system,
@@ -492,7 +514,8 @@ impl<S: OdeSystem> Radau5<S> {
             w.e2i[j * n + j] = betan;
         }
         self.core.stats.lin_setups += 1;
-        let ok = lu_real(&mut w.e1, &mut w.ip1, n) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, n);
+        let ok =
+            lu_real(&mut w.e1, &mut w.ip1, n) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, n);
         self.lu_h = if ok { h } else { f64::NAN };
         ok
     }
@@ -645,7 +668,13 @@ impl<S: OdeSystem> Radau5<S> {
 
     /// Sets a reduced step size after a failure; an error of `kind` if h is already at
     /// `min_step`.
-    fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
+    fn reduce(
+        &mut self,
+        hnew: f64,
+        kind: ErrorKind,
+        flag: i32,
+        why: &str,
+    ) -> Result<(), SolverError> {
         self.core.reduce(hnew, kind, flag, why)?;
         self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
         Ok(())
@@ -654,13 +683,15 @@ impl<S: OdeSystem> Radau5<S> {
     /// One accepted step (with as many attempts as needed). Returns true if it ended at the
     /// stop time.
     fn step(&mut self) -> Result<bool, SolverError> {
-        let (mut conv_fails, mut nonfinite, mut singular, mut rejections) = (0u32, 0u32, 0u32, 0u32);
+        let (mut conv_fails, mut nonfinite, mut singular, mut rejections) =
+            (0u32, 0u32, 0u32, 0u32);
         let mut attempts = 0u32;
         self.core.drop_passed_stop_time();
         loop {
             attempts += 1;
             if attempts > MAX_ATTEMPTS {
-                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
+                let message =
+                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
                 return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
             }
             if let Some(h) = self.fixed_h {
@@ -675,7 +706,11 @@ impl<S: OdeSystem> Radau5<S> {
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {
                 if !self.compute_jacobian() {
-                    return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
+                    return Err(self.core.error(
+                        ErrorKind::RhsFailure,
+                        -6,
+                        "the Jacobian is not finite".into(),
+                    ));
                 }
                 self.caljac = true;
                 self.jacobian_age = 0;
@@ -685,10 +720,18 @@ impl<S: OdeSystem> Radau5<S> {
                 if !self.decompose() {
                     singular += 1;
                     if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
-                        let message = format!("iteration matrix singular {singular} times (h = {:e})", self.core.h);
+                        let message = format!(
+                            "iteration matrix singular {singular} times (h = {:e})",
+                            self.core.h
+                        );
                         return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                     }
-                    self.reduce(0.5 * self.core.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
+                    self.reduce(
+                        0.5 * self.core.h,
+                        ErrorKind::LinearSolver,
+                        -4,
+                        "singular iteration matrix",
+                    )?;
                     continue;
                 }
                 self.action = Action::Reuse;
@@ -701,16 +744,29 @@ impl<S: OdeSystem> Radau5<S> {
                     self.core.stats.step_solve_fails += 1;
                     conv_fails += 1;
                     if conv_fails >= self.max_conv_fails || self.fixed_h.is_some() {
-                        let message = format!("Newton failed {conv_fails} times in one step (h = {:e})", self.core.h);
+                        let message = format!(
+                            "Newton failed {conv_fails} times in one step (h = {:e})",
+                            self.core.h
+                        );
                         return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
                     }
-                    self.reduce(0.5 * self.core.h, ErrorKind::ConvergenceFailures, -5, "Newton failure")?;
+                    self.reduce(
+                        0.5 * self.core.h,
+                        ErrorKind::ConvergenceFailures,
+                        -5,
+                        "Newton failure",
+                    )?;
                     continue;
                 }
                 Newton::Slow(factor) => {
                     self.core.stats.nonlin_conv_fails += 1;
                     self.core.stats.step_solve_fails += 1;
-                    self.reduce(factor * self.core.h, ErrorKind::ConvergenceFailures, -5, "slow Newton convergence")?;
+                    self.reduce(
+                        factor * self.core.h,
+                        ErrorKind::ConvergenceFailures,
+                        -5,
+                        "slow Newton convergence",
+                    )?;
                     continue;
                 }
                 Newton::NonFinite => {
@@ -729,7 +785,11 @@ impl<S: OdeSystem> Radau5<S> {
             let mut hnew = self.core.h / quot;
             if err < 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
+                let xph = if last {
+                    self.core.stop_time.unwrap_or(self.core.x + self.core.h)
+                } else {
+                    self.core.x + self.core.h
+                };
                 let w = &mut self.work;
                 for i in 0..self.n {
                     w.ynew[i] = self.core.y[i] + w.z3[i];
@@ -771,7 +831,10 @@ impl<S: OdeSystem> Radau5<S> {
             self.core.stats.err_test_fails += 1;
             rejections += 1;
             if rejections >= self.max_err_test_fails {
-                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.core.h);
+                let message = format!(
+                    "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
+                    self.core.h
+                );
                 return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
             }
             let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
@@ -792,7 +855,8 @@ impl<S: OdeSystem> Radau5<S> {
         let h = self.core.h;
         self.naccpt += 1;
         if self.naccpt > 1 {
-            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE).clamp(FACR, FACL);
+            let facgus =
+                ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE).clamp(FACR, FACL);
             *quot = quot.max(facgus);
             *hnew = h / *quot;
         }
@@ -916,8 +980,16 @@ mod tests {
         // T⁻¹ A⁻¹ T must be diag(γ) ⊕ [[α, −β], [β, α]] (RADAU5's convention).
         let sq6 = 6f64.sqrt();
         let a = [
-            [(88.0 - 7.0 * sq6) / 360.0, (296.0 - 169.0 * sq6) / 1800.0, (-2.0 + 3.0 * sq6) / 225.0],
-            [(296.0 + 169.0 * sq6) / 1800.0, (88.0 + 7.0 * sq6) / 360.0, (-2.0 - 3.0 * sq6) / 225.0],
+            [
+                (88.0 - 7.0 * sq6) / 360.0,
+                (296.0 - 169.0 * sq6) / 1800.0,
+                (-2.0 + 3.0 * sq6) / 225.0,
+            ],
+            [
+                (296.0 + 169.0 * sq6) / 1800.0,
+                (88.0 + 7.0 * sq6) / 360.0,
+                (-2.0 - 3.0 * sq6) / 225.0,
+            ],
             [(16.0 - sq6) / 36.0, (16.0 + sq6) / 36.0, 1.0 / 9.0],
         ];
         let t = [[T11, T12, T13], [T21, T22, T23], [T31, 1.0, 0.0]];

@@ -50,10 +50,7 @@
 
 use super::linalg::{lu_real, rms, solve_real, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
-use super::{
-    ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
-    Tolerance,
-};
+use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
 const NAME: &str = "Rodas5P";
 /// Safety factor of the step-size control.
@@ -96,11 +93,27 @@ const C: [[f64; 7]; STAGES] = [
     [37.80277123390563, -3.2571969029072276, 112.26918849496327, 66.9347231244047, -40.06618937091002, -54.66780262877968, -9.48861652309627],
 ];
 /// The nodes c_i (c_2 = 3γ).
-const NODES: [f64; STAGES] =
-    [0.0, 0.6358126895828704, 0.4095798393397535, 0.9769306725060716, 0.4288403609558664, 1.0, 1.0, 1.0];
+const NODES: [f64; STAGES] = [
+    0.0,
+    0.6358126895828704,
+    0.4095798393397535,
+    0.9769306725060716,
+    0.4288403609558664,
+    1.0,
+    1.0,
+    1.0,
+];
 /// d_i = Σ_j γ_ij: the coefficients of h ∂f/∂t.
-const D: [f64; STAGES] =
-    [0.21193756319429014, -0.42387512638858027, -0.3384627126235924, 1.8046452872882734, 2.325825639765069, 0.0, 0.0, 0.0];
+const D: [f64; STAGES] = [
+    0.21193756319429014,
+    -0.42387512638858027,
+    -0.3384627126235924,
+    1.8046452872882734,
+    2.325825639765069,
+    0.0,
+    0.0,
+    0.0,
+];
 /// Dense output: K_m = Σ_i h_mi k_i.
 #[rustfmt::skip]
 const HD: [[f64; STAGES]; 3] = [
@@ -195,10 +208,13 @@ pub struct Rodas5p<S: OdeSystem> {
 
 impl<S: OdeSystem> std::fmt::Debug for Rodas5p<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Rodas5p").field("n", &self.n).field("t", &self.core.t_out).field("t_internal", &self.core.x).finish()
+        f.debug_struct("Rodas5p")
+            .field("n", &self.n)
+            .field("t", &self.core.t_out)
+            .field("t_internal", &self.core.x)
+            .finish()
     }
 }
-
 
 /// Evaluates the k-th time derivative of the continuous output of the last step [x − hold, x]
 /// at t into `out`.
@@ -212,7 +228,10 @@ fn interpolate(w: &Work, y: &[f64], x: f64, hold: f64, t: f64, k: u32, out: &mut
         let (k1, k2, k3) = (w.cont[i], w.cont[n + i], w.cont[2 * n + i]);
         out[i] = match k {
             0 => th1 * y0 + th * (y1 + th1 * (k1 + th * (k2 + th * k3))),
-            1 => ((y1 - y0 + k1) + th * (2.0 * (k2 - k1) + th * (3.0 * (k3 - k2) - 4.0 * th * k3))) / hold,
+            1 => {
+                ((y1 - y0 + k1) + th * (2.0 * (k2 - k1) + th * (3.0 * (k3 - k2) - 4.0 * th * k3)))
+                    / hold
+            }
             2 => (2.0 * (k2 - k1) + th * (6.0 * (k3 - k2) - 12.0 * th * k3)) / (hold * hold),
             3 => (6.0 * (k3 - k2) - 24.0 * th * k3) / (hold * hold * hold),
             _ => -24.0 * k3 / (hold * hold * hold * hold),
@@ -226,7 +245,8 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+        let core =
+            Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
         let no_newton = "a Rosenbrock method has no nonlinear iteration";
         core.reject_unsupported(&[
             ("max_order", options.max_order.is_some(), "the order is fixed at 5"),
@@ -456,7 +476,11 @@ impl<S: OdeSystem> Rodas5p<S> {
             // Jacobian (once per point) and LU factors (once per step size).
             if !self.jac_current {
                 if !self.compute_jacobian() {
-                    return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian or ∂f/∂t is not finite".into()));
+                    return Err(self.core.error(
+                        ErrorKind::RhsFailure,
+                        -6,
+                        "the Jacobian or ∂f/∂t is not finite".into(),
+                    ));
                 }
                 self.jac_current = true;
                 self.lu_h = f64::NAN;
@@ -464,10 +488,18 @@ impl<S: OdeSystem> Rodas5p<S> {
             if self.lu_h != self.core.h && !self.decompose() {
                 singular += 1;
                 if singular >= MAX_SINGULAR || self.fixed_h.is_some() {
-                    let message = format!("matrix I/(hγ) − J singular {singular} times (h = {:e})", self.core.h);
+                    let message = format!(
+                        "matrix I/(hγ) − J singular {singular} times (h = {:e})",
+                        self.core.h
+                    );
                     return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                 }
-                self.core.reduce(0.5 * self.core.h, ErrorKind::LinearSolver, -4, "singular matrix")?;
+                self.core.reduce(
+                    0.5 * self.core.h,
+                    ErrorKind::LinearSolver,
+                    -4,
+                    "singular matrix",
+                )?;
                 continue;
             }
             self.core.stats.step_attempts += 1;
@@ -481,7 +513,11 @@ impl<S: OdeSystem> Rodas5p<S> {
             let mut hnew = self.core.h / quot;
             if err <= 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
+                let xph = if last {
+                    self.core.stop_time.unwrap_or(self.core.x + self.core.h)
+                } else {
+                    self.core.x + self.core.h
+                };
                 let w = &mut self.work;
                 self.system.rhs(xph, &w.ynew, &mut w.fnew);
                 self.core.stats.rhs_evals += 1;
@@ -513,7 +549,10 @@ impl<S: OdeSystem> Rodas5p<S> {
             self.core.stats.err_test_fails += 1;
             rejections += 1;
             if rejections >= self.max_err_test_fails {
-                let message = format!("{rejections} error-test failures in one step (h = {:e}, err = {err:e})", self.core.h);
+                let message = format!(
+                    "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
+                    self.core.h
+                );
                 return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
             }
             // From the second rejection in a row, the error is evidently not falling like h⁵ (a
@@ -558,7 +597,8 @@ impl<S: OdeSystem> Rodas5p<S> {
         let n = self.n;
         self.naccpt += 1;
         if self.naccpt > 1 {
-            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
+            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(EXPONENT) / SAFE)
+                .clamp(FAC2, FAC1);
             *quot = quot.max(facgus);
             *hnew = h / *quot;
         }
@@ -781,7 +821,8 @@ mod tests {
             }
             if t.order() <= 4 {
                 for th in [0.1, 0.3, 0.5, 0.7, 0.9] {
-                    let d = (0..STAGES).map(|i| dense(th)[i] * k[i]).sum::<f64>() - th.powi(t.order() as i32) * exact;
+                    let d = (0..STAGES).map(|i| dense(th)[i] * k[i]).sum::<f64>()
+                        - th.powi(t.order() as i32) * exact;
                     assert!(d.abs() < 1e-13, "dense output, θ = {th}, {t:?}: {d:e}");
                 }
             }
@@ -798,7 +839,10 @@ mod tests {
             assert!((b[j] - alpha[7][j] - gamma[7][j]).abs() < 1e-13);
             assert!((bhat[j] - alpha[6][j] - gamma[6][j]).abs() < 1e-13);
         }
-        assert!((b.iter().sum::<f64>() - 1.0).abs() < 1e-13 && (bhat.iter().sum::<f64>() - 1.0).abs() < 1e-13);
+        assert!(
+            (b.iter().sum::<f64>() - 1.0).abs() < 1e-13
+                && (bhat.iter().sum::<f64>() - 1.0).abs() < 1e-13
+        );
     }
 
     /// One step of the method on y' = λy with h = 1: (R(z), R̂(z)).
@@ -817,7 +861,10 @@ mod tests {
     fn stability_function_vanishes_at_infinity() {
         for z in [-1e8, -1e12] {
             let (r, rhat) = stability(z);
-            assert!(r.abs() < 20.0 / z.abs() && rhat.abs() < 20.0 / z.abs(), "R({z}) = {r:e}, R̂ = {rhat:e}");
+            assert!(
+                r.abs() < 20.0 / z.abs() && rhat.abs() < 20.0 / z.abs(),
+                "R({z}) = {r:e}, R̂ = {rhat:e}"
+            );
         }
         let (r, _) = stability(-0.1);
         assert!((r - (-0.1f64).exp()).abs() < 1e-8, "R(−0.1) = {r} ≈ e^−0.1");

@@ -7,7 +7,10 @@
 //!
 //! [`Integrator::advance`]: super::Integrator::advance
 
-use super::{panic_message, ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step, StepEvent, Task, DEFAULT_MAX_STEPS};
+use super::{
+    panic_message, ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step,
+    StepEvent, Task, DEFAULT_MAX_STEPS,
+};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The unit roundoff of RADAU5, RODAS, SEULEX and ODEX (step-underflow test, difference
@@ -138,9 +141,10 @@ impl Core {
     /// the first one that is set (an option is never silently ignored).
     pub fn reject_unsupported(&self, options: &[(&str, bool, &str)]) -> Result<(), SolverError> {
         match options.iter().find(|(_, set, _)| *set) {
-            Some((name, _, why)) => {
-                Err(self.invalid(format!("{name} is not an option of {} ({why}): leave it unset (None)", self.name)))
-            }
+            Some((name, _, why)) => Err(self.invalid(format!(
+                "{name} is not an option of {} ({why}): leave it unset (None)",
+                self.name
+            ))),
             None => Ok(()),
         }
     }
@@ -201,7 +205,8 @@ impl Core {
     /// `fail_on_step_underflow`, otherwise a counted warning.
     pub fn check_step_underflow(&mut self) -> Result<(), SolverError> {
         if 0.1 * self.h.abs() <= self.x.abs() * UROUND {
-            let message = format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
+            let message =
+                format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
             if self.fail_on_step_underflow || self.x + self.h == self.x {
                 return Err(self.error(ErrorKind::StepUnderflow, -3, message));
             }
@@ -212,7 +217,13 @@ impl Core {
 
     /// Sets a reduced step size after a failure; an error of `kind` if h is already at
     /// `min_step`.
-    pub fn reduce(&mut self, hnew: f64, kind: ErrorKind, flag: i32, why: &str) -> Result<(), SolverError> {
+    pub fn reduce(
+        &mut self,
+        hnew: f64,
+        kind: ErrorKind,
+        flag: i32,
+        why: &str,
+    ) -> Result<(), SolverError> {
         let mut hnew = hnew;
         if hnew.abs() < self.hmin {
             if self.h.abs() <= self.hmin {
@@ -243,7 +254,9 @@ impl Core {
     pub fn restart(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         let n = self.y.len();
         if y0.len() != n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message = format!("reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {y0:?}");
+            let message = format!(
+                "reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {y0:?}"
+            );
             return Err(self.invalid(message));
         }
         self.x = t0;
@@ -350,7 +363,9 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
     m.check_fixed().map_err(|message| m.core().invalid(message))?;
     start(m, tout, task)?;
     // A stop time reached by a step whose call returned an earlier tout: return it now.
-    if m.core().stop_pending && (task == Task::OneStep || (tout - m.core().x) * m.core().posneg >= 0.0) {
+    if m.core().stop_pending
+        && (task == Task::OneStep || (tout - m.core().x) * m.core().posneg >= 0.0)
+    {
         let c = m.core_mut();
         c.stop_pending = false;
         c.t_out = c.x;
@@ -395,7 +410,8 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
         }
         let c = m.core();
         if taken >= c.max_steps {
-            let message = format!("{} steps taken before tout = {tout:e} (raise max_steps)", c.max_steps);
+            let message =
+                format!("{} steps taken before tout = {tout:e} (raise max_steps)", c.max_steps);
             return Err(c.error(ErrorKind::TooMuchWork, -2, message));
         }
         stopped = m.step()?;
@@ -415,10 +431,15 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
 /// leaves the method as a failed attempt does: at the last accepted step with its dense
 /// output, its scratch (stages, Newton iterates, a Jacobian half built) rebuilt by the next
 /// attempt. A later `advance` goes on from there.
-fn guarded<M: Stepper, T>(m: &mut M, f: impl FnOnce(&mut M) -> Result<T, SolverError>) -> Result<T, SolverError> {
+fn guarded<M: Stepper, T>(
+    m: &mut M,
+    f: impl FnOnce(&mut M) -> Result<T, SolverError>,
+) -> Result<T, SolverError> {
     match catch_unwind(AssertUnwindSafe(|| f(m))) {
         Ok(result) => result,
-        Err(payload) => Err(m.core().error(ErrorKind::CallbackPanic, PANIC_FLAG, panic_message(&*payload))),
+        Err(payload) => {
+            Err(m.core().error(ErrorKind::CallbackPanic, PANIC_FLAG, panic_message(&*payload)))
+        }
     }
 }
 
@@ -447,11 +468,14 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
         if nonfinite > 0 {
             let attempts = c.stats.step_attempts.saturating_sub(before.step_attempts);
             let failed = attempts.saturating_sub(c.stats.steps.saturating_sub(before.steps));
-            let from_rhs = e.kind != ErrorKind::StepUnderflow || (2 * nonfinite >= failed && !c.layer_step);
+            let from_rhs =
+                e.kind != ErrorKind::StepUnderflow || (2 * nonfinite >= failed && !c.layer_step);
             if !matches!(e.kind, ErrorKind::InvalidInput | ErrorKind::CallbackPanic) && from_rhs {
                 e.kind = ErrorKind::RhsFailure;
             }
-            e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+            e.message.push_str(&format!(
+                " [{nonfinite} right-hand-side calls returned non-finite values]"
+            ));
         }
         e
     })
@@ -463,12 +487,15 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
 pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], SolverError> {
     let max = M::MAX_DENSE_ORDER;
     if !t.is_finite() || k > max {
-        return Err(m.core().invalid(format!("dense output needs a finite t and k ≤ {max}, got t = {t}, k = {k}")));
+        return Err(m.core().invalid(format!(
+            "dense output needs a finite t and k ≤ {max}, got t = {t}, k = {k}"
+        )));
     }
     if !m.core().have_step {
         let c = m.core();
         if t != c.x || k > 1 {
-            let message = format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", c.x);
+            let message =
+                format!("no step taken yet: dense output only at t = {:e} with k ≤ 1", c.x);
             return Err(c.invalid(message));
         }
         if k == 0 {
@@ -476,7 +503,11 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
             c.dense.copy_from_slice(&c.y);
         } else {
             if !guarded(m, |m| Ok(m.ensure_f0()))? {
-                return Err(m.core().error(ErrorKind::RhsFailure, -6, "the right-hand side is not finite".into()));
+                return Err(m.core().error(
+                    ErrorKind::RhsFailure,
+                    -6,
+                    "the right-hand side is not finite".into(),
+                ));
             }
             let c = m.core_mut();
             c.dense.copy_from_slice(&c.f0);
@@ -500,7 +531,13 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
 /// the system's analytic one, or forward differences with RADAU5's increments
 /// √(u·max(1e-5, |y_j|)) against `c.f0` (valid), with `tmp` and `fnew` as scratch. Counts the
 /// evaluations. False if an entry is not finite.
-pub(super) fn jacobian<S: OdeSystem>(system: &S, c: &mut Core, jac: &mut [f64], tmp: &mut [f64], fnew: &mut [f64]) -> bool {
+pub(super) fn jacobian<S: OdeSystem>(
+    system: &S,
+    c: &mut Core,
+    jac: &mut [f64],
+    tmp: &mut [f64],
+    fnew: &mut [f64],
+) -> bool {
     let n = c.y.len();
     c.stats.jac_evals += 1;
     if system.has_jacobian() {

@@ -93,7 +93,11 @@ impl Drr {
             if mid <= lo || mid >= hi {
                 break;
             }
-            if excess(mid) > 0.0 { lo = mid } else { hi = mid }
+            if excess(mid) > 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
         }
         let theta_exit = theta(hi);
         let u_exit = -(theta_exit + STICK_EXIT) / p.xi;
@@ -138,10 +142,17 @@ mod tests {
     fn slip_law_stick_is_the_plate_catching_up() {
         // ξu + θ = 1000: the floor is ln v = −1000, and ln v = −(ξ(u0 − t) + θ0) reaches −50
         // after (1000 − 50)/ξ.
-        let stick = drr(StateLaw::Slip, Friction::Log).deep_stick(&[1e3, -1e3, -1e3]).expect("a deep stick");
+        let stick = drr(StateLaw::Slip, Friction::Log)
+            .deep_stick(&[1e3, -1e3, -1e3])
+            .expect("a deep stick");
         assert_eq!(stick.floor, -1e3);
         assert!((stick.duration - 475.0).abs() < 1e-12, "{stick:?}");
-        assert!((stick.exit[U] - 525.0).abs() < 1e-12 && stick.exit[W] == STICK_EXIT && stick.exit[THETA] == -1e3, "{stick:?}");
+        assert!(
+            (stick.exit[U] - 525.0).abs() < 1e-12
+                && stick.exit[W] == STICK_EXIT
+                && stick.exit[THETA] == -1e3,
+            "{stick:?}"
+        );
     }
 
     #[test]
@@ -163,9 +174,16 @@ mod tests {
                 let k4 = f(theta + h * k3);
                 theta += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
             }
-            assert!((stick.exit[THETA] - theta).abs() < 1e-9 * theta.abs().max(1.0), "{law:?}: {} vs {theta}", stick.exit[THETA]);
+            assert!(
+                (stick.exit[THETA] - theta).abs() < 1e-9 * theta.abs().max(1.0),
+                "{law:?}: {} vs {theta}",
+                stick.exit[THETA]
+            );
             // The exit is on the slow manifold at ln v = −50, and u fell by the duration.
-            assert!((2.0 * stick.exit[U] + stick.exit[THETA] + STICK_EXIT).abs() < 1e-9, "{stick:?}");
+            assert!(
+                (2.0 * stick.exit[U] + stick.exit[THETA] + STICK_EXIT).abs() < 1e-9,
+                "{stick:?}"
+            );
             assert!((y[U] - stick.duration - stick.exit[U]).abs() < 1e-9 * y[U], "{stick:?}");
         }
     }
@@ -173,7 +191,9 @@ mod tests {
     #[test]
     fn the_lowest_ln_v_of_a_healing_stick_lies_below_its_start() {
         // Slip law: ln v only rises from the floor.
-        let stick = drr(StateLaw::Slip, Friction::Log).deep_stick(&[1e3, -1e3, -1e3]).expect("a deep stick");
+        let stick = drr(StateLaw::Slip, Friction::Log)
+            .deep_stick(&[1e3, -1e3, -1e3])
+            .expect("a deep stick");
         assert_eq!(stick.lowest, (-1e3, 0.0));
         for law in [StateLaw::Ageing, StateLaw::Prz] {
             let d = drr(law, Friction::Log);
@@ -192,7 +212,11 @@ mod tests {
                 }
             }
             assert!(stick.lowest.0 < stick.floor - 1.0, "{stick:?}");
-            assert!((stick.lowest.0 - best).abs() < 1e-9 * best.abs(), "{law:?}: {:?} vs {best}", stick.lowest);
+            assert!(
+                (stick.lowest.0 - best).abs() < 1e-9 * best.abs(),
+                "{law:?}: {:?} vs {best}",
+                stick.lowest
+            );
             assert!((stick.lowest.1 - at).abs() < 1e-3, "{law:?}: {:?} vs t = {at}", stick.lowest);
             assert!((stick.lowest.1 - (3.0 - (-20.0f64 / 6.0).exp())).abs() < 1e-12);
         }

@@ -126,7 +126,11 @@ impl Drr {
     /// side's path, which needs no derivatives.
     fn resistance_value(&self, f: f64, v: f64) -> f64 {
         let eta = self.params.eta;
-        if eta == 0.0 { f } else { f + eta * v }
+        if eta == 0.0 {
+            f
+        } else {
+            f + eta * v
+        }
     }
 
     /// G = u + (θ + r)/ξ at y, given the resistance r = f(v) + η v there.
@@ -184,7 +188,11 @@ impl Drr {
             if value == 0.0 {
                 return Some(w);
             }
-            if value < 0.0 { lo = w } else { hi = w }
+            if value < 0.0 {
+                lo = w
+            } else {
+                hi = w
+            }
             let newton = w - value / self.resistance(w).slope;
             let next = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
             if (next - w).abs() <= 4.0 * f64::EPSILON * w.abs().max(1.0) {
@@ -255,7 +263,8 @@ impl Drr {
         n_hess[THETA][W] = law.w_theta();
         n_hess[THETA][THETA] = law.theta_theta();
         // d³(f + ηv)/dw³, needed here only (not on the inertial right-hand side's path).
-        let curvature_slope = p.friction.d2_vfprime_dw2(w) + if p.eta == 0.0 { 0.0 } else { p.eta * v };
+        let curvature_slope =
+            p.friction.d2_vfprime_dw2(w) + if p.eta == 0.0 { 0.0 } else { p.eta * v };
         quasi_dynamic::quotient(n, n_grad, n_hess, (r.slope, r.curvature, curvature_slope))
     }
 
@@ -281,7 +290,11 @@ impl Drr {
     /// The scale of v in a slip, which sets the fastest time scale 1/scale: γ with inertia,
     /// 1/η without (radiation damping caps v near 1/η).
     pub fn slip_speed_scale(&self) -> f64 {
-        if self.params.inertia { self.params.gamma } else { 1.0 / self.params.eta }
+        if self.params.inertia {
+            self.params.gamma
+        } else {
+            1.0 / self.params.eta
+        }
     }
 
     /// (du/dt, dw/dt, dθ/dt). With inertia (every benchmark and the paper's model) only the
@@ -483,9 +496,16 @@ mod tests {
         for friction in frictions() {
             for (_, state_law) in StateLaw::ALL {
                 for eta in [0.0, 0.37] {
-                    out.push(Drr::new(DrrParams { state_law, eta, ..DrrParams::new(gamma, xi, epsilon, friction) }));
+                    out.push(Drr::new(DrrParams {
+                        state_law,
+                        eta,
+                        ..DrrParams::new(gamma, xi, epsilon, friction)
+                    }));
                 }
-                out.push(Drr::new(DrrParams { state_law, ..DrrParams::quasi_dynamic(xi, epsilon, 0.37, friction) }));
+                out.push(Drr::new(DrrParams {
+                    state_law,
+                    ..DrrParams::quasi_dynamic(xi, epsilon, 0.37, friction)
+                }));
             }
         }
         out
@@ -498,8 +518,13 @@ mod tests {
         for drr in models(10.0, 0.7, 0.72) {
             let p = drr.params();
             for y in STATES {
-                for (row, col, exact, fd) in jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs())) {
-                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}");
+                for (row, col, exact, fd) in
+                    jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs()))
+                {
+                    assert!(
+                        (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
+                        "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}"
+                    );
                 }
             }
         }
@@ -520,7 +545,11 @@ mod tests {
             drr.jacobian(0.0, &ym, &mut JacobianMatrix::new(&mut jm, 3));
             for i in 0..9 {
                 let fd = (jp[i] - jm[i]) / (2.0 * h);
-                assert!((fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()), "{p:?} y={y:?} k={k} entry {i}: {} vs {fd}", exact[i]);
+                assert!(
+                    (fd - exact[i]).abs() <= 1e-5 * (1.0 + exact[i].abs()),
+                    "{p:?} y={y:?} k={k} entry {i}: {} vs {fd}",
+                    exact[i]
+                );
             }
         }
     }
@@ -538,11 +567,18 @@ mod tests {
     /// those of the held rate, and the right-hand side is finite and continuous at the hold.
     #[test]
     fn held_arrest_rate_has_consistent_jacobians_and_is_continuous() {
-        for drr in models(1e8, 0.7, 3.0).into_iter().filter(|d| d.params().friction == Friction::Log) {
+        for drr in
+            models(1e8, 0.7, 3.0).into_iter().filter(|d| d.params().friction == Friction::Log)
+        {
             let p = drr.params();
             let y = [900.0, -800.0, -1.0];
-            for (row, col, exact, fd) in jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs())) {
-                assert!(exact.is_finite() && (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}");
+            for (row, col, exact, fd) in
+                jacobian_against_differences(&drr, &y, |x| 1e-6 * (1.0 + x.abs()))
+            {
+                assert!(
+                    exact.is_finite() && (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
+                    "{p:?} y={y:?} ({row},{col}): {exact} vs {fd}"
+                );
             }
             assert_jacobian_derivative_matches_differences(&drr, y);
             let at = |w: f64| {
@@ -550,8 +586,12 @@ mod tests {
                 drr.rhs(0.0, &[900.0, w, -1.0], &mut d);
                 d[W]
             };
-            let (below, above) = (at(ARREST_RATE_HELD_BELOW - 1e-12), at(ARREST_RATE_HELD_BELOW + 1e-12));
-            assert!(below.is_finite() && (below - above).abs() <= 1e-9 * above.abs(), "{p:?}: {below:e} vs {above:e}");
+            let (below, above) =
+                (at(ARREST_RATE_HELD_BELOW - 1e-12), at(ARREST_RATE_HELD_BELOW + 1e-12));
+            assert!(
+                below.is_finite() && (below - above).abs() <= 1e-9 * above.abs(),
+                "{p:?}: {below:e} vs {above:e}"
+            );
         }
     }
 
@@ -564,7 +604,11 @@ mod tests {
                 drr.rhs(0.0, &y, &mut d);
                 let (f, _) = friction.eval(y[W]);
                 let paper = -y[W].exp() * (y[THETA] + 1.72 * f);
-                assert!((d[THETA] - paper).abs() <= 1e-14 * (1.0 + paper.abs()), "{friction:?} y={y:?}: {} vs {paper}", d[THETA]);
+                assert!(
+                    (d[THETA] - paper).abs() <= 1e-14 * (1.0 + paper.abs()),
+                    "{friction:?} y={y:?}: {} vs {paper}",
+                    d[THETA]
+                );
             }
         }
     }
@@ -590,13 +634,21 @@ mod tests {
                 let u = drr.manifold_u(w, theta);
                 let back = drr.manifold_w(u, theta).unwrap();
                 // w is determined by u only to the rounding of ξu + θ over ∂(ξG)/∂w.
-                let conditioning = 1e-15 * (1.0 + (p.xi * u).abs() + theta.abs()) / (p.xi * drr.manifold_offset_slope(w));
-                assert!((back - w).abs() < 1e-10 * (1.0 + w.abs()) + 10.0 * conditioning, "{p:?} w={w}: {back}");
-                assert!(drr.manifold_offset(&[u, back, theta]).abs() < 1e-12 * (1.0 + u.abs()), "{p:?} w={w}");
+                let conditioning = 1e-15 * (1.0 + (p.xi * u).abs() + theta.abs())
+                    / (p.xi * drr.manifold_offset_slope(w));
+                assert!(
+                    (back - w).abs() < 1e-10 * (1.0 + w.abs()) + 10.0 * conditioning,
+                    "{p:?} w={w}: {back}"
+                );
+                assert!(
+                    drr.manifold_offset(&[u, back, theta]).abs() < 1e-12 * (1.0 + u.abs()),
+                    "{p:?} w={w}"
+                );
             }
         }
         // Outside the range of f + ηv (asinh: f + ηv > 0): no point of the manifold.
-        let asinh = Drr::new(DrrParams { eta: 0.5, ..DrrParams::new(1e3, 0.7, 0.72, Friction::Asinh) });
+        let asinh =
+            Drr::new(DrrParams { eta: 0.5, ..DrrParams::new(1e3, 0.7, 0.72, Friction::Asinh) });
         assert_eq!(asinh.manifold_w(1.0, 0.0), None);
     }
 
@@ -611,8 +663,13 @@ mod tests {
                 drr.rhs(0.0, &y, &mut d);
                 let g = drr.manifold_offset(&y);
                 let dg = d[U] + d[THETA] / p.xi + drr.manifold_offset_slope(y[W]) * d[W];
-                let scale = d[U].abs() + (d[THETA] / p.xi).abs() + (drr.manifold_offset_slope(y[W]) * d[W]).abs();
-                assert!((dg + CONSTRAINT_RELAXATION_RATE * g).abs() <= 1e-14 * scale.max(1.0), "{p:?} y={y:?}: dG/dt {dg} vs G {g}");
+                let scale = d[U].abs()
+                    + (d[THETA] / p.xi).abs()
+                    + (drr.manifold_offset_slope(y[W]) * d[W]).abs();
+                assert!(
+                    (dg + CONSTRAINT_RELAXATION_RATE * g).abs() <= 1e-14 * scale.max(1.0),
+                    "{p:?} y={y:?}: dG/dt {dg} vs G {g}"
+                );
             }
         }
     }

@@ -28,7 +28,8 @@ pub fn shifts(xi: f64, epsilon: f64) -> (f64, f64) {
 impl FastSlip {
     /// The fast system of a model with f = ln v; None for other friction laws.
     pub fn new(params: &DrrParams) -> Option<Self> {
-        (params.friction == Friction::Log).then_some(Self { xi: params.xi, epsilon: params.epsilon })
+        (params.friction == Friction::Log)
+            .then_some(Self { xi: params.xi, epsilon: params.epsilon })
     }
 
     /// Maps a 3D state (u, w = ln v, θ) to fast variables (U, W = ln V, Θ) at this γ.
@@ -98,11 +99,23 @@ mod tests {
             fast.rhs(0.0, &z, &mut dz);
             // d/dT = (1/γ) d/dt.
             assert!(((dy[0] + 1.0) / gamma - dz[0]).abs() < 1e-12 * dz[0].abs());
-            assert!((dy[1] / gamma - dz[1]).abs() < 1e-9 * (1.0 + dz[1].abs()), "{gamma}: {} vs {}", dy[1] / gamma, dz[1]);
+            assert!(
+                (dy[1] / gamma - dz[1]).abs() < 1e-9 * (1.0 + dz[1].abs()),
+                "{gamma}: {} vs {}",
+                dy[1] / gamma,
+                dz[1]
+            );
             assert!((dy[2] / gamma - dz[2]).abs() < 1e-9 * (1.0 + dz[2].abs()));
-            assert_eq!(fast.to_fast(gamma, &y).map(|x| (x * 1e9).round()), z.map(|x| (x * 1e9).round()));
+            assert_eq!(
+                fast.to_fast(gamma, &y).map(|x| (x * 1e9).round()),
+                z.map(|x| (x * 1e9).round())
+            );
         }
-        assert!(FastSlip::new(&DrrParams { friction: Friction::Power { alpha: 0.3 }, ..params(1.0) }).is_none());
+        assert!(FastSlip::new(&DrrParams {
+            friction: Friction::Power { alpha: 0.3 },
+            ..params(1.0)
+        })
+        .is_none());
     }
 
     #[test]

@@ -6,16 +6,16 @@ pub mod fast_slip;
 pub mod friction;
 pub mod quasi_dynamic;
 pub mod robertson;
+pub mod saddle_node;
 pub mod slow_manifold;
 pub mod state_law;
-pub mod saddle_node;
 pub mod van_der_pol;
 pub mod variational;
 
 pub use deep_stick::DeepStick;
 pub use drr::{Drr, DrrParams};
 pub use friction::Friction;
-pub use state_law::StateLaw;
 pub use saddle_node::{SaddleNode, SaddleNodeParams};
+pub use state_law::StateLaw;
 pub use van_der_pol::{VanDerPol, VanDerPolParams};
 pub use variational::Variational;

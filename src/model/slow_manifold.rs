@@ -153,8 +153,13 @@ mod tests {
         for friction in [Friction::Log, Friction::Power { alpha: 0.15 }, Friction::Asinh] {
             let f = flow(friction);
             for y in [[0.0, 0.3, -1.2], [1.0, -1.0, 0.4], [2.0, 2.0, -4.5]] {
-                for (row, col, exact, fd) in jacobian_against_differences(&f, &y, |x| 1e-6 * (1.0 + x.abs())) {
-                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{friction:?} {y:?} ({row},{col}): {exact} vs {fd}");
+                for (row, col, exact, fd) in
+                    jacobian_against_differences(&f, &y, |x| 1e-6 * (1.0 + x.abs()))
+                {
+                    assert!(
+                        (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
+                        "{friction:?} {y:?} ({row},{col}): {exact} vs {fd}"
+                    );
                 }
             }
         }
@@ -181,7 +186,8 @@ mod tests {
         let (xi, e, c) = (0.7, 0.72, -0.3);
         for u in [-1.0, 0.5, 3.0] {
             let h = 1e-6;
-            let dtheta = (matching_theta(xi, e, c, u + h) - matching_theta(xi, e, c, u - h)) / (2.0 * h);
+            let dtheta =
+                (matching_theta(xi, e, c, u + h) - matching_theta(xi, e, c, u - h)) / (2.0 * h);
             let theta = matching_theta(xi, e, c, u);
             assert!((dtheta - (e * theta + (1.0 + e) * xi * u)).abs() < 1e-7);
             assert!((matching_c(xi, e, u, theta) - c).abs() < 1e-12);

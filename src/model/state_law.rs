@@ -50,7 +50,8 @@ pub struct LawTerms {
 
 impl StateLaw {
     /// Every law with its scene name.
-    pub const ALL: [(&'static str, StateLaw); 3] = [("slip", StateLaw::Slip), ("ageing", StateLaw::Ageing), ("prz", StateLaw::Prz)];
+    pub const ALL: [(&'static str, StateLaw); 3] =
+        [("slip", StateLaw::Slip), ("ageing", StateLaw::Ageing), ("prz", StateLaw::Prz)];
 
     /// The scene name: "slip", "ageing" or "prz".
     pub fn name(self) -> &'static str {
@@ -117,8 +118,14 @@ mod tests {
                 let t = law.terms(w, v, x);
                 let h = 1e-6;
                 let (p, m) = (law.terms(w, v, x + h), law.terms(w, v, x - h));
-                assert!(((p.f - m.f) / (2.0 * h) - t.d1).abs() < 1e-7 * (1.0 + t.d1.abs()), "{law:?} x={x}");
-                assert!(((p.d1 - m.d1) / (2.0 * h) - t.d2).abs() < 1e-7 * (1.0 + t.d2.abs()), "{law:?} x={x}");
+                assert!(
+                    ((p.f - m.f) / (2.0 * h) - t.d1).abs() < 1e-7 * (1.0 + t.d1.abs()),
+                    "{law:?} x={x}"
+                );
+                assert!(
+                    ((p.d1 - m.d1) / (2.0 * h) - t.d2).abs() < 1e-7 * (1.0 + t.d2.abs()),
+                    "{law:?} x={x}"
+                );
             }
             assert!(law.terms(0.3, 0.3f64.exp(), law.steady_x()).f.abs() < 1e-15, "{law:?}");
             assert!((law.steady_rate() - 1.0).abs() < 1e-15, "{law:?}: κ = {}", law.steady_rate());

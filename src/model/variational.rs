@@ -138,7 +138,12 @@ impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
         for k in 0..N {
             let dj = if self.system.has_jacobian_derivative() {
                 let mut columns = [[0.0; N]; N];
-                self.system.jacobian_derivative(t, y, k, &mut JacobianMatrix::new(columns.as_flattened_mut(), N));
+                self.system.jacobian_derivative(
+                    t,
+                    y,
+                    k,
+                    &mut JacobianMatrix::new(columns.as_flattened_mut(), N),
+                );
                 transpose(columns)
             } else {
                 let h = 1e-5 * (1.0 + y[k].abs());
@@ -203,14 +208,23 @@ mod tests {
     fn augmented_jacobian_matches_central_differences() {
         for (_, state_law) in StateLaw::ALL {
             for eta in [0.0, 0.37] {
-                let drr = Drr::new(DrrParams { state_law, eta, ..DrrParams::new(10.0, 0.7, 0.72, Friction::Log) });
+                let drr = Drr::new(DrrParams {
+                    state_law,
+                    eta,
+                    ..DrrParams::new(10.0, 0.7, 0.72, Friction::Log)
+                });
                 let var = Variational::<_, 3>::new(drr);
                 let mut z = Variational::<Drr, 3>::initial(&[0.3, -0.4, 0.2]);
                 for (i, v) in z.iter_mut().enumerate().skip(3) {
                     *v += 0.1 * (i as f64).sin();
                 }
-                for (row, col, exact, fd) in jacobian_against_differences(&var, &z, |x| 1e-6 * (1.0 + x.abs())) {
-                    assert!((fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()), "{state_law:?} η={eta} ({row},{col}): {exact} vs {fd}");
+                for (row, col, exact, fd) in
+                    jacobian_against_differences(&var, &z, |x| 1e-6 * (1.0 + x.abs()))
+                {
+                    assert!(
+                        (fd - exact).abs() <= 1e-6 * (1.0 + exact.abs()),
+                        "{state_law:?} η={eta} ({row},{col}): {exact} vs {fd}"
+                    );
                 }
             }
         }
@@ -219,13 +233,22 @@ mod tests {
     #[test]
     fn the_newton_jacobian_is_the_exact_one_without_the_coupling_block() {
         for (_, state_law) in StateLaw::ALL {
-            let drr = Drr::new(DrrParams { state_law, ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log) });
+            let drr =
+                Drr::new(DrrParams { state_law, ..DrrParams::new(1e8, 0.8, 1.0, Friction::Log) });
             let mut z = Variational::<Drr, 3>::initial(&[37.0, -31.6, 1.9]);
             z[4] = -0.8;
             let n = 12;
             let (mut exact, mut newton) = (vec![0.0; n * n], vec![0.0; n * n]);
-            Variational::<_, 3>::new(drr).jacobian(0.0, &z, &mut JacobianMatrix::new(&mut exact, n));
-            Variational::<_, 3>::for_newton(drr).jacobian(0.0, &z, &mut JacobianMatrix::new(&mut newton, n));
+            Variational::<_, 3>::new(drr).jacobian(
+                0.0,
+                &z,
+                &mut JacobianMatrix::new(&mut exact, n),
+            );
+            Variational::<_, 3>::for_newton(drr).jacobian(
+                0.0,
+                &z,
+                &mut JacobianMatrix::new(&mut newton, n),
+            );
             let mut coupling = 0.0f64;
             for col in 0..n {
                 for row in 0..n {

@@ -27,7 +27,13 @@ pub fn shipped(text: &str) -> Value {
 /// A copy of `base` named `name`, with model parameters set (`gamma`, `xi`, `epsilon`,
 /// `alpha` for power-law friction, `friction` = "log") and `trajectory_cycles` cycles of
 /// trajectory kept (0: none). Analyses become hopf, cycle and paper.
-pub fn variant(base: &Value, name: &str, params: &[(&str, f64)], log_friction: bool, trajectory_cycles: usize) -> Value {
+pub fn variant(
+    base: &Value,
+    name: &str,
+    params: &[(&str, f64)],
+    log_friction: bool,
+    trajectory_cycles: usize,
+) -> Value {
     let mut s = base.clone();
     s["name"] = json!(name);
     for &(key, v) in params {
@@ -51,13 +57,19 @@ pub fn variant(base: &Value, name: &str, params: &[(&str, f64)], log_friction: b
 /// Runs one scene as `stickslip run` would.
 pub fn run_scene(scene_json: &Value) -> Result<Report, ReproduceError> {
     let name = scene_json["name"].as_str().unwrap_or("?").to_string();
-    let s = scene::parse(&scene_json.to_string(), &name).map_err(|e| ReproduceError::Scene(e.to_string()))?;
+    let s = scene::parse(&scene_json.to_string(), &name)
+        .map_err(|e| ReproduceError::Scene(e.to_string()))?;
     engine::run(&s, scene_json.clone()).map_err(|source| ReproduceError::Run { case: name, source })
 }
 
 /// Runs `jobs` on `threads` worker threads, results in input order, reporting progress.
 pub fn parallel<T: Sync, R: Send>(ctx: &Context, jobs: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    crate::parallel::map(jobs.len(), ctx.threads, &|done, total| ctx.progress.points(done, total), |i| f(&jobs[i]))
+    crate::parallel::map(
+        jobs.len(),
+        ctx.threads,
+        &|done, total| ctx.progress.points(done, total),
+        |i| f(&jobs[i]),
+    )
 }
 
 /// Runs several scenes in parallel; every one must succeed.
@@ -116,20 +128,29 @@ pub fn period_curve(ctx: &Context, base: &Value, param: &str, values: &[f64]) ->
     let mut points: Vec<Option<CurvePoint>> = vec![None; values.len()];
     if matches!(param, "epsilon" | "xi" | "gamma") && values.len() >= 2 {
         let reverse = param != "gamma";
-        let grid: &[f64] = if reverse { values } else { &values[..values.iter().take_while(|&&g| g <= 1e8 * (1.0 + 1e-12)).count()] };
-        let (from, to) = if reverse { (grid[grid.len() - 1], grid[0]) } else { (grid[0], grid[grid.len() - 1]) };
+        let grid: &[f64] = if reverse {
+            values
+        } else {
+            &values[..values.iter().take_while(|&&g| g <= 1e8 * (1.0 + 1e-12)).count()]
+        };
+        let (from, to) =
+            if reverse { (grid[grid.len() - 1], grid[0]) } else { (grid[0], grid[grid.len() - 1]) };
         let mut scene = variant(base, &format!("{param}-continuation"), &[(param, from)], false, 0);
         scene["solver"]["method"] = json!("radau5");
         scene["analyses"] = json!([{ "continuation": { "parameter": param, "to": to, "points": grid.len().max(2) } }]);
         if let Ok(report) = run_scene(&scene) {
             for p in report.continuation.iter().flat_map(|c| &c.points) {
                 if let Some(i) = values.iter().position(|v| (p.value - v).abs() <= 1e-9 * v.abs()) {
-                    points[i] = Some(CurvePoint { value: values[i], outcome: PointOutcome::Periodic { period: p.orbit.period } });
+                    points[i] = Some(CurvePoint {
+                        value: values[i],
+                        outcome: PointOutcome::Periodic { period: p.orbit.period },
+                    });
                 }
             }
         }
     }
-    let missing: Vec<f64> = values.iter().zip(&points).filter(|(_, p)| p.is_none()).map(|(v, _)| *v).collect();
+    let missing: Vec<f64> =
+        values.iter().zip(&points).filter(|(_, p)| p.is_none()).map(|(v, _)| *v).collect();
     let mut brute = parallel(ctx, &missing, |&value| {
         let mut scene = variant(base, &format!("{param}={value}"), &[(param, value)], false, 0);
         scene["analyses"] = json!(["cycle"]);
@@ -140,7 +161,10 @@ pub fn period_curve(ctx: &Context, base: &Value, param: &str, values: &[f64]) ->
         CurvePoint { value, outcome }
     })
     .into_iter();
-    points.into_iter().map(|p| p.or_else(|| brute.next()).expect("every missing point was run")).collect()
+    points
+        .into_iter()
+        .map(|p| p.or_else(|| brute.next()).expect("every missing point was run"))
+        .collect()
 }
 
 fn outcome(report: &Report) -> PointOutcome {
@@ -150,9 +174,13 @@ fn outcome(report: &Report) -> PointOutcome {
     };
     match (c.status, &c.values) {
         (CycleStatus::Periodic, Some(v)) => PointOutcome::Periodic { period: v.period },
-        (CycleStatus::PeriodN, _) => PointOutcome::PeriodN { periods: c.orbit.iter().map(|o| o.period).collect() },
+        (CycleStatus::PeriodN, _) => {
+            PointOutcome::PeriodN { periods: c.orbit.iter().map(|o| o.period).collect() }
+        }
         (CycleStatus::FixedPoint, _) => PointOutcome::FixedPoint,
-        _ => PointOutcome::NotConverged { last_periods: c.last_cycles.iter().map(|o| o.period).collect() },
+        _ => PointOutcome::NotConverged {
+            last_periods: c.last_cycles.iter().map(|o| o.period).collect(),
+        },
     }
 }
 
@@ -161,7 +189,10 @@ fn outcome(report: &Report) -> PointOutcome {
 pub fn trajectory(report: &Report) -> Result<TrajectoryCycle, ReproduceError> {
     let cycles = report.cycle.as_ref().map(|c| c.trajectory.as_slice()).unwrap_or_default();
     if cycles.is_empty() {
-        return Err(ReproduceError::Missing(format!("scene {}: no trajectory kept (is the cycle periodic?)", report.name)));
+        return Err(ReproduceError::Missing(format!(
+            "scene {}: no trajectory kept (is the cycle periodic?)",
+            report.name
+        )));
     }
     let mut out = TrajectoryCycle::default();
     let mut offset = 0.0;

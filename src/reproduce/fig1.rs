@@ -7,7 +7,8 @@ use crate::figure::{Anchor, Axis, Dash, Figure, Marker, Note, Panel, RefLine, Se
 use serde_json::json;
 
 /// Units of the dimensionless model, for captions.
-pub const UNITS: &str = "Units: time t in D_{c}/v_{0}, slip u in D_{c}, velocity v in v_{0}, θ in A.";
+pub const UNITS: &str =
+    "Units: time t in D_{c}/v_{0}, slip u in D_{c}, velocity v in v_{0}, θ in A.";
 
 /// ε values of Fig. 1b: from just above the threshold ε_c ≈ 0.7 to 1.2.
 fn epsilons(reduced: bool) -> Vec<f64> {
@@ -44,13 +45,23 @@ pub fn split(points: &[CurvePoint], name: &str) -> Split {
             PointOutcome::Periodic { period } => periodic.push((p.value, *period)),
             PointOutcome::PeriodN { periods } => {
                 period_n.extend(periods.iter().map(|&t| (p.value, t)));
-                notes.push(format!("{name} = {}: a period-{} orbit (each cycle's period is drawn)", p.value, periods.len()));
+                notes.push(format!(
+                    "{name} = {}: a period-{} orbit (each cycle's period is drawn)",
+                    p.value,
+                    periods.len()
+                ));
             }
-            PointOutcome::FixedPoint => notes.push(format!("{name} = {}: the oscillation dies out (stable fixed point)", p.value)),
-            PointOutcome::NotConverged { .. } => {
-                notes.push(format!("{name} = {}: the cycle analysis did not converge within its limits (not drawn)", p.value))
+            PointOutcome::FixedPoint => notes.push(format!(
+                "{name} = {}: the oscillation dies out (stable fixed point)",
+                p.value
+            )),
+            PointOutcome::NotConverged { .. } => notes.push(format!(
+                "{name} = {}: the cycle analysis did not converge within its limits (not drawn)",
+                p.value
+            )),
+            PointOutcome::Failed { error } => {
+                notes.push(format!("{name} = {}: failed: {error} (not drawn)", p.value))
             }
-            PointOutcome::Failed { error } => notes.push(format!("{name} = {}: failed: {error} (not drawn)", p.value)),
         }
     }
     Split { periodic, period_n, notes }
@@ -62,7 +73,8 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
     if points.len() < 2 {
         return None;
     }
-    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mx, my) =
+        (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
     let sxx: f64 = points.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     (sxx > 0.0).then(|| sxy / sxx)
@@ -70,11 +82,23 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
 
 fn curve_panel(title: &str, x: Axis, periodic: &[(f64, f64)], period_n: &[(f64, f64)]) -> Panel {
     let (xs, ys): (Vec<f64>, Vec<f64>) = periodic.iter().copied().unzip();
-    let mut p = Panel::new(title, x, Axis::linear("period τ").unit("D_{c}/v_{0}"))
-        .series(Series::new("limit cycle (shooting and continuation)", xs, ys, Style::line(0).marker(Marker::Circle)).width(1.2));
+    let mut p = Panel::new(title, x, Axis::linear("period τ").unit("D_{c}/v_{0}")).series(
+        Series::new(
+            "limit cycle (shooting and continuation)",
+            xs,
+            ys,
+            Style::line(0).marker(Marker::Circle),
+        )
+        .width(1.2),
+    );
     if !period_n.is_empty() {
         let (xs, ys): (Vec<f64>, Vec<f64>) = period_n.iter().copied().unzip();
-        p = p.series(Series::new("cycles of a period-n orbit", xs, ys, Style::markers(1, Marker::Triangle)));
+        p = p.series(Series::new(
+            "cycles of a period-n orbit",
+            xs,
+            ys,
+            Style::markers(1, Marker::Triangle),
+        ));
     }
     p
 }
@@ -86,7 +110,11 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let scene = cases::variant(&base, "fig1", &[], false, 2);
     let report = cases::run_scene(&scene)?;
     let tr = cases::trajectory(&report)?;
-    let values = report.cycle.as_ref().and_then(|c| c.values).ok_or_else(|| ReproduceError::Missing("fig1: the cycle is not periodic".into()))?;
+    let values = report
+        .cycle
+        .as_ref()
+        .and_then(|c| c.values)
+        .ok_or_else(|| ReproduceError::Missing("fig1: the cycle is not periodic".into()))?;
 
     let gamma_base = base.clone();
     let mut eps_base = base.clone();
@@ -100,24 +128,56 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
 
     // (a) the solution over two cycles.
     let t = &tr.t;
-    let lnv_line = RefLine::horizontal(1.0, "v = 1 (the drive)", Style::line(3).dash(Dash::Dotted).width(1.0));
-    let a_v = Panel::new("(a) velocity", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::log10("v").unit("v_{0}"))
-        .series(Series::new("", t.clone(), tr.v.clone(), Style::line(0)))
-        .line(lnv_line);
-    let a_u = Panel::new("(a) slip", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::linear("u").unit("D_{c}"))
-        .series(Series::new("", t.clone(), tr.u.clone(), Style::line(1)));
-    let a_th = Panel::new("(a) state", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::linear("θ").unit("A"))
-        .series(Series::new("", t.clone(), tr.theta.clone(), Style::line(2)));
-    let a_cycle = Panel::new("(a) the limit cycle in the (u, v) plane", Axis::linear("u").unit("D_{c}"), Axis::log10("v").unit("v_{0}"))
-        .series(Series::new("", tr.u.clone(), tr.v.clone(), Style::line(0)))
-        .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)))
-        .note(Note::new(values.u_at_v_max, values.v_max, format!("v_{{max}} = {:.1}", values.v_max), Anchor::Middle).offset(0.0, 22.0));
+    let lnv_line =
+        RefLine::horizontal(1.0, "v = 1 (the drive)", Style::line(3).dash(Dash::Dotted).width(1.0));
+    let a_v = Panel::new(
+        "(a) velocity",
+        Axis::linear("t").unit("D_{c}/v_{0}"),
+        Axis::log10("v").unit("v_{0}"),
+    )
+    .series(Series::new("", t.clone(), tr.v.clone(), Style::line(0)))
+    .line(lnv_line);
+    let a_u = Panel::new(
+        "(a) slip",
+        Axis::linear("t").unit("D_{c}/v_{0}"),
+        Axis::linear("u").unit("D_{c}"),
+    )
+    .series(Series::new("", t.clone(), tr.u.clone(), Style::line(1)));
+    let a_th =
+        Panel::new("(a) state", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::linear("θ").unit("A"))
+            .series(Series::new("", t.clone(), tr.theta.clone(), Style::line(2)));
+    let a_cycle = Panel::new(
+        "(a) the limit cycle in the (u, v) plane",
+        Axis::linear("u").unit("D_{c}"),
+        Axis::log10("v").unit("v_{0}"),
+    )
+    .series(Series::new("", tr.u.clone(), tr.v.clone(), Style::line(0)))
+    .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)))
+    .note(
+        Note::new(
+            values.u_at_v_max,
+            values.v_max,
+            format!("v_{{max}} = {:.1}", values.v_max),
+            Anchor::Middle,
+        )
+        .offset(0.0, 22.0),
+    );
 
     // (b) and (c).
-    let b = curve_panel("(b) period against ε (γ = 10^{3})", Axis::linear("ε").dimensionless(), &eps_ok, &eps_n);
+    let b = curve_panel(
+        "(b) period against ε (γ = 10^{3})",
+        Axis::linear("ε").dimensionless(),
+        &eps_ok,
+        &eps_n,
+    );
     let log_g: Vec<(f64, f64)> = gam_ok.iter().map(|&(g, p)| (g.log10(), p)).collect();
     let log_gn: Vec<(f64, f64)> = gam_n.iter().map(|&(g, p)| (g.log10(), p)).collect();
-    let c = curve_panel("(c) period against log_{10} γ (ε = 0.72)", Axis::linear("log_{10} γ").dimensionless(), &log_g, &log_gn);
+    let c = curve_panel(
+        "(c) period against log_{10} γ (ε = 0.72)",
+        Axis::linear("log_{10} γ").dimensionless(),
+        &log_g,
+        &log_gn,
+    );
 
     let fig = Figure::new("Fig. 1: periodic solution and its period (ξ = 0.7)")
         .columns(3)
@@ -142,8 +202,14 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         .caption(UNITS);
     out.files.push(ctx.write_figure("fig1.svg", &fig)?);
     out.files.push(ctx.write_json("fig1.json", &report)?);
-    out.files.push(ctx.write_json("fig1b-period-vs-epsilon.json", &json!({ "gamma": 1e3, "xi": 0.7, "points": eps }))?);
-    out.files.push(ctx.write_json("fig1c-period-vs-gamma.json", &json!({ "xi": 0.7, "epsilon": 0.72, "points": gam }))?);
+    out.files.push(ctx.write_json(
+        "fig1b-period-vs-epsilon.json",
+        &json!({ "gamma": 1e3, "xi": 0.7, "points": eps }),
+    )?);
+    out.files.push(ctx.write_json(
+        "fig1c-period-vs-gamma.json",
+        &json!({ "xi": 0.7, "epsilon": 0.72, "points": gam }),
+    )?);
 
     // Claims.
     for c in report.paper.iter().flatten() {
@@ -155,13 +221,24 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
             "Fig. 1b",
             "the period increases with ε (γ = 10³, ξ = 0.7)",
             "increases",
-            format!("increases at {increasing} of {} steps, {:.3} → {:.3}", eps_ok.len() - 1, eps_ok[0].1, eps_ok[eps_ok.len() - 1].1),
+            format!(
+                "increases at {increasing} of {} steps, {:.3} → {:.3}",
+                eps_ok.len() - 1,
+                eps_ok[0].1,
+                eps_ok[eps_ok.len() - 1].1
+            ),
             increasing == eps_ok.len() - 1,
-            format!("periods by continuation at ε = {:.3} … {:.3}", eps_ok[0].0, eps_ok[eps_ok.len() - 1].0),
+            format!(
+                "periods by continuation at ε = {:.3} … {:.3}",
+                eps_ok[0].0,
+                eps_ok[eps_ok.len() - 1].0
+            ),
         ));
     }
-    let lower: Vec<(f64, f64)> = eps_ok.iter().copied().filter(|p| (0.9..=1.05).contains(&p.0)).collect();
-    let upper: Vec<(f64, f64)> = eps_ok.iter().copied().filter(|p| (1.05..=1.2).contains(&p.0)).collect();
+    let lower: Vec<(f64, f64)> =
+        eps_ok.iter().copied().filter(|p| (0.9..=1.05).contains(&p.0)).collect();
+    let upper: Vec<(f64, f64)> =
+        eps_ok.iter().copied().filter(|p| (1.05..=1.2).contains(&p.0)).collect();
     if let (Some(s1), Some(s2)) = (slope(&lower), slope(&upper)) {
         let ratio = s2 / s1;
         out.claims.push(Row::qualitative(
@@ -173,9 +250,18 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
             "least-squares slopes on two halves of the large-ε range; linear if they agree within 5 %".into(),
         ));
     }
-    let paper_range: Vec<(f64, f64)> = log_g.iter().copied().filter(|p| p.0 <= 8.0 + 1e-9).collect();
+    let paper_range: Vec<(f64, f64)> =
+        log_g.iter().copied().filter(|p| p.0 <= 8.0 + 1e-9).collect();
     if let Some(s) = slope(&paper_range) {
-        let local = |lo: f64, hi: f64| slope(&log_g.iter().copied().filter(|p| p.0 >= lo - 1e-9 && p.0 <= hi + 1e-9).collect::<Vec<_>>());
+        let local = |lo: f64, hi: f64| {
+            slope(
+                &log_g
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0 >= lo - 1e-9 && p.0 <= hi + 1e-9)
+                    .collect::<Vec<_>>(),
+            )
+        };
         let fmt = |x: Option<f64>| x.map_or("-".into(), |x| format!("{x:.3}"));
         out.claims.push(Row::numeric(
             "Fig. 1c",
@@ -191,7 +277,13 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         ));
     }
     // The paper's earthquake case (text after Fig. 1): τ = 28 for γ = 1e8, ξ = 0.8, ε = 1.
-    let quake = cases::run_scene(&cases::variant(&cases::shipped(cases::EARTHQUAKE), "earthquake", &[], false, 0))?;
+    let quake = cases::run_scene(&cases::variant(
+        &cases::shipped(cases::EARTHQUAKE),
+        "earthquake",
+        &[],
+        false,
+        0,
+    ))?;
     out.files.push(ctx.write_json("earthquake.json", &quake)?);
     for c in quake.paper.iter().flatten().filter(|c| c.claim.starts_with("earthquake")) {
         out.claims.push(Row::from_claim("text (earthquake case)", c));

@@ -6,14 +6,18 @@ use super::cases;
 use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
 use crate::analysis::cycle::TrajectoryCycle;
-use crate::figure::{Axis, Dash, Figure, LegendPlace, Panel, Series, Style};
 use crate::figure::scale::power_of_ten;
+use crate::figure::{Axis, Dash, Figure, LegendPlace, Panel, Series, Style};
 
 /// The window of fast time drawn.
 const WINDOW: (f64, f64) = (-8.0, 12.0);
 
 fn gammas(reduced: bool) -> Vec<f64> {
-    if reduced { vec![1e3, 1e5] } else { vec![1e2, 1e3, 1e4, 1e6, 1e8] }
+    if reduced {
+        vec![1e3, 1e5]
+    } else {
+        vec![1e2, 1e3, 1e4, 1e6, 1e8]
+    }
 }
 
 /// The samples of one trajectory inside the fast-time window around its v maximum (plus one
@@ -42,14 +46,26 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let gammas = gammas(ctx.reduced);
     let scenes: Vec<_> = gammas
         .iter()
-        .map(|&g| cases::variant(&base, &format!("fig2-gamma-1e{}", g.log10().round()), &[("gamma", g)], false, 1))
+        .map(|&g| {
+            cases::variant(
+                &base,
+                &format!("fig2-gamma-1e{}", g.log10().round()),
+                &[("gamma", g)],
+                false,
+                1,
+            )
+        })
         .collect();
     let reports = cases::run_scenes(ctx, &scenes)?;
     let t_axis = || Axis::linear("T = γ(t − t_{c})").dimensionless().range(WINDOW.0, WINDOW.1);
     let mut v_lin = Panel::new("(a) V = v/γ", t_axis(), Axis::linear("V = v/γ").dimensionless());
-    let mut v_log = Panel::new("(b) V = v/γ, log scale", t_axis(), Axis::log10("V = v/γ").dimensionless()).legend(LegendPlace::Hidden);
-    let mut u = Panel::new("(c) U = u − (ε/ξ) ln γ", t_axis(), Axis::linear("U").unit("D_{c}")).legend(LegendPlace::Hidden);
-    let mut th = Panel::new("(d) Θ = θ + (1 + ε) ln γ", t_axis(), Axis::linear("Θ").unit("A")).legend(LegendPlace::Hidden);
+    let mut v_log =
+        Panel::new("(b) V = v/γ, log scale", t_axis(), Axis::log10("V = v/γ").dimensionless())
+            .legend(LegendPlace::Hidden);
+    let mut u = Panel::new("(c) U = u − (ε/ξ) ln γ", t_axis(), Axis::linear("U").unit("D_{c}"))
+        .legend(LegendPlace::Hidden);
+    let mut th = Panel::new("(d) Θ = θ + (1 + ε) ln γ", t_axis(), Axis::linear("Θ").unit("A"))
+        .legend(LegendPlace::Hidden);
     let mut widths = Vec::new();
     for (i, (report, &g)) in reports.iter().zip(&gammas).enumerate() {
         let tr = cases::trajectory(report)?;
@@ -64,7 +80,10 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         if let Some(w) = values.and_then(|v| v.slip_half_width) {
             out.claims.push(Row::numeric(
                 "Fig. 2",
-                &format!("slip half-width δt ≈ 2.5/γ (γ = 1e{}, ξ = 0.7, ε = 0.72)", g.log10().round()),
+                &format!(
+                    "slip half-width δt ≈ 2.5/γ (γ = 1e{}, ξ = 0.7, ε = 0.72)",
+                    g.log10().round()
+                ),
                 2.5,
                 w * g,
                 "full width of v(t) at half its maximum, times γ (limit cycle)".into(),

@@ -24,25 +24,53 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     // The γ scan (1e2 … 1e12, about a second) is kept: the claim "t0 is γ-independent" takes
     // its reference at the largest γ.
     scene["analyses"] = json!(["cycle", "asymptotics"]);
-    let params = crate::scene::parse(&scene.to_string(), "fig3").map_err(|e| ReproduceError::Scene(e.to_string()))?.params;
+    let params = crate::scene::parse(&scene.to_string(), "fig3")
+        .map_err(|e| ReproduceError::Scene(e.to_string()))?
+        .params;
     let report = cases::run_scene(&scene)?;
-    let a = report.asymptotics.as_ref().ok_or_else(|| ReproduceError::Missing("fig3: no asymptotics section".into()))?;
+    let a = report
+        .asymptotics
+        .as_ref()
+        .ok_or_else(|| ReproduceError::Missing("fig3: no asymptotics section".into()))?;
     let why = || a.note.clone().unwrap_or_else(|| "no reason given".into());
-    let m = a.manifold.as_ref().ok_or_else(|| ReproduceError::Missing(format!("fig3: no slow-manifold part ({})", why())))?;
-    let mt = a.matching.as_ref().ok_or_else(|| ReproduceError::Missing(format!("fig3: no matching part ({})", why())))?;
+    let m = a.manifold.as_ref().ok_or_else(|| {
+        ReproduceError::Missing(format!("fig3: no slow-manifold part ({})", why()))
+    })?;
+    let mt = a
+        .matching
+        .as_ref()
+        .ok_or_else(|| ReproduceError::Missing(format!("fig3: no matching part ({})", why())))?;
     let f = &m.fig3a;
     let gamma = params.gamma;
 
     // (a) v/γ over the whole stick, log scale.
     let departure = m.leaves_manifold.map(|p| -p.time_before_tc);
     let mark = |p: Panel| match departure {
-        Some(t) => p.line(RefLine::vertical(t, "3D leaves S", Style::line(3).dash(Dash::Dotted).width(1.0))),
+        Some(t) => p.line(RefLine::vertical(
+            t,
+            "3D leaves S",
+            Style::line(3).dash(Dash::Dotted).width(1.0),
+        )),
         None => p,
     };
-    let pa = Panel::new("(a) v/γ of the 2D flow on S and of the 3D flow", Axis::linear("t − t_{c}").unit("D_{c}/v_{0}"), Axis::log10("v/γ").dimensionless())
-        .series(Series::new("3D flow", f.t_3d.clone(), f.v_over_gamma_3d.clone(), Style::line(0).width(2.6)))
-        .series(Series::new("2D flow on S", f.t_2d.clone(), f.v_over_gamma_2d.clone(), Style::line(1).dash(Dash::Dashed)))
-        .legend(LegendPlace::TopLeft);
+    let pa = Panel::new(
+        "(a) v/γ of the 2D flow on S and of the 3D flow",
+        Axis::linear("t − t_{c}").unit("D_{c}/v_{0}"),
+        Axis::log10("v/γ").dimensionless(),
+    )
+    .series(Series::new(
+        "3D flow",
+        f.t_3d.clone(),
+        f.v_over_gamma_3d.clone(),
+        Style::line(0).width(2.6),
+    ))
+    .series(Series::new(
+        "2D flow on S",
+        f.t_2d.clone(),
+        f.v_over_gamma_2d.clone(),
+        Style::line(1).dash(Dash::Dashed),
+    ))
+    .legend(LegendPlace::TopLeft);
     // (b) zoom on the catastrophe, linear scale, clipped at 1.2 × the 3D maximum.
     let v3max = f.v_over_gamma_3d.iter().copied().fold(0.0, f64::max);
     let window = |t: &[f64], y: &[f64]| -> (Vec<f64>, Vec<f64>) {
@@ -63,24 +91,70 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     // (c) the (u, θ) plane.
     let b = &mt.fig3b;
     let (u_lo, u_hi) = (b.u_span[0], b.u_span[1]);
-    let (th_lo, th_hi) = b.cycle_theta.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let (th_lo, th_hi) = b
+        .cycle_theta
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let (du, dth) = (0.08 * (u_hi - u_lo), 0.12 * (th_hi - th_lo));
     let (x0, x1) = (u_lo - du, u_hi + du);
-    let line = |l: &matching::Line, label: &str, style: Style| Series::new(label, vec![x0, x1], vec![l.intercept + l.slope * x0, l.intercept + l.slope * x1], style);
-    let mut pc = Panel::new("(c) the (u, θ) plane", Axis::linear("u").unit("D_{c}").range(x0, x1), Axis::linear("θ").unit("A").range(th_lo - dth, th_hi + 4.0 * dth))
-        .series(Series::new("3D limit cycle", b.cycle_u.clone(), b.cycle_theta.clone(), Style::line(0).dash(Dash::Dashed).width(1.6)))
-        .series(Series::new("2D flow on S", b.slow_u.clone(), b.slow_theta.clone(), Style::line(3).width(2.6)));
+    let line = |l: &matching::Line, label: &str, style: Style| {
+        Series::new(
+            label,
+            vec![x0, x1],
+            vec![l.intercept + l.slope * x0, l.intercept + l.slope * x1],
+            style,
+        )
+    };
+    let mut pc = Panel::new(
+        "(c) the (u, θ) plane",
+        Axis::linear("u").unit("D_{c}").range(x0, x1),
+        Axis::linear("θ").unit("A").range(th_lo - dth, th_hi + 4.0 * dth),
+    )
+    .series(Series::new(
+        "3D limit cycle",
+        b.cycle_u.clone(),
+        b.cycle_theta.clone(),
+        Style::line(0).dash(Dash::Dashed).width(1.6),
+    ))
+    .series(Series::new(
+        "2D flow on S",
+        b.slow_u.clone(),
+        b.slow_theta.clone(),
+        Style::line(3).width(2.6),
+    ));
     if !b.before_u.is_empty() {
-        pc = pc.series(Series::new("matching, c before t_{c}", b.before_u.clone(), b.before_theta.clone(), Style::line(4).width(1.6)));
+        pc = pc.series(Series::new(
+            "matching, c before t_{c}",
+            b.before_u.clone(),
+            b.before_theta.clone(),
+            Style::line(4).width(1.6),
+        ));
     }
     if !b.after_u.is_empty() {
-        pc = pc.series(Series::new("matching, c after t_{c}", b.after_u.clone(), b.after_theta.clone(), Style::line(2).width(1.6)));
+        pc = pc.series(Series::new(
+            "matching, c after t_{c}",
+            b.after_u.clone(),
+            b.after_theta.clone(),
+            Style::line(2).width(1.6),
+        ));
     }
     let lines = &mt.lines;
     pc = pc
-        .series(line(&lines[matching::PAPER_ZERO_ACCELERATION], "zero acceleration (as printed)", Style::line(5).dash(Dash::DashDot).width(1.2)))
-        .series(line(&lines[matching::ZERO_ACCELERATION], "zero acceleration (derived)", Style::line(6).dash(Dash::Dotted).width(1.4)))
-        .series(line(&lines[matching::ADIABATIC], "adiabatic limit", Style::line(1).dash(Dash::Dashed).width(1.2)))
+        .series(line(
+            &lines[matching::PAPER_ZERO_ACCELERATION],
+            "zero acceleration (as printed)",
+            Style::line(5).dash(Dash::DashDot).width(1.2),
+        ))
+        .series(line(
+            &lines[matching::ZERO_ACCELERATION],
+            "zero acceleration (derived)",
+            Style::line(6).dash(Dash::Dotted).width(1.4),
+        ))
+        .series(line(
+            &lines[matching::ADIABATIC],
+            "adiabatic limit",
+            Style::line(1).dash(Dash::Dashed).width(1.2),
+        ))
         .legend(LegendPlace::TopRight);
 
     let opt = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{v:.3e}"));
@@ -121,7 +195,10 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         all: &all,
     };
     let stick = verdicts::stick_claims(&inputs);
-    debug_assert!(stick.iter().zip(&a.claims).all(|(s, c)| s == c), "the stick claims are the report's first claims");
+    debug_assert!(
+        stick.iter().zip(&a.claims).all(|(s, c)| s == c),
+        "the stick claims are the report's first claims"
+    );
     out.claims.extend(stick.iter().map(|c| Row::from_analysis("Fig. 3", c)));
     Ok(out)
 }

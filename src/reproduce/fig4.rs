@@ -22,14 +22,24 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let x: Vec<f64> = tr.u.iter().zip(&tr.theta).map(|(u, th)| xi * u + th).collect();
     let lnv: Vec<f64> = tr.v.iter().map(|v| v.ln()).collect();
     let offset: Vec<f64> = x.iter().zip(&lnv).map(|(a, b)| a + b).collect();
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let (lo, hi) =
+        x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let span = hi - lo;
     let manifold_x = vec![lo - 0.05 * span, hi + 0.05 * span];
     let manifold_y: Vec<f64> = manifold_x.iter().map(|x| -x).collect();
-    let a = Panel::new("(a) projection along the slow manifold", Axis::linear("ξu + θ").unit("A"), Axis::linear("ln v").dimensionless())
-        .series(Series::new("slow manifold ξu + θ + ln v = 0", manifold_x, manifold_y, Style::line(3).dash(Dash::Dashed).width(1.4)))
-        .series(Series::new("limit cycle (γ = 10^{3})", x.clone(), lnv, Style::line(0)))
-        .legend(LegendPlace::Auto);
+    let a = Panel::new(
+        "(a) projection along the slow manifold",
+        Axis::linear("ξu + θ").unit("A"),
+        Axis::linear("ln v").dimensionless(),
+    )
+    .series(Series::new(
+        "slow manifold ξu + θ + ln v = 0",
+        manifold_x,
+        manifold_y,
+        Style::line(3).dash(Dash::Dashed).width(1.4),
+    ))
+    .series(Series::new("limit cycle (γ = 10^{3})", x.clone(), lnv, Style::line(0)))
+    .legend(LegendPlace::Auto);
     let k = cases::peak_index(&tr);
     let tc = tr.t[k];
     let big_t: Vec<f64> = tr.t.iter().map(|t| gamma * (t - tc)).collect();
@@ -40,10 +50,24 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         Axis::linear("T = γ(t − t_{c})").dimensionless().range(WINDOW.0, WINDOW.1),
         Axis::linear("ξu + θ + ln v").unit("A"),
     )
-    .series(Series::new("", big_t[first..=last].to_vec(), offset[first..=last].to_vec(), Style::line(0)))
-    .line(RefLine::horizontal(0.0, "on the manifold", Style::line(3).dash(Dash::Dashed).width(1.4)));
+    .series(Series::new(
+        "",
+        big_t[first..=last].to_vec(),
+        offset[first..=last].to_vec(),
+        Style::line(0),
+    ))
+    .line(RefLine::horizontal(
+        0.0,
+        "on the manifold",
+        Style::line(3).dash(Dash::Dashed).width(1.4),
+    ));
     // Where the trajectory is off the manifold: on the stick (v < 1) and at the slip.
-    let stick = offset.iter().zip(&tr.v).filter(|(_, &v)| v < 1.0).map(|(g, _)| g.abs()).fold(0.0, f64::max);
+    let stick = offset
+        .iter()
+        .zip(&tr.v)
+        .filter(|(_, &v)| v < 1.0)
+        .map(|(g, _)| g.abs())
+        .fold(0.0, f64::max);
     let slip = offset.iter().map(|g| g.abs()).fold(0.0, f64::max);
     out.notes.push(format!(
         "largest |ξu + θ + ln v| over the cycle: {slip:.3} (during the slip); over the stick (v < 1): {stick:.2e}"

@@ -14,30 +14,61 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let run = noise_cases::run(ctx, noise_cases::DRR)?;
     let n = &run.noise;
     let gamma = run.report["model"]["gamma"].as_f64().unwrap_or(1e3);
-    let v = n.series.iter().find(|s| s.name == "v").ok_or_else(|| ReproduceError::Missing("fig6: no v series".into()))?;
+    let v = n
+        .series
+        .iter()
+        .find(|s| s.name == "v")
+        .ok_or_else(|| ReproduceError::Missing("fig6: no v series".into()))?;
     // (a) until t_c − 0.1, against γ(t − t_c).
-    let keep: Vec<usize> = (0..n.t_before_event.len()).filter(|&k| n.t_before_event[k] >= 0.1 - 1e-12).collect();
+    let keep: Vec<usize> =
+        (0..n.t_before_event.len()).filter(|&k| n.t_before_event[k] >= 0.1 - 1e-12).collect();
     let x: Vec<f64> = keep.iter().map(|&k| -gamma * n.t_before_event[k]).collect();
     let pick = |values: &[f64]| keep.iter().map(|&k| values[k]).collect::<Vec<f64>>();
-    let mut a = Panel::new("(a) v and its standard deviation σ_{v} before the slip", Axis::linear("γ(t − t_{c})").dimensionless(), Axis::log10("v, σ_{v}").unit("v_{0}"))
-        .series(Series::new("v (ensemble mean)", x.clone(), pick(&v.mean), Style::line(1)))
-        .series(Series::new("σ_{v} (ensemble)", x.clone(), pick(&v.sigma), Style::line(0)))
-        .legend(LegendPlace::TopLeft);
+    let mut a = Panel::new(
+        "(a) v and its standard deviation σ_{v} before the slip",
+        Axis::linear("γ(t − t_{c})").dimensionless(),
+        Axis::log10("v, σ_{v}").unit("v_{0}"),
+    )
+    .series(Series::new("v (ensemble mean)", x.clone(), pick(&v.mean), Style::line(1)))
+    .series(Series::new("σ_{v} (ensemble)", x.clone(), pick(&v.sigma), Style::line(0)))
+    .legend(LegendPlace::TopLeft);
     if let Some(sl) = &v.sigma_linear_response {
-        a = a.series(Series::new("σ_{v} (linear response)", x, pick(sl), Style::line(3).dash(Dash::Dashed)));
+        a = a.series(Series::new(
+            "σ_{v} (linear response)",
+            x,
+            pick(sl),
+            Style::line(3).dash(Dash::Dashed),
+        ));
     }
     // (b) Γ_u normalised by its value at t' = 0, lags up to 3.
-    let mut b = Panel::new("(b) Γ_{u}(t, t − t′)/Γ_{u}(t, t)", Axis::linear("t′").unit("D_{c}/v_{0}").range(0.0, 3.0), Axis::linear("Γ_{u}/Γ_{u}(t, t)").dimensionless());
+    let mut b = Panel::new(
+        "(b) Γ_{u}(t, t − t′)/Γ_{u}(t, t)",
+        Axis::linear("t′").unit("D_{c}/v_{0}").range(0.0, 3.0),
+        Axis::linear("Γ_{u}/Γ_{u}(t, t)").dimensionless(),
+    );
     for (i, c) in n.correlation_functions.iter().enumerate() {
         let upto = c.lag.iter().position(|&l| l > 3.0).unwrap_or(c.lag.len());
         let norm = |g: &[f64]| g[..upto].iter().map(|v| v / g[0]).collect::<Vec<f64>>();
         let label = format!("t = t_{{c}} − {:.3}", c.t_before_event);
-        b = b.series(Series::new(format!("{label} (ensemble)"), c.lag[..upto].to_vec(), norm(&c.gamma), Style::line(i)));
+        b = b.series(Series::new(
+            format!("{label} (ensemble)"),
+            c.lag[..upto].to_vec(),
+            norm(&c.gamma),
+            Style::line(i),
+        ));
         if let Some(g) = &c.gamma_linear_response {
-            b = b.series(Series::new(format!("{label} (linear response)"), c.lag[..upto].to_vec(), norm(g), Style::line(i).dash(Dash::Dashed)));
+            b = b.series(Series::new(
+                format!("{label} (linear response)"),
+                c.lag[..upto].to_vec(),
+                norm(g),
+                Style::line(i).dash(Dash::Dashed),
+            ));
         }
     }
-    let g = n.growth.as_ref().ok_or_else(|| ReproduceError::Missing("fig6: no growth of σ_v".into()))?;
+    let g = n
+        .growth
+        .as_ref()
+        .ok_or_else(|| ReproduceError::Missing("fig6: no growth of σ_v".into()))?;
     let fig = Figure::new("Fig. 6: response to noise before the slip (γ = 10^{3}, ξ = 0.7, ε = 0.72)")
         .columns(2)
         .panel_size(480.0, 320.0)
@@ -70,8 +101,11 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
             g.ratio_linear_response.map_or("-".into(), |v| format!("{v:.3}"))
         ),
     ));
-    let widths: Vec<(f64, Option<f64>)> =
-        n.correlation_functions.iter().map(|c| (c.t_before_event, noise_cases::half_width(&c.lag, &c.gamma))).collect();
+    let widths: Vec<(f64, Option<f64>)> = n
+        .correlation_functions
+        .iter()
+        .map(|c| (c.t_before_event, noise_cases::half_width(&c.lag, &c.gamma)))
+        .collect();
     let defined: Vec<f64> = widths.iter().filter_map(|w| w.1).collect();
     out.claims.push(Row::qualitative(
         "Fig. 6b",

@@ -11,15 +11,30 @@ use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Styl
 
 /// A panel of τ against t_c − t (both log scales): ensemble markers, linear-response line.
 fn tau_panel(title: &str, curves: &[(&str, &[CorrelationPoint])]) -> Panel {
-    let mut p = Panel::new(title, Axis::log10("t_{c} − t").unit("D_{c}/v_{0}"), Axis::log10("τ").unit("D_{c}/v_{0}")).legend(LegendPlace::Auto);
+    let mut p = Panel::new(
+        title,
+        Axis::log10("t_{c} − t").unit("D_{c}/v_{0}"),
+        Axis::log10("τ").unit("D_{c}/v_{0}"),
+    )
+    .legend(LegendPlace::Auto);
     for (i, (name, points)) in curves.iter().enumerate() {
         let (xe, ye) = curve(points, false);
         let (xl, yl) = curve(points, true);
         if !xe.is_empty() {
-            p = p.series(Series::new(format!("{name} (ensemble)"), xe, ye, Style::markers(i, Marker::Circle)));
+            p = p.series(Series::new(
+                format!("{name} (ensemble)"),
+                xe,
+                ye,
+                Style::markers(i, Marker::Circle),
+            ));
         }
         if !xl.is_empty() {
-            p = p.series(Series::new(format!("{name} (linear response)"), xl, yl, Style::line(i).dash(Dash::nth(i))));
+            p = p.series(Series::new(
+                format!("{name} (linear response)"),
+                xl,
+                yl,
+                Style::line(i).dash(Dash::nth(i)),
+            ));
         }
     }
     p
@@ -32,12 +47,26 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let drr = noise_cases::run(ctx, noise_cases::DRR)?;
     let vdp = noise_cases::run(ctx, noise_cases::VAN_DER_POL)?;
     let by_name = |run: &noise_cases::NoiseRun, name: &str| -> Vec<CorrelationPoint> {
-        run.noise.correlation_time_by_variable.iter().find(|(n, _)| n == name).map(|(_, p)| p.clone()).unwrap_or_default()
+        run.noise
+            .correlation_time_by_variable
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, p)| p.clone())
+            .unwrap_or_default()
     };
-    let a = tau_panel("(a) saddle-node dx/dt = μ0 − rt − x² (x)", &[("τ_{x}", &sn.noise.correlation_time)]);
-    let b = tau_panel("(b) stick-slip, γ = 10^{3}, ξ = 0.7, ε = 0.72 (u)", &[("τ_{u}", &drr.noise.correlation_time)]);
+    let a = tau_panel(
+        "(a) saddle-node dx/dt = μ0 − rt − x² (x)",
+        &[("τ_{x}", &sn.noise.correlation_time)],
+    );
+    let b = tau_panel(
+        "(b) stick-slip, γ = 10^{3}, ξ = 0.7, ε = 0.72 (u)",
+        &[("τ_{u}", &drr.noise.correlation_time)],
+    );
     let x_offset = by_name(&vdp, "x_offset");
-    let c = tau_panel("(c) van der Pol, β = 30, a = 0", &[("τ_{x}", &vdp.noise.correlation_time), ("τ of x − x^{3}/3 − y", &x_offset)]);
+    let c = tau_panel(
+        "(c) van der Pol, β = 30, a = 0",
+        &[("τ_{x}", &vdp.noise.correlation_time), ("τ of x − x^{3}/3 − y", &x_offset)],
+    );
     let fig = Figure::new("Fig. 7: correlation time before the event — slowing-down (saddle-node) against speed-up (stick-slip)")
         .columns(3)
         .panel_size(420.0, 320.0)
@@ -71,12 +100,16 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         "decreases",
         describe(&xd, &yd),
         falls_towards_the_event(&yd),
-        "linear response, window t_c − 3 … t_c − 30/γ; undefined where Γ_u does not fall to half".into(),
+        "linear response, window t_c − 3 … t_c − 30/γ; undefined where Γ_u does not fall to half"
+            .into(),
     ));
     let (xv, yv) = curve(&x_offset, true);
     out.notes.push(format!(
         "Fig. 7c (no claim in the paper): van der Pol, τ of x: {}; τ of x − x³/3 − y: {}",
-        { let (x, y) = curve(&vdp.noise.correlation_time, true); describe(&x, &y) },
+        {
+            let (x, y) = curve(&vdp.noise.correlation_time, true);
+            describe(&x, &y)
+        },
         describe(&xv, &yv)
     ));
     Ok(out)

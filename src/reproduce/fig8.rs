@@ -13,7 +13,11 @@ fn alphas(reduced: bool) -> Vec<f64> {
     // Up to 0.3: from α ≈ 0.32 on (γ = 10, ξ = 0.7, ε = 1) v falls to 0 in finite time after
     // the slip (g_α is bounded below: the block stops), which the integration in ln v cannot
     // pass; those runs end in a typed error.
-    if reduced { vec![0.1, 0.3] } else { (1..=12).map(|i| 0.025 * i as f64).collect() }
+    if reduced {
+        vec![0.1, 0.3]
+    } else {
+        (1..=12).map(|i| 0.025 * i as f64).collect()
+    }
 }
 
 /// The amplitude compared in (d): the range of u over the cycle (units of D_c).
@@ -30,7 +34,8 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let alphas = alphas(ctx.reduced);
     let mut scenes = vec![log_scene, power_scene];
     scenes.extend(alphas.iter().map(|&a| {
-        let mut s = cases::variant(&power, &format!("fig8-power-{a:.3}"), &[("alpha", a)], false, 0);
+        let mut s =
+            cases::variant(&power, &format!("fig8-power-{a:.3}"), &[("alpha", a)], false, 0);
         s["analyses"] = serde_json::json!(["cycle"]);
         s
     }));
@@ -39,41 +44,97 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let log = results.next().expect("scene 0")?;
     let pow = results.next().expect("scene 1")?;
     let periodic = |r: &crate::report::Report| r.cycle.as_ref().and_then(|c| c.values);
-    let log_values = periodic(&log).ok_or_else(|| ReproduceError::Missing("fig8: the ln v cycle is not periodic".into()))?;
-    let pow_values = periodic(&pow).ok_or_else(|| ReproduceError::Missing("fig8: the power-law cycle is not periodic".into()))?;
+    let log_values = periodic(&log)
+        .ok_or_else(|| ReproduceError::Missing("fig8: the ln v cycle is not periodic".into()))?;
+    let pow_values = periodic(&pow).ok_or_else(|| {
+        ReproduceError::Missing("fig8: the power-law cycle is not periodic".into())
+    })?;
     let (tl, tp) = (cases::trajectory(&log)?, cases::trajectory(&pow)?);
 
-    let a = Panel::new("(a, b) velocity: ln v and power-law friction", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::log10("v").unit("v_{0}"))
-        .series(Series::new("f = ln v", tl.t.clone(), tl.v.clone(), Style::line(1)))
-        .series(Series::new("f = g_{α}(v), α = 0.31", tp.t.clone(), tp.v.clone(), Style::line(0).dash(Dash::Dashed)))
-        .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
-    let b = Panel::new("(a, b) the two limit cycles in the (u, θ) plane", Axis::linear("u").unit("D_{c}"), Axis::linear("θ").unit("A"))
-        .series(Series::new("f = ln v", tl.u.clone(), tl.theta.clone(), Style::line(1)))
-        .series(Series::new("f = g_{α}(v), α = 0.31", tp.u.clone(), tp.theta.clone(), Style::line(0).dash(Dash::Dashed)));
+    let a = Panel::new(
+        "(a, b) velocity: ln v and power-law friction",
+        Axis::linear("t").unit("D_{c}/v_{0}"),
+        Axis::log10("v").unit("v_{0}"),
+    )
+    .series(Series::new("f = ln v", tl.t.clone(), tl.v.clone(), Style::line(1)))
+    .series(Series::new(
+        "f = g_{α}(v), α = 0.31",
+        tp.t.clone(),
+        tp.v.clone(),
+        Style::line(0).dash(Dash::Dashed),
+    ))
+    .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
+    let b = Panel::new(
+        "(a, b) the two limit cycles in the (u, θ) plane",
+        Axis::linear("u").unit("D_{c}"),
+        Axis::linear("θ").unit("A"),
+    )
+    .series(Series::new("f = ln v", tl.u.clone(), tl.theta.clone(), Style::line(1)))
+    .series(Series::new(
+        "f = g_{α}(v), α = 0.31",
+        tp.u.clone(),
+        tp.theta.clone(),
+        Style::line(0).dash(Dash::Dashed),
+    ));
 
     let vs: Vec<f64> = (0..=200).map(|i| 10f64.powf(-2.0 + 4.0 * i as f64 / 200.0)).collect();
     let law = |f: Friction| vs.iter().map(|v| f.eval(v.ln()).0).collect::<Vec<f64>>();
-    let c = Panel::new("(c) friction laws", Axis::log10("v").unit("v_{0}"), Axis::linear("f(v)").dimensionless())
-        .series(Series::new("ln v", vs.clone(), law(Friction::Log), Style::line(1)))
-        .series(Series::new("g_{α}, α = 0.143", vs.clone(), law(Friction::Power { alpha: 0.143 }), Style::line(0).dash(Dash::Dashed)))
-        .series(Series::new("g_{α}, α = 0.333", vs.clone(), law(Friction::Power { alpha: 0.333 }), Style::line(2).dash(Dash::DashDot)))
-        .legend(LegendPlace::TopLeft);
+    let c = Panel::new(
+        "(c) friction laws",
+        Axis::log10("v").unit("v_{0}"),
+        Axis::linear("f(v)").dimensionless(),
+    )
+    .series(Series::new("ln v", vs.clone(), law(Friction::Log), Style::line(1)))
+    .series(Series::new(
+        "g_{α}, α = 0.143",
+        vs.clone(),
+        law(Friction::Power { alpha: 0.143 }),
+        Style::line(0).dash(Dash::Dashed),
+    ))
+    .series(Series::new(
+        "g_{α}, α = 0.333",
+        vs.clone(),
+        law(Friction::Power { alpha: 0.333 }),
+        Style::line(2).dash(Dash::DashDot),
+    ))
+    .legend(LegendPlace::TopLeft);
 
     let mut ratio_points = Vec::new();
     for (r, &alpha) in results.zip(&alphas) {
         match r {
             Ok(report) => match periodic(&report) {
-                Some(v) => ratio_points.push((alpha, v.period / log_values.period, amplitude(&v) / amplitude(&log_values), v.period)),
-                None => out.notes.push(format!("Fig. 8d: α = {alpha:.3}: no period-1 limit cycle found (not drawn)")),
+                Some(v) => ratio_points.push((
+                    alpha,
+                    v.period / log_values.period,
+                    amplitude(&v) / amplitude(&log_values),
+                    v.period,
+                )),
+                None => out.notes.push(format!(
+                    "Fig. 8d: α = {alpha:.3}: no period-1 limit cycle found (not drawn)"
+                )),
             },
             Err(e) => out.notes.push(format!("Fig. 8d: α = {alpha:.3}: {e} (not drawn)")),
         }
     }
     let xs: Vec<f64> = ratio_points.iter().map(|p| p.0).collect();
-    let d = Panel::new("(d) power law / ln v, against α", Axis::linear("α").dimensionless(), Axis::linear("ratio").dimensionless())
-        .series(Series::new("period ratio", xs.clone(), ratio_points.iter().map(|p| p.1).collect(), Style::markers(0, Marker::Circle)))
-        .series(Series::new("amplitude ratio (range of u)", xs, ratio_points.iter().map(|p| p.2).collect(), Style::markers(2, Marker::Square)))
-        .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
+    let d = Panel::new(
+        "(d) power law / ln v, against α",
+        Axis::linear("α").dimensionless(),
+        Axis::linear("ratio").dimensionless(),
+    )
+    .series(Series::new(
+        "period ratio",
+        xs.clone(),
+        ratio_points.iter().map(|p| p.1).collect(),
+        Style::markers(0, Marker::Circle),
+    ))
+    .series(Series::new(
+        "amplitude ratio (range of u)",
+        xs,
+        ratio_points.iter().map(|p| p.2).collect(),
+        Style::markers(2, Marker::Square),
+    ))
+    .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
 
     let fig = Figure::new("Fig. 8: power-law friction g_{α}(v) = (v^{α} − 1)/α against ln v (γ = 10, ξ = 0.7, ε = 1)")
         .columns(2)

@@ -13,10 +13,19 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let points = &run.noise.correlation_time;
     let (xe, ye) = curve(points, false);
     let (xl, yl) = curve(points, true);
-    let panel = Panel::new("half-height width of Γ_{u}(t, t − t′)", Axis::log10("t_{c} − t").unit("D_{c}/v_{0}"), Axis::log10("τ").unit("D_{c}/v_{0}"))
-        .series(Series::new("ensemble", xe, ye, Style::markers(0, Marker::Circle)))
-        .series(Series::new("linear response", xl.clone(), yl.clone(), Style::line(1).dash(Dash::Dashed)))
-        .legend(LegendPlace::Auto);
+    let panel = Panel::new(
+        "half-height width of Γ_{u}(t, t − t′)",
+        Axis::log10("t_{c} − t").unit("D_{c}/v_{0}"),
+        Axis::log10("τ").unit("D_{c}/v_{0}"),
+    )
+    .series(Series::new("ensemble", xe, ye, Style::markers(0, Marker::Circle)))
+    .series(Series::new(
+        "linear response",
+        xl.clone(),
+        yl.clone(),
+        Style::line(1).dash(Dash::Dashed),
+    ))
+    .legend(LegendPlace::Auto);
     let t0 = run.noise.deterministic.t0.map_or("-".to_string(), |t| format!("{t:.3}"));
     let fig = Figure::new("Fig. 9: correlation time before the slip, power-law friction (α = 0.15, γ = 10^{3}, ε = 0.78, ξ = 0.7)")
         .panel_size(560.0, 360.0)

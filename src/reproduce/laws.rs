@@ -29,7 +29,11 @@ const CYCLE_GAMMA: f64 = 1e3;
 const PERIOD_TOL: f64 = 1e-6;
 
 fn gammas(reduced: bool) -> Vec<f64> {
-    if reduced { vec![1e1, 1e3, 1e8] } else { (1..=8).map(|k| 10f64.powi(k)).collect() }
+    if reduced {
+        vec![1e1, 1e3, 1e8]
+    } else {
+        (1..=8).map(|k| 10f64.powi(k)).collect()
+    }
 }
 
 /// The scene of one point: cycle (and Hopf) analysis, radau5 at rtol 1e-10, one trajectory
@@ -50,8 +54,11 @@ fn scene(law: StateLaw, gamma: f64) -> Value {
 /// The reference period at (γ, ξ = 0.8, ε = 1) in a table, if it has that row.
 fn reference_period(table: &Value, gamma: f64) -> Option<f64> {
     table["rows"].as_array()?.iter().find_map(|r| {
-        let same = |key: &str, x: f64| r[key].as_f64().is_some_and(|v| (v - x).abs() <= 1e-12 * x.abs());
-        (same("gamma", gamma) && same("xi", XI) && same("epsilon", EPSILON)).then(|| r["reference"]["period"].as_f64()).flatten()
+        let same =
+            |key: &str, x: f64| r[key].as_f64().is_some_and(|v| (v - x).abs() <= 1e-12 * x.abs());
+        (same("gamma", gamma) && same("xi", XI) && same("epsilon", EPSILON))
+            .then(|| r["reference"]["period"].as_f64())
+            .flatten()
     })
 }
 
@@ -60,36 +67,68 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let mut out = Output::default();
     let gammas = gammas(ctx.reduced);
     let laws: Vec<StateLaw> = StateLaw::ALL.iter().map(|(_, l)| *l).collect();
-    let points: Vec<(StateLaw, f64)> = laws.iter().flat_map(|&l| gammas.iter().map(move |&g| (l, g))).collect();
+    let points: Vec<(StateLaw, f64)> =
+        laws.iter().flat_map(|&l| gammas.iter().map(move |&g| (l, g))).collect();
     let scenes: Vec<Value> = points.iter().map(|&(l, g)| scene(l, g)).collect();
     let reports = cases::run_scenes(ctx, &scenes)?;
-    let tables = [(StateLaw::Slip, cases::shipped(SLIP_TABLE)), (StateLaw::Ageing, cases::shipped(AGEING_TABLE))];
+    let tables = [
+        (StateLaw::Slip, cases::shipped(SLIP_TABLE)),
+        (StateLaw::Ageing, cases::shipped(AGEING_TABLE)),
+    ];
 
-    let mut a = Panel::new("(a) period against γ (ξ = 0.8, ε = 1)", Axis::log10("γ").dimensionless(), Axis::linear("period").unit("D_{c}/v_{0}"))
-        .legend(LegendPlace::TopLeft);
-    let mut b = Panel::new("(b) one cycle at γ = 10^{3}", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::log10("v").unit("v_{0}"))
-        .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
+    let mut a = Panel::new(
+        "(a) period against γ (ξ = 0.8, ε = 1)",
+        Axis::log10("γ").dimensionless(),
+        Axis::linear("period").unit("D_{c}/v_{0}"),
+    )
+    .legend(LegendPlace::TopLeft);
+    let mut b = Panel::new(
+        "(b) one cycle at γ = 10^{3}",
+        Axis::linear("t").unit("D_{c}/v_{0}"),
+        Axis::log10("v").unit("v_{0}"),
+    )
+    .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)));
     let markers = [Marker::Circle, Marker::Square, Marker::Triangle];
     let mut rows = Vec::new();
     for (i, &law) in laws.iter().enumerate() {
-        let mine: Vec<(&(StateLaw, f64), &Report)> = points.iter().zip(&reports).filter(|(p, _)| p.0 == law).collect();
+        let mine: Vec<(&(StateLaw, f64), &Report)> =
+            points.iter().zip(&reports).filter(|(p, _)| p.0 == law).collect();
         let mut curve = Vec::new();
         for &(&(_, gamma), report) in &mine {
             match report.cycle.as_ref().and_then(|c| c.values) {
                 Some(v) => curve.push((gamma, v.period)),
-                None => out.notes.push(format!("{} law, γ = {gamma:e}: no period-1 limit cycle found (not drawn)", law.name())),
+                None => out.notes.push(format!(
+                    "{} law, γ = {gamma:e}: no period-1 limit cycle found (not drawn)",
+                    law.name()
+                )),
             }
             if gamma == CYCLE_GAMMA {
                 let tr = cases::trajectory(report)?;
-                b = b.series(Series::new(format!("{} law", law.name()), tr.t, tr.v, Style::line(i).dash(Dash::nth(i))));
+                b = b.series(Series::new(
+                    format!("{} law", law.name()),
+                    tr.t,
+                    tr.v,
+                    Style::line(i).dash(Dash::nth(i)),
+                ));
             }
         }
         let style = Style::markers(i, markers[i]);
-        a = a.series(Series::new(format!("{} law", law.name()), curve.iter().map(|p| p.0).collect(), curve.iter().map(|p| p.1).collect(), style));
+        a = a.series(Series::new(
+            format!("{} law", law.name()),
+            curve.iter().map(|p| p.0).collect(),
+            curve.iter().map(|p| p.1).collect(),
+            style,
+        ));
         if let Some((_, table)) = tables.iter().find(|(l, _)| *l == law) {
-            let reference: Vec<(f64, f64)> = gammas.iter().filter_map(|&g| reference_period(table, g).map(|p| (g, p))).collect();
+            let reference: Vec<(f64, f64)> =
+                gammas.iter().filter_map(|&g| reference_period(table, g).map(|p| (g, p))).collect();
             let label = format!("{} law, reference table", law.name());
-            a = a.series(Series::new(label, reference.iter().map(|p| p.0).collect(), reference.iter().map(|p| p.1).collect(), Style::line(i).dash(Dash::Dotted)));
+            a = a.series(Series::new(
+                label,
+                reference.iter().map(|p| p.0).collect(),
+                reference.iter().map(|p| p.1).collect(),
+                Style::line(i).dash(Dash::Dotted),
+            ));
             for &(gamma, period) in &curve {
                 if let Some(reference) = reference_period(table, gamma) {
                     let claim = Claim::relative(
@@ -119,7 +158,12 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         )
         .caption(UNITS);
     out.files.push(ctx.write_figure("laws.svg", &fig)?);
-    out.files.push(ctx.write_json("laws-periods.json", &json!({ "xi": XI, "epsilon": EPSILON, "laws": rows }))?);
+    out.files.push(
+        ctx.write_json(
+            "laws-periods.json",
+            &json!({ "xi": XI, "epsilon": EPSILON, "laws": rows }),
+        )?,
+    );
     Ok(out)
 }
 
@@ -127,7 +171,12 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
 /// relative difference of each from the slip law's, over the γ run.
 fn threshold_claims(out: &mut Output, points: &[(StateLaw, f64)], reports: &[Report]) {
     let hopf = |law: StateLaw, gamma: f64| {
-        points.iter().zip(reports).find(|(p, _)| p.0 == law && p.1 == gamma).and_then(|(_, r)| r.hopf.as_ref()).map(|h| (h.epsilon_c, h.omega_c))
+        points
+            .iter()
+            .zip(reports)
+            .find(|(p, _)| p.0 == law && p.1 == gamma)
+            .and_then(|(_, r)| r.hopf.as_ref())
+            .map(|h| (h.epsilon_c, h.omega_c))
     };
     let (mut eps, mut omega) = (0.0f64, 0.0f64);
     let mut compared = 0;
@@ -141,7 +190,15 @@ fn threshold_claims(out: &mut Output, points: &[(StateLaw, f64)], reports: &[Rep
     let note = format!("largest relative difference from the slip law's, ageing and PRZ, {compared} (law, γ) pairs; each law's value is also found by bisection on the Jacobian's eigenvalues in the unit tests");
     let why = "the laws' linearisations coincide (κ = 1), so only rounding may differ";
     for (name, value) in [("ε_c", eps), ("ω_c", omega)] {
-        let claim = Claim::absolute(&format!("slip, ageing and PRZ share the Hopf {name}"), Source::Prediction, 0.0, value, 1e-12, why, note.clone());
+        let claim = Claim::absolute(
+            &format!("slip, ageing and PRZ share the Hopf {name}"),
+            Source::Prediction,
+            0.0,
+            value,
+            1e-12,
+            why,
+            note.clone(),
+        );
         out.claims.push(Row::from_analysis("State laws", &claim));
     }
 }

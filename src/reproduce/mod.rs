@@ -22,8 +22,8 @@ pub mod laws;
 pub mod noise_cases;
 pub mod summary;
 
-use crate::figure::FigureError;
 use crate::engine::EngineError;
+use crate::figure::FigureError;
 use std::path::{Path, PathBuf};
 pub use summary::{Row, Summary};
 
@@ -91,20 +91,30 @@ impl Context<'_> {
     pub fn write(&self, name: &str, text: &str) -> Result<String, ReproduceError> {
         let path = self.out.join(name);
         if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|source| ReproduceError::Io { path: dir.display().to_string(), source })?;
+            std::fs::create_dir_all(dir)
+                .map_err(|source| ReproduceError::Io { path: dir.display().to_string(), source })?;
         }
-        crate::report::write_atomic(&path, text).map_err(|source| ReproduceError::Io { path: path.display().to_string(), source })?;
+        crate::report::write_atomic(&path, text)
+            .map_err(|source| ReproduceError::Io { path: path.display().to_string(), source })?;
         Ok(name.to_string())
     }
 
     /// Writes a figure as `name` (SVG) under the output directory; returns `name`.
-    pub fn write_figure(&self, name: &str, figure: &crate::figure::Figure) -> Result<String, ReproduceError> {
+    pub fn write_figure(
+        &self,
+        name: &str,
+        figure: &crate::figure::Figure,
+    ) -> Result<String, ReproduceError> {
         let svg = figure.to_svg()?;
         self.write(name, &svg)
     }
 
     /// Writes a JSON value as `reports/name` and returns that path.
-    pub fn write_json(&self, name: &str, value: &impl serde::Serialize) -> Result<String, ReproduceError> {
+    pub fn write_json(
+        &self,
+        name: &str,
+        value: &impl serde::Serialize,
+    ) -> Result<String, ReproduceError> {
         let text = serde_json::to_string_pretty(value).expect("reproduce outputs serialise");
         self.write(&format!("reports/{name}"), &text)
     }
@@ -162,8 +172,14 @@ pub const PENDING: [Pending; 0] = [];
 /// Runs every figure into `out` (created if needed), then writes `summary.json`,
 /// `summary.md` and `summary.html`. A figure that fails is reported in the summary (and in
 /// the returned [`Summary`]) and the others still run.
-pub fn run(out: &Path, threads: usize, reduced: bool, progress: &dyn Progress) -> Result<Summary, ReproduceError> {
-    std::fs::create_dir_all(out).map_err(|source| ReproduceError::Io { path: out.display().to_string(), source })?;
+pub fn run(
+    out: &Path,
+    threads: usize,
+    reduced: bool,
+    progress: &dyn Progress,
+) -> Result<Summary, ReproduceError> {
+    std::fs::create_dir_all(out)
+        .map_err(|source| ReproduceError::Io { path: out.display().to_string(), source })?;
     let ctx = Context { out: out.to_path_buf(), threads: threads.max(1), reduced, progress };
     let started = std::time::Instant::now();
     let mut results = Vec::new();
@@ -174,7 +190,10 @@ pub fn run(out: &Path, threads: usize, reduced: bool, progress: &dyn Progress) -
         results.push(summary::FigureResult::new(entry, outcome, t.elapsed().as_secs_f64()));
     }
     let summary = Summary::new(results, threads, reduced, started.elapsed().as_secs_f64());
-    ctx.write("summary.json", &serde_json::to_string_pretty(&summary).expect("the summary serialises"))?;
+    ctx.write(
+        "summary.json",
+        &serde_json::to_string_pretty(&summary).expect("the summary serialises"),
+    )?;
     ctx.write("summary.md", &summary.markdown())?;
     ctx.write("summary.html", &summary.html())?;
     Ok(summary)

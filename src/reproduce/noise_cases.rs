@@ -45,20 +45,29 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
         }
     }
     let key = json.to_string();
-    if let Some((_, done)) = DONE.lock().unwrap_or_else(|e| e.into_inner()).iter().find(|(k, _)| *k == key) {
+    if let Some((_, done)) =
+        DONE.lock().unwrap_or_else(|e| e.into_inner()).iter().find(|(k, _)| *k == key)
+    {
         return Ok(done.clone());
     }
     let name = json["name"].as_str().unwrap_or("?").to_string();
     let failed = |source| ReproduceError::Run { case: name.clone(), source };
     let progress = |done, total| ctx.progress.points(done, total);
-    let (report, noise) = match scene::parse_any(&json.to_string(), &name).map_err(|e| ReproduceError::Scene(e.to_string()))? {
+    let (report, noise) = match scene::parse_any(&json.to_string(), &name)
+        .map_err(|e| ReproduceError::Scene(e.to_string()))?
+    {
         AnyScene::Drr(s) => {
-            let r = crate::engine::run_with(&s, json.clone(), ctx.threads, &progress).map_err(failed)?;
-            let n = r.noise.clone().ok_or_else(|| ReproduceError::Missing(format!("{name}: no noise section")))?;
+            let r = crate::engine::run_with(&s, json.clone(), ctx.threads, &progress)
+                .map_err(failed)?;
+            let n = r
+                .noise
+                .clone()
+                .ok_or_else(|| ReproduceError::Missing(format!("{name}: no noise section")))?;
             (serde_json::to_value(&r).expect("a report serialises"), n)
         }
         AnyScene::Other(s) => {
-            let r = crate::engine::run_other(&s, json.clone(), ctx.threads, &progress).map_err(failed)?;
+            let r = crate::engine::run_other(&s, json.clone(), ctx.threads, &progress)
+                .map_err(failed)?;
             (serde_json::to_value(&r).expect("a report serialises"), r.noise)
         }
     };
@@ -71,7 +80,9 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
 pub fn curve(points: &[CorrelationPoint], linear: bool) -> (Vec<f64>, Vec<f64>) {
     points
         .iter()
-        .filter_map(|p| if linear { p.tau_linear_response } else { p.tau }.map(|tau| (p.t_before_event, tau)))
+        .filter_map(|p| {
+            if linear { p.tau_linear_response } else { p.tau }.map(|tau| (p.t_before_event, tau))
+        })
         .unzip()
 }
 
@@ -80,7 +91,12 @@ pub fn describe(x: &[f64], y: &[f64]) -> String {
     match (x.first(), x.last(), y.iter().cloned().enumerate().max_by(|a, b| a.1.total_cmp(&b.1))) {
         (Some(&x0), Some(&x1), Some((i, ymax))) => format!(
             "τ = {:.3} at t_c − {:.3} … largest {:.3} at t_c − {:.3} … {:.3} at t_c − {:.3}",
-            y[0], x0, ymax, x[i], y[y.len() - 1], x1
+            y[0],
+            x0,
+            ymax,
+            x[i],
+            y[y.len() - 1],
+            x1
         ),
         _ => "no correlation time defined in the window".into(),
     }
@@ -89,7 +105,9 @@ pub fn describe(x: &[f64], y: &[f64]) -> String {
 /// Whether a curve (ordered from the window's start towards the event) has its largest value
 /// strictly inside and at least 1.5 times each end.
 pub fn peaks_inside(y: &[f64]) -> bool {
-    let Some((i, ymax)) = y.iter().cloned().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) else { return false };
+    let Some((i, ymax)) = y.iter().cloned().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return false;
+    };
     i > 0 && i + 1 < y.len() && ymax >= 1.5 * y[0] && ymax >= 1.5 * y[y.len() - 1]
 }
 

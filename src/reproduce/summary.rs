@@ -29,7 +29,8 @@ impl Row {
     /// A row from one of [`crate::analysis::paper`]'s claims (its value to four decimals and
     /// the relative difference; the criterion, 5 %, is the summary's).
     pub fn from_claim(figure: &str, c: &Claim) -> Self {
-        let rel = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+        let rel =
+            c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
         Self {
             figure: figure.into(),
             claim: c.claim.clone(),
@@ -49,7 +50,8 @@ impl Row {
             Source::Prediction => " (predicted)",
             Source::Check => " (check)",
         };
-        let rel = c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
+        let rel =
+            c.relative_difference.map_or(String::new(), |r| format!(" ({:+.1} %)", 100.0 * r));
         Self {
             figure: figure.into(),
             claim: c.claim.clone(),
@@ -66,7 +68,14 @@ impl Row {
     }
 
     /// A qualitative claim: it holds or it does not.
-    pub fn qualitative(figure: &str, claim: &str, paper: &str, ours: String, holds: bool, note: String) -> Self {
+    pub fn qualitative(
+        figure: &str,
+        claim: &str,
+        paper: &str,
+        ours: String,
+        holds: bool,
+        note: String,
+    ) -> Self {
         Self {
             figure: figure.into(),
             claim: claim.into(),
@@ -131,12 +140,20 @@ fn short(x: f64) -> String {
     }
     let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
     let s = format!("{x:.digits$}");
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// [`short`], or 4 significant digits in scientific notation for |x| < 1e-3 or ≥ 1e6.
 fn short_or_sci(x: f64) -> String {
-    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) { format!("{x:.3e}") } else { short(x) }
+    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) {
+        format!("{x:.3e}")
+    } else {
+        short(x)
+    }
 }
 
 fn md_cell(s: &str) -> String {
@@ -145,7 +162,12 @@ fn md_cell(s: &str) -> String {
 
 impl Summary {
     /// Assembles the summary.
-    pub fn new(figures: Vec<FigureResult>, threads: usize, reduced: bool, wall_time_s: f64) -> Self {
+    pub fn new(
+        figures: Vec<FigureResult>,
+        threads: usize,
+        reduced: bool,
+        wall_time_s: f64,
+    ) -> Self {
         Self {
             stickslip_version: env!("CARGO_PKG_VERSION"),
             sundials_version: crate::sundials::version(),
@@ -180,15 +202,26 @@ impl Summary {
 
     /// The summary as Markdown.
     pub fn markdown(&self) -> String {
-        let mut s = String::from("# Reproducing Pomeau & Le Berre, \"Critical speed-up vs critical slow-down\"\n\n");
-        s += &format!("{}.\nThe paper's numbers are claims to test: nothing is tuned to them.\n\n", self.header());
+        let mut s = String::from(
+            "# Reproducing Pomeau & Le Berre, \"Critical speed-up vs critical slow-down\"\n\n",
+        );
+        s += &format!(
+            "{}.\nThe paper's numbers are claims to test: nothing is tuned to them.\n\n",
+            self.header()
+        );
         s += "## Figures\n\n| figure | shows | files | status |\n|---|---|---|---|\n";
         for f in &self.figures {
             let status = match &f.error {
                 None => format!("made in {:.1} s", f.seconds),
                 Some(e) => format!("FAILED: {e}"),
             };
-            s += &format!("| {} | {} | {} | {} |\n", f.id, md_cell(&f.what), md_cell(&f.output.files.join(", ")), md_cell(&status));
+            s += &format!(
+                "| {} | {} | {} | {} |\n",
+                f.id,
+                md_cell(&f.what),
+                md_cell(&f.output.files.join(", ")),
+                md_cell(&status)
+            );
         }
         s += "\n## Claims\n\n| figure | claim | paper | ours | verdict | how |\n|---|---|---|---|---|---|\n";
         for r in self.rows() {
@@ -202,7 +235,11 @@ impl Summary {
                 md_cell(&r.note)
             );
         }
-        let notes: Vec<String> = self.figures.iter().flat_map(|f| f.output.notes.iter().map(move |n| format!("- {}: {n}\n", f.id))).collect();
+        let notes: Vec<String> = self
+            .figures
+            .iter()
+            .flat_map(|f| f.output.notes.iter().map(move |n| format!("- {}: {n}\n", f.id)))
+            .collect();
         if !notes.is_empty() {
             s += "\n## Notes\n\n";
             s += &notes.concat();
@@ -228,7 +265,10 @@ impl Summary {
              </style></head><body>\n",
         );
         s += "<h1>Reproducing Pomeau &amp; Le Berre, “Critical speed-up vs critical slow-down”</h1>\n";
-        s += &format!("<p>{}. The paper's numbers are claims to test: nothing is tuned to them.</p>\n", escape(&self.header()));
+        s += &format!(
+            "<p>{}. The paper's numbers are claims to test: nothing is tuned to them.</p>\n",
+            escape(&self.header())
+        );
         s += "<h2>Claims</h2>\n<table><tr><th>figure</th><th>claim</th><th>paper</th><th>ours</th><th>verdict</th><th>how</th></tr>\n";
         for r in self.rows() {
             s += &format!(
@@ -253,8 +293,13 @@ impl Summary {
                             s += &format!("<img src=\"{0}\" alt=\"{0}\">\n", escape(file));
                         }
                     }
-                    let data: Vec<String> =
-                        f.output.files.iter().filter(|x| !x.ends_with(".svg")).map(|x| format!("<a href=\"{0}\">{0}</a>", escape(x))).collect();
+                    let data: Vec<String> = f
+                        .output
+                        .files
+                        .iter()
+                        .filter(|x| !x.ends_with(".svg"))
+                        .map(|x| format!("<a href=\"{0}\">{0}</a>", escape(x)))
+                        .collect();
                     if !data.is_empty() {
                         s += &format!("<p>Data: {}</p>\n", data.join(", "));
                     }
@@ -269,7 +314,12 @@ impl Summary {
             s += "<li>none: every figure of the paper is remade</li>\n";
         }
         for p in &self.pending {
-            s += &format!("<li>{}: {} (waits for {})</li>\n", escape(p.figure), escape(p.what), escape(p.waiting_for));
+            s += &format!(
+                "<li>{}: {} (waits for {})</li>\n",
+                escape(p.figure),
+                escape(p.what),
+                escape(p.waiting_for)
+            );
         }
         s += "</ul>\n</body></html>\n";
         s
@@ -286,11 +336,22 @@ mod tests {
             files: vec!["fig1.svg".into(), "reports/fig1.json".into()],
             claims: vec![
                 Row::numeric("Fig. 1a", "t0 ≅ 1", 1.0, 1.3, "a <note> | with a pipe".into()),
-                Row::qualitative("Fig. 1b", "grows with ε", "increases", "increases at 10/10 steps".into(), true, "n".into()),
+                Row::qualitative(
+                    "Fig. 1b",
+                    "grows with ε",
+                    "increases",
+                    "increases at 10/10 steps".into(),
+                    true,
+                    "n".into(),
+                ),
             ],
             notes: vec!["one point did not converge".into()],
         };
-        let failed = FigureResult::new(entry, Err(ReproduceError::Missing("no cycle & no luck".into())), 0.5);
+        let failed = FigureResult::new(
+            entry,
+            Err(ReproduceError::Missing("no cycle & no luck".into())),
+            0.5,
+        );
         Summary::new(vec![FigureResult::new(entry, Ok(made), 1.0), failed], 2, true, 1.5)
     }
 

@@ -13,95 +13,60 @@ use std::ffi::{c_int, c_long, c_void};
 #[cfg(sundials7)]
 mod ark {
     pub(super) use super::ffi::{
-        ARKodeFree as Free,
-        ARKodeEvolve as Evolve,
-        ARKodeGetDky as GetDky,
-        ARKodeSetUserData as SetUserData,
-        ARKodeSStolerances as SStolerances,
-        ARKodeSVtolerances as SVtolerances,
-        ARKodeSetLinearSolver as SetLinearSolver,
-        ARKodeSetJacFn as SetJacFn,
-        ARKodeRootInit as RootInit,
-        ARKodeSetRootDirection as SetRootDirection,
-        ARKodeGetRootInfo as GetRootInfo,
-        ARKodeSetStopTime as SetStopTime,
-        ARKodeSetMaxNumSteps as SetMaxNumSteps,
-        ARKodeSetInitStep as SetInitStep,
-        ARKodeSetMinStep as SetMinStep,
-        ARKodeSetMaxStep as SetMaxStep,
-        ARKodeSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKodeSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKodeSetMaxConvFails as SetMaxConvFails,
-        ARKodeSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKodeSetMaxHnilWarns as SetMaxHnilWarns,
-        ARKodeReset as Reset,
-        ARKodeGetNumSteps as GetNumSteps,
-        ARKodeGetNumStepAttempts as GetNumStepAttempts,
-        ARKodeGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKodeGetNumErrTestFails as GetNumErrTestFails,
-        ARKodeGetNumStepSolveFails as GetNumStepSolveFails,
-        ARKodeGetNumNonlinSolvIters as GetNumNonlinSolvIters,
-        ARKodeGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKodeGetNumJacEvals as GetNumJacEvals,
+        ARKodeEvolve as Evolve, ARKodeFree as Free, ARKodeGetActualInitStep as GetActualInitStep,
+        ARKodeGetCurrentStep as GetCurrentStep, ARKodeGetDky as GetDky,
+        ARKodeGetLastStep as GetLastStep, ARKodeGetNumErrTestFails as GetNumErrTestFails,
+        ARKodeGetNumGEvals as GetNumGEvals, ARKodeGetNumJacEvals as GetNumJacEvals,
         ARKodeGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKodeGetNumGEvals as GetNumGEvals,
-        ARKodeGetLastStep as GetLastStep,
-        ARKodeGetCurrentStep as GetCurrentStep,
-        ARKodeGetActualInitStep as GetActualInitStep,
-        ARKodeSetPredictorMethod as SetPredictorMethod,
+        ARKodeGetNumLinSolvSetups as GetNumLinSolvSetups,
+        ARKodeGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
+        ARKodeGetNumNonlinSolvIters as GetNumNonlinSolvIters,
+        ARKodeGetNumStepAttempts as GetNumStepAttempts,
+        ARKodeGetNumStepSolveFails as GetNumStepSolveFails, ARKodeGetNumSteps as GetNumSteps,
+        ARKodeGetRootInfo as GetRootInfo, ARKodeReset as Reset, ARKodeRootInit as RootInit,
+        ARKodeSStolerances as SStolerances, ARKodeSVtolerances as SVtolerances,
         ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKodeSetLSetupFrequency as SetLSetupFrequency,
-        ARKodeSetJacEvalFrequency as SetJacEvalFrequency,
+        ARKodeSetFixedStepBounds as SetFixedStepBounds, ARKodeSetInitStep as SetInitStep,
         ARKodeSetInterpolantType as SetInterpolantType,
+        ARKodeSetJacEvalFrequency as SetJacEvalFrequency, ARKodeSetJacFn as SetJacFn,
+        ARKodeSetLSetupFrequency as SetLSetupFrequency, ARKodeSetLinearSolver as SetLinearSolver,
+        ARKodeSetMaxConvFails as SetMaxConvFails, ARKodeSetMaxErrTestFails as SetMaxErrTestFails,
+        ARKodeSetMaxHnilWarns as SetMaxHnilWarns, ARKodeSetMaxNonlinIters as SetMaxNonlinIters,
+        ARKodeSetMaxNumSteps as SetMaxNumSteps, ARKodeSetMaxStep as SetMaxStep,
+        ARKodeSetMinStep as SetMinStep, ARKodeSetNonlinConvCoef as SetNonlinConvCoef,
         ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKodeSetFixedStepBounds as SetFixedStepBounds,
+        ARKodeSetPredictorMethod as SetPredictorMethod, ARKodeSetRootDirection as SetRootDirection,
+        ARKodeSetStopTime as SetStopTime, ARKodeSetUserData as SetUserData,
     };
 }
 #[cfg(not(sundials7))]
 mod ark {
     pub(super) use super::ffi::{
-        ARKStepFree as Free,
-        ARKStepEvolve as Evolve,
-        ARKStepGetDky as GetDky,
-        ARKStepSetUserData as SetUserData,
-        ARKStepSStolerances as SStolerances,
-        ARKStepSVtolerances as SVtolerances,
-        ARKStepSetLinearSolver as SetLinearSolver,
-        ARKStepSetJacFn as SetJacFn,
-        ARKStepRootInit as RootInit,
-        ARKStepSetRootDirection as SetRootDirection,
-        ARKStepGetRootInfo as GetRootInfo,
-        ARKStepSetStopTime as SetStopTime,
-        ARKStepSetMaxNumSteps as SetMaxNumSteps,
-        ARKStepSetInitStep as SetInitStep,
-        ARKStepSetMinStep as SetMinStep,
-        ARKStepSetMaxStep as SetMaxStep,
-        ARKStepSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKStepSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKStepSetMaxConvFails as SetMaxConvFails,
-        ARKStepSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKStepSetMaxHnilWarns as SetMaxHnilWarns,
-        ARKStepReset as Reset,
-        ARKStepGetNumSteps as GetNumSteps,
-        ARKStepGetNumStepAttempts as GetNumStepAttempts,
+        ARKStepEvolve as Evolve, ARKStepFree as Free,
+        ARKStepGetActualInitStep as GetActualInitStep, ARKStepGetCurrentStep as GetCurrentStep,
+        ARKStepGetDky as GetDky, ARKStepGetLastStep as GetLastStep,
+        ARKStepGetNumErrTestFails as GetNumErrTestFails, ARKStepGetNumGEvals as GetNumGEvals,
+        ARKStepGetNumJacEvals as GetNumJacEvals, ARKStepGetNumLinRhsEvals as GetNumLinRhsEvals,
         ARKStepGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKStepGetNumErrTestFails as GetNumErrTestFails,
-        ARKStepGetNumStepSolveFails as GetNumStepSolveFails,
-        ARKStepGetNumNonlinSolvIters as GetNumNonlinSolvIters,
         ARKStepGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKStepGetNumJacEvals as GetNumJacEvals,
-        ARKStepGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKStepGetNumGEvals as GetNumGEvals,
-        ARKStepGetLastStep as GetLastStep,
-        ARKStepGetCurrentStep as GetCurrentStep,
-        ARKStepGetActualInitStep as GetActualInitStep,
-        ARKStepSetPredictorMethod as SetPredictorMethod,
+        ARKStepGetNumNonlinSolvIters as GetNumNonlinSolvIters,
+        ARKStepGetNumStepAttempts as GetNumStepAttempts,
+        ARKStepGetNumStepSolveFails as GetNumStepSolveFails, ARKStepGetNumSteps as GetNumSteps,
+        ARKStepGetRootInfo as GetRootInfo, ARKStepReset as Reset, ARKStepRootInit as RootInit,
+        ARKStepSStolerances as SStolerances, ARKStepSVtolerances as SVtolerances,
         ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKStepSetLSetupFrequency as SetLSetupFrequency,
-        ARKStepSetJacEvalFrequency as SetJacEvalFrequency,
+        ARKStepSetFixedStepBounds as SetFixedStepBounds, ARKStepSetInitStep as SetInitStep,
         ARKStepSetInterpolantType as SetInterpolantType,
+        ARKStepSetJacEvalFrequency as SetJacEvalFrequency, ARKStepSetJacFn as SetJacFn,
+        ARKStepSetLSetupFrequency as SetLSetupFrequency, ARKStepSetLinearSolver as SetLinearSolver,
+        ARKStepSetMaxConvFails as SetMaxConvFails, ARKStepSetMaxErrTestFails as SetMaxErrTestFails,
+        ARKStepSetMaxHnilWarns as SetMaxHnilWarns, ARKStepSetMaxNonlinIters as SetMaxNonlinIters,
+        ARKStepSetMaxNumSteps as SetMaxNumSteps, ARKStepSetMaxStep as SetMaxStep,
+        ARKStepSetMinStep as SetMinStep, ARKStepSetNonlinConvCoef as SetNonlinConvCoef,
         ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKStepSetFixedStepBounds as SetFixedStepBounds,
+        ARKStepSetPredictorMethod as SetPredictorMethod,
+        ARKStepSetRootDirection as SetRootDirection, ARKStepSetStopTime as SetStopTime,
+        ARKStepSetUserData as SetUserData,
     };
 }
 
@@ -250,16 +215,25 @@ fn classify(flag: c_int) -> ErrorKind {
         ffi::ARK_TOO_MUCH_WORK => ErrorKind::TooMuchWork,
         ffi::ARK_TOO_MUCH_ACC => ErrorKind::AccuracyNotAttainable,
         ffi::ARK_ERR_FAILURE => ErrorKind::ErrorTestFailures,
-        ffi::ARK_CONV_FAILURE | ffi::ARK_NLS_INIT_FAIL | ffi::ARK_NLS_SETUP_FAIL | ffi::ARK_NLS_OP_ERR => {
-            ErrorKind::ConvergenceFailures
+        ffi::ARK_CONV_FAILURE
+        | ffi::ARK_NLS_INIT_FAIL
+        | ffi::ARK_NLS_SETUP_FAIL
+        | ffi::ARK_NLS_OP_ERR => ErrorKind::ConvergenceFailures,
+        ffi::ARK_LINIT_FAIL | ffi::ARK_LSETUP_FAIL | ffi::ARK_LSOLVE_FAIL => {
+            ErrorKind::LinearSolver
         }
-        ffi::ARK_LINIT_FAIL | ffi::ARK_LSETUP_FAIL | ffi::ARK_LSOLVE_FAIL => ErrorKind::LinearSolver,
-        ffi::ARK_RHSFUNC_FAIL | ffi::ARK_FIRST_RHSFUNC_ERR | ffi::ARK_REPTD_RHSFUNC_ERR | ffi::ARK_UNREC_RHSFUNC_ERR => {
-            ErrorKind::RhsFailure
-        }
+        ffi::ARK_RHSFUNC_FAIL
+        | ffi::ARK_FIRST_RHSFUNC_ERR
+        | ffi::ARK_REPTD_RHSFUNC_ERR
+        | ffi::ARK_UNREC_RHSFUNC_ERR => ErrorKind::RhsFailure,
         ffi::ARK_RTFUNC_FAIL => ErrorKind::RootFunctionFailure,
-        ffi::ARK_ILL_INPUT | ffi::ARK_BAD_K | ffi::ARK_BAD_T | ffi::ARK_BAD_DKY | ffi::ARK_TOO_CLOSE
-        | ffi::ARK_NO_MALLOC | ffi::ARK_INVALID_TABLE => ErrorKind::InvalidInput,
+        ffi::ARK_ILL_INPUT
+        | ffi::ARK_BAD_K
+        | ffi::ARK_BAD_T
+        | ffi::ARK_BAD_DKY
+        | ffi::ARK_TOO_CLOSE
+        | ffi::ARK_NO_MALLOC
+        | ffi::ARK_INVALID_TABLE => ErrorKind::InvalidInput,
         _ => ErrorKind::Other,
     }
 }
@@ -385,11 +359,23 @@ fn dimension_error(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
 }
 
 impl<S> Solver<S> {
-    fn finish_arkstep(&mut self, options: &Options, settings: ArkSettings, tables: (c_int, c_int)) -> Result<(), SolverError> {
+    fn finish_arkstep(
+        &mut self,
+        options: &Options,
+        settings: ArkSettings,
+        tables: (c_int, c_int),
+    ) -> Result<(), SolverError> {
         let m = self.mem();
         if let Some(order) = options.max_order {
             let message = format!("max_order = {order} applies to CVODE; ARKStep's order is that of its Butcher table");
-            return Err(SolverError { solver: ARKSTEP.name, kind: ErrorKind::InvalidInput, t: self.t(), state: self.state().to_vec(), flag: 0, message });
+            return Err(SolverError {
+                solver: ARKSTEP.name,
+                kind: ErrorKind::InvalidInput,
+                t: self.t(),
+                state: self.state().to_vec(),
+                flag: 0,
+                message,
+            });
         }
         // SAFETY: live ARKStep memory; the ids name built-in tables of this ARKODE.
         self.check(unsafe { ffi::ARKStepSetTableNum(m, tables.0, tables.1) })?;
@@ -397,7 +383,8 @@ impl<S> Solver<S> {
         // ark_robertson settings. With ARKODE's own defaults the Newton residual, times the
         // stiffness, enters the error estimate through f_I(z_i), and OREGO, ROBER and E5 end
         // in repeated error-test failures (docs/test-set.md).
-        let tight_newton = tables.0 != ffi::ARKODE_DIRKTableID_ARKODE_DIRK_NONE && !settings.deduce_implicit_rhs;
+        let tight_newton =
+            tables.0 != ffi::ARKODE_DIRKTableID_ARKODE_DIRK_NONE && !settings.deduce_implicit_rhs;
         let predictor = settings.predictor_method.or(tight_newton.then_some(1));
         if tight_newton && options.nonlin_conv_coef.is_none() {
             // SAFETY: live ARKStep memory; stores a scalar.
@@ -454,7 +441,14 @@ impl<S: OdeSystem> Solver<S> {
         let implicit = matches!(method, ArkMethod::Dirk(_));
         let jacobian: ffi::CVLsJacFn =
             if implicit && system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: implicit, jacobian, rhs: S::rhs };
+        let creation = Creation {
+            system,
+            t0,
+            y0: y0.to_vec(),
+            needs_linear_solver: implicit,
+            jacobian,
+            rhs: S::rhs,
+        };
         let f: ffi::ARKRhsFn = Some(callbacks::rhs::<S>);
         let (fe, fi) = if implicit { (None, f) } else { (f, None) };
         let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {
@@ -486,9 +480,19 @@ impl<S: ImexSystem> Solver<S> {
         options: &Options,
     ) -> Result<Self, SolverError> {
         dimension_error(system.dim(), t0, y0)?;
-        let jacobian: ffi::CVLsJacFn =
-            if system.has_implicit_jacobian() { Some(callbacks::implicit_jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian, rhs: S::rhs };
+        let jacobian: ffi::CVLsJacFn = if system.has_implicit_jacobian() {
+            Some(callbacks::implicit_jacobian::<S>)
+        } else {
+            None
+        };
+        let creation = Creation {
+            system,
+            t0,
+            y0: y0.to_vec(),
+            needs_linear_solver: true,
+            jacobian,
+            rhs: S::rhs,
+        };
         let (fe, fi): (ffi::ARKRhsFn, ffi::ARKRhsFn) =
             (Some(callbacks::rhs_explicit::<S>), Some(callbacks::rhs_implicit::<S>));
         let mut solver = Solver::build(&ARKSTEP, creation, options, |y, ctx| {

@@ -270,7 +270,11 @@ unsafe fn jacobian_code<S>(
     if !shared.diag.guarded(|| fill(system, y, &mut matrix)) {
         return -1;
     }
-    if matrix.is_finite() { 0 } else { 1 }
+    if matrix.is_finite() {
+        0
+    } else {
+        1
+    }
 }
 
 /// Dense ∂f/∂y (CVLsJacFn / ARKLsJacFn signature).
@@ -326,7 +330,8 @@ pub(crate) unsafe extern "C" fn roots<S>(
         return -1;
     }
     if let Some(i) = g.iter().position(|v| !v.is_finite()) {
-        shared.diag.root_failure = Some(format!("root function {i} returned {} at t = {t:e}", g[i]));
+        shared.diag.root_failure =
+            Some(format!("root function {i} returned {} at t = {t:e}", g[i]));
         return -1;
     }
     0

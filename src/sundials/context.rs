@@ -107,7 +107,10 @@ mod v7 {
             // SAFETY: live logger; SUNDIALS opens (creates) the named file and copies the name.
             let flag = unsafe { ffi::SUNLogger_SetWarningFilename(logger, name.as_ptr()) };
             if flag != 0 {
-                return Err(std::io::Error::other(format!("SUNLogger_SetWarningFilename({}) failed ({flag})", path.display())));
+                return Err(std::io::Error::other(format!(
+                    "SUNLogger_SetWarningFilename({}) failed ({flag})",
+                    path.display()
+                )));
             }
             let file = File::open(&path);
             // Both descriptors stay valid after the name is gone; nothing is left behind.

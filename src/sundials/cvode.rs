@@ -35,17 +35,22 @@ fn classify(flag: c_int) -> ErrorKind {
         ffi::CV_TOO_MUCH_WORK => ErrorKind::TooMuchWork,
         ffi::CV_TOO_MUCH_ACC => ErrorKind::AccuracyNotAttainable,
         ffi::CV_ERR_FAILURE => ErrorKind::ErrorTestFailures,
-        ffi::CV_CONV_FAILURE | ffi::CV_NLS_FAIL | ffi::CV_NLS_INIT_FAIL | ffi::CV_NLS_SETUP_FAIL => {
-            ErrorKind::ConvergenceFailures
-        }
+        ffi::CV_CONV_FAILURE
+        | ffi::CV_NLS_FAIL
+        | ffi::CV_NLS_INIT_FAIL
+        | ffi::CV_NLS_SETUP_FAIL => ErrorKind::ConvergenceFailures,
         ffi::CV_LINIT_FAIL | ffi::CV_LSETUP_FAIL | ffi::CV_LSOLVE_FAIL => ErrorKind::LinearSolver,
-        ffi::CV_RHSFUNC_FAIL | ffi::CV_FIRST_RHSFUNC_ERR | ffi::CV_REPTD_RHSFUNC_ERR | ffi::CV_UNREC_RHSFUNC_ERR => {
-            ErrorKind::RhsFailure
-        }
+        ffi::CV_RHSFUNC_FAIL
+        | ffi::CV_FIRST_RHSFUNC_ERR
+        | ffi::CV_REPTD_RHSFUNC_ERR
+        | ffi::CV_UNREC_RHSFUNC_ERR => ErrorKind::RhsFailure,
         ffi::CV_RTFUNC_FAIL => ErrorKind::RootFunctionFailure,
-        ffi::CV_ILL_INPUT | ffi::CV_BAD_K | ffi::CV_BAD_T | ffi::CV_BAD_DKY | ffi::CV_TOO_CLOSE | ffi::CV_NO_MALLOC => {
-            ErrorKind::InvalidInput
-        }
+        ffi::CV_ILL_INPUT
+        | ffi::CV_BAD_K
+        | ffi::CV_BAD_T
+        | ffi::CV_BAD_DKY
+        | ffi::CV_TOO_CLOSE
+        | ffi::CV_NO_MALLOC => ErrorKind::InvalidInput,
         _ => ErrorKind::Other,
     }
 }
@@ -155,7 +160,14 @@ impl<S: OdeSystem> Solver<S> {
         }
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
-        let creation = Creation { system, t0, y0: y0.to_vec(), needs_linear_solver: true, jacobian, rhs: S::rhs };
+        let creation = Creation {
+            system,
+            t0,
+            y0: y0.to_vec(),
+            needs_linear_solver: true,
+            jacobian,
+            rhs: S::rhs,
+        };
         let lmm = match settings.method {
             CvodeMethod::Bdf => ffi::CV_BDF,
             CvodeMethod::Adams => ffi::CV_ADAMS,

@@ -26,7 +26,8 @@ pub use solver::Solver;
 pub fn version() -> String {
     let mut buffer = [0 as std::ffi::c_char; 64];
     // SAFETY: SUNDIALSGetVersion writes a NUL-terminated string of at most `len` bytes.
-    let flag = unsafe { ffi::SUNDIALSGetVersion(buffer.as_mut_ptr(), buffer.len() as std::ffi::c_int) };
+    let flag =
+        unsafe { ffi::SUNDIALSGetVersion(buffer.as_mut_ptr(), buffer.len() as std::ffi::c_int) };
     if flag != 0 {
         return "unknown".into();
     }

@@ -6,7 +6,10 @@ use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
 use super::vector::SerialVector;
-use crate::integrate::{panic_message, ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent, Task, Tolerance};
+use crate::integrate::{
+    panic_message, ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent,
+    Task, Tolerance,
+};
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr::NonNull;
 
@@ -159,9 +162,9 @@ impl<S> Solver<S> {
         let y = SerialVector::from_slice(&y0, &ctx).ok_or_else(|| resource("state vector"))?;
         let scratch = SerialVector::from_slice(&y0, &ctx).ok_or_else(|| resource("vector"))?;
         let atol = match &options.atol {
-            Tolerance::PerComponent(v) => {
-                Some(SerialVector::from_slice(v, &ctx).ok_or_else(|| resource("tolerance vector"))?)
-            }
+            Tolerance::PerComponent(v) => Some(
+                SerialVector::from_slice(v, &ctx).ok_or_else(|| resource("tolerance vector"))?,
+            ),
             Tolerance::Scalar(_) => None,
         };
         let mem = NonNull::new(create(&y, &ctx)).ok_or_else(|| resource("solver memory"))?;
@@ -169,10 +172,13 @@ impl<S> Solver<S> {
         diag.stop_on_underflow = options.fail_on_step_underflow;
         #[cfg(sundials7)]
         {
-            let log = ctx.warning_log().map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
+            let log = ctx
+                .warning_log()
+                .map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
             diag.warning_log = Some(log);
         }
-        let shared = Box::new(Shared { system, dim, roots: None, root_count: 0, diag, step_ends: None });
+        let shared =
+            Box::new(Shared { system, dim, roots: None, root_count: 0, diag, step_ends: None });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -230,7 +236,8 @@ impl<S> Solver<S> {
                 .ok_or_else(|| resource("dense linear solver"))?;
             // SAFETY: `m` is live; the matrix and linear solver are owned by `solver.linear`,
             // which is dropped only after the solver memory is freed.
-            solver.check(unsafe { (api.set_linear_solver)(m, linear.solver(), linear.matrix()) })?;
+            solver
+                .check(unsafe { (api.set_linear_solver)(m, linear.solver(), linear.matrix()) })?;
             solver.linear = Some(linear);
             if jacobian.is_some() {
                 // SAFETY: `m` is live and has a linear solver attached just above; the trampoline matches CVLsJacFn/ARKLsJacFn.
@@ -327,7 +334,14 @@ impl<S> Solver<S> {
     }
 
     fn error(&self, kind: ErrorKind, flag: c_int, message: String) -> SolverError {
-        SolverError { solver: self.api.name, kind, t: self.t, state: self.state().to_vec(), flag, message }
+        SolverError {
+            solver: self.api.name,
+            kind,
+            t: self.t,
+            state: self.state().to_vec(),
+            flag,
+            message,
+        }
     }
 
     /// Integrates towards `tout` (see [`Task`]) and returns where and why it stopped. The
@@ -337,7 +351,11 @@ impl<S> Solver<S> {
     /// `fail_on_step_underflow` is set — a "t + h = t" step underflow during this call.
     pub fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
         if !tout.is_finite() {
-            return Err(self.error(ErrorKind::InvalidInput, 0, format!("tout = {tout} must be finite")));
+            return Err(self.error(
+                ErrorKind::InvalidInput,
+                0,
+                format!("tout = {tout} must be finite"),
+            ));
         }
         let task_code = match task {
             Task::Normal => 1,
@@ -349,14 +367,17 @@ impl<S> Solver<S> {
         let mut t = self.t;
         // SAFETY: live solver memory; `y` is a vector of the system's length owned by us;
         // callbacks reach `shared`, which outlives the call.
-        let mut flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        let mut flag =
+            unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
         // The counter is read only when the check applies: after every step it cost an ERK cycle
         // 4 % of its instructions.
         if flag == 0 && steps_before.is_some_and(|before| before == self.raw_steps()) {
             // One-step mode after an interpolated return gave back the last step's end
             // without a step: take the step the contract promises.
             // SAFETY: as above.
-            flag = unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+            flag = unsafe {
+                (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code)
+            };
         }
         // A failure is located at the last accepted point, whose state SUNDIALS returned
         // (ARKStep returns the failed attempt's stage time with it).
@@ -387,7 +408,9 @@ impl<S> Solver<S> {
                 // Steps shrank to nothing because the right-hand side kept failing: that is
                 // the root cause.
                 e.kind = ErrorKind::RhsFailure;
-                e.message.push_str(&format!(" [{nonfinite} right-hand-side calls returned non-finite values]"));
+                e.message.push_str(&format!(
+                    " [{nonfinite} right-hand-side calls returned non-finite values]"
+                ));
             }
             return Err(e);
         }
@@ -448,7 +471,10 @@ impl<S> Solver<S> {
     /// Registers the post-step function that keeps the ends of the accepted steps, through
     /// which a failure is located ([`StepEnds`]); `set` is ARKODE's setter. Call after the user
     /// data is set (ARKODE hands the post-step function the user data current at this call).
-    pub(crate) fn keep_step_ends(&mut self, set: unsafe extern "C" fn(Mem, ffi::ARKPostProcessFn) -> c_int) -> Result<(), SolverError> {
+    pub(crate) fn keep_step_ends(
+        &mut self,
+        set: unsafe extern "C" fn(Mem, ffi::ARKPostProcessFn) -> c_int,
+    ) -> Result<(), SolverError> {
         let start = StepEnds::new(self.t, self.raw_steps());
         self.shared_mut().step_ends = Some(start);
         // SAFETY: `mem` is live ARKODE memory whose user data is the boxed `Shared<S>` the
@@ -460,7 +486,8 @@ impl<S> Solver<S> {
     /// The typed error for `fail_on_step_underflow`, quoting SUNDIALS' last "t + h = t" warning.
     fn underflow_error(&self, underflows: u64, flag: c_int) -> SolverError {
         let warning = self.shared().diag.warnings.iter().rev().find(|w| w.contains("t + h = t"));
-        let message = format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
+        let message =
+            format!("{underflows} step(s) below the spacing of t: {}", warning.map_or("", |w| w));
         self.error(ErrorKind::StepUnderflow, flag, message)
     }
 
@@ -482,7 +509,11 @@ impl<S> Solver<S> {
     /// non-finite `t` is invalid input.
     pub fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
         if !t.is_finite() {
-            return Err(self.error(ErrorKind::InvalidInput, 0, format!("dense output needs a finite t, got {t}")));
+            return Err(self.error(
+                ErrorKind::InvalidInput,
+                0,
+                format!("dense output needs a finite t, got {t}"),
+            ));
         }
         if !self.stepped {
             if t != self.t || k > 1 {
@@ -498,7 +529,10 @@ impl<S> Solver<S> {
                     return Err(self.error(ErrorKind::CallbackPanic, 0, panic_message(&*payload)));
                 }
                 if let Some(i) = f.iter().position(|v| !v.is_finite()) {
-                    let message = format!("the right-hand side is not finite at t0 (component {i}: {})", f[i]);
+                    let message = format!(
+                        "the right-hand side is not finite at t0 (component {i}: {})",
+                        f[i]
+                    );
                     return Err(self.error(ErrorKind::RhsFailure, 0, message));
                 }
                 value = f;
@@ -523,7 +557,8 @@ impl<S> Solver<S> {
             return Ok(());
         };
         let bad_directions = !roots.directions.is_empty()
-            && (roots.directions.len() != roots.count || roots.directions.iter().any(|d| d.abs() > 1));
+            && (roots.directions.len() != roots.count
+                || roots.directions.iter().any(|d| d.abs() > 1));
         if roots.count == 0 || bad_directions {
             let message = format!(
                 "roots: count = {} must be ≥ 1 and directions {:?} empty or one of -1/0/+1 per root",
@@ -555,7 +590,11 @@ impl<S> Solver<S> {
     /// [`Integrator::set_stop_time`]).
     pub fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
         if !t_stop.is_finite() {
-            return Err(self.error(ErrorKind::InvalidInput, 0, format!("stop time {t_stop} must be finite")));
+            return Err(self.error(
+                ErrorKind::InvalidInput,
+                0,
+                format!("stop time {t_stop} must be finite"),
+            ));
         }
         // SAFETY: live solver memory; stores a scalar.
         self.check(unsafe { (self.api.set_stop_time)(self.mem.as_ptr(), t_stop) })?;
@@ -567,7 +606,8 @@ impl<S> Solver<S> {
     /// size is above the new limit.
     pub fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
         if max_step.is_some_and(|h| !(h.is_finite() && h > 0.0)) {
-            let message = format!("max step {max_step:?} must be finite and positive (or None: no limit)");
+            let message =
+                format!("max step {max_step:?} must be finite and positive (or None: no limit)");
             return Err(self.error(ErrorKind::InvalidInput, 0, message));
         }
         // SAFETY: live solver memory; stores a scalar (0 means no limit in CVODE and ARKODE).
@@ -585,10 +625,14 @@ impl<S> Solver<S> {
     /// the running statistics.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         if y0.len() != self.shared().dim || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
-            let message = format!("reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}", self.shared().dim);
+            let message = format!(
+                "reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}",
+                self.shared().dim
+            );
             return Err(self.error(ErrorKind::InvalidInput, 0, message));
         }
-        let before = if self.api.reinit_resets_counters { self.raw_stats() } else { Stats::default() };
+        let before =
+            if self.api.reinit_resets_counters { self.raw_stats() } else { Stats::default() };
         self.y.as_mut_slice().copy_from_slice(y0);
         // SAFETY: live memory; SUNDIALS copies `y` into its own history arrays.
         let flag = unsafe { (self.api.reinit)(self.mem.as_ptr(), t0, self.y.raw()) };

@@ -106,7 +106,10 @@ pub fn observed_orders(errors: &[f64]) -> Vec<f64> {
 /// OneStep integration of the DRR model from `y0` to total time `tend`, re-basing time (a
 /// restart at local t = 0) at the first step end after each slip peak, as the cycle engine
 /// does. Returns (steps, peak times).
-pub fn drr_cycles(integ: &mut dyn Integrator, tend: f64) -> Result<(u64, Vec<f64>), stickslip::integrate::SolverError> {
+pub fn drr_cycles(
+    integ: &mut dyn Integrator,
+    tend: f64,
+) -> Result<(u64, Vec<f64>), stickslip::integrate::SolverError> {
     let (mut elapsed, mut steps, mut peaks) = (0.0, 0u64, Vec::new());
     let mut prev_dw = integ.dense(integ.t(), 1)?[1];
     let mut rebase_pending = false;

@@ -65,7 +65,8 @@ const MINIMUM_SCD: &[(&str, &str, [f64; 3])] = &[
 /// 13.61 on 6.4.1. The same 7.1.1 library with that one line reverted gives 10.20 and 12.96
 /// in 2790 and 5635 steps, 6.4.1's digits and step counts exactly; with a 1000× tighter
 /// Newton tolerance (1e-10) 7.1.1 gets 10.66 and 14.17. See docs/debian.md.
-const MINIMUM_SCD_SINCE_6_7: &[(&str, &str, [f64; 3])] = &[("ROBER", "arkode-dirk", [8.2, 10.0, 13.1])];
+const MINIMUM_SCD_SINCE_6_7: &[(&str, &str, [f64; 3])] =
+    &[("ROBER", "arkode-dirk", [8.2, 10.0, 13.1])];
 
 /// Whether the linked SUNDIALS is 6.7.0 or newer.
 fn sundials_since_6_7() -> bool {
@@ -90,5 +91,6 @@ pub fn expectation(problem: &str, method: &str, rtol: f64) -> Expect {
 /// Cells of more than about a second each (dense LU of MEDAKZO's 400 equations; ARKStep's DIRK
 /// at rtol 1e-10, which takes 1e5 steps and more): run by the ignored `slow_cells` test.
 pub fn is_slow(problem: &str, method: &str, rtol: f64) -> bool {
-    (problem == "MEDAKZO" && (rtol < 1e-4 || method == "arkode-dirk")) || (method == "arkode-dirk" && rtol < 1e-7 && problem != "POLLU" && problem != "HIRES")
+    (problem == "MEDAKZO" && (rtol < 1e-4 || method == "arkode-dirk"))
+        || (method == "arkode-dirk" && rtol < 1e-7 && problem != "POLLU" && problem != "HIRES")
 }

@@ -94,7 +94,12 @@ fn check(cells: &[Cell]) {
                 Ok((scd, r)) => format!("scd {scd:.2} ({} steps)", r.stats.steps),
                 Err((_, m)) => m.chars().take(300).collect(),
             };
-            failures.push(format!("{} {} rtol {:e}: expected {expected:?}, got {got}", c.problem, c.method.name(), c.rtol));
+            failures.push(format!(
+                "{} {} rtol {:e}: expected {expected:?}, got {got}",
+                c.problem,
+                c.method.name(),
+                c.rtol
+            ));
         }
     }
     assert!(failures.is_empty(), "{} cells off:\n{}", failures.len(), failures.join("\n"));
@@ -173,7 +178,13 @@ fn print_table() {
                 );
             }
             Err((kind, message)) => {
-                println!("| {} | {} | {:.0e} | {kind:?} | | | | | | {}", c.problem, c.method.name(), c.rtol, message);
+                println!(
+                    "| {} | {} | {:.0e} | {kind:?} | | | | | | {}",
+                    c.problem,
+                    c.method.name(),
+                    c.rtol,
+                    message
+                );
             }
         }
     }
@@ -184,7 +195,11 @@ fn print_table() {
 fn jacobian_matches<P: TestProblem>() {
     let system = P::new();
     let n = system.dim();
-    let y: Vec<f64> = P::y0().iter().enumerate().map(|(i, v)| v + 1e-3 * (1.0 + 0.1 * i as f64) * (1.0 + v.abs())).collect();
+    let y: Vec<f64> = P::y0()
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v + 1e-3 * (1.0 + 0.1 * i as f64) * (1.0 + v.abs()))
+        .collect();
     let mut storage = vec![0.0; n * n];
     let mut jac = JacobianMatrix::new(&mut storage, n);
     system.jacobian(1.0, &y, &mut jac);
@@ -202,7 +217,11 @@ fn jacobian_matches<P: TestProblem>() {
             // Differences of a row lose digits to its largest terms: allow 1e-9 of the row.
             let row_scale = (0..n).map(|c| jac.get(row, c).abs()).fold(0.0, f64::max);
             let tolerance = 1e-5 * an.abs().max(fd.abs()) + 1e-9 * row_scale + 1e-12;
-            assert!((an - fd).abs() <= tolerance, "{} J[{row}][{col}]: analytic {an:e}, differences {fd:e}", P::NAME);
+            assert!(
+                (an - fd).abs() <= tolerance,
+                "{} J[{row}][{col}]: analytic {an:e}, differences {fd:e}",
+                P::NAME
+            );
         }
     }
 }

@@ -31,7 +31,11 @@ fn coefficients(j: usize) -> (f64, f64) {
 
 /// The boundary concentration φ(t).
 fn phi(t: f64) -> f64 {
-    if t <= 5.0 { 2.0 } else { 0.0 }
+    if t <= 5.0 {
+        2.0
+    } else {
+        0.0
+    }
 }
 
 impl OdeSystem for Medakzo {
@@ -51,7 +55,9 @@ impl OdeSystem for Medakzo {
             let (alpha, bz) = coefficients(j);
             let left = if j == 1 { phi(t) } else { y[i - 2] };
             let right = y[i + 2];
-            f[i] = (left - 2.0 * y[i] + right) * bz + alpha * (right - left) / (2.0 * DZETA) + reaction;
+            f[i] = (left - 2.0 * y[i] + right) * bz
+                + alpha * (right - left) / (2.0 * DZETA)
+                + reaction;
         }
     }
     fn has_jacobian(&self) -> bool {
@@ -92,7 +98,12 @@ impl TestProblem for Medakzo {
         let values: Vec<f64> = text
             .lines()
             .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-            .map(|l| l.trim().replace('d', "e").parse().expect("data/test_set/medakzo.txt: a number per line"))
+            .map(|l| {
+                l.trim()
+                    .replace('d', "e")
+                    .parse()
+                    .expect("data/test_set/medakzo.txt: a number per line")
+            })
             .collect();
         assert_eq!(values.len(), 2 * N, "data/test_set/medakzo.txt must hold 400 values");
         values

@@ -3,7 +3,8 @@
 
 use std::time::{Duration, Instant};
 use stickslip::integrate::{
-    Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, SolverError, Stats, Task, Tolerance,
+    Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, SolverError, Stats, Task,
+    Tolerance,
 };
 use stickslip::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
 
@@ -34,8 +35,13 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 5] =
-        [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
+    pub const ALL: [Method; 5] = [
+        Method::CvodeBdf,
+        Method::ArkodeDirk,
+        Method::Radau5,
+        Method::Rodas5p,
+        Method::Extrapolation,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -55,10 +61,17 @@ impl Method {
         options: &Options,
     ) -> Result<Box<dyn Integrator>, SolverError> {
         Ok(match self {
-            Method::CvodeBdf => Box::new(Solver::cvode(system, CvodeSettings::default(), t0, y0, options)?),
-            Method::ArkodeDirk => {
-                Box::new(Solver::arkstep(system, ArkMethod::default(), ArkSettings::default(), t0, y0, options)?)
+            Method::CvodeBdf => {
+                Box::new(Solver::cvode(system, CvodeSettings::default(), t0, y0, options)?)
             }
+            Method::ArkodeDirk => Box::new(Solver::arkstep(
+                system,
+                ArkMethod::default(),
+                ArkSettings::default(),
+                t0,
+                y0,
+                options,
+            )?),
             Method::Radau5 => Box::new(Radau5::new(system, t0, y0, options)?),
             Method::Rodas5p => Box::new(Rodas5p::new(system, t0, y0, options)?),
             Method::Extrapolation => Box::new(Extrapolation::new(system, t0, y0, options)?),
@@ -83,10 +96,17 @@ pub fn run<P: TestProblem>(method: Method, rtol: f64) -> Result<Run, SolverError
     let mut stats = Stats::default();
     let ends = P::BREAKPOINTS.iter().copied().chain(std::iter::once(P::T_END));
     for t1 in ends {
-        let options = Options { stop_time: Some(t1), ..Options::new(rtol, Tolerance::Scalar(P::atol(rtol))) };
+        let options =
+            Options { stop_time: Some(t1), ..Options::new(rtol, Tolerance::Scalar(P::atol(rtol))) };
         let mut solver = method.build(P::new(), t0, &y, &options)?;
         let step = solver.advance(t1, Task::Normal)?;
-        assert_eq!(step.t, t1, "{} {}: the run must end at the segment end", P::NAME, method.name());
+        assert_eq!(
+            step.t,
+            t1,
+            "{} {}: the run must end at the segment end",
+            P::NAME,
+            method.name()
+        );
         y = solver.state().to_vec();
         stats.accumulate(&solver.stats());
         t0 = t1;

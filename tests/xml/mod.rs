@@ -19,21 +19,33 @@ pub fn check_well_formed(xml: &str) -> Result<BTreeMap<String, usize>, String> {
     }
     while !rest.is_empty() {
         if let Some(r) = rest.strip_prefix("<!--") {
-            let end = r.find("-->").ok_or_else(|| format!("unterminated comment at byte {}", offset(rest)))?;
+            let end = r
+                .find("-->")
+                .ok_or_else(|| format!("unterminated comment at byte {}", offset(rest)))?;
             rest = &r[end + 3..];
         } else if let Some(r) = rest.strip_prefix("</") {
-            let end = r.find('>').ok_or_else(|| format!("unterminated end tag at byte {}", offset(rest)))?;
+            let end = r
+                .find('>')
+                .ok_or_else(|| format!("unterminated end tag at byte {}", offset(rest)))?;
             let name = r[..end].trim_end();
             match stack.pop() {
                 Some(open) if open == name => {}
-                Some(open) => return Err(format!("</{name}> at byte {} closes <{open}>", offset(rest))),
+                Some(open) => {
+                    return Err(format!("</{name}> at byte {} closes <{open}>", offset(rest)))
+                }
                 None => return Err(format!("</{name}> at byte {} closes nothing", offset(rest))),
             }
             rest = &r[end + 1..];
         } else if let Some(r) = rest.strip_prefix('<') {
-            let name_end = r.find(|c: char| c.is_whitespace() || c == '>' || c == '/').ok_or("unterminated start tag")?;
+            let name_end = r
+                .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+                .ok_or("unterminated start tag")?;
             let name = &r[..name_end];
-            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == ':' || c == '_') {
+            if name.is_empty()
+                || !name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == ':' || c == '_')
+            {
                 return Err(format!("bad element name {name:?} at byte {}", offset(rest)));
             }
             let mut a = &r[name_end..];
@@ -48,9 +60,12 @@ pub fn check_well_formed(xml: &str) -> Result<BTreeMap<String, usize>, String> {
                     a = t;
                     break false;
                 }
-                let eq = a.find('=').ok_or_else(|| format!("attribute without value in <{name}>"))?;
+                let eq =
+                    a.find('=').ok_or_else(|| format!("attribute without value in <{name}>"))?;
                 let key = a[..eq].trim();
-                if key.is_empty() || key.contains(|c: char| c.is_whitespace() || c == '<' || c == '"') {
+                if key.is_empty()
+                    || key.contains(|c: char| c.is_whitespace() || c == '<' || c == '"')
+                {
                     return Err(format!("bad attribute name {key:?} in <{name}>"));
                 }
                 if seen.contains(&key) {
@@ -58,8 +73,14 @@ pub fn check_well_formed(xml: &str) -> Result<BTreeMap<String, usize>, String> {
                 }
                 seen.push(key);
                 let v = a[eq + 1..].trim_start();
-                let quote = v.chars().next().filter(|&c| c == '"' || c == '\'').ok_or_else(|| format!("unquoted value of {key} in <{name}>"))?;
-                let close = v[1..].find(quote).ok_or_else(|| format!("unterminated value of {key} in <{name}>"))?;
+                let quote = v
+                    .chars()
+                    .next()
+                    .filter(|&c| c == '"' || c == '\'')
+                    .ok_or_else(|| format!("unquoted value of {key} in <{name}>"))?;
+                let close = v[1..]
+                    .find(quote)
+                    .ok_or_else(|| format!("unterminated value of {key} in <{name}>"))?;
                 let value = &v[1..1 + close];
                 if value.contains('<') {
                     return Err(format!("'<' in the value of {key} in <{name}>"));
@@ -107,8 +128,12 @@ fn check_entities(text: &str) -> Result<(), String> {
         let end = r.find(';').ok_or_else(|| format!("'&' without ';' in {text:?}"))?;
         let name = &r[..end];
         let ok = matches!(name, "amp" | "lt" | "gt" | "quot" | "apos")
-            || name.strip_prefix("#x").is_some_and(|h| !h.is_empty() && h.chars().all(|c| c.is_ascii_hexdigit()))
-            || name.strip_prefix('#').is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()));
+            || name
+                .strip_prefix("#x")
+                .is_some_and(|h| !h.is_empty() && h.chars().all(|c| c.is_ascii_hexdigit()))
+            || name
+                .strip_prefix('#')
+                .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()));
         if !ok {
             return Err(format!("unknown entity &{name}; in {text:?}"));
         }

@@ -46,7 +46,8 @@ impl Solout<f64, [f64; 3]> for Probe<'_> {
     where
         I: Interpolation<f64, [f64; 3]> + ?Sized,
     {
-        let dense = |s: f64| interpolator.interpolate(s).map_err(|e| format!("interpolation: {e:?}"));
+        let dense =
+            |s: f64| interpolator.interpolate(s).map_err(|e| format!("interpolation: {e:?}"));
         match self.meter.step(t_curr, *y_curr, dense) {
             Ok(()) => ControlFlag::Continue,
             Err(e) => {
@@ -75,11 +76,14 @@ pub fn run(method: Method, setting: Setting, run: &Run) -> Result<(Measured, Cou
     let problem = IVP::ode(&system, 0.0, run.t_end, run.y0);
     let atol = [run.atol; 3];
     let solution = match (method, setting) {
-        (Method::Radau5, Setting::Default) => {
-            problem.method(ImplicitRungeKutta::radau5().rtol(run.rtol).atol(atol)).solout(probe).solve()
-        }
+        (Method::Radau5, Setting::Default) => problem
+            .method(ImplicitRungeKutta::radau5().rtol(run.rtol).atol(atol))
+            .solout(probe)
+            .solve(),
         (Method::Radau5, Setting::Tuned) => problem
-            .method(ImplicitRungeKutta::radau5().rtol(run.rtol).atol(atol).max_steps(TUNED_MAX_STEPS))
+            .method(
+                ImplicitRungeKutta::radau5().rtol(run.rtol).atol(atol).max_steps(TUNED_MAX_STEPS),
+            )
             .solout(probe)
             .solve(),
         (Method::Bdf, Setting::Default) => problem
@@ -87,7 +91,12 @@ pub fn run(method: Method, setting: Setting, run: &Run) -> Result<(Measured, Cou
             .solout(probe)
             .solve(),
         (Method::Bdf, Setting::Tuned) => problem
-            .method(BackwardDifferentiationFormula::adaptive().rtol(run.rtol).atol(atol).max_steps(TUNED_MAX_STEPS))
+            .method(
+                BackwardDifferentiationFormula::adaptive()
+                    .rtol(run.rtol)
+                    .atol(atol)
+                    .max_steps(TUNED_MAX_STEPS),
+            )
             .solout(probe)
             .solve(),
     }

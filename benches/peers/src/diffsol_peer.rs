@@ -93,7 +93,9 @@ pub fn run(method: Method, setting: Setting, run: &Run) -> Result<(Measured, Cou
         // diffsol builds its dense Jacobian from n = 3 Jacobian–vector products.
         jac: Some(jvp_calls.get() / 3),
         lu: Some(stats.number_of_linear_solver_setups as u64),
-        rejected: Some((stats.number_of_error_test_failures + stats.number_of_nonlinear_solver_fails) as u64),
+        rejected: Some(
+            (stats.number_of_error_test_failures + stats.number_of_nonlinear_solver_fails) as u64,
+        ),
     };
     Ok((measured, counts))
 }

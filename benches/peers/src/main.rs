@@ -54,7 +54,8 @@ pub struct Counts {
     rejected: Option<u64>,
 }
 
-const METHODS: [&str; 5] = ["diffsol-bdf", "diffsol-esdirk34", "diffsol-tr-bdf2", "de-radau5", "de-bdf"];
+const METHODS: [&str; 5] =
+    ["diffsol-bdf", "diffsol-esdirk34", "diffsol-tr-bdf2", "de-radau5", "de-bdf"];
 
 /// What the tuned setting of a method changes.
 fn tuning(method: &str) -> String {
@@ -65,7 +66,10 @@ fn tuning(method: &str) -> String {
             diffsol_peer::TUNED_MAX_FAILURES
         )
     } else {
-        format!("max_steps {:e} (default 1e5 for radau5, 1e4 for BDF)", de_peer::TUNED_MAX_STEPS as f64)
+        format!(
+            "max_steps {:e} (default 1e5 for radau5, 1e4 for BDF)",
+            de_peer::TUNED_MAX_STEPS as f64
+        )
     }
 }
 
@@ -111,8 +115,11 @@ fn main() {
         "tuned" => Setting::Tuned,
         _ => usage(),
     };
-    let num = |i: usize| -> f64 { args[i].parse().ok().filter(|x: &f64| x.is_finite()).unwrap_or_else(|| usage()) };
-    let int = |i: usize| -> usize { args[i].parse().ok().filter(|&n| n >= 1).unwrap_or_else(|| usage()) };
+    let num = |i: usize| -> f64 {
+        args[i].parse().ok().filter(|x: &f64| x.is_finite()).unwrap_or_else(|| usage())
+    };
+    let int =
+        |i: usize| -> usize { args[i].parse().ok().filter(|&n| n >= 1).unwrap_or_else(|| usage()) };
     let (gamma, rtol, atol) = (num(2), num(5), num(6));
     let run = Run {
         drr: model::Drr::new(gamma, num(3), num(4)),

@@ -34,7 +34,11 @@ pub struct Meter {
 
 /// The root of g in [a, b] (g(a) and g(b) of opposite signs, or g(b) = 0) by the Illinois
 /// method, to the resolution of t.
-fn illinois(mut g: impl FnMut(f64) -> Result<f64, String>, (mut a, mut b): (f64, f64), (mut ga, mut gb): (f64, f64)) -> Result<f64, String> {
+fn illinois(
+    mut g: impl FnMut(f64) -> Result<f64, String>,
+    (mut a, mut b): (f64, f64),
+    (mut ga, mut gb): (f64, f64),
+) -> Result<f64, String> {
     let mut side = 0;
     for _ in 0..200 {
         if gb == 0.0 {
@@ -78,7 +82,12 @@ impl Meter {
 
     /// One accepted step ending at (t, y); `dense(s)` is the crate's interpolant at s inside
     /// the step. The first call gives the initial point (no step).
-    pub fn step(&mut self, t: f64, y: [f64; 3], mut dense: impl FnMut(f64) -> Result<[f64; 3], String>) -> Result<(), String> {
+    pub fn step(
+        &mut self,
+        t: f64,
+        y: [f64; 3],
+        mut dense: impl FnMut(f64) -> Result<[f64; 3], String>,
+    ) -> Result<(), String> {
         if y.iter().any(|v| !v.is_finite()) {
             return Err(format!("non-finite state {y:?} at t = {t}"));
         }

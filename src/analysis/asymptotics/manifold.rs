@@ -10,9 +10,9 @@ use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Options, Tolerance};
-use crate::solver::{self, Method};
 use crate::model::slow_manifold::SlowFlow;
 use crate::model::DrrParams;
+use crate::solver::{self, Method};
 use serde::Serialize;
 
 /// A state of the cycle, located in time from the catastrophe t_c (the 3D v maximum).
@@ -112,15 +112,29 @@ fn point(gamma: f64, s: f64, u: f64, w: f64, theta: f64) -> StatePoint {
 
 /// The first k in `range` where `offset(k)` exceeds `threshold`, with the crossing
 /// interpolated linearly from k − 1.
-fn first_exceeding(orbit: &CyclePeriod, gamma: f64, range: std::ops::Range<usize>, threshold: f64, offset: &dyn Fn(usize) -> Option<f64>) -> Option<StatePoint> {
+fn first_exceeding(
+    orbit: &CyclePeriod,
+    gamma: f64,
+    range: std::ops::Range<usize>,
+    threshold: f64,
+    offset: &dyn Fn(usize) -> Option<f64>,
+) -> Option<StatePoint> {
     let mut prev: Option<(usize, f64)> = None;
     for k in range {
         let d = offset(k)?;
         if d > threshold {
-            let Some((j, dj)) = prev else { return Some(point(gamma, orbit.s[k], orbit.u[k], orbit.w[k], orbit.theta[k])) };
+            let Some((j, dj)) = prev else {
+                return Some(point(gamma, orbit.s[k], orbit.u[k], orbit.w[k], orbit.theta[k]));
+            };
             let a = ((threshold - dj) / (d - dj)).clamp(0.0, 1.0);
             let lerp = |x: &[f64]| x[j] + a * (x[k] - x[j]);
-            return Some(point(gamma, lerp(&orbit.s), lerp(&orbit.u), lerp(&orbit.w), lerp(&orbit.theta)));
+            return Some(point(
+                gamma,
+                lerp(&orbit.s),
+                lerp(&orbit.u),
+                lerp(&orbit.w),
+                lerp(&orbit.theta),
+            ));
         }
         prev = Some((k, d));
     }
@@ -128,17 +142,35 @@ fn first_exceeding(orbit: &CyclePeriod, gamma: f64, range: std::ops::Range<usize
 }
 
 /// The manifold analysis of one cycle.
-pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions) -> Result<ManifoldReport, AnalysisError> {
+pub fn analyse(
+    orbit: &CyclePeriod,
+    params: &DrrParams,
+    options: &AsymptoticsOptions,
+) -> Result<ManifoldReport, AnalysisError> {
     let gamma = params.gamma;
     let flow = SlowFlow::new(*params);
     let (rtol, atol) = (options.rtol, options.rtol * 1e-2);
     let y0 = [orbit.s[0], orbit.u[0], orbit.theta[0]];
-    let mut integ = solver::build_default(Method::Radau5, flow, 0.0, &y0, &Options::new(rtol, Tolerance::Scalar(atol)))?;
+    let mut integ = solver::build_default(
+        Method::Radau5,
+        flow,
+        0.0,
+        &y0,
+        &Options::new(rtol, Tolerance::Scalar(atol)),
+    )?;
     let probes = &orbit.s[..=orbit.peak];
     let run: SlowRun = slow_run::run(integ.as_mut(), &flow, 2.0 * orbit.period, probes)?;
 
-    let diff = |k: usize| run.probes[k].map(|p| [orbit.u[k] - p[0], orbit.theta[k] - p[1], orbit.w[k] - p[2]]);
-    let mut dev = StickDeviation { samples: 0, max_abs_ln_v: 0.0, max_abs_u: 0.0, max_abs_theta: 0.0, max_abs_ln_v_times_gamma2: 0.0 };
+    let diff = |k: usize| {
+        run.probes[k].map(|p| [orbit.u[k] - p[0], orbit.theta[k] - p[1], orbit.w[k] - p[2]])
+    };
+    let mut dev = StickDeviation {
+        samples: 0,
+        max_abs_ln_v: 0.0,
+        max_abs_u: 0.0,
+        max_abs_theta: 0.0,
+        max_abs_ln_v_times_gamma2: 0.0,
+    };
     for k in 0..=orbit.up {
         if let Some(d) = diff(k) {
             dev.samples += 1;
@@ -149,18 +181,25 @@ pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOpt
     }
     dev.max_abs_ln_v_times_gamma2 = dev.max_abs_ln_v * gamma * gamma;
 
-    let off_manifold = |k: usize| flow.w(orbit.u[k], orbit.theta[k]).map(|ws| (orbit.w[k] - ws).abs());
-    let leaves_manifold = first_exceeding(orbit, gamma, 0..orbit.peak + 1, options.departure_offset, &off_manifold);
-    let flows_split = first_exceeding(orbit, gamma, 0..orbit.peak + 1, options.departure_offset, &|k| {
-        Some(diff(k).map_or(f64::INFINITY, |d| d[2].abs()))
-    });
+    let off_manifold =
+        |k: usize| flow.w(orbit.u[k], orbit.theta[k]).map(|ws| (orbit.w[k] - ws).abs());
+    let leaves_manifold =
+        first_exceeding(orbit, gamma, 0..orbit.peak + 1, options.departure_offset, &off_manifold);
+    let flows_split =
+        first_exceeding(orbit, gamma, 0..orbit.peak + 1, options.departure_offset, &|k| {
+            Some(diff(k).map_or(f64::INFINITY, |d| d[2].abs()))
+        });
 
     let v_max = orbit.w[orbit.peak].exp();
     let idx3: Vec<usize> = (0..=orbit.down).collect();
     let t3: Vec<f64> = pick(&orbit.s, &idx3);
     let y3: Vec<f64> = idx3.iter().map(|&k| orbit.w[k].exp() / gamma).collect();
     let keep3 = decimate(&t3, &[&y3], options.series_points);
-    let end2 = run.samples.iter().position(|x| x[3].exp() > 10.0 * v_max).map_or(run.samples.len(), |i| i + 1);
+    let end2 = run
+        .samples
+        .iter()
+        .position(|x| x[3].exp() > 10.0 * v_max)
+        .map_or(run.samples.len(), |i| i + 1);
     let t2: Vec<f64> = run.samples[..end2].iter().map(|x| x[0]).collect();
     let y2: Vec<f64> = run.samples[..end2].iter().map(|x| x[3].exp() / gamma).collect();
     let keep2 = decimate(&t2, &[&y2], options.series_points);
@@ -175,8 +214,19 @@ pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOpt
         departure_offset: options.departure_offset,
         leaves_manifold,
         flows_split,
-        integration: SlowIntegration { method: "radau5", rtol, atol, steps: run.steps, tail: run.tail },
-        fig3a: Fig3a { t_3d: pick(&t3, &keep3), v_over_gamma_3d: pick(&y3, &keep3), t_2d: pick(&t2, &keep2), v_over_gamma_2d: pick(&y2, &keep2) },
+        integration: SlowIntegration {
+            method: "radau5",
+            rtol,
+            atol,
+            steps: run.steps,
+            tail: run.tail,
+        },
+        fig3a: Fig3a {
+            t_3d: pick(&t3, &keep3),
+            v_over_gamma_3d: pick(&y3, &keep3),
+            t_2d: pick(&t2, &keep2),
+            v_over_gamma_2d: pick(&y2, &keep2),
+        },
         slow_samples: run.samples,
     })
 }

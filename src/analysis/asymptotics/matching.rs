@@ -160,9 +160,11 @@ fn fit_branch(orbit: &CyclePeriod, params: &DrrParams, idx: &[usize]) -> Option<
         den += ex * ex;
     }
     let c = num / den;
-    let res: Vec<f64> = idx.iter().map(|&i| orbit.theta[i] - matching_theta(xi, e, c, orbit.u[i])).collect();
+    let res: Vec<f64> =
+        idx.iter().map(|&i| orbit.theta[i] - matching_theta(xi, e, c, orbit.u[i])).collect();
     let range = |f: &dyn Fn(usize) -> f64| {
-        idx.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &i| [lo.min(f(i)), hi.max(f(i))])
+        idx.iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &i| [lo.min(f(i)), hi.max(f(i))])
     };
     Some(Branch {
         c,
@@ -228,20 +230,29 @@ pub fn blow_up_integral(xi: f64, epsilon: f64, c: f64, u0: f64) -> Option<f64> {
 }
 
 /// The matching analysis of one cycle. `slow_samples` are the 2D flow's (t − t_c, u, θ, ln v).
-pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions, slow_samples: &[[f64; 4]]) -> MatchingReport {
+pub fn analyse(
+    orbit: &CyclePeriod,
+    params: &DrrParams,
+    options: &AsymptoticsOptions,
+    slow_samples: &[[f64; 4]],
+) -> MatchingReport {
     let (xi, e, gamma) = (params.xi, params.epsilon, params.gamma);
     let flow = SlowFlow::new(*params);
     let ln_v_min = options.matching_v_min.ln();
     let on_manifold = |k: usize| {
-        flow.w(orbit.u[k], orbit.theta[k]).is_some_and(|ws| (orbit.w[k] - ws).abs() <= options.manifold_tolerance)
+        flow.w(orbit.u[k], orbit.theta[k])
+            .is_some_and(|ws| (orbit.w[k] - ws).abs() <= options.manifold_tolerance)
     };
     // Before: the stretch of the rise from v = matching_v_min to where the cycle first leaves S.
     // After: the stretch of the descent on S that ends where v falls below matching_v_min. (The
     // v maximum itself lies on S, dv/dt = 0, but not in the matching regime.)
-    let before_idx: Vec<usize> =
-        (orbit.up..=orbit.peak).skip_while(|&k| orbit.w[k] < ln_v_min).take_while(|&k| on_manifold(k)).collect();
+    let before_idx: Vec<usize> = (orbit.up..=orbit.peak)
+        .skip_while(|&k| orbit.w[k] < ln_v_min)
+        .take_while(|&k| on_manifold(k))
+        .collect();
     let end = (orbit.peak..orbit.down).find(|&k| orbit.w[k] < ln_v_min).unwrap_or(orbit.down);
-    let mut after_idx: Vec<usize> = (orbit.peak + 1..end).rev().take_while(|&k| on_manifold(k)).collect();
+    let mut after_idx: Vec<usize> =
+        (orbit.peak + 1..end).rev().take_while(|&k| on_manifold(k)).collect();
     after_idx.reverse();
     // The descent's last stretch on S before v = 1 (the v maximum itself is on S too).
     let descent_on_manifold_v_max = (orbit.peak + 1..orbit.down)
@@ -283,9 +294,11 @@ pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOpt
         .collect();
 
     // Figure 3b.
-    let (u_lo, u_hi) = orbit.u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &u| (a.min(u), b.max(u)));
+    let (u_lo, u_hi) =
+        orbit.u.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &u| (a.min(u), b.max(u)));
     let theta_range = orbit.theta[imax] - orbit.theta[imin];
-    let (th_lo, th_hi) = (orbit.theta[imin] - 0.5 * theta_range, orbit.theta[imax] + 0.5 * theta_range);
+    let (th_lo, th_hi) =
+        (orbit.theta[imin] - 0.5 * theta_range, orbit.theta[imax] + 0.5 * theta_range);
     let keep = decimate(&orbit.u, &[&orbit.theta], options.series_points);
     let curve = |c: Option<f64>| -> (Vec<f64>, Vec<f64>) {
         let Some(c) = c else { return (vec![], vec![]) };
@@ -299,7 +312,10 @@ pub fn analyse(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOpt
     };
     let (before_u, before_theta) = curve(before.as_ref().map(|b| b.c));
     let (after_u, after_theta) = curve(after.as_ref().map(|b| b.c));
-    let slow: Vec<&[f64; 4]> = slow_samples.iter().take_while(|x| (th_lo..=th_hi).contains(&x[2]) && x[1] <= u_hi + 0.1 * (u_hi - u_lo)).collect();
+    let slow: Vec<&[f64; 4]> = slow_samples
+        .iter()
+        .take_while(|x| (th_lo..=th_hi).contains(&x[2]) && x[1] <= u_hi + 0.1 * (u_hi - u_lo))
+        .collect();
     let su: Vec<f64> = slow.iter().map(|x| x[1]).collect();
     let sth: Vec<f64> = slow.iter().map(|x| x[2]).collect();
     let keep_slow = decimate(&su, &[&sth], options.series_points);

@@ -83,7 +83,8 @@ impl AsymptoticsOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object) and what would be valid.
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let raw: RawOptions = serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
+        let raw: RawOptions =
+            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
         let d = Self::default();
         let o = Self {
             gammas: raw.gammas.unwrap_or(d.gammas),
@@ -97,7 +98,13 @@ impl AsymptoticsOptions {
         };
         let bad = |field: &str, message: String| Err(InvalidOption::new(field, message));
         if o.gammas.is_empty() || o.gammas.len() > 100 {
-            return bad("gammas", format!("has {} values; give 1 to 100 values of γ, e.g. [1e2, 1e4, 1e6, 1e8]", o.gammas.len()));
+            return bad(
+                "gammas",
+                format!(
+                    "has {} values; give 1 to 100 values of γ, e.g. [1e2, 1e4, 1e6, 1e8]",
+                    o.gammas.len()
+                ),
+            );
         }
         if let Some(g) = o.gammas.iter().find(|g| !(g.is_finite() && (1.0..=1e100).contains(*g))) {
             return bad("gammas", format!("{g} is not a γ in [1, 1e100]"));
@@ -108,18 +115,31 @@ impl AsymptoticsOptions {
             return bad("gammas", format!("{} appears twice; give distinct values", w[0]));
         }
         if !(o.fit_min_gamma.is_finite() && o.fit_min_gamma > 0.0) {
-            return bad("fit_min_gamma", format!("{} must be a finite γ > 0, e.g. 1e4", o.fit_min_gamma));
+            return bad(
+                "fit_min_gamma",
+                format!("{} must be a finite γ > 0, e.g. 1e4", o.fit_min_gamma),
+            );
         }
         if !(o.matching_v_min.is_finite() && o.matching_v_min > 1.0) {
-            return bad("matching_v_min", format!("{} must be > 1 (the matching region is 1 ≪ v), e.g. 10", o.matching_v_min));
+            return bad(
+                "matching_v_min",
+                format!("{} must be > 1 (the matching region is 1 ≪ v), e.g. 10", o.matching_v_min),
+            );
         }
-        for (name, x) in [("manifold_tolerance", o.manifold_tolerance), ("departure_offset", o.departure_offset), ("fast_start", o.fast_start)] {
+        for (name, x) in [
+            ("manifold_tolerance", o.manifold_tolerance),
+            ("departure_offset", o.departure_offset),
+            ("fast_start", o.fast_start),
+        ] {
             if !(x > 0.0 && x < 1.0) {
                 return bad(name, format!("{x} must be in (0, 1)"));
             }
         }
         if !(10..=1_000_000).contains(&o.series_points) {
-            return bad("series_points", format!("{} must be between 10 and 1000000", o.series_points));
+            return bad(
+                "series_points",
+                format!("{} must be between 10 and 1000000", o.series_points),
+            );
         }
         if !(1e-14..=1e-6).contains(&o.rtol) {
             return bad("rtol", format!("{} must be in [1e-14, 1e-6], e.g. 1e-12", o.rtol));
@@ -178,9 +198,13 @@ pub fn analyse(
     let scan = scan::run(params, initial, &options.gammas, cycle_at);
     let all = scan::usable(&scan, 0.0);
     let fit = scan::usable(&scan, options.fit_min_gamma);
-    let half_width_3d = cycle.and_then(|c| c.values).and_then(|v| v.slip_half_width).map(|w| w * params.gamma);
-    let spread = cycle.and_then(|c| c.spread).map_or([0.0; 2], |s| [s.v_max, s.slip_half_width.unwrap_or(0.0)]);
-    let slip = slip_scaling::analyse(&fit, orbit.as_ref().ok(), params, options, half_width_3d, spread)?;
+    let half_width_3d =
+        cycle.and_then(|c| c.values).and_then(|v| v.slip_half_width).map(|w| w * params.gamma);
+    let spread = cycle
+        .and_then(|c| c.spread)
+        .map_or([0.0; 2], |s| [s.v_max, s.slip_half_width.unwrap_or(0.0)]);
+    let slip =
+        slip_scaling::analyse(&fit, orbit.as_ref().ok(), params, options, half_width_3d, spread)?;
     let singular = singular_limit::analyse(&all, &fit, params);
     let claims = verdicts::claims(&verdicts::Inputs {
         params,
@@ -231,15 +255,23 @@ pub fn summary(a: &AsymptoticsReport) -> String {
     if let Some(mt) = &a.matching {
         s += &format!(
             "  matching: c before = {}, after = {}; ∫e^−Φ blow-up − t_c = {}\n",
-            mt.before.as_ref().map_or("-".into(), |b| format!("{:.6e} (rms {:.2e})", b.c, b.residual_rms)),
-            mt.after.as_ref().map_or("-".into(), |b| format!("{:.6e} (rms {:.2e})", b.c, b.residual_rms)),
-            mt.predicted_blow_up.as_ref().map_or("-".into(), |p| format!("{:.3e}", p.offset_from_tc))
+            mt.before
+                .as_ref()
+                .map_or("-".into(), |b| format!("{:.6e} (rms {:.2e})", b.c, b.residual_rms)),
+            mt.after
+                .as_ref()
+                .map_or("-".into(), |b| format!("{:.6e} (rms {:.2e})", b.c, b.residual_rms)),
+            mt.predicted_blow_up
+                .as_ref()
+                .map_or("-".into(), |p| format!("{:.3e}", p.offset_from_tc))
         );
     }
     let periodic = a.scan.iter().filter(|r| r.values.is_some()).count();
     let sl = &a.slip_scaling;
     let slope = |f: &slip_scaling::ShiftFit| {
-        f.with_ln_ln.as_ref().map_or("-".into(), |l| format!("{:.4} (+ {:.3} ln ln γ)", l.coefficients[1], l.coefficients[2]))
+        f.with_ln_ln.as_ref().map_or("-".into(), |l| {
+            format!("{:.4} (+ {:.3} ln ln γ)", l.coefficients[1], l.coefficients[2])
+        })
     };
     s += &format!(
         "  γ scan: {} values, {} periodic; per ln γ: u at v_max {} (c_u = {:.4}), θ at v_max {} (c_θ = {:.4}); half-width × γ → {}\n",

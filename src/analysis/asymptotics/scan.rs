@@ -77,7 +77,12 @@ pub fn start(params: &DrrParams, initial: [f64; 3]) -> [f64; 3] {
 }
 
 /// Runs the cycle (by `cycle_at`) at each γ on the model `params`, from [`start`].
-pub fn run(params: &DrrParams, initial: [f64; 3], gammas: &[f64], cycle_at: &mut CycleAt<'_>) -> Vec<ScanRow> {
+pub fn run(
+    params: &DrrParams,
+    initial: [f64; 3],
+    gammas: &[f64],
+    cycle_at: &mut CycleAt<'_>,
+) -> Vec<ScanRow> {
     let start = start(params, initial);
     gammas
         .iter()
@@ -85,11 +90,22 @@ pub fn run(params: &DrrParams, initial: [f64; 3], gammas: &[f64], cycle_at: &mut
             let drr = Drr::new(DrrParams { gamma, ..*params });
             match cycle_at(&drr, start) {
                 Ok(report) => {
-                    let status = serde_json::to_value(report.status).ok().and_then(|v| v.as_str().map(String::from)).unwrap_or_default();
-                    let values = report.values.filter(|_| report.status == CycleStatus::Periodic).map(|c| ScanValues::of(&c, gamma));
+                    let status = serde_json::to_value(report.status)
+                        .ok()
+                        .and_then(|v| v.as_str().map(String::from))
+                        .unwrap_or_default();
+                    let values = report
+                        .values
+                        .filter(|_| report.status == CycleStatus::Periodic)
+                        .map(|c| ScanValues::of(&c, gamma));
                     ScanRow { gamma, status, error: None, values }
                 }
-                Err(e) => ScanRow { gamma, status: "failed".into(), error: Some(e.to_string()), values: None },
+                Err(e) => ScanRow {
+                    gamma,
+                    status: "failed".into(),
+                    error: Some(e.to_string()),
+                    values: None,
+                },
             }
         })
         .collect()
@@ -97,7 +113,11 @@ pub fn run(params: &DrrParams, initial: [f64; 3], gammas: &[f64], cycle_at: &mut
 
 /// The periodic rows with γ ≥ `min_gamma`, in increasing γ.
 pub fn usable(rows: &[ScanRow], min_gamma: f64) -> Vec<(f64, ScanValues)> {
-    let mut v: Vec<(f64, ScanValues)> = rows.iter().filter(|r| r.gamma >= min_gamma).filter_map(|r| r.values.map(|x| (r.gamma, x))).collect();
+    let mut v: Vec<(f64, ScanValues)> = rows
+        .iter()
+        .filter(|r| r.gamma >= min_gamma)
+        .filter_map(|r| r.values.map(|x| (r.gamma, x)))
+        .collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
     v
 }

@@ -81,13 +81,21 @@ pub struct SingularLimitReport {
 
 /// The singular-limit analysis over all periodic scan points (`all`, increasing γ) and the
 /// fit points (γ ≥ fit_min_gamma, `fit`).
-pub fn analyse(all: &[(f64, ScanValues)], fit: &[(f64, ScanValues)], params: &DrrParams) -> SingularLimitReport {
+pub fn analyse(
+    all: &[(f64, ScanValues)],
+    fit: &[(f64, ScanValues)],
+    params: &DrrParams,
+) -> SingularLimitReport {
     let (xi, e) = (params.xi, params.epsilon);
     let l: Vec<f64> = fit.iter().map(|(g, _)| g.ln()).collect();
     let p: Vec<f64> = fit.iter().map(|(_, v)| v.period).collect();
     let local_slopes = all
         .windows(2)
-        .map(|w| LocalSlope { from_gamma: w[0].0, to_gamma: w[1].0, per_decade: (w[1].1.period - w[0].1.period) / (w[1].0 / w[0].0).log10() })
+        .map(|w| LocalSlope {
+            from_gamma: w[0].0,
+            to_gamma: w[1].0,
+            per_decade: (w[1].1.period - w[0].1.period) / (w[1].0 / w[0].0).log10(),
+        })
         .collect();
     let ln_v_max = all
         .iter()
@@ -110,11 +118,20 @@ pub fn analyse(all: &[(f64, ScanValues)], fit: &[(f64, ScanValues)], params: &Dr
             predicted_slope_per_ln_gamma: 2.0 * e / xi,
             predicted_slope_per_decade: 2.0 * e * std::f64::consts::LN_10 / xi,
             linear: least_squares("a + b ln γ", &l, &p, &[&|_| 1.0, &|l| l]),
-            with_ln_ln: least_squares("a + b ln γ + d ln ln γ", &l, &p, &[&|_| 1.0, &|l| l, &|l: f64| l.ln()]),
+            with_ln_ln: least_squares(
+                "a + b ln γ + d ln ln γ",
+                &l,
+                &p,
+                &[&|_| 1.0, &|l| l, &|l: f64| l.ln()],
+            ),
             local_slopes,
         },
         ln_v_max,
         half_width_predicted_limit: 2.0 * std::f64::consts::PI / 3.0,
-        invariants: vec![invariant("t0", |v| v.t0), invariant("u_min", |v| v.u_min), invariant("theta_max", |v| v.theta_max)],
+        invariants: vec![
+            invariant("t0", |v| v.t0),
+            invariant("u_min", |v| v.u_min),
+            invariant("theta_max", |v| v.theta_max),
+        ],
     }
 }

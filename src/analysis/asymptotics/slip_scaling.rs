@@ -13,15 +13,15 @@
 
 use super::scan::ScanValues;
 use super::AsymptoticsOptions;
+use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::events::{self, Knot};
 use crate::analysis::fit::{least_squares, power_limit, Fit, PowerLimit};
-use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Integrator, Options, SolverError, Task, Tolerance};
-use crate::solver::{self, Method};
 use crate::model::fast_slip::{shifts, FastSlip};
 use crate::model::DrrParams;
+use crate::solver::{self, Method};
 use serde::Serialize;
 
 /// Fits of a quantity at the v maximum against ln γ.
@@ -113,18 +113,28 @@ pub struct SlipScalingReport {
     pub fast_system_note: Option<String>,
 }
 
-fn shift_fit(points: &[(f64, ScanValues)], predicted_slope: f64, get: fn(&ScanValues) -> f64) -> ShiftFit {
+fn shift_fit(
+    points: &[(f64, ScanValues)],
+    predicted_slope: f64,
+    get: fn(&ScanValues) -> f64,
+) -> ShiftFit {
     let l: Vec<f64> = points.iter().map(|(g, _)| g.ln()).collect();
     let y: Vec<f64> = points.iter().map(|(_, v)| get(v)).collect();
     ShiftFit {
         predicted_slope,
         linear: least_squares("a + b ln γ", &l, &y, &[&|_| 1.0, &|l| l]),
-        with_ln_ln: least_squares("a + b ln γ + d ln ln γ", &l, &y, &[&|_| 1.0, &|l| l, &|l: f64| l.ln()]),
+        with_ln_ln: least_squares(
+            "a + b ln γ + d ln ln γ",
+            &l,
+            &y,
+            &[&|_| 1.0, &|l| l, &|l: f64| l.ln()],
+        ),
     }
 }
 
 fn half_width_limit(points: &[(f64, ScanValues)]) -> HalfWidthLimit {
-    let with: Vec<(f64, f64)> = points.iter().filter_map(|(g, v)| v.half_width_times_gamma.map(|h| (g.ln(), h))).collect();
+    let with: Vec<(f64, f64)> =
+        points.iter().filter_map(|(g, v)| v.half_width_times_gamma.map(|h| (g.ln(), h))).collect();
     let fit_of = |p: &[(f64, f64)]| {
         let (l, y): (Vec<f64>, Vec<f64>) = p.iter().copied().unzip();
         power_limit("a + b (ln γ)^(−p)", &l, &y)
@@ -145,7 +155,12 @@ fn half_width_limit(points: &[(f64, ScanValues)]) -> HalfWidthLimit {
 }
 
 /// Bisection inside the last step for a sign change of g(dense(t, k)).
-fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), k: u32, g: &dyn Fn(&[f64]) -> f64) -> Result<f64, SolverError> {
+fn bisect(
+    integ: &mut dyn Integrator,
+    (mut a, mut b): (f64, f64),
+    k: u32,
+    g: &dyn Fn(&[f64]) -> f64,
+) -> Result<f64, SolverError> {
     let ga = g(integ.dense(a, k)?) > 0.0;
     for _ in 0..200 {
         let m = 0.5 * (a + b);
@@ -163,19 +178,37 @@ fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), k: u32, g: &dy
 
 /// The fast system on the scene's cycle; [`AnalysisError::NotApplicable`] when it cannot be
 /// started or finds no peak (a note in the report).
-fn fast_check(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOptions, half_width_3d: Option<f64>, spread_3d: [f64; 2]) -> Result<FastCheck, AnalysisError> {
+fn fast_check(
+    orbit: &CyclePeriod,
+    params: &DrrParams,
+    options: &AsymptoticsOptions,
+    half_width_3d: Option<f64>,
+    spread_3d: [f64; 2],
+) -> Result<FastCheck, AnalysisError> {
     let not_applicable = |reason: String| AnalysisError::NotApplicable { reason };
     let Some(fast) = FastSlip::new(params) else {
-        return Err(not_applicable(format!("the fast system needs f = ln v; this scene's friction is {}", params.friction.label())));
+        return Err(not_applicable(format!(
+            "the fast system needs f = ln v; this scene's friction is {}",
+            params.friction.label()
+        )));
     };
     let gamma = params.gamma;
     let level = (options.fast_start * gamma).ln();
     let Some(k0) = (orbit.up..orbit.peak).find(|&k| orbit.w[k] >= level) else {
-        return Err(not_applicable(format!("the rise has no step end with v/γ ≥ {} before the peak", options.fast_start)));
+        return Err(not_applicable(format!(
+            "the rise has no step end with v/γ ≥ {} before the peak",
+            options.fast_start
+        )));
     };
     let z0 = fast.to_fast(gamma, &orbit.state(k0));
     let t0 = gamma * orbit.s[k0];
-    let mut integ = solver::build_default(Method::Radau5, fast, t0, &z0, &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)))?;
+    let mut integ = solver::build_default(
+        Method::Radau5,
+        fast,
+        t0,
+        &z0,
+        &Options::new(options.rtol, Tolerance::Scalar(options.rtol * 1e-2)),
+    )?;
     let mut d0 = [0.0; 3];
     crate::integrate::OdeSystem::rhs(&fast, t0, &z0, &mut d0);
     let mut knots = vec![Knot { t: t0, x: z0[1], dx: d0[1] }];
@@ -235,7 +268,12 @@ fn fast_check(orbit: &CyclePeriod, params: &DrrParams, options: &AsymptoticsOpti
         u_theta_at_v_max_fast: [zp[0], zp[2]],
         u_theta_at_v_max_3d: [orbit.u[orbit.peak] - cu * l, orbit.theta[orbit.peak] - ct * l],
         steps,
-        fig4: Fig4 { t_3d: pick(&t3, &keep3), v_3d: pick(&v3, &keep3), t_fast: pick(&tf, &keepf), v_fast: pick(&vf, &keepf) },
+        fig4: Fig4 {
+            t_3d: pick(&t3, &keep3),
+            v_3d: pick(&v3, &keep3),
+            t_fast: pick(&tf, &keepf),
+            v_fast: pick(&vf, &keepf),
+        },
     })
 }
 

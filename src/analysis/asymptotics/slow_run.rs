@@ -28,7 +28,11 @@ fn w_of(flow: &SlowFlow, y: &[f64]) -> f64 {
 }
 
 /// Finds s in [a, b] (inside the last step) where `g(dense(s))` changes sign, by bisection.
-fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), g: &dyn Fn(&[f64]) -> f64) -> Result<f64, SolverError> {
+fn bisect(
+    integ: &mut dyn Integrator,
+    (mut a, mut b): (f64, f64),
+    g: &dyn Fn(&[f64]) -> f64,
+) -> Result<f64, SolverError> {
     let mut ga = g(integ.dense(a, 0)?);
     for _ in 0..200 {
         let m = 0.5 * (a + b);
@@ -50,14 +54,27 @@ fn bisect(integ: &mut dyn Integrator, (mut a, mut b): (f64, f64), g: &dyn Fn(&[f
 /// t(). Stops at the blow-up — when v > 1e6 and the remaining time, bounded by
 /// 1/(v · d ln v/ds) (d ln v/ds grows on the blow-up), is below 1e-16 of |t| — or after
 /// `max_time` of t. `probe_times` must be increasing.
-pub fn run(integ: &mut dyn Integrator, flow: &SlowFlow, max_time: f64, probe_times: &[f64]) -> Result<SlowRun, AnalysisError> {
+pub fn run(
+    integ: &mut dyn Integrator,
+    flow: &SlowFlow,
+    max_time: f64,
+    probe_times: &[f64],
+) -> Result<SlowRun, AnalysisError> {
     let y = integ.state().to_vec();
     let t_start = y[T];
     let mut prev = (integ.t(), y);
-    let mut out = SlowRun { samples: vec![], t_up: None, t_c: None, tail: None, probes: vec![None; probe_times.len()], steps: 0 };
+    let mut out = SlowRun {
+        samples: vec![],
+        t_up: None,
+        t_c: None,
+        tail: None,
+        probes: vec![None; probe_times.len()],
+        steps: 0,
+    };
     let w0 = w_of(flow, &prev.1);
     out.samples.push([prev.1[T], prev.1[U], prev.1[THETA], w0]);
-    let mut next_probe = probe_times.iter().position(|&t| t >= t_start).unwrap_or(probe_times.len());
+    let mut next_probe =
+        probe_times.iter().position(|&t| t >= t_start).unwrap_or(probe_times.len());
     loop {
         let step = integ.advance(prev.0 + 1e6, Task::OneStep)?;
         out.steps += 1;
@@ -157,7 +174,10 @@ mod tests {
             let predicted = matching_time(matching_c(xi, e, u0, theta0), u0);
             // The matching flow neglects the −1 in du/dt: relative error O(1/v0).
             // (plus the integration's absolute tolerance on t, 1e-13 per step)
-            assert!((t_c - predicted).abs() < 2.0 * predicted / v0 + 1e-11, "c = {c}: t_c {t_c} vs ∫e^−Φ {predicted} (v0 {v0})");
+            assert!(
+                (t_c - predicted).abs() < 2.0 * predicted / v0 + 1e-11,
+                "c = {c}: t_c {t_c} vs ∫e^−Φ {predicted} (v0 {v0})"
+            );
         }
         // c > K e^{−εu} > 0 (c then grows, dc/dt = ε(c − K e^{−εu}) on the 2D flow): θ outruns
         // −ξu, v falls from e^{4.4} below 1 and there is no blow-up.
@@ -181,12 +201,19 @@ mod tests {
         assert!(t_up > 10.0 && t_c > t_up && t_c - t_up < 2.0, "t_up {t_up}, t_c {t_c}");
         // Each probe agrees with an independent integrator (CVODE BDF) on the same flow.
         let options = Options::new(1e-12, Tolerance::Scalar(1e-13));
-        let settings = crate::sundials::CvodeSettings { method: crate::sundials::CvodeMethod::Bdf, stability_limit_detection: false };
-        let mut cvode = crate::sundials::Solver::cvode(flow(), settings, 0.0, &y0, &options).unwrap();
+        let settings = crate::sundials::CvodeSettings {
+            method: crate::sundials::CvodeMethod::Bdf,
+            stability_limit_detection: false,
+        };
+        let mut cvode =
+            crate::sundials::Solver::cvode(flow(), settings, 0.0, &y0, &options).unwrap();
         let other = run(&mut cvode, &flow(), 100.0, &probes).unwrap();
         for (a, b) in r.probes.iter().zip(&other.probes) {
             let (a, b) = (a.unwrap(), b.unwrap());
-            assert!((0..3).all(|i| (a[i] - b[i]).abs() < 1e-8 * (1.0 + a[i].abs())), "{a:?} vs {b:?}");
+            assert!(
+                (0..3).all(|i| (a[i] - b[i]).abs() < 1e-8 * (1.0 + a[i].abs())),
+                "{a:?} vs {b:?}"
+            );
         }
         assert!((other.t_c.unwrap() - t_c).abs() < 1e-8 * t_c, "{} vs {t_c}", other.t_c.unwrap());
         assert!((other.t_up.unwrap() - t_up).abs() < 1e-8 * t_up);

@@ -65,7 +65,10 @@ fn manifold_claims(m: &ManifoldReport, i: &Inputs, out: &mut Vec<Claim>) {
             offset,
             tol,
             "5 % of t0, the time scale of the final acceleration",
-            format!("2D flow from the 3D cycle's v minimum; t0(2D) = {:?}, t0(3D) = {:.6}", m.t0_2d, m.t0_3d),
+            format!(
+                "2D flow from the 3D cycle's v minimum; t0(2D) = {:?}, t0(3D) = {:.6}",
+                m.t0_2d, m.t0_3d
+            ),
         )),
         None => out.push(Claim::absolute(
             "the 2D slow flow blows up in finite time at the end of the stick: t_c(2D) − t_c = 0",
@@ -74,7 +77,8 @@ fn manifold_claims(m: &ManifoldReport, i: &Inputs, out: &mut Vec<Claim>) {
             m.followed_until,
             tol,
             "5 % of t0",
-            "NO blow-up of the 2D flow within two periods; ours is a lower bound on the offset".into(),
+            "NO blow-up of the 2D flow within two periods; ours is a lower bound on the offset"
+                .into(),
         )),
     }
     if let (Some(t0_2d), Some((g, last))) = (m.t0_2d, i.all.last()) {
@@ -110,7 +114,10 @@ fn matching_claims(m: &MatchingReport, t0: f64, out: &mut Vec<Claim>) {
             "finite-time condition: c < 0 on the matching curve before the catastrophe",
             Source::Paper,
             b.c,
-            format!("least-squares c over {} step ends with v in [{:.3e}, {:.3e}] on S", b.points, b.v_range[0], b.v_range[1]),
+            format!(
+                "least-squares c over {} step ends with v in [{:.3e}, {:.3e}] on S",
+                b.points, b.v_range[0], b.v_range[1]
+            ),
         ));
     }
     if m.after.is_none() {
@@ -159,7 +166,10 @@ fn matching_claims(m: &MatchingReport, t0: f64, out: &mut Vec<Claim>) {
             d.at_theta_max.abs().max(d.at_theta_min.abs()),
             0.05 * m.theta_range,
             "5 % of the cycle's θ range: visibly on the line in Fig. 3b",
-            format!("θ − line(u) at the θ maximum {:.4}, at the θ minimum {:.4}", d.at_theta_max, d.at_theta_min),
+            format!(
+                "θ − line(u) at the θ maximum {:.4}, at the θ minimum {:.4}",
+                d.at_theta_max, d.at_theta_min
+            ),
         )
     };
     out.push(line_claim(
@@ -167,7 +177,11 @@ fn matching_claims(m: &MatchingReport, t0: f64, out: &mut Vec<Claim>) {
         Source::Paper,
         "the zero-acceleration line, as printed εθ = (1+ε)u − ξ, joins the two θ extrema of the cycle",
     ));
-    out.push(line_claim(ZERO_ACCELERATION, Source::Prediction, "the derived zero-acceleration line εθ = −(1+ε)ξu − ξ joins the two θ extrema"));
+    out.push(line_claim(
+        ZERO_ACCELERATION,
+        Source::Prediction,
+        "the derived zero-acceleration line εθ = −(1+ε)ξu − ξ joins the two θ extrema",
+    ));
     let d = &m.extrema_distances[THETA_EXTREMA];
     out.push(Claim::absolute(
         "the stick's θ maximum lies on εθ = −(1+ε)ξu (dθ/dt = 0 on S)",
@@ -181,9 +195,13 @@ fn matching_claims(m: &MatchingReport, t0: f64, out: &mut Vec<Claim>) {
 }
 
 fn slip_claims(s: &SlipScalingReport, out: &mut Vec<Claim>) {
-    for (fit, name, c) in [(&s.u_at_v_max, "u", "c_u = ε/ξ"), (&s.theta_at_v_max, "θ", "c_θ = −(1+ε)")] {
+    for (fit, name, c) in
+        [(&s.u_at_v_max, "u", "c_u = ε/ξ"), (&s.theta_at_v_max, "θ", "c_θ = −(1+ε)")]
+    {
         if let Some(f) = &fit.with_ln_ln {
-            let linear = fit.linear.as_ref().map_or("-".into(), |l| format!("{:.4} (rms {:.1e})", l.coefficients[1], l.residual_rms));
+            let linear = fit.linear.as_ref().map_or("-".into(), |l| {
+                format!("{:.4} (rms {:.1e})", l.coefficients[1], l.residual_rms)
+            });
             out.push(Claim::relative(
                 &format!("{name} at the v maximum moves by {c} per unit ln γ"),
                 Source::Paper,
@@ -199,7 +217,9 @@ fn slip_claims(s: &SlipScalingReport, out: &mut Vec<Claim>) {
     }
     let h = &s.half_width;
     if let (Some(at), Some(gamma)) = (h.at_largest_gamma, h.largest_gamma) {
-        let limit = h.fit.as_ref().map_or("no power-law fit".into(), |f| format!("extrapolated limit {:.5} (exponent {:.2})", f.limit, f.exponent));
+        let limit = h.fit.as_ref().map_or("no power-law fit".into(), |f| {
+            format!("extrapolated limit {:.5} (exponent {:.2})", f.limit, f.exponent)
+        });
         out.push(Claim::relative(
             "the slip half-width is about 2.5/γ \"in a wide range of parameters\" (half-width × γ at the largest γ)",
             Source::Paper,
@@ -268,7 +288,8 @@ fn singular_claims(sl: &SingularLimitReport, i: &Inputs, out: &mut Vec<Claim>) {
         ));
     }
     let fig1 = i.params.friction == Friction::Log && i.params.xi == 0.7 && i.params.epsilon == 0.72;
-    let paper_range: Vec<&(f64, ScanValues)> = i.all.iter().filter(|(g, _)| (10.0..=1e4).contains(g)).collect();
+    let paper_range: Vec<&(f64, ScanValues)> =
+        i.all.iter().filter(|(g, _)| (10.0..=1e4).contains(g)).collect();
     if fig1 && paper_range.len() >= 2 {
         let x: Vec<f64> = paper_range.iter().map(|(g, _)| g.log10()).collect();
         let y: Vec<f64> = paper_range.iter().map(|(_, v)| v.period).collect();
@@ -284,7 +305,11 @@ fn singular_claims(sl: &SingularLimitReport, i: &Inputs, out: &mut Vec<Claim>) {
         }
     }
     if let Some(last) = sl.ln_v_max.last() {
-        let trend: Vec<String> = sl.ln_v_max.iter().map(|r| format!("{:+.3} (γ = {:e})", r.difference, r.gamma)).collect();
+        let trend: Vec<String> = sl
+            .ln_v_max
+            .iter()
+            .map(|r| format!("{:+.3} (γ = {:e})", r.difference, r.gamma))
+            .collect();
         out.push(Claim::absolute(
             "ln v_max ≈ ln γ + ln ln γ + ln(ε/ξ)",
             Source::Prediction,

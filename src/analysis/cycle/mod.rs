@@ -311,7 +311,6 @@ fn first_sample(drr: &Drr, t: f64, y: [f64; 3]) -> Sample {
 }
 
 impl<'a> Tracker<'a> {
-
     fn state_at(&mut self, t: f64) -> Result<[f64; 3], SolverError> {
         let y = self.clock.integrator().dense(t, 0)?;
         Ok([y[0], y[1], y[2]])
@@ -335,14 +334,20 @@ impl<'a> Tracker<'a> {
         }
         for i in [U, THETA] {
             if (p.d[i] > 0.0) != (next.d[i] > 0.0) {
-                found.push((events::refine(self.clock.integrator(), span, 1, i, 0.0)?, Event::Extremum(i)));
+                found.push((
+                    events::refine(self.clock.integrator(), span, 1, i, 0.0)?,
+                    Event::Extremum(i),
+                ));
             }
         }
         if let Some(c) = &self.open {
             if let (Some(_), None) = (c.peak, c.half_fall) {
                 let level = c.w_max - std::f64::consts::LN_2;
                 if p.y[W] >= level && next.y[W] < level {
-                    found.push((events::refine(self.clock.integrator(), span, 0, W, level)?, Event::HalfFall));
+                    found.push((
+                        events::refine(self.clock.integrator(), span, 0, W, level)?,
+                        Event::HalfFall,
+                    ));
                 }
             }
         }
@@ -391,7 +396,8 @@ impl<'a> Tracker<'a> {
                     u_range: (y[U], y[U]),
                     theta_range: (y[THETA], y[THETA]),
                     steps_at_start: self.steps,
-                    trajectory: (self.settings.trajectory_cycles > 0).then(TrajectoryCycle::default),
+                    trajectory: (self.settings.trajectory_cycles > 0)
+                        .then(TrajectoryCycle::default),
                 };
                 if let Some(tr) = &mut c.trajectory {
                     tr.push(0.0, &y);
@@ -427,7 +433,8 @@ impl<'a> Tracker<'a> {
                 let level = y[W] - std::f64::consts::LN_2;
                 let mut knots: Vec<Knot> = self.rise.iter().copied().filter(|k| k.t < t).collect();
                 knots.push(Knot { t, x: y[W], dx: 0.0 });
-                c.half_rise = events::last_upward_crossing(&knots, level).map(|tr| self.clock.global(tr).since(c.up));
+                c.half_rise = events::last_upward_crossing(&knots, level)
+                    .map(|tr| self.clock.global(tr).since(c.up));
                 c.half_fall = None;
                 self.rebase_in_rise = false;
                 return Ok(true);
@@ -455,7 +462,8 @@ impl<'a> Tracker<'a> {
         // crossed the hold) is the cycle's ln v_min.
         let (lowest, t_lowest) = stick.lowest;
         if t_lowest > 0.0 {
-            let at_lowest = [y[U] - t_lowest, lowest, -(self.drr.params().xi * (y[U] - t_lowest) + lowest)];
+            let at_lowest =
+                [y[U] - t_lowest, lowest, -(self.drr.params().xi * (y[U] - t_lowest) + lowest)];
             self.update_ranges(&at_lowest);
             self.record(self.prev.t + t_lowest, &at_lowest);
         }
@@ -613,7 +621,9 @@ impl<'a> Tracker<'a> {
         // slip, at orders 1–4. Measured (cvode-bdf, γ = 1e12, ξ = 2, ε = 5, rtol 1e-10): the
         // period's error against radau5 goes from 1.0e-7 to 6.4e-8, the restarts from 45 to 40
         // in 5 cycles (docs/robustness.md).
-        let mut rebase = after_peak && !self.clock.rebase_restarts() && self.restart_safe(&next.y, self.rise_rate);
+        let mut rebase = after_peak
+            && !self.clock.rebase_restarts()
+            && self.restart_safe(&next.y, self.rise_rate);
         // When f is not resolved anywhere in the rise before the steps reach the clock's
         // resolution (e.g. γ = 1e12 at rtol 1e-10), re-base anyway once they come within 1e4
         // ulps of it: a restart may fail there, staying would.
@@ -679,12 +689,16 @@ fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize
     if closed.last().is_none_or(|c| c.ln_v_max - c.ln_v_min < noise_floor(settings)) {
         return None;
     }
-    let lagged = |n: usize, tol: f64| (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], tol));
+    let lagged = |n: usize, tol: f64| {
+        (0..settings.settle).all(|j| agree(&closed[k - 1 - j], &closed[k - 1 - j - n], tol))
+    };
     let distinct = DISTINCT_CYCLES.min(100.0 * settings.tolerance);
     (1..=4).find(|&n| {
         k > settings.settle.saturating_add(n)
             && lagged(n, settings.tolerance)
-            && (n == 1 || (0..settings.settle).all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], distinct)))
+            && (n == 1
+                || (0..settings.settle)
+                    .all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], distinct)))
     })
 }
 
@@ -709,7 +723,9 @@ fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: b
     }
     let n = settings.settle.saturating_mul(2).saturating_add(1);
     closed.len() >= n
-        && closed[closed.len() - n..].windows(2).all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
+        && closed[closed.len() - n..]
+            .windows(2)
+            .all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
 }
 
 /// Applies `f` to every real-valued field of a set of cycles, building one CycleValues.
@@ -746,9 +762,14 @@ fn mean(x: &[f64]) -> f64 {
 }
 
 fn relative_spread(x: &[f64]) -> f64 {
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    let (lo, hi) =
+        x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let m = mean(x).abs();
-    if m > 0.0 { (hi - lo) / m } else { hi - lo }
+    if m > 0.0 {
+        (hi - lo) / m
+    } else {
+        hi - lo
+    }
 }
 
 /// Integrates from the integrator's current state until the limit cycle is reached (or the
@@ -830,7 +851,8 @@ pub fn analyse(
     let time_integrated = tracker.clock.now().since(t_start);
     let (deep_sticks, fixed_point_escapes) = (tracker.deep_sticks, tracker.escapes);
     let closed = tracker.closed;
-    let n = periodicity(&closed, settings).filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
+    let n = periodicity(&closed, settings)
+        .filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
     let (values, spread, orbit, used) = match (outcome, n) {
         (CycleStatus::Periodic, _) => {
             let used = &closed[closed.len() - (settings.settle + 1)..];
@@ -844,8 +866,11 @@ pub fn analyse(
         _ => (None, None, Vec::new(), 0),
     };
     let orbit_period = (!orbit.is_empty()).then(|| orbit.iter().map(|c| c.period).sum::<f64>());
-    let last_cycles =
-        if values.is_none() && orbit.is_empty() { closed[closed.len().saturating_sub(10)..].to_vec() } else { Vec::new() };
+    let last_cycles = if values.is_none() && orbit.is_empty() {
+        closed[closed.len().saturating_sub(10)..].to_vec()
+    } else {
+        Vec::new()
+    };
     Ok(CycleReport {
         status: outcome,
         converged: matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN),
@@ -910,23 +935,30 @@ mod tests {
         let mut cycles = vec![cycle(20.0, 5.0, -2.0), cycle(19.0, 4.9, -2.0)];
         cycles.extend((0..4).map(|k| cycle(18.0 + 1e-9 * k as f64, 4.8, -2.0)));
         assert_eq!(periodicity(&cycles, &settings()), Some(1));
-        assert_eq!(periodicity(&cycles[..4], &settings()), None, "needs settle + 1 agreeing cycles");
+        assert_eq!(
+            periodicity(&cycles[..4], &settings()),
+            None,
+            "needs settle + 1 agreeing cycles"
+        );
     }
 
     #[test]
     fn alternating_cycles_are_period_two_and_never_averaged() {
-        let cycles: Vec<CycleValues> =
-            (0..8).map(|k| if k % 2 == 0 { cycle(10.0, 3.0, -1.0) } else { cycle(12.0, 3.5, -1.2) }).collect();
+        let cycles: Vec<CycleValues> = (0..8)
+            .map(|k| if k % 2 == 0 { cycle(10.0, 3.0, -1.0) } else { cycle(12.0, 3.5, -1.2) })
+            .collect();
         assert_eq!(periodicity(&cycles, &settings()), Some(2));
-        let three: Vec<CycleValues> = (0..9).map(|k| cycle(10.0 + (k % 3) as f64, 3.0, -1.0)).collect();
+        let three: Vec<CycleValues> =
+            (0..9).map(|k| cycle(10.0 + (k % 3) as f64, 3.0, -1.0)).collect();
         assert_eq!(periodicity(&three, &settings()), Some(3));
     }
 
     #[test]
     fn noise_around_a_period_one_orbit_is_not_period_two() {
         // Lag-2 agreement by chance, lag-1 differences of only a few tolerances.
-        let noisy: Vec<CycleValues> =
-            (0..8).map(|k| cycle(18.0 * (1.0 + if k % 2 == 0 { 0.0 } else { 3e-7 }), 4.8, -2.0)).collect();
+        let noisy: Vec<CycleValues> = (0..8)
+            .map(|k| cycle(18.0 * (1.0 + if k % 2 == 0 { 0.0 } else { 3e-7 }), 4.8, -2.0))
+            .collect();
         assert_eq!(periodicity(&noisy, &settings()), None);
     }
 
@@ -939,17 +971,27 @@ mod tests {
         assert!(growth(escape.near) > 1.0 && growth(0.59) < 1.0, "{escape:?}");
         assert_eq!(escape.elsewhere, Some(0.59));
         // Two real unstable eigenvalues: the faster one sets the step.
-        assert_eq!(EscapeStep::for_eigenvalues(&[[4.0, 0.0], [0.05, 0.0]], None).unwrap().near, 0.25);
-        assert_eq!(EscapeStep::for_eigenvalues(&[[-1.0, 0.0], [-0.1, 2.0], [-0.1, -2.0]], None), None);
+        assert_eq!(
+            EscapeStep::for_eigenvalues(&[[4.0, 0.0], [0.05, 0.0]], None).unwrap().near,
+            0.25
+        );
+        assert_eq!(
+            EscapeStep::for_eigenvalues(&[[-1.0, 0.0], [-0.1, 2.0], [-0.1, -2.0]], None),
+            None
+        );
     }
 
     #[test]
     fn a_shrinking_oscillation_is_recognised_only_at_a_stable_fixed_point() {
-        let shrinking: Vec<CycleValues> = (0..8).map(|k| cycle(7.0, 0.5 * 0.8f64.powi(k), -0.5 * 0.8f64.powi(k))).collect();
+        let shrinking: Vec<CycleValues> =
+            (0..8).map(|k| cycle(7.0, 0.5 * 0.8f64.powi(k), -0.5 * 0.8f64.powi(k))).collect();
         assert!(decaying(&shrinking, &settings(), true));
         assert!(!decaying(&shrinking, &settings(), false));
         assert!(decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), true));
-        assert!(!decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), false), "near an unstable fixed point it is growing");
+        assert!(
+            !decaying(&[cycle(7.0, 1e-10, 0.0)], &settings(), false),
+            "near an unstable fixed point it is growing"
+        );
     }
 
     #[test]

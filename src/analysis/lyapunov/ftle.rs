@@ -31,18 +31,18 @@
 //! Checked against finite differences of the Poincaré map (tests/lyapunov.rs): at γ = 1e4,
 //! ξ = 0.8, ε = 1, ln |μ₂| = −17.65 both ways, where shooting's section Jacobian gives −16.2.
 
+use super::VariationalFactory;
 use crate::analysis::cycle::restart_safe;
-use crate::analysis::events;
 use crate::analysis::cycle_period::CyclePeriod;
+use crate::analysis::events;
 use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Clock, Time};
 use crate::model::drr::{Drr, W};
-use crate::model::Variational;
 use crate::model::DrrParams;
+use crate::model::Variational;
 use crate::solver::{Method, SolverSpec};
-use super::VariationalFactory;
 use nalgebra::{Matrix3x2, Vector3};
 use serde::Serialize;
 
@@ -159,7 +159,8 @@ pub fn analyse(
 ) -> Result<FtleReport, AnalysisError> {
     let drr = Drr::new(p);
     let start = orbit.state(orbit.peak);
-    let spec = SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..solver.clone() };
+    let spec =
+        SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..solver.clone() };
     let mut integ = variational(drr, &spec, &start)?;
     let w_tol = (solver.rtol, solver.atol[1]);
     let floor = 1e-9f64.max(1e3 * (w_tol.0 + w_tol.1));
@@ -201,7 +202,10 @@ pub fn analyse(
         let y = first3(&z);
         let d = first3(clock.integrator().dense(step.t, 1)?);
         if z.iter().chain(&d).any(|x| !x.is_finite()) {
-            return Err(failure(&clock, "the state, the tangent frame or dy/dt became non-finite".into()));
+            return Err(failure(
+                &clock,
+                "the state, the tangent frame or dy/dt became non-finite".into(),
+            ));
         }
         if steps > 20_000_000 {
             return Err(failure(&clock, "2e7 steps without completing the FTLE periods".into()));
@@ -210,7 +214,10 @@ pub fn analyse(
         quad += (step.t - prev.t) / 6.0 * (fprime(prev.y[W]) + 4.0 * fprime(mid) + fprime(y[W]));
         let (now, _) = reorthonormalise(&z, &d, f_norm);
         if per_period.len() + 1 == periods {
-            series.push((clock.global(step.t).since(period_t0), [logs[0] + now[0], logs[1] + now[1]]));
+            series.push((
+                clock.global(step.t).since(period_t0),
+                [logs[0] + now[0], logs[1] + now[1]],
+            ));
         }
         if prev.y[W] >= 0.0 && y[W] < 0.0 {
             down_seen = true;
@@ -223,7 +230,8 @@ pub fn analyse(
         // interpolant); the other cuts are made at step ends.
         let cut = if down_seen && prev.d[W] > 0.0 && d[W] <= 0.0 && y[W] > floor {
             Some((events::refine(clock.integrator(), (prev.t, step.t), 1, W, 0.0)?, true))
-        } else if (stage == 0 && y[W] <= descent_level && safe) || (stage == 1 && down_seen && safe) {
+        } else if (stage == 0 && y[W] <= descent_level && safe) || (stage == 1 && down_seen && safe)
+        {
             stage += 1;
             Some((step.t, false))
         } else if stage == 2 && drifting {
@@ -259,7 +267,8 @@ pub fn analyse(
             let trace_integral = -dw - du - elapsed - p.gamma * p.gamma / p.xi * quad;
             per_period.push(PeriodLogs { time: elapsed, ln_r: logs, trace_integral });
             total_time += elapsed;
-            (period_t0, logs, quad, period_start, down_seen, stage) = (at, [0.0; 2], 0.0, yc, false, first_stage(yc[W]));
+            (period_t0, logs, quad, period_start, down_seen, stage) =
+                (at, [0.0; 2], 0.0, yc, false, first_stage(yc[W]));
         }
         clock.reinit(at, &restart)?;
         prev = Sample { t: 0.0, y: yc, d: vc };
@@ -272,10 +281,11 @@ pub fn analyse(
     let r11: Vec<f64> = series.iter().map(|(_, l)| l[0]).collect();
     let r22: Vec<f64> = series.iter().map(|(_, l)| l[1]).collect();
     let keep = decimate(&t, &[&r11, &r22], series_points);
-    let (floquet, floquet_note) = match floquet_link(solver, variational, &drr, orbit, &per_period, &exponents) {
-        Ok(f) => (Some(f), None),
-        Err(why) => (None, Some(why.into_note()?)),
-    };
+    let (floquet, floquet_note) =
+        match floquet_link(solver, variational, &drr, orbit, &per_period, &exponents) {
+            Ok(f) => (Some(f), None),
+            Err(why) => (None, Some(why.into_note()?)),
+        };
     Ok(FtleReport {
         method: "radau5".into(),
         periods: per_period.len(),
@@ -286,7 +296,11 @@ pub fn analyse(
         steps,
         floquet,
         floquet_note,
-        along_cycle: FtleSeries { t: pick(&t, &keep), ln_r11: pick(&r11, &keep), ln_r22: pick(&r22, &keep) },
+        along_cycle: FtleSeries {
+            t: pick(&t, &keep),
+            ln_r11: pick(&r11, &keep),
+            ln_r22: pick(&r22, &keep),
+        },
     })
 }
 
@@ -305,15 +319,30 @@ fn floquet_link(
     let mut integ = variational(*drr, solver, &y0)?;
     let report = shooting::analyse(integ.as_mut(), drr, y0, &settings)?;
     let Some(o) = report.orbit else {
-        return Err(AnalysisError::NotConverged { what: "shooting", reason: report.failure.map_or(String::new(), |why| why.to_string()) });
+        return Err(AnalysisError::NotConverged {
+            what: "shooting",
+            reason: report.failure.map_or(String::new(), |why| why.to_string()),
+        });
     };
-    let last = per_period.last().copied().unwrap_or(PeriodLogs { time: 0.0, ln_r: [0.0; 2], trace_integral: 0.0 });
+    let last = per_period.last().copied().unwrap_or(PeriodLogs {
+        time: 0.0,
+        ln_r: [0.0; 2],
+        trace_integral: 0.0,
+    });
     Ok(FloquetLink {
         source: "shooting",
-        ln_abs_nontrivial: o.nontrivial().iter().map(|m| (m.modulus > 0.0).then(|| m.modulus.ln()).filter(|x| x.is_finite())).collect(),
+        ln_abs_nontrivial: o
+            .nontrivial()
+            .iter()
+            .map(|m| (m.modulus > 0.0).then(|| m.modulus.ln()).filter(|x| x.is_finite()))
+            .collect(),
         trivial_multiplier_error: o.trivial_multiplier_error,
         ftle_times_period: exponents.map(|l| l * o.period),
-        last_period_logs: [last.ln_r[0], last.ln_r[1], last.trace_integral - last.ln_r[0] - last.ln_r[1]],
+        last_period_logs: [
+            last.ln_r[0],
+            last.ln_r[1],
+            last.trace_integral - last.ln_r[0] - last.ln_r[1],
+        ],
         period: o.period,
     })
 }

@@ -15,8 +15,8 @@
 //!   a ≈ a₂ to leading order in γ: B = ½ (−q + (ξ + p)/(f'(v) + η)), C = −ξ q/(f'(v) + η)
 //!   (the paper's B = ½ (v + (ξ − A)/f'(v)), C = ξ v/f'(v) for the slip law without damping).
 
-use crate::analysis::hopf::cubic_roots;
 use crate::analysis::cycle_period::CyclePeriod;
+use crate::analysis::hopf::cubic_roots;
 use crate::model::Drr;
 use nalgebra::Matrix3;
 
@@ -73,7 +73,15 @@ pub fn at(drr: &Drr, y: &[f64; 3]) -> Local {
     } else {
         ([-b, -b], (-d).sqrt())
     };
-    Local { fast: roots[0][0], slow_re, slow_im, slow_discriminant, quasi_re, quasi_im, quasi_discriminant: d }
+    Local {
+        fast: roots[0][0],
+        slow_re,
+        slow_im,
+        slow_discriminant,
+        quasi_re,
+        quasi_im,
+        quasi_discriminant: d,
+    }
 }
 
 /// nalgebra's eigenvalues of the matrix, as (fast, slow pair sorted by real part then
@@ -101,12 +109,17 @@ pub struct Crossing {
 /// The first upward crossing of zero by `f` over samples `from..to` of the orbit (`f` must
 /// be negative somewhere before it).
 pub fn first_up(orbit: &CyclePeriod, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
-    (from + 1..to).find(|&k| values[k - 1] < 0.0 && values[k] >= 0.0).map(|k| crossing(orbit, values, k))
+    (from + 1..to)
+        .find(|&k| values[k - 1] < 0.0 && values[k] >= 0.0)
+        .map(|k| crossing(orbit, values, k))
 }
 
 /// The last downward crossing of zero by `values` over samples `from..to`.
 pub fn last_down(orbit: &CyclePeriod, values: &[f64], from: usize, to: usize) -> Option<Crossing> {
-    (from + 1..to).rev().find(|&k| values[k - 1] >= 0.0 && values[k] < 0.0).map(|k| crossing(orbit, values, k))
+    (from + 1..to)
+        .rev()
+        .find(|&k| values[k - 1] >= 0.0 && values[k] < 0.0)
+        .map(|k| crossing(orbit, values, k))
 }
 
 fn crossing(orbit: &CyclePeriod, values: &[f64], k: usize) -> Crossing {
@@ -151,7 +164,11 @@ mod tests {
                         let (fp, fm) = (rhs(&drr, plus), rhs(&drr, minus));
                         for i in 0..3 {
                             let d = (fp[i] - fm[i]) / (2.0 * h);
-                            assert!((j[(i, k)] - d).abs() <= 1e-6 * (1.0 + d.abs()), "{law:?} η = {eta} {x:?}: J[{i}][{k}] = {} vs {d}", j[(i, k)]);
+                            assert!(
+                                (j[(i, k)] - d).abs() <= 1e-6 * (1.0 + d.abs()),
+                                "{law:?} η = {eta} {x:?}: J[{i}][{k}] = {} vs {d}",
+                                j[(i, k)]
+                            );
                         }
                     }
                 }
@@ -162,20 +179,41 @@ mod tests {
     #[test]
     fn polynomial_roots_agree_with_the_matrix_and_the_paper_form() {
         // States of Fig. 1's cycle: stick, late stick, rise, slip peak.
-        let states = [[9.12, (0.0785f64).ln(), -3.84], [-0.70, (0.357f64).ln(), 1.52], [0.39, (20.1f64).ln(), -3.28], [8.17, (3422.0f64).ln(), -13.86]];
-        let models = [params(1e3, Friction::Log), params(1e3, Friction::Power { alpha: 0.15 }), with_law(1e3, StateLaw::Ageing, 0.0), with_law(1e3, StateLaw::Prz, 0.05)];
+        let states = [
+            [9.12, (0.0785f64).ln(), -3.84],
+            [-0.70, (0.357f64).ln(), 1.52],
+            [0.39, (20.1f64).ln(), -3.28],
+            [8.17, (3422.0f64).ln(), -13.86],
+        ];
+        let models = [
+            params(1e3, Friction::Log),
+            params(1e3, Friction::Power { alpha: 0.15 }),
+            with_law(1e3, StateLaw::Ageing, 0.0),
+            with_law(1e3, StateLaw::Prz, 0.05),
+        ];
         for p in &models {
             let friction = (p.params().friction, p.params().state_law, p.params().eta);
             for y in states {
                 let l = at(p, &y);
                 let (fast, slow, _) = matrix_eigenvalues(p, &y);
-                assert!((l.fast - fast[0]).abs() < 1e-9 * fast[0].abs(), "{friction:?} {y:?}: {} vs {fast:?}", l.fast);
+                assert!(
+                    (l.fast - fast[0]).abs() < 1e-9 * fast[0].abs(),
+                    "{friction:?} {y:?}: {} vs {fast:?}",
+                    l.fast
+                );
                 // Slow pair: sort ours like the matrix's (by real part, then imaginary part).
-                let mut ours = if l.slow_im > 0.0 { [[l.slow_re[0], -l.slow_im], [l.slow_re[0], l.slow_im]] } else { [[l.slow_re[1], 0.0], [l.slow_re[0], 0.0]] };
+                let mut ours = if l.slow_im > 0.0 {
+                    [[l.slow_re[0], -l.slow_im], [l.slow_re[0], l.slow_im]]
+                } else {
+                    [[l.slow_re[1], 0.0], [l.slow_re[0], 0.0]]
+                };
                 ours.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
                 for (a, b) in ours.iter().zip(&slow) {
                     let scale = 1.0 + b[0].hypot(b[1]);
-                    assert!((a[0] - b[0]).abs() < 1e-7 * scale && (a[1] - b[1]).abs() < 1e-7 * scale, "{friction:?} {y:?}: {ours:?} vs {slow:?}");
+                    assert!(
+                        (a[0] - b[0]).abs() < 1e-7 * scale && (a[1] - b[1]).abs() < 1e-7 * scale,
+                        "{friction:?} {y:?}: {ours:?} vs {slow:?}"
+                    );
                 }
             }
         }

@@ -49,14 +49,24 @@ impl LyapunovOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object).
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let raw: RawOptions = serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
+        let raw: RawOptions =
+            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
         let d = Self::default();
-        let o = Self { ftle_periods: raw.ftle_periods.unwrap_or(d.ftle_periods), series_points: raw.series_points.unwrap_or(d.series_points) };
+        let o = Self {
+            ftle_periods: raw.ftle_periods.unwrap_or(d.ftle_periods),
+            series_points: raw.series_points.unwrap_or(d.series_points),
+        };
         if o.ftle_periods > 1000 {
-            return Err(InvalidOption::new("ftle_periods", format!("{} must be between 0 (no FTLE) and 1000", o.ftle_periods)));
+            return Err(InvalidOption::new(
+                "ftle_periods",
+                format!("{} must be between 0 (no FTLE) and 1000", o.ftle_periods),
+            ));
         }
         if !(10..=1_000_000).contains(&o.series_points) {
-            return Err(InvalidOption::new("series_points", format!("{} must be between 10 and 1000000", o.series_points)));
+            return Err(InvalidOption::new(
+                "series_points",
+                format!("{} must be between 10 and 1000000", o.series_points),
+            ));
         }
         Ok(o)
     }
@@ -167,7 +177,8 @@ fn empty(options: &LyapunovOptions, note: String) -> LyapunovReport {
 /// Builds an integrator of the variational equations (state and fundamental matrix Φ) of a
 /// DRR system with the given solver settings, starting at (0, y0) with Φ = I (the engine's
 /// `variational_integrator`).
-pub type VariationalFactory<'a> = dyn FnMut(Drr, &SolverSpec, &[f64; 3]) -> Result<Box<dyn Integrator>, SolverError> + 'a;
+pub type VariationalFactory<'a> =
+    dyn FnMut(Drr, &SolverSpec, &[f64; 3]) -> Result<Box<dyn Integrator>, SolverError> + 'a;
 
 /// Runs the analysis on the model `params` whose "cycle" analysis produced `cycle`, with
 /// `solver`'s tolerances; `variational` builds the integrators of the variational equations.
@@ -185,7 +196,8 @@ pub fn analyse(
     let p = params;
     let drr = Drr::new(*p);
     let n = orbit.peak + 1;
-    let locals: Vec<local::Local> = (0..orbit.len()).map(|k| local::at(&drr, &orbit.state(k))).collect();
+    let locals: Vec<local::Local> =
+        (0..orbit.len()).map(|k| local::at(&drr, &orbit.state(k))).collect();
     let stick = &locals[..n];
     let re_max: Vec<f64> = stick.iter().map(|l| l.slow_re[0]).collect();
     let disc: Vec<f64> = stick.iter().map(|l| l.slow_discriminant).collect();
@@ -198,7 +210,11 @@ pub fn analyse(
     let rel = |l: &local::Local| {
         let exact = [(l.slow_re[0], l.slow_im), (l.slow_re[1], -l.slow_im)];
         let quasi = [(l.quasi_re[0], l.quasi_im), (l.quasi_re[1], -l.quasi_im)];
-        exact.iter().zip(&quasi).map(|(e, q)| (e.0 - q.0).hypot(e.1 - q.1) / e.0.hypot(e.1).max(f64::MIN_POSITIVE)).fold(0.0, f64::max)
+        exact
+            .iter()
+            .zip(&quasi)
+            .map(|(e, q)| (e.0 - q.0).hypot(e.1 - q.1) / e.0.hypot(e.1).max(f64::MIN_POSITIVE))
+            .fold(0.0, f64::max)
     };
     let max_rel = locals[..=orbit.up].iter().map(rel).fold(0.0, f64::max);
 
@@ -211,16 +227,25 @@ pub fn analyse(
             continue;
         }
         check.samples += 1;
-        let mut ours = if l.slow_im > 0.0 { [[l.slow_re[0], -l.slow_im], [l.slow_re[0], l.slow_im]] } else { [[l.slow_re[1], 0.0], [l.slow_re[0], 0.0]] };
+        let mut ours = if l.slow_im > 0.0 {
+            [[l.slow_re[0], -l.slow_im], [l.slow_re[0], l.slow_im]]
+        } else {
+            [[l.slow_re[1], 0.0], [l.slow_re[0], 0.0]]
+        };
         ours.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
         let d_fast = (l.fast - fast[0]).abs() / (1.0 + l.fast.abs());
-        let d_slow = ours.iter().zip(&slow).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) / (1.0 + b[0].hypot(b[1]))).fold(0.0, f64::max);
+        let d_slow = ours
+            .iter()
+            .zip(&slow)
+            .map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1]) / (1.0 + b[0].hypot(b[1])))
+            .fold(0.0, f64::max);
         check.max_difference = Some(check.max_difference.unwrap_or(0.0).max(d_fast).max(d_slow));
     }
 
     let t: Vec<f64> = orbit.s[..n].to_vec();
     let col = |f: &dyn Fn(&local::Local) -> f64| stick.iter().map(f).collect::<Vec<f64>>();
-    let (fast, s1, s2, si) = (col(&|l| l.fast), col(&|l| l.slow_re[0]), col(&|l| l.slow_re[1]), col(&|l| l.slow_im));
+    let (fast, s1, s2, si) =
+        (col(&|l| l.fast), col(&|l| l.slow_re[0]), col(&|l| l.slow_re[1]), col(&|l| l.slow_im));
     let (q1, q2, qi) = (col(&|l| l.quasi_re[0]), col(&|l| l.quasi_re[1]), col(&|l| l.quasi_im));
     let v: Vec<f64> = orbit.w[..n].iter().map(|w| w.exp()).collect();
     // Spacing by the slow pair, compressed (it spans 1e-2 … 1e3 near t_c).
@@ -240,7 +265,18 @@ pub fn analyse(
     };
     // The frequency and v at the zero crossing: at the sample just after it.
     let at_zero = zero.map(|z| (locals[z.index].slow_im, orbit.w[z.index].exp()));
-    let ftle = if options.ftle_periods > 0 { Some(ftle::analyse(*params, solver, variational, &orbit, options.ftle_periods, options.series_points)?) } else { None };
+    let ftle = if options.ftle_periods > 0 {
+        Some(ftle::analyse(
+            *params,
+            solver,
+            variational,
+            &orbit,
+            options.ftle_periods,
+            options.series_points,
+        )?)
+    } else {
+        None
+    };
     let mut report = LyapunovReport {
         options: options.clone(),
         note: None,
@@ -271,19 +307,28 @@ pub fn analyse(
 fn paper_case(p: &DrrParams) -> Option<(&'static str, Option<f64>, f64)> {
     let base = p.is_papers_model() && p.gamma == 1e3 && p.xi == 0.7;
     match p.friction {
-        Friction::Log if base && p.epsilon == 0.72 => Some(("Fig. 5 (γ = 1e3, ξ = 0.7, ε = 0.72)", Some(4.6), 2.3)),
-        Friction::Power { .. } if base && p.epsilon == 0.78 => Some(("power law (γ = 1e3, ξ = 0.7, ε = 0.78; α not stated, Fig. 8 uses 0.15)", None, 2.45)),
+        Friction::Log if base && p.epsilon == 0.72 => {
+            Some(("Fig. 5 (γ = 1e3, ξ = 0.7, ε = 0.72)", Some(4.6), 2.3))
+        }
+        Friction::Power { .. } if base && p.epsilon == 0.78 => Some((
+            "power law (γ = 1e3, ξ = 0.7, ε = 0.78; α not stated, Fig. 8 uses 0.15)",
+            None,
+            2.45,
+        )),
         _ => None,
     }
 }
 
 fn claims(p: &DrrParams, r: &LyapunovReport) -> Vec<Claim> {
     let mut out = Vec::new();
-    let res = |c: &Option<Crossing>| c.map_or(String::new(), |c| format!("located to ±{:.1e} (sample spacing)", c.resolution));
+    let res = |c: &Option<Crossing>| {
+        c.map_or(String::new(), |c| format!("located to ±{:.1e} (sample spacing)", c.resolution))
+    };
     let q = r.quasi_static.as_ref();
     if let Some((case, onset, zero)) = paper_case(p) {
         if let (Some(paper), Some(ours)) = (onset, r.complex_onset_before_tc) {
-            let qs = q.and_then(|q| q.complex_onset_before_tc).map_or("-".into(), |x| format!("{x:.4}"));
+            let qs =
+                q.and_then(|q| q.complex_onset_before_tc).map_or("-".into(), |x| format!("{x:.4}"));
             out.push(Claim::relative(
                 &format!("{case}: the slow pair turns complex at t_c − 4.6"),
                 Source::Paper,
@@ -294,20 +339,31 @@ fn claims(p: &DrrParams, r: &LyapunovReport) -> Vec<Claim> {
             ));
         }
         if let Some(ours) = r.zero_crossing_before_tc {
-            let qs = q.and_then(|q| q.zero_crossing_before_tc).map_or("-".into(), |x| format!("{x:.4}"));
-            let caption = r.t0.map_or(String::new(), |t0| format!("; Fig. 5's caption says t_c − 2.3 t0 = t_c − {:.4}", 2.3 * t0));
+            let qs =
+                q.and_then(|q| q.zero_crossing_before_tc).map_or("-".into(), |x| format!("{x:.4}"));
+            let caption = r.t0.map_or(String::new(), |t0| {
+                format!("; Fig. 5's caption says t_c − 2.3 t0 = t_c − {:.4}", 2.3 * t0)
+            });
             out.push(Claim::relative(
                 &format!("{case}: the real part of the slow pair crosses zero at t_c − {zero}"),
                 Source::Paper,
                 zero,
                 ours,
                 0.05,
-                format!("exact eigenvalues; quasi-static formula: {qs}; {}{caption}", res(&r.zero_crossing)),
+                format!(
+                    "exact eigenvalues; quasi-static formula: {qs}; {}{caption}",
+                    res(&r.zero_crossing)
+                ),
             ));
         }
     }
     if let Some(fast) = r.fast_eigenvalue_max {
-        out.push(Claim::negative("one eigenvalue is negative all along the trajectory", Source::Paper, fast, "largest fast eigenvalue over every step end of the cycle".into()));
+        out.push(Claim::negative(
+            "one eigenvalue is negative all along the trajectory",
+            Source::Paper,
+            fast,
+            "largest fast eigenvalue over every step end of the cycle".into(),
+        ));
     }
     if let (Some(z), Some(t0)) = (r.zero_crossing_before_tc, r.t0) {
         out.push(Claim::negative(
@@ -351,7 +407,11 @@ fn claims(p: &DrrParams, r: &LyapunovReport) -> Vec<Claim> {
             d,
             1e-6,
             "1e-6 relative to 1 + |λ| where the matrix route resolves the slow pair",
-            format!("over {} samples ({} too stiff for the matrix route)", r.matrix_check.as_ref().map_or(0, |m| m.samples), r.matrix_check.as_ref().map_or(0, |m| m.unresolvable)),
+            format!(
+                "over {} samples ({} too stiff for the matrix route)",
+                r.matrix_check.as_ref().map_or(0, |m| m.samples),
+                r.matrix_check.as_ref().map_or(0, |m| m.unresolvable)
+            ),
         ));
     }
     if let Some(f) = r.ftle.as_ref() {
@@ -410,7 +470,11 @@ pub fn summary(r: &LyapunovReport) -> String {
             f.periods, f.method, f.exponents[0], f.exponents[1], f.exponents[2]
         );
         if let Some(l) = &f.floquet {
-            let mu: Vec<String> = l.ln_abs_nontrivial.iter().map(|m| m.map_or("-∞".into(), |x| format!("{x:.6}"))).collect();
+            let mu: Vec<String> = l
+                .ln_abs_nontrivial
+                .iter()
+                .map(|m| m.map_or("-∞".into(), |x| format!("{x:.6}")))
+                .collect();
             s += &format!(
                 "  Floquet (shooting, T = {:.6}): ln|μ| = 0, {}; λ T = {:.6}, {:.6}, {:.4e}; last period's ln R = {:.6}, {:.6}\n",
                 l.period,

@@ -7,8 +7,8 @@ use super::models::{EventKind, NoiseModel};
 use super::rng::Rng;
 use super::scheme::{self, Path, SchemeSettings, Start};
 use crate::analysis::AnalysisError;
-use crate::parallel;
 use crate::integrate::{ErrorKind, OdeSystem, Stats};
+use crate::parallel;
 
 /// One realisation's results: event time, samples, solver statistics, noise nodes.
 type Realisation = (f64, Vec<f64>, Stats, usize);
@@ -58,7 +58,12 @@ pub struct EnsembleSpec<'a> {
 }
 
 /// Reads realisation `path`'s observables at the sampling times into `out` ([observable][k]).
-fn sample(model: &NoiseModel, path: &Path, sampling: &Sampling<'_>, out: &mut [f64]) -> Result<(), AnalysisError> {
+fn sample(
+    model: &NoiseModel,
+    path: &Path,
+    sampling: &Sampling<'_>,
+    out: &mut [f64],
+) -> Result<(), AnalysisError> {
     let reference = sampling.fixed_reference.unwrap_or(path.t_event);
     let k_n = sampling.s.len();
     let mut x = vec![0.0; model.dim()];
@@ -100,16 +105,26 @@ pub fn run(
     let realisation = |i: usize| -> Result<Realisation, AnalysisError> {
         let mut path = Path::default();
         let mut rng = Rng::for_realisation(spec.seed, i as u64);
-        let outcome = scheme::realisation(spec.model, spec.start, spec.scheme, spec.event, spec.record_until, spec.t_max, &mut rng, &mut path)
-            .and_then(|()| {
-                let mut out = vec![0.0; per];
-                sample(spec.model, &path, sampling, &mut out)?;
-                Ok(out)
-            });
+        let outcome = scheme::realisation(
+            spec.model,
+            spec.start,
+            spec.scheme,
+            spec.event,
+            spec.record_until,
+            spec.t_max,
+            &mut rng,
+            &mut path,
+        )
+        .and_then(|()| {
+            let mut out = vec![0.0; per];
+            sample(spec.model, &path, sampling, &mut out)?;
+            Ok(out)
+        });
         match outcome {
             Ok(out) => Ok((path.t_event, out, path.stats, path.nodes())),
             Err(mut e) => {
-                let hint = if matches!(&e, AnalysisError::Solver(s) if s.kind == ErrorKind::ErrorTestFailures) {
+                let hint = if matches!(&e, AnalysisError::Solver(s) if s.kind == ErrorKind::ErrorTestFailures)
+                {
                     " (an absolute tolerance below what a noise-driven stiff component allows? loosen atol)"
                 } else {
                     ""
@@ -121,7 +136,11 @@ pub fn run(
             }
         }
     };
-    let mut data = EnsembleData { realisations: count, samples: Vec::with_capacity(count * per), ..Default::default() };
+    let mut data = EnsembleData {
+        realisations: count,
+        samples: Vec::with_capacity(count * per),
+        ..Default::default()
+    };
     for (t, out, stats, nodes) in parallel::try_map(count, threads, progress, realisation)? {
         data.event_times.push(t);
         data.nodes += nodes as u64;

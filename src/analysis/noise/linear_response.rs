@@ -28,8 +28,8 @@
 
 use super::models::{EventKind, NoiseModel};
 use crate::analysis::AnalysisError;
-use crate::solver::{self, Method};
 use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, Tolerance};
+use crate::solver::{self, Method};
 
 /// Largest augmented dimension (2 × the DRR's 3).
 const MAX_BIG: usize = 6;
@@ -48,7 +48,14 @@ pub struct HermiteOrbit {
 impl HermiteOrbit {
     /// The orbit from (t0, x0) to t1 (Rodas5P at rtol, atol); derivatives from the integrator's
     /// interpolant (never from the right-hand side, which is noisy on a stiff slow manifold).
-    pub fn compute(model: &NoiseModel, t0: f64, x0: &[f64], t1: f64, rtol: f64, atol: &[f64]) -> Result<Self, SolverError> {
+    pub fn compute(
+        model: &NoiseModel,
+        t0: f64,
+        x0: &[f64],
+        t1: f64,
+        rtol: f64,
+        atol: &[f64],
+    ) -> Result<Self, SolverError> {
         let options = Options {
             max_steps: Some(10_000_000),
             max_err_test_fails: Some(20),
@@ -85,7 +92,8 @@ impl HermiteOrbit {
         let h = self.t[k + 1] - self.t[k];
         let s = ((t - self.t[k]) / h).clamp(0.0, 1.0);
         let (s2, s3) = (s * s, s * s * s);
-        let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
+        let (h00, h10, h01, h11) =
+            (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
         for (i, o) in out.iter_mut().enumerate() {
             let (ya, yb) = (self.x[k * n + i], self.x[(k + 1) * n + i]);
             let (da, db) = (self.f[k * n + i] * h, self.f[(k + 1) * n + i] * h);
@@ -265,14 +273,26 @@ fn event_function_gradient(model: &NoiseModel, event: EventKind, t: f64, x: &[f6
             }
             grad[n + c] = b[c];
         }
-        EventKind::CrossDown { component: c, .. } | EventKind::CrossUp { component: c, .. } => grad[c] = 1.0,
+        EventKind::CrossDown { component: c, .. } | EventKind::CrossUp { component: c, .. } => {
+            grad[c] = 1.0
+        }
     }
     grad
 }
 
 /// C at the ascending `times` (all ≥ t0) from C(t0) = c0, Radau5 at (rtol, atol); also the steps.
-fn integrate_covariance(sys: Lyapunov<'_>, t0: f64, c0: &[f64], times: &[f64], rtol: f64, atol: &[f64]) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
-    let options = Options { max_steps: Some(1_000_000), ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec())) };
+fn integrate_covariance(
+    sys: Lyapunov<'_>,
+    t0: f64,
+    c0: &[f64],
+    times: &[f64],
+    rtol: f64,
+    atol: &[f64],
+) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
+    let options = Options {
+        max_steps: Some(1_000_000),
+        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
+    };
     let mut integ = solver::build_default(Method::Radau5, sys, t0, c0, &options)?;
     let mut out = Vec::with_capacity(times.len());
     for &t in times {
@@ -292,7 +312,15 @@ fn form(a: &[f64], c: &[f64], b: &[f64]) -> f64 {
 }
 
 /// μ_k = Φ(t_j, t_k)ᵀ μ_j for k = j, j−1, …, 0 (backwards along the orbit).
-fn adjoint_sweep(model: &NoiseModel, orbit: &HermiteOrbit, tau: f64, times: &[f64], j: usize, mu_j: &[f64], rtol: f64) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
+fn adjoint_sweep(
+    model: &NoiseModel,
+    orbit: &HermiteOrbit,
+    tau: f64,
+    times: &[f64],
+    j: usize,
+    mu_j: &[f64],
+    rtol: f64,
+) -> Result<(Vec<Vec<f64>>, u64), SolverError> {
     let scale = mu_j.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
     let options = Options {
         max_steps: Some(1_000_000),
@@ -328,7 +356,10 @@ pub fn compute(
     let n = model.dim();
     let nn = 2 * n;
     if model.amplitudes().iter().all(|a| *a == 0.0) {
-        return Err(failure(t_start, "every noise amplitude is zero: nothing to respond to".into()));
+        return Err(failure(
+            t_start,
+            "every noise amplitude is zero: nothing to respond to".into(),
+        ));
     }
     let tc = *times.last().ok_or_else(|| failure(t_start, "an empty grid".into()))?;
     let path = HermiteOrbit::compute(model, t_start, x_start, tc, 1e-10, atol_x)?;
@@ -351,12 +382,18 @@ pub fn compute(
     let mut covariance_atol = Vec::new();
     for pass in 0..2 {
         let factor = if pass == 0 { 1e-12 } else { 1e-9 };
-        covariance_atol = (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
+        covariance_atol =
+            (0..nn * nn).map(|ij| factor * scales[ij / nn] * scales[ij % nn]).collect();
         let pass_rtol = if pass == 0 { rtol.max(1e-4) } else { rtol };
-        let (c, pass_steps) = integrate_covariance(sys, t_start, &c0, times, pass_rtol, &covariance_atol)?;
+        let (c, pass_steps) =
+            integrate_covariance(sys, t_start, &c0, times, pass_rtol, &covariance_atol)?;
         covariance = c;
         steps += pass_steps;
-        scales = (0..nn).map(|i| covariance.iter().fold(0.0f64, |m, c| m.max(c[i * nn + i].abs())).sqrt().max(1e-300)).collect();
+        scales = (0..nn)
+            .map(|i| {
+                covariance.iter().fold(0.0f64, |m, c| m.max(c[i * nn + i].abs())).sqrt().max(1e-300)
+            })
+            .collect();
     }
     if covariance.iter().any(|m| m.iter().any(|v| !v.is_finite())) {
         return Err(failure(tc, "the covariance is not finite".into()));
@@ -382,9 +419,13 @@ pub fn compute(
             let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
             model.rhs(tc + dt, xc, &mut fp);
             model.rhs(tc - dt, xc, &mut fm);
-            let gdot: f64 = (0..n).map(|j| grad[j] * f[j]).sum::<f64>() + (fp[c] - fm[c]) / (2.0 * dt);
+            let gdot: f64 =
+                (0..n).map(|j| grad[j] * f[j]).sum::<f64>() + (fp[c] - fm[c]) / (2.0 * dt);
             if gdot.is_nan() || gdot >= 0.0 {
-                return Err(failure(tc, format!("the event is not a strict maximum (d²x/dt² = {gdot:e})")));
+                return Err(failure(
+                    tc,
+                    format!("the event is not a strict maximum (d²x/dt² = {gdot:e})"),
+                ));
             }
             gdot
         }
@@ -425,7 +466,10 @@ impl LinearResponse {
     /// `lags` s (each below t_c − t_start), and the steps taken. The linearised event time
     /// δt_c = −δg(t_c)/ġ assumes that g stays linear in time around t_c in each realisation's
     /// own frame; [`EventFunctionLags`] measures how far that holds.
-    pub fn event_function_at_lags(&self, lags: &[f64]) -> Result<(EventFunctionLags, u64), SolverError> {
+    pub fn event_function_at_lags(
+        &self,
+        lags: &[f64],
+    ) -> Result<(EventFunctionLags, u64), SolverError> {
         let nn = self.big;
         let n = nn / 2;
         let tc = *self.times.last().expect("a grid");
@@ -441,7 +485,8 @@ impl LinearResponse {
         local.push(tc);
         let last = local.len() - 1;
         let grad_c = grad_at(tc);
-        let (mu, adjoint_steps) = adjoint_sweep(&self.model, &self.path, self.tau, &local, last, &grad_c, self.rtol)?;
+        let (mu, adjoint_steps) =
+            adjoint_sweep(&self.model, &self.path, self.tau, &local, last, &grad_c, self.rtol)?;
         // C there, forwards from the last grid time at or before the earliest local time.
         let (t0, c0) = match self.times.iter().rposition(|t| *t <= local[0]) {
             Some(k) => (self.times[k], self.covariance[k].clone()),
@@ -452,7 +497,8 @@ impl LinearResponse {
             }
         };
         let sys = Lyapunov { model: &self.model, orbit: &self.path, tau: self.tau };
-        let (cov, cov_steps) = integrate_covariance(sys, t0, &c0, &local[..last], self.rtol, &self.covariance_atol)?;
+        let (cov, cov_steps) =
+            integrate_covariance(sys, t0, &c0, &local[..last], self.rtol, &self.covariance_atol)?;
         let var_c = form(&grad_c, self.covariance.last().expect("a grid"), &grad_c);
         let var_tc = self.event_time_std * self.event_time_std;
         let (mut correlation, mut own_frame) = (Vec::new(), Vec::new());
@@ -466,19 +512,26 @@ impl LinearResponse {
             let slope: f64 = g[..n].iter().zip(&f).map(|(a, b)| a * b).sum();
             let with_tc = -form(&g, c, &mu[l]) / self.event_slope;
             let aligned = var + 2.0 * slope * with_tc + slope * slope * var_tc;
-            own_frame.push(aligned.max(0.0).sqrt() / (self.event_slope.abs() * self.event_time_std));
+            own_frame
+                .push(aligned.max(0.0).sqrt() / (self.event_slope.abs() * self.event_time_std));
         }
         Ok((EventFunctionLags { correlation, own_frame }, adjoint_steps + cov_steps))
     }
 
     /// Cov(gᵀδz(t_k), δt_c) at every grid time for gradients g_k.
     fn with_event_time(&self, grads: &[Vec<f64>]) -> Vec<f64> {
-        (0..self.covariance.len()).map(|k| form(&grads[k], &self.covariance[k], &self.adjoint[k])).collect()
+        (0..self.covariance.len())
+            .map(|k| form(&grads[k], &self.covariance[k], &self.adjoint[k]))
+            .collect()
     }
 
     /// gᵀ ż at every grid time: the observable's rate of change along the orbit.
     fn rates(&self, grads: &[Vec<f64>]) -> Vec<f64> {
-        grads.iter().zip(&self.velocity).map(|(g, z)| g.iter().zip(z).map(|(a, b)| a * b).sum()).collect()
+        grads
+            .iter()
+            .zip(&self.velocity)
+            .map(|(g, z)| g.iter().zip(z).map(|(a, b)| a * b).sum())
+            .collect()
     }
 
     /// Var(g_kᵀ δz(t_k)) at every grid time for the observable gradients g_k (of length N, zero
@@ -501,11 +554,17 @@ impl LinearResponse {
     /// Cov(g_jᵀδz(t_j), g_kᵀδz(t_k)) for k = 0..=j, aligned on each realisation's event when
     /// `own` (through the adjoint μ_k = Φ(t_j, t_k)ᵀ g_j, integrated backwards from t_j); also
     /// the adjoint's steps.
-    pub fn row(&self, grads: &[Vec<f64>], own: bool, j: usize) -> Result<(Vec<f64>, u64), SolverError> {
+    pub fn row(
+        &self,
+        grads: &[Vec<f64>],
+        own: bool,
+        j: usize,
+    ) -> Result<(Vec<f64>, u64), SolverError> {
         let with_tc = self.with_event_time(grads);
         let rate = self.rates(grads);
         let var_tc = self.event_time_std * self.event_time_std;
-        let (mu, steps) = adjoint_sweep(&self.model, &self.path, self.tau, &self.times, j, &grads[j], self.rtol)?;
+        let (mu, steps) =
+            adjoint_sweep(&self.model, &self.path, self.tau, &self.times, j, &grads[j], self.rtol)?;
         let row = (0..=j)
             .map(|k| {
                 let mut v = form(&mu[k], &self.covariance[k], &grads[k]);

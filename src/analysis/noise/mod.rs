@@ -302,7 +302,12 @@ fn not_applicable(reason: &str) -> AnalysisError {
 /// Converged when three successive periods and the event states agree to 1e-8 (relative;
 /// absolute below 1): a decaying oscillation, whose period converges but whose amplitude does
 /// not, never qualifies.
-fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f64]) -> Result<(f64, Vec<f64>, usize), AnalysisError> {
+fn limit_cycle(
+    model: &NoiseModel,
+    initial: &[f64],
+    event: EventKind,
+    atol: &[f64],
+) -> Result<(f64, Vec<f64>, usize), AnalysisError> {
     let mut x = initial.to_vec();
     let mut periods: Vec<f64> = Vec::new();
     let mut states: Vec<Vec<f64>> = Vec::new();
@@ -315,7 +320,8 @@ fn limit_cycle(model: &NoiseModel, initial: &[f64], event: EventKind, atol: &[f6
             states.push(x.clone());
         }
         if let ([.., a, b, c], [.., sa, sb, sc]) = (&periods[..], &states[..]) {
-            let same_states = sa.iter().zip(sb).zip(sc).all(|((p, q), r)| close(*p, *q) && close(*q, *r));
+            let same_states =
+                sa.iter().zip(sb).zip(sc).all(|((p, q), r)| close(*p, *q) && close(*q, *r));
             if close(*a, *b) && close(*b, *c) && same_states {
                 return Ok((*c, x, events));
             }
@@ -397,21 +403,40 @@ pub fn run(
     let orbit = deterministic_orbit(model, initial, options, &det_atol)?;
     let plan = plan(model, options, &orbit)?;
     let linear = if plan.want_linear {
-        Some(linear_response::compute(model, orbit.start.t, &orbit.start.x, &plan.times, plan.event, plan.tau, LR_RTOL, &det_atol)?)
+        Some(linear_response::compute(
+            model,
+            orbit.start.t,
+            &orbit.start.x,
+            &plan.times,
+            plan.event,
+            plan.tau,
+            LR_RTOL,
+            &det_atol,
+        )?)
     } else {
         None
     };
-    let realisations = realisations(model, options, &orbit, &plan, linear.as_ref(), threads, progress)?;
+    let realisations =
+        realisations(model, options, &orbit, &plan, linear.as_ref(), threads, progress)?;
     summary::statistics(model, &orbit, plan, realisations, linear, &det_atol)
 }
 
 /// Step 1, the deterministic orbit: for periodic models the converged limit cycle, the start
 /// `start_before_event` before an event, t_c and (DRR) t0; for the saddle-node the passage
 /// from t = 0.
-fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptions, det_atol: &[f64]) -> Result<SettledOrbit, AnalysisError> {
+fn deterministic_orbit(
+    model: &NoiseModel,
+    initial: &[f64],
+    options: &NoiseOptions,
+    det_atol: &[f64],
+) -> Result<SettledOrbit, AnalysisError> {
     let (event_for_burn_in, periodic) = match model {
-        NoiseModel::Drr { .. } => (EventKind::Maximum { component: 1, arm: 0.0, drop: std::f64::consts::LN_2 }, true),
-        NoiseModel::VanDerPol { .. } => (EventKind::CrossDown { component: 0, level: 0.0, arm: 1.0 }, true),
+        NoiseModel::Drr { .. } => {
+            (EventKind::Maximum { component: 1, arm: 0.0, drop: std::f64::consts::LN_2 }, true)
+        }
+        NoiseModel::VanDerPol { .. } => {
+            (EventKind::CrossDown { component: 0, level: 0.0, arm: 1.0 }, true)
+        }
         NoiseModel::SaddleNode { .. } => {
             let level = options.event_level.unwrap_or(-1.0);
             (EventKind::CrossDown { component: 0, level, arm: 0.0 }, false)
@@ -422,7 +447,9 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
     };
     if let NoiseModel::Drr { system, .. } = model {
         if crate::analysis::hopf::analyse(system).max_real_part < 0.0 {
-            return Err(not_applicable("the fixed point is stable (ε below ε_c): there is no stick-slip event to align on"));
+            return Err(not_applicable(
+                "the fixed point is stable (ε below ε_c): there is no stick-slip event to align on",
+            ));
         }
     }
     let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
@@ -432,10 +459,22 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
             _ => 0.45 * period,
         });
         if before >= period {
-            return Err(invalid("start_before_event", format!("{before} must be shorter than the period {period}")));
+            return Err(invalid(
+                "start_before_event",
+                format!("{before} must be shorter than the period {period}"),
+            ));
         }
-        let x_start = scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
-        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, &x_start, event_for_burn_in, 2.0 * period, DET_RTOL, det_atol)?;
+        let x_start =
+            scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
+        let (tc, xc, _) = scheme::deterministic_event(
+            model,
+            0.0,
+            &x_start,
+            event_for_burn_in,
+            2.0 * period,
+            DET_RTOL,
+            det_atol,
+        )?;
         // The event search arms only after the component has been below its arming level: a
         // start already past it (inside a broad damped slip, v > 1) would find the next event,
         // a period later, while the realisations find this one.
@@ -447,20 +486,40 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
         }
         (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
     } else {
-        let (tc, xc, _) = scheme::deterministic_event(model, 0.0, initial, event_for_burn_in, 1e7, DET_RTOL, det_atol)?;
+        let (tc, xc, _) = scheme::deterministic_event(
+            model,
+            0.0,
+            initial,
+            event_for_burn_in,
+            1e7,
+            DET_RTOL,
+            det_atol,
+        )?;
         let before = options.start_before_event.unwrap_or(tc);
         if before > tc {
-            return Err(invalid("start_before_event", format!("{before} exceeds the time {tc} from t = 0 to the escape")));
+            return Err(invalid(
+                "start_before_event",
+                format!("{before} exceeds the time {tc} from t = 0 to the escape"),
+            ));
         }
-        let x_start = scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, det_atol)?;
+        let x_start =
+            scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, det_atol)?;
         (None, 0, before, Start { t: tc - before, x: x_start }, tc, xc)
     };
     let t0 = match model {
         NoiseModel::Drr { .. } => {
             let up = EventKind::CrossUp { component: 1, level: 0.0, arm: 0.0 };
-            scheme::deterministic_event(model, start.t, &start.x, up, t_event_det, DET_RTOL, det_atol)
-                .ok()
-                .map(|(t, _, _)| t_event_det - t)
+            scheme::deterministic_event(
+                model,
+                start.t,
+                &start.x,
+                up,
+                t_event_det,
+                DET_RTOL,
+                det_atol,
+            )
+            .ok()
+            .map(|(t, _, _)| t_event_det - t)
         }
         _ => None,
     };
@@ -478,7 +537,11 @@ fn deterministic_orbit(model: &NoiseModel, initial: &[f64], options: &NoiseOptio
 }
 
 /// The settings resolved on the orbit (defaults, checks against the period) and the grid.
-fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &SettledOrbit) -> Result<Plan, AnalysisError> {
+fn plan(
+    model: &NoiseModel,
+    options: &NoiseOptions,
+    orbit: &SettledOrbit,
+) -> Result<Plan, AnalysisError> {
     let before = orbit.before;
     let tau = options.correlation_time.unwrap_or(match model {
         NoiseModel::Drr { system, .. } => 2.5 / system.params().gamma,
@@ -501,7 +564,10 @@ fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &SettledOrbit) -> Res
         _ => vec![window[0], (window[0] * window[1]).sqrt(), window[1]],
     });
     if let Some(t) = curves_at.iter().find(|t| **t > far) {
-        return Err(invalid("correlation_curves_at", format!("{t} is before the grid's first time {far} before the event")));
+        return Err(invalid(
+            "correlation_curves_at",
+            format!("{t} is before the grid's first time {far} before the event"),
+        ));
     }
     let alignment = options.alignment.unwrap_or(Alignment::OwnEvent);
     let grid_points = options.grid_points.unwrap_or(1000);
@@ -529,8 +595,12 @@ fn plan(model: &NoiseModel, options: &NoiseOptions, orbit: &SettledOrbit) -> Res
     };
     let event_words = match event {
         EventKind::Maximum { .. } => "the maximum of v (slip peak)".to_string(),
-        EventKind::CrossDown { level, .. } if orbit.periodic => format!("the downward crossing of x = {level} (jump off the fold x = 1)"),
-        EventKind::CrossDown { level, .. } => format!("the downward crossing of x = {level} (escape)"),
+        EventKind::CrossDown { level, .. } if orbit.periodic => {
+            format!("the downward crossing of x = {level} (jump off the fold x = 1)")
+        }
+        EventKind::CrossDown { level, .. } => {
+            format!("the downward crossing of x = {level} (escape)")
+        }
         EventKind::CrossUp { level, .. } => format!("the upward crossing of level {level}"),
     };
     let times: Vec<f64> = s.iter().map(|v| orbit.t_event + v).collect();
@@ -576,29 +646,53 @@ fn realisations(
     let atol = options.atol.clone().unwrap_or_else(|| match linear {
         Some(l) => (0..n)
             .map(|i| {
-                let mut sig: Vec<f64> = l.covariance.iter().map(|c| c[i * l.big + i].max(0.0).sqrt()).collect();
+                let mut sig: Vec<f64> =
+                    l.covariance.iter().map(|c| c[i * l.big + i].max(0.0).sqrt()).collect();
                 sig.sort_by(|a, b| a.total_cmp(b));
                 (1e-3 * sig[sig.len() / 2]).clamp(1e-14, 1e-6)
             })
             .collect(),
         None => vec![1e-6; n],
     });
-    let scheme_settings = SchemeSettings { h: plan.h, tau: plan.tau, rtol: plan.rtol, atol: atol.clone() };
+    let scheme_settings =
+        SchemeSettings { h: plan.h, tau: plan.tau, rtol: plan.rtol, atol: atol.clone() };
     // The scheme's deterministic error: one realisation with zero amplitudes.
     let quiet = model.scaled(0.0);
     let t_max = start.t + 2.0 * orbit.before + 10.0 * plan.tau;
     let mut path = scheme::Path::default();
     let mut rng = rng::Rng::for_realisation(plan.seed, u64::MAX);
-    scheme::realisation(&quiet, start, &scheme_settings, Some(plan.event), start.t, t_max, &mut rng, &mut path)?;
+    scheme::realisation(
+        &quiet,
+        start,
+        &scheme_settings,
+        Some(plan.event),
+        start.t,
+        t_max,
+        &mut rng,
+        &mut path,
+    )?;
     let event_time_without_noise = path.t_event;
     let record_until = match plan.alignment {
         Alignment::OwnEvent => start.t,
         Alignment::Deterministic => orbit.t_event + plan.h,
     };
-    let spec = ensemble::EnsembleSpec { model, start, scheme: &scheme_settings, event: Some(plan.event), record_until, t_max, seed: plan.seed };
+    let spec = ensemble::EnsembleSpec {
+        model,
+        start,
+        scheme: &scheme_settings,
+        event: Some(plan.event),
+        record_until,
+        t_max,
+        seed: plan.seed,
+    };
     let fixed_reference = (plan.alignment == Alignment::Deterministic).then_some(orbit.t_event);
     let sampling = ensemble::Sampling { s: &plan.s, fixed_reference };
     let started = std::time::Instant::now();
     let data = ensemble::run(&spec, &sampling, plan.realisations, threads, progress)?;
-    Ok(Realisations { data, atol, event_time_without_noise, wall_time_s: started.elapsed().as_secs_f64() })
+    Ok(Realisations {
+        data,
+        atol,
+        event_time_without_noise,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
 }

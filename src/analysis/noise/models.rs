@@ -137,12 +137,18 @@ impl NoiseModel {
     /// The same model with every amplitude multiplied by `factor`.
     pub fn scaled(&self, factor: f64) -> Self {
         match *self {
-            NoiseModel::Drr { system, amplitudes } => NoiseModel::Drr { system, amplitudes: amplitudes.map(|a| a * factor) },
-            NoiseModel::SaddleNode { system, amplitude } => NoiseModel::SaddleNode { system, amplitude: amplitude * factor },
+            NoiseModel::Drr { system, amplitudes } => {
+                NoiseModel::Drr { system, amplitudes: amplitudes.map(|a| a * factor) }
+            }
+            NoiseModel::SaddleNode { system, amplitude } => {
+                NoiseModel::SaddleNode { system, amplitude: amplitude * factor }
+            }
             NoiseModel::VanDerPol { system, amplitudes } => {
                 NoiseModel::VanDerPol { system, amplitudes: amplitudes.map(|a| a * factor) }
             }
-            NoiseModel::Linear { rate, amplitude } => NoiseModel::Linear { rate, amplitude: amplitude * factor },
+            NoiseModel::Linear { rate, amplitude } => {
+                NoiseModel::Linear { rate, amplitude: amplitude * factor }
+            }
         }
     }
 
@@ -171,10 +177,14 @@ impl NoiseModel {
     /// x_offset = x − x³/3 − y, the fast variable's distance from its slow manifold.
     pub fn observables(&self) -> &'static [(&'static str, Observable)] {
         match self {
-            NoiseModel::Drr { .. } => {
-                &[("u", Observable::Component(0)), ("v", Observable::ExpOf(1)), ("theta", Observable::Component(2))]
+            NoiseModel::Drr { .. } => &[
+                ("u", Observable::Component(0)),
+                ("v", Observable::ExpOf(1)),
+                ("theta", Observable::Component(2)),
+            ],
+            NoiseModel::SaddleNode { .. } | NoiseModel::Linear { .. } => {
+                &[("x", Observable::Component(0))]
             }
-            NoiseModel::SaddleNode { .. } | NoiseModel::Linear { .. } => &[("x", Observable::Component(0))],
             NoiseModel::VanDerPol { .. } => &[
                 ("x", Observable::Component(0)),
                 ("y", Observable::Component(1)),
@@ -191,7 +201,9 @@ impl NoiseModel {
                 b[1] = amplitudes[1] * (-x[W]).exp();
                 b[2] = amplitudes[2];
             }
-            NoiseModel::SaddleNode { amplitude, .. } | NoiseModel::Linear { amplitude, .. } => b[0] = *amplitude,
+            NoiseModel::SaddleNode { amplitude, .. } | NoiseModel::Linear { amplitude, .. } => {
+                b[0] = *amplitude
+            }
             NoiseModel::VanDerPol { amplitudes, .. } => b[..2].copy_from_slice(amplitudes),
         }
     }
@@ -272,7 +284,11 @@ mod tests {
         let amplitudes = [0.1, 3e3, 0.2];
         for (name, state_law) in StateLaw::ALL {
             for eta_damping in [0.0, 0.37] {
-                let params = DrrParams { state_law, eta: eta_damping, ..DrrParams::new(gamma, xi, epsilon, Friction::Log) };
+                let params = DrrParams {
+                    state_law,
+                    eta: eta_damping,
+                    ..DrrParams::new(gamma, xi, epsilon, Friction::Log)
+                };
                 let m = NoiseModel::Drr { system: Drr::new(params), amplitudes };
                 for x in [[0.3f64, -0.4, 0.2], [1.0, 0.1, -0.3], [-2.0, 2.0, 1.0]] {
                     for noise in [[0.0; 3], [0.5, -1.2, 0.7]] {
@@ -282,7 +298,9 @@ mod tests {
                         let drift_theta = match state_law {
                             StateLaw::Slip => -v * (theta + c * w),
                             StateLaw::Ageing => c * ((-theta / c).exp() - v),
-                            StateLaw::Prz => c * ((-theta / c).exp() - v * v * (theta / c).exp() / 4.0),
+                            StateLaw::Prz => {
+                                c * ((-theta / c).exp() - v * v * (theta / c).exp() / 4.0)
+                            }
                         };
                         let expected = [
                             v - 1.0 + amplitudes[0] * noise[0],
@@ -293,9 +311,18 @@ mod tests {
                         m.forced_rhs(0.0, &x, &noise, &mut got);
                         for i in 0..3 {
                             // dw/dt is a difference of terms of size γ²(|u| + (|θ| + |ln v| + ηv)/ξ)/v.
-                            let terms = (gamma * gamma * (u.abs() + (theta.abs() + w.abs() + eta_damping * v) / xi) + amplitudes[1]) / v;
+                            let terms = (gamma
+                                * gamma
+                                * (u.abs() + (theta.abs() + w.abs() + eta_damping * v) / xi)
+                                + amplitudes[1])
+                                / v;
                             let scale = 1.0 + expected[i].abs() + if i == 1 { terms } else { 0.0 };
-                            assert!((got[i] - expected[i]).abs() <= 1e-14 * scale, "{name} η = {eta_damping} {x:?} {noise:?} component {i}: {} vs {}", got[i], expected[i]);
+                            assert!(
+                                (got[i] - expected[i]).abs() <= 1e-14 * scale,
+                                "{name} η = {eta_damping} {x:?} {noise:?} component {i}: {} vs {}",
+                                got[i],
+                                expected[i]
+                            );
                         }
                     }
                 }

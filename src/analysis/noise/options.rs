@@ -75,7 +75,12 @@ pub struct NoiseOptions {
 
 /// Validates the options for a model with `dim` components; `gamma2` is γ² for the DRR (the
 /// amplitudes must stay below it). The error names the field.
-pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -> Result<(), InvalidOption> {
+pub fn validate(
+    o: &NoiseOptions,
+    dim: usize,
+    kind: &str,
+    gamma2: Option<f64>,
+) -> Result<(), InvalidOption> {
     let bad = |field: &str, message: String| Err(InvalidOption::new(field, message));
     let names = match kind {
         "drr" => "(η_u, η_v, η_θ)",
@@ -83,7 +88,10 @@ pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -
         _ => "(η_x, η_y)",
     };
     if o.amplitudes.len() != dim {
-        return bad("amplitudes", format!("has {} values; give {dim}, one per component {names}", o.amplitudes.len()));
+        return bad(
+            "amplitudes",
+            format!("has {} values; give {dim}, one per component {names}", o.amplitudes.len()),
+        );
     }
     for (i, a) in o.amplitudes.iter().enumerate() {
         if !(a.is_finite() && *a >= 0.0) {
@@ -100,7 +108,9 @@ pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -
     }
     let positive = |field: &str, v: Option<f64>, hint: &str| -> Result<(), InvalidOption> {
         match v {
-            Some(x) if !(x.is_finite() && x > 0.0) => Err(InvalidOption::new(field, format!("{x} must be a finite number > 0 ({hint})"))),
+            Some(x) if !(x.is_finite() && x > 0.0) => {
+                Err(InvalidOption::new(field, format!("{x} must be a finite number > 0 ({hint})")))
+            }
             _ => Ok(()),
         }
     };
@@ -108,7 +118,10 @@ pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -
     positive("start_before_event", o.start_before_event, "a duration")?;
     if let Some(k) = o.steps_per_correlation_time {
         if !(k.is_finite() && (2.0..=1e4).contains(&k)) {
-            return bad("steps_per_correlation_time", format!("{k} must be between 2 and 1e4 (default 10)"));
+            return bad(
+                "steps_per_correlation_time",
+                format!("{k} must be between 2 and 1e4 (default 10)"),
+            );
         }
     }
     if let Some(r) = o.realisations {
@@ -146,7 +159,10 @@ pub fn validate(o: &NoiseOptions, dim: usize, kind: &str, gamma2: Option<f64>) -
     }
     if let Some(times) = &o.correlation_curves_at {
         if let Some(i) = times.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
-            return bad(&format!("correlation_curves_at[{i}]"), format!("{} must be a time before the event > 0", times[i]));
+            return bad(
+                &format!("correlation_curves_at[{i}]"),
+                format!("{} must be a time before the event > 0", times[i]),
+            );
         }
     }
     match (kind, o.event_level) {

@@ -38,10 +38,18 @@ impl NoiseReport {
             );
         }
         let f = |v: Option<f64>| v.map_or("      -".to_string(), |v| format!("{v:8.4}"));
-        s += &format!("  correlation time of {} (half-height width of Γ; ensemble / linear response):\n", self.correlation_variable);
+        s += &format!(
+            "  correlation time of {} (half-height width of Γ; ensemble / linear response):\n",
+            self.correlation_variable
+        );
         let step = (self.correlation_time.len() / 8).max(1);
         for p in self.correlation_time.iter().step_by(step) {
-            s += &format!("    t_c − t = {:9.4}: τ = {} / {}\n", p.t_before_event, f(p.tau), f(p.tau_linear_response));
+            s += &format!(
+                "    t_c − t = {:9.4}: τ = {} / {}\n",
+                p.t_before_event,
+                f(p.tau),
+                f(p.tau_linear_response)
+            );
         }
         if let Some(g) = &self.growth {
             s += &format!(
@@ -91,7 +99,10 @@ pub fn combine(reports: &[(String, serde_json::Value)]) -> Result<Vec<Curve>, St
     reports
         .iter()
         .map(|(source, r)| {
-            let noise = r.get("noise").filter(|n| n.is_object()).ok_or_else(|| format!("{source}: the report has no \"noise\" section"))?;
+            let noise = r
+                .get("noise")
+                .filter(|n| n.is_object())
+                .ok_or_else(|| format!("{source}: the report has no \"noise\" section"))?;
             let text = |v: &serde_json::Value| v.as_str().unwrap_or("").to_string();
             Ok(Curve {
                 source: source.clone(),

@@ -144,10 +144,22 @@ mod tests {
 
     #[test]
     fn streams_depend_on_seed_and_index_only() {
-        let a: Vec<u64> = (0..4).map(|_| 0).scan(Rng::for_realisation(1, 5), |g, _: u64| Some(g.next_u64())).collect();
-        let b: Vec<u64> = (0..4).map(|_| 0).scan(Rng::for_realisation(1, 5), |g, _: u64| Some(g.next_u64())).collect();
-        let c: Vec<u64> = (0..4).map(|_| 0).scan(Rng::for_realisation(1, 6), |g, _: u64| Some(g.next_u64())).collect();
-        let d: Vec<u64> = (0..4).map(|_| 0).scan(Rng::for_realisation(2, 5), |g, _: u64| Some(g.next_u64())).collect();
+        let a: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(Rng::for_realisation(1, 5), |g, _: u64| Some(g.next_u64()))
+            .collect();
+        let b: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(Rng::for_realisation(1, 5), |g, _: u64| Some(g.next_u64()))
+            .collect();
+        let c: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(Rng::for_realisation(1, 6), |g, _: u64| Some(g.next_u64()))
+            .collect();
+        let d: Vec<u64> = (0..4)
+            .map(|_| 0)
+            .scan(Rng::for_realisation(2, 5), |g, _: u64| Some(g.next_u64()))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
         assert_ne!(a, d);

@@ -31,8 +31,8 @@ use super::models::{EventKind, NoiseModel, MAX_DIM};
 use super::ou::{self, OuStep};
 use super::rng::Rng;
 use crate::analysis::AnalysisError;
-use crate::solver::{self, Method};
 use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Stats, Task, Tolerance};
+use crate::solver::{self, Method};
 use std::cell::Cell;
 
 /// The OU values around the current interval [t_k, t_{k+1}]: η_{k−1}, η_k, η_{k+1}, η_{k+2}.
@@ -58,9 +58,12 @@ impl Forced<'_> {
         // (0, 0, 1, 0) (and (1, 0, 0, 0)): the forcing is continuous bit for bit across a node.
         let s = (t - seg.t0) / (seg.t1 - seg.t0);
         let (s2, s3) = (s * s, s * s * s);
-        let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
+        let (h00, h10, h01, h11) =
+            (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
         let [em, e0, e1, e2] = seg.eta;
-        std::array::from_fn(|i| h00 * e0[i] + h01 * e1[i] + 0.5 * (h10 * (e1[i] - em[i]) + h11 * (e2[i] - e0[i])))
+        std::array::from_fn(|i| {
+            h00 * e0[i] + h01 * e1[i] + 0.5 * (h10 * (e1[i] - em[i]) + h11 * (e2[i] - e0[i]))
+        })
     }
 }
 
@@ -155,8 +158,14 @@ impl Path {
         let (ya, yb) = (self.x[k * n + i], self.x[(k + 1) * n + i]);
         let (da, db) = (self.f[k * n + i] * self.h, self.f[(k + 1) * n + i] * self.h);
         let (s2, s3) = (s * s, s * s * s);
-        let value = (2.0 * s3 - 3.0 * s2 + 1.0) * ya + (s3 - 2.0 * s2 + s) * da + (3.0 * s2 - 2.0 * s3) * yb + (s3 - s2) * db;
-        let slope = (6.0 * s2 - 6.0 * s) * ya + (3.0 * s2 - 4.0 * s + 1.0) * da + (6.0 * s - 6.0 * s2) * yb + (3.0 * s2 - 2.0 * s) * db;
+        let value = (2.0 * s3 - 3.0 * s2 + 1.0) * ya
+            + (s3 - 2.0 * s2 + s) * da
+            + (3.0 * s2 - 2.0 * s3) * yb
+            + (s3 - s2) * db;
+        let slope = (6.0 * s2 - 6.0 * s) * ya
+            + (3.0 * s2 - 4.0 * s + 1.0) * da
+            + (6.0 * s - 6.0 * s2) * yb
+            + (3.0 * s2 - 2.0 * s) * db;
         (value, slope / self.h)
     }
 
@@ -181,7 +190,11 @@ impl Path {
             let n = self.n;
             let (ya, yb) = (self.x[k * n + i], self.x[(k + 1) * n + i]);
             let (da, db) = (self.f[k * n + i] * self.h, self.f[(k + 1) * n + i] * self.h);
-            let (qa, qb, qc) = (6.0 * ya + 3.0 * da - 6.0 * yb + 3.0 * db, -6.0 * ya - 4.0 * da + 6.0 * yb - 2.0 * db, da);
+            let (qa, qb, qc) = (
+                6.0 * ya + 3.0 * da - 6.0 * yb + 3.0 * db,
+                -6.0 * ya - 4.0 * da + 6.0 * yb - 2.0 * db,
+                da,
+            );
             let mut roots = Vec::with_capacity(2);
             if qa.abs() > 1e-300 {
                 let disc = qb * qb - 4.0 * qa * qc;
@@ -262,7 +275,8 @@ pub fn realisation(
     let n = model.dim();
     let segment = Cell::new(Segment::default());
     let forced = Forced { model, segment: &segment };
-    let mut integ = solver::build_default(Method::Rodas5p, forced, start.t, &start.x, &settings.options())?;
+    let mut integ =
+        solver::build_default(Method::Rodas5p, forced, start.t, &start.x, &settings.options())?;
     let ou_step = OuStep::new(settings.h, settings.tau);
     // The path η_{−1}, η_0, η_1, η_2 (η_{−1} stationary), then one node further per interval.
     let mut eta = [[0.0; MAX_DIM]; 4];
@@ -271,7 +285,14 @@ pub fn realisation(
         eta[j] = eta[j - 1];
         ou_step.advance(&mut eta[j][..n], rng);
     }
-    *path = Path { n, t0: start.t, h: settings.h, x: std::mem::take(&mut path.x), f: std::mem::take(&mut path.f), ..Path::default() };
+    *path = Path {
+        n,
+        t0: start.t,
+        h: settings.h,
+        x: std::mem::take(&mut path.x),
+        f: std::mem::take(&mut path.f),
+        ..Path::default()
+    };
     path.x.clear();
     path.f.clear();
     let mut f = [0.0; MAX_DIM];
@@ -313,7 +334,9 @@ pub fn realisation(
                 match best {
                     None if below_arm && v > arm => best = Some((k, v)),
                     Some((_, b)) if v > b => best = Some((k, v)),
-                    Some((b, bv)) if v < bv - drop && k as f64 * settings.h + start.t >= record_until => {
+                    Some((b, bv))
+                        if v < bv - drop && k as f64 * settings.h + start.t >= record_until =>
+                    {
                         path.t_event = path.locate_maximum(b, component);
                         break;
                     }
@@ -388,7 +411,9 @@ pub fn deterministic_event(
                 let found = if armed && prev_end_slope > 0.0 && start_slope <= 0.0 {
                     Some(t_prev)
                 } else if armed && start_slope > 0.0 && end_slope <= 0.0 {
-                    Some(bisect(t_prev, t, |s| integ.dense(s, 1).map(|d| d[c] > 0.0).unwrap_or(false)))
+                    Some(bisect(t_prev, t, |s| {
+                        integ.dense(s, 1).map(|d| d[c] > 0.0).unwrap_or(false)
+                    }))
                 } else {
                     None
                 };
@@ -396,14 +421,16 @@ pub fn deterministic_event(
                 found
             }
             EventKind::CrossDown { component: c, level, arm } => {
-                let found = (armed && prev_x[c] >= level && x[c] < level)
-                    .then(|| bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] >= level).unwrap_or(false)));
+                let found = (armed && prev_x[c] >= level && x[c] < level).then(|| {
+                    bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] >= level).unwrap_or(false))
+                });
                 armed |= prev_x[c] > arm || x[c] > arm;
                 found
             }
             EventKind::CrossUp { component: c, level, arm } => {
-                let found = (armed && prev_x[c] <= level && x[c] > level)
-                    .then(|| bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] <= level).unwrap_or(false)));
+                let found = (armed && prev_x[c] <= level && x[c] > level).then(|| {
+                    bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] <= level).unwrap_or(false))
+                });
                 armed |= prev_x[c] < arm || x[c] < arm;
                 found
             }
@@ -413,7 +440,11 @@ pub fn deterministic_event(
             return Ok((tc, xc, integ.stats()));
         }
         if t >= t_max {
-            return Err(no_event(t, &x, format!("the deterministic orbit has no event before t = {t_max:e}")));
+            return Err(no_event(
+                t,
+                &x,
+                format!("the deterministic orbit has no event before t = {t_max:e}"),
+            ));
         }
         prev_x = x;
     }
@@ -438,7 +469,14 @@ fn bisect(mut a: f64, mut b: f64, mut before: impl FnMut(f64) -> bool) -> f64 {
 
 /// The deterministic states at the ascending `times` (all ≥ t0) from (t0, x0), Rodas5P at
 /// the given tolerances.
-pub fn deterministic_states(model: &NoiseModel, t0: f64, x0: &[f64], times: &[f64], rtol: f64, atol: &[f64]) -> Result<Vec<Vec<f64>>, SolverError> {
+pub fn deterministic_states(
+    model: &NoiseModel,
+    t0: f64,
+    x0: &[f64],
+    times: &[f64],
+    rtol: f64,
+    atol: &[f64],
+) -> Result<Vec<Vec<f64>>, SolverError> {
     let options = Options {
         max_steps: Some(10_000_000),
         max_err_test_fails: Some(20),
@@ -456,7 +494,14 @@ pub fn deterministic_states(model: &NoiseModel, t0: f64, x0: &[f64], times: &[f6
 }
 
 /// The deterministic state at time t1 from (t0, x0) (Rodas5P at the given tolerances).
-pub fn deterministic_state(model: &NoiseModel, t0: f64, x0: &[f64], t1: f64, rtol: f64, atol: &[f64]) -> Result<Vec<f64>, SolverError> {
+pub fn deterministic_state(
+    model: &NoiseModel,
+    t0: f64,
+    x0: &[f64],
+    t1: f64,
+    rtol: f64,
+    atol: &[f64],
+) -> Result<Vec<f64>, SolverError> {
     let options = Options {
         max_steps: Some(10_000_000),
         max_err_test_fails: Some(20),

@@ -6,8 +6,10 @@
 /// values from −far to 0, `log` values of |s| log-spaced from `far` down to `near` (dense near
 /// the event), 0, and the `extra` values in [−far, 0].
 pub fn grid(far: f64, near: f64, uniform: usize, log: usize, extra: &[f64]) -> Vec<f64> {
-    let fraction = |i: usize, count: usize| if count > 1 { i as f64 / (count - 1) as f64 } else { 0.0 };
-    let mut s: Vec<f64> = (0..log).map(|i| -(far.ln() + fraction(i, log) * (near.ln() - far.ln())).exp()).collect();
+    let fraction =
+        |i: usize, count: usize| if count > 1 { i as f64 / (count - 1) as f64 } else { 0.0 };
+    let mut s: Vec<f64> =
+        (0..log).map(|i| -(far.ln() + fraction(i, log) * (near.ln() - far.ln())).exp()).collect();
     s.extend((0..uniform).map(|i| -far * (1.0 - fraction(i, uniform))));
     s.push(0.0);
     s.extend(extra.iter().copied().filter(|v| *v >= -far && *v <= 0.0));
@@ -43,10 +45,19 @@ impl Moments {
     /// r at grid time k), summed in realisation order (so the result does not depend on how
     /// the realisations were scheduled), with covariance rows at `rows`. Covariances use the
     /// unbiased 1/(R − 1).
-    pub fn from_samples(samples: &[f64], realisations: usize, stride: usize, offset: usize, points: usize, rows: &[usize]) -> Self {
+    pub fn from_samples(
+        samples: &[f64],
+        realisations: usize,
+        stride: usize,
+        offset: usize,
+        points: usize,
+        rows: &[usize],
+    ) -> Self {
         let r_n = realisations as f64;
         let value = |r: usize, k: usize| samples[r * stride + offset + k];
-        let mean: Vec<f64> = (0..points).map(|k| (0..realisations).map(|r| value(r, k)).sum::<f64>() / r_n).collect();
+        let mean: Vec<f64> = (0..points)
+            .map(|k| (0..realisations).map(|r| value(r, k)).sum::<f64>() / r_n)
+            .collect();
         let mut var = vec![0.0; points];
         let mut cov: Vec<(usize, Vec<f64>)> = rows.iter().map(|&j| (j, vec![0.0; j + 1])).collect();
         let mut dev = vec![0.0; points];
@@ -89,7 +100,13 @@ pub enum Width {
 /// the variances: the smallest lag t' = s_j − s_k at which the normalised Γ falls to 1/2
 /// (linear interpolation between grid times); None if it stays above 1/2 back to the start of
 /// the grid, or σ(t_j) = 0.
-pub fn correlation_time(row: &[f64], var: &[f64], s: &[f64], j: usize, width: Width) -> Option<f64> {
+pub fn correlation_time(
+    row: &[f64],
+    var: &[f64],
+    s: &[f64],
+    j: usize,
+    width: Width,
+) -> Option<f64> {
     let g0 = row[j];
     if g0.is_nan() || g0 <= 0.0 {
         return None;
@@ -139,12 +156,17 @@ mod tests {
         let tau = correlation_time(&row, &var, &s, j, Width::Coefficient).unwrap();
         assert!((tau - t_c * 2f64.ln()).abs() < 1e-6, "{tau}");
         // A growing variance σ²(t) = e^{2t}: the half-height width shrinks, the coefficient's not.
-        let grow: Vec<f64> = (0..=j).map(|k| (s[j] + s[k]).exp() * (-(s[j] - s[k]) / t_c).exp()).collect();
+        let grow: Vec<f64> =
+            (0..=j).map(|k| (s[j] + s[k]).exp() * (-(s[j] - s[k]) / t_c).exp()).collect();
         let var: Vec<f64> = s.iter().map(|v| (2.0 * v).exp()).collect();
         let half = correlation_time(&grow, &var, &s, j, Width::HalfHeight).unwrap();
         let expected = 2f64.ln() / (1.0 + 1.0 / t_c);
         assert!((half - expected).abs() < 1e-6, "{half} vs {expected}");
-        assert!((correlation_time(&grow, &var, &s, j, Width::Coefficient).unwrap() - t_c * 2f64.ln()).abs() < 1e-6);
+        assert!(
+            (correlation_time(&grow, &var, &s, j, Width::Coefficient).unwrap() - t_c * 2f64.ln())
+                .abs()
+                < 1e-6
+        );
         // No half-height crossing within the grid.
         let short: Vec<f64> = (0..=50).map(|k| (-(s[50] - s[k]) / t_c).exp()).collect();
         assert_eq!(correlation_time(&short, &var, &s, 50, Width::HalfHeight), None);

@@ -11,8 +11,9 @@ use super::options::Alignment;
 use super::scheme;
 use super::statistics::{self, Moments, Width};
 use super::{
-    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, EventLinearity, Events, Growth, NoiseReport, Plan, Realisations, Series, Settings, SettledOrbit, Work,
-    DET_RTOL, EVENT_LINEARITY_LIMIT, SCHEME,
+    Agreement, CorrelationCurve, CorrelationPoint, Deterministic, EventLinearity, Events, Growth,
+    NoiseReport, Plan, Realisations, Series, Settings, SettledOrbit, Work, DET_RTOL,
+    EVENT_LINEARITY_LIMIT, SCHEME,
 };
 use crate::analysis::AnalysisError;
 use crate::integrate::{OdeSystem, SolverError};
@@ -27,7 +28,14 @@ pub(super) fn statistics(
     linear: Option<LinearResponse>,
     det_atol: &[f64],
 ) -> Result<NoiseReport, AnalysisError> {
-    let path_orbit = scheme::deterministic_states(model, orbit.start.t, &orbit.start.x, &plan.times, DET_RTOL, det_atol)?;
+    let path_orbit = scheme::deterministic_states(
+        model,
+        orbit.start.t,
+        &orbit.start.x,
+        &plan.times,
+        DET_RTOL,
+        det_atol,
+    )?;
     let rows = Rows::of(&plan);
     let observables = model.observables();
     let mut linear_steps = linear.as_ref().map_or(0, |l| l.steps);
@@ -36,7 +44,14 @@ pub(super) fn statistics(
     let mut agreement = Vec::new();
     let mut correlation_functions = Vec::new();
     for (o, &(name, obs)) in observables.iter().enumerate() {
-        let context = Context { model, plan: &plan, data: &realisations.data, linear: linear.as_ref(), rows: &rows, path_orbit: &path_orbit };
+        let context = Context {
+            model,
+            plan: &plan,
+            data: &realisations.data,
+            linear: linear.as_ref(),
+            rows: &rows,
+            path_orbit: &path_orbit,
+        };
         let stats = observable(&context, o, name, obs, o == 0, &mut linear_steps)?;
         agreement.extend(stats.agreement);
         correlation_functions.extend(stats.curves);
@@ -44,8 +59,17 @@ pub(super) fn statistics(
         series.push(stats.series);
     }
     let growth = growth(model, orbit, &plan, &series);
-    let linearity = linear.as_ref().map(|l| event_linearity(l, plan.h, orbit.t_event - orbit.start.t, &mut linear_steps)).transpose()?;
-    let events = event_spread(&realisations.data, orbit.t_event, plan.realisations, linear.as_ref(), linearity);
+    let linearity = linear
+        .as_ref()
+        .map(|l| event_linearity(l, plan.h, orbit.t_event - orbit.start.t, &mut linear_steps))
+        .transpose()?;
+    let events = event_spread(
+        &realisations.data,
+        orbit.t_event,
+        plan.realisations,
+        linear.as_ref(),
+        linearity,
+    );
     let work = work(&realisations, plan.realisations, linear.as_ref().map(|_| linear_steps));
     let deterministic = deterministic(model, orbit, realisations.event_time_without_noise);
     Ok(NoiseReport {
@@ -76,8 +100,10 @@ struct Rows {
 
 impl Rows {
     fn of(plan: &Plan) -> Self {
-        let report: Vec<usize> = plan.report_times.iter().map(|t| statistics::nearest(&plan.s, -t)).collect();
-        let curves: Vec<usize> = plan.curves_at.iter().map(|t| statistics::nearest(&plan.s, -t)).collect();
+        let report: Vec<usize> =
+            plan.report_times.iter().map(|t| statistics::nearest(&plan.s, -t)).collect();
+        let curves: Vec<usize> =
+            plan.curves_at.iter().map(|t| statistics::nearest(&plan.s, -t)).collect();
         let mut all: Vec<usize> = report.iter().chain(&curves).copied().collect();
         all.sort_unstable();
         all.dedup();
@@ -107,13 +133,30 @@ struct ObservableStats {
 /// Observable number `o`: the ensemble's moments, the linear response's, the correlation times
 /// at the report rows, their agreement and (`with_curves`) the Γ curves. The linear response's
 /// adjoint steps are added to `linear_steps`.
-fn observable(c: &Context<'_>, o: usize, name: &'static str, obs: Observable, with_curves: bool, linear_steps: &mut u64) -> Result<ObservableStats, SolverError> {
+fn observable(
+    c: &Context<'_>,
+    o: usize,
+    name: &'static str,
+    obs: Observable,
+    with_curves: bool,
+    linear_steps: &mut u64,
+) -> Result<ObservableStats, SolverError> {
     let (s, k_n) = (&c.plan.s, c.plan.s.len());
     let stride = c.model.observables().len() * k_n;
-    let m = Moments::from_samples(&c.data.samples, c.plan.realisations, stride, o * k_n, k_n, &c.rows.all);
+    let m = Moments::from_samples(
+        &c.data.samples,
+        c.plan.realisations,
+        stride,
+        o * k_n,
+        k_n,
+        &c.rows.all,
+    );
     let deterministic: Vec<f64> = c.path_orbit.iter().map(|x| obs.value(x)).collect();
-    let lin = c.linear.map(|l| linear_moments(c, l, obs, &deterministic, linear_steps)).transpose()?;
-    let tau_of = |m: &Moments, j: usize, width: Width| statistics::correlation_time(&row_of(m, j), &m.var, s, j, width);
+    let lin =
+        c.linear.map(|l| linear_moments(c, l, obs, &deterministic, linear_steps)).transpose()?;
+    let tau_of = |m: &Moments, j: usize, width: Width| {
+        statistics::correlation_time(&row_of(m, j), &m.var, s, j, width)
+    };
     let sigma = m.sigma();
     let sigma_lin = lin.as_ref().map(|l| l.sigma());
     let points: Vec<CorrelationPoint> = c
@@ -125,10 +168,14 @@ fn observable(c: &Context<'_>, o: usize, name: &'static str, obs: Observable, wi
             tau: tau_of(&m, j, Width::HalfHeight),
             tau_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::HalfHeight)),
             tau_coefficient: tau_of(&m, j, Width::Coefficient),
-            tau_coefficient_linear_response: lin.as_ref().and_then(|l| tau_of(l, j, Width::Coefficient)),
+            tau_coefficient_linear_response: lin
+                .as_ref()
+                .and_then(|l| tau_of(l, j, Width::Coefficient)),
         })
         .collect();
-    let agreement = sigma_lin.as_ref().map(|sl| agreement_of(name, &sigma, sl, &points, &c.rows.report, s, c.plan.realisations));
+    let agreement = sigma_lin
+        .as_ref()
+        .map(|sl| agreement_of(name, &sigma, sl, &points, &c.rows.report, s, c.plan.realisations));
     let curves = if with_curves {
         c.rows
             .curves
@@ -137,19 +184,28 @@ fn observable(c: &Context<'_>, o: usize, name: &'static str, obs: Observable, wi
                 t_before_event: -s[j],
                 lag: (0..=j).rev().map(|k| s[j] - s[k]).collect(),
                 gamma: row_of(&m, j).into_iter().rev().collect(),
-                gamma_linear_response: lin.as_ref().map(|l| row_of(l, j).into_iter().rev().collect()),
+                gamma_linear_response: lin
+                    .as_ref()
+                    .map(|l| row_of(l, j).into_iter().rev().collect()),
             })
             .collect()
     } else {
         Vec::new()
     };
-    let series = Series { name, mean: m.mean, deterministic, sigma, sigma_linear_response: sigma_lin };
+    let series =
+        Series { name, mean: m.mean, deterministic, sigma, sigma_linear_response: sigma_lin };
     Ok(ObservableStats { series, points, agreement, curves })
 }
 
 /// The linear response of an observable, δo = ∇o(x̄)·δx: its variances and the covariance
 /// rows at every needed row, with the deterministic values as its mean.
-fn linear_moments(c: &Context<'_>, l: &LinearResponse, obs: Observable, deterministic: &[f64], linear_steps: &mut u64) -> Result<Moments, SolverError> {
+fn linear_moments(
+    c: &Context<'_>,
+    l: &LinearResponse,
+    obs: Observable,
+    deterministic: &[f64],
+    linear_steps: &mut u64,
+) -> Result<Moments, SolverError> {
     let n = c.model.dim();
     let own = c.plan.alignment == Alignment::OwnEvent;
     let grads: Vec<Vec<f64>> = l
@@ -182,7 +238,13 @@ fn row_of(m: &Moments, j: usize) -> Vec<f64> {
 
 /// The realisations' event times against the deterministic one: mean shift and spread, with
 /// the linear response's spread.
-fn event_spread(data: &EnsembleData, t_event: f64, realisations: usize, linear: Option<&LinearResponse>, linearity: Option<EventLinearity>) -> Events {
+fn event_spread(
+    data: &EnsembleData,
+    t_event: f64,
+    realisations: usize,
+    linear: Option<&LinearResponse>,
+    linearity: Option<EventLinearity>,
+) -> Events {
     let r_n = realisations as f64;
     let shifts: Vec<f64> = data.event_times.iter().map(|t| t - t_event).collect();
     let mean_shift = shifts.iter().sum::<f64>() / r_n;
@@ -197,12 +259,18 @@ const LAGS_PER_DECADE: f64 = 8.0;
 /// at the lag σ_tc (the linear event-time spread), and ρ_g's half-height width on log-spaced
 /// lags from 1e-4 · min(σ_tc, h) to min(0.9 · `span`, 1e3 · max(σ_tc, h)), h the noise step;
 /// `span` = t_c − t_start. The steps are added to `linear_steps`.
-fn event_linearity(l: &LinearResponse, h: f64, span: f64, linear_steps: &mut u64) -> Result<EventLinearity, SolverError> {
+fn event_linearity(
+    l: &LinearResponse,
+    h: f64,
+    span: f64,
+    linear_steps: &mut u64,
+) -> Result<EventLinearity, SolverError> {
     let sigma = l.event_time_std;
     let shortest = if sigma > 0.0 { sigma.min(h) } else { h };
     let (lo, hi) = (1e-4 * shortest, (0.9 * span).min(1e3 * sigma.max(h)));
     let count = (LAGS_PER_DECADE * (hi / lo).log10()).ceil().max(1.0) as usize;
-    let mut lags: Vec<f64> = (0..=count).map(|i| lo * (hi / lo).powf(i as f64 / count as f64)).collect();
+    let mut lags: Vec<f64> =
+        (0..=count).map(|i| lo * (hi / lo).powf(i as f64 / count as f64)).collect();
     let at_spread = sigma.clamp(lo, hi);
     lags.push(at_spread);
     lags.sort_by(|a, b| a.total_cmp(b));
@@ -216,8 +284,13 @@ fn event_linearity(l: &LinearResponse, h: f64, span: f64, linear_steps: &mut u64
         let (a, b) = (lags[i - 1].ln(), lags[i].ln());
         (a + (r0 - 0.5) / (r0 - r1) * (b - a)).exp()
     });
-    let own_frame_deviation = e.own_frame[lags.iter().position(|s| *s == at_spread).expect("an examined lag")];
-    Ok(EventLinearity { own_frame_deviation, event_function_correlation_time: width, valid: own_frame_deviation <= EVENT_LINEARITY_LIMIT })
+    let own_frame_deviation =
+        e.own_frame[lags.iter().position(|s| *s == at_spread).expect("an examined lag")];
+    Ok(EventLinearity {
+        own_frame_deviation,
+        event_function_correlation_time: width,
+        valid: own_frame_deviation <= EVENT_LINEARITY_LIMIT,
+    })
 }
 
 /// The settings as used.
@@ -243,7 +316,11 @@ fn settings(model: &NoiseModel, orbit: &SettledOrbit, plan: Plan, atol: Vec<f64>
 }
 
 /// The deterministic orbit's section, with the scheme's own event-time error.
-fn deterministic(model: &NoiseModel, orbit: &SettledOrbit, event_time_without_noise: f64) -> Deterministic {
+fn deterministic(
+    model: &NoiseModel,
+    orbit: &SettledOrbit,
+    event_time_without_noise: f64,
+) -> Deterministic {
     Deterministic {
         period: orbit.period,
         burn_in_events: orbit.burn_in_events,
@@ -274,7 +351,15 @@ fn work(realisations: &Realisations, count: usize, linear_response_steps: Option
 
 /// Ensemble against linear response for one observable over the report rows: σ's largest
 /// relative difference and where it exceeds 4 standard errors, τ's median and largest.
-fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[CorrelationPoint], report_rows: &[usize], s: &[f64], realisations: usize) -> Agreement {
+fn agreement_of(
+    name: &'static str,
+    sigma: &[f64],
+    sigma_lin: &[f64],
+    points: &[CorrelationPoint],
+    report_rows: &[usize],
+    s: &[f64],
+    realisations: usize,
+) -> Agreement {
     let se = 1.0 / (2.0 * (realisations as f64 - 1.0)).sqrt();
     let mut max_rel = 0.0f64;
     let mut disagree = Vec::new();
@@ -306,14 +391,23 @@ fn agreement_of(name: &'static str, sigma: &[f64], sigma_lin: &[f64], points: &[
 }
 
 /// DRR: the growth of σ_v against v over (t_f − t0, t_f), t_f = t_c − 0.1, from the series.
-fn growth(model: &NoiseModel, orbit: &SettledOrbit, plan: &Plan, series: &[Series]) -> Option<Growth> {
+fn growth(
+    model: &NoiseModel,
+    orbit: &SettledOrbit,
+    plan: &Plan,
+    series: &[Series],
+) -> Option<Growth> {
     match (model, orbit.t0) {
         (NoiseModel::Drr { .. }, Some(t0)) if !plan.growth_points.is_empty() => {
-            let (jf, j0) = (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));
+            let (jf, j0) =
+                (statistics::nearest(&plan.s, -0.1), statistics::nearest(&plan.s, -(0.1 + t0)));
             let v = &series[1];
             let v_growth = v.mean[jf] / v.mean[j0];
             let sigma_v_growth = v.sigma[jf] / v.sigma[j0];
-            let lin = v.sigma_linear_response.as_ref().map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
+            let lin = v
+                .sigma_linear_response
+                .as_ref()
+                .map(|sl| (v.deterministic[jf] / v.deterministic[j0], sl[jf] / sl[j0]));
             Some(Growth {
                 t_f_before_event: 0.1,
                 interval: t0,

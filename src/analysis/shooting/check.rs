@@ -71,8 +71,11 @@ pub struct Checked {
 
 /// The eigenvalues of a 2×2 map, by decreasing modulus.
 pub fn eigenvalues(m: &Matrix2<f64>) -> Vec<Multiplier> {
-    let mut mu: Vec<Multiplier> =
-        m.complex_eigenvalues().iter().map(|z| Multiplier { re: z.re, im: z.im, modulus: z.norm() }).collect();
+    let mut mu: Vec<Multiplier> = m
+        .complex_eigenvalues()
+        .iter()
+        .map(|z| Multiplier { re: z.re, im: z.im, modulus: z.norm() })
+        .collect();
     mu.sort_by(|a, b| b.modulus.total_cmp(&a.modulus));
     mu
 }
@@ -129,10 +132,19 @@ pub fn check(
     let from_dp = eigenvalues(dp);
     let finite = from_dp.iter().all(|m| m.re.is_finite() && m.im.is_finite());
     if trivial_error <= settings.multiplier_check_above && finite {
-        return Checked { multipliers: Some(from_dp), jacobian: Some(*dp), source: MultiplierSource::SectionJacobian, check: None, note: None };
+        return Checked {
+            multipliers: Some(from_dp),
+            jacobian: Some(*dp),
+            source: MultiplierSource::SectionJacobian,
+            check: None,
+            note: None,
+        };
     }
     let why = if finite {
-        format!("the trivial multiplier's error {trivial_error:.2e} exceeds {:.0e}", settings.multiplier_check_above)
+        format!(
+            "the trivial multiplier's error {trivial_error:.2e} exceeds {:.0e}",
+            settings.multiplier_check_above
+        )
     } else {
         "DP is not finite".to_string()
     };
@@ -145,7 +157,13 @@ pub fn check(
         Ok(p) => p,
         Err(e) => {
             let note = format!("{why}, and the map's central differences failed: {e}");
-            return Checked { multipliers: None, jacobian: None, source: MultiplierSource::Unresolved, check: None, note: Some(note) };
+            return Checked {
+                multipliers: None,
+                jacobian: None,
+                source: MultiplierSource::Unresolved,
+                check: None,
+                note: Some(note),
+            };
         }
     };
     judge(&why, steps, *dp, &coarse, fine)
@@ -153,24 +171,52 @@ pub fn check(
 
 /// The verdict from DP and the map's differences at the larger and the smaller step (module
 /// docs); `why` says why the check ran.
-fn judge(why: &str, steps: [f64; 2], dp: Matrix2<f64>, coarse: &Matrix2<f64>, fine: Matrix2<f64>) -> Checked {
+fn judge(
+    why: &str,
+    steps: [f64; 2],
+    dp: Matrix2<f64>,
+    coarse: &Matrix2<f64>,
+    fine: Matrix2<f64>,
+) -> Checked {
     let from_dp = eigenvalues(&dp);
     let from_fine = eigenvalues(&fine);
     let spread = distance(&eigenvalues(coarse), &from_fine);
     let dp_difference = distance(&from_dp, &from_fine);
-    let check = Some(MultiplierCheck { relative_steps: steps, differences_spread: spread, section_jacobian_difference: dp_difference });
+    let check = Some(MultiplierCheck {
+        relative_steps: steps,
+        differences_spread: spread,
+        section_jacobian_difference: dp_difference,
+    });
     if spread > RESOLVED {
         let note = format!(
             "{why}; the map's central differences at the two step sizes disagree by {spread:.2e} (> {RESOLVED:e}; DP's multipliers are {dp_difference:.2e} from the finer): the multipliers are unresolved and the stability unknown"
         );
-        Checked { multipliers: None, jacobian: None, source: MultiplierSource::Unresolved, check, note: Some(note) }
+        Checked {
+            multipliers: None,
+            jacobian: None,
+            source: MultiplierSource::Unresolved,
+            check,
+            note: Some(note),
+        }
     } else if dp_difference <= RESOLVED.max(2.0 * spread) {
-        Checked { multipliers: Some(from_dp), jacobian: Some(dp), source: MultiplierSource::SectionJacobianChecked, check, note: None }
+        Checked {
+            multipliers: Some(from_dp),
+            jacobian: Some(dp),
+            source: MultiplierSource::SectionJacobianChecked,
+            check,
+            note: None,
+        }
     } else {
         let note = format!(
             "{why}; DP's multipliers are {dp_difference:.2e} from the map's central differences (spread {spread:.1e}): the differences' are reported"
         );
-        Checked { multipliers: Some(from_fine), jacobian: Some(fine), source: MultiplierSource::MapDifferences, check, note: Some(note) }
+        Checked {
+            multipliers: Some(from_fine),
+            jacobian: Some(fine),
+            source: MultiplierSource::MapDifferences,
+            check,
+            note: Some(note),
+        }
     }
 }
 
@@ -203,7 +249,10 @@ mod tests {
         assert!(c.note.unwrap().contains("the differences' are reported"));
         // The differences disagree between their two steps: no number, whatever DP says.
         let c = judge("why", steps, map(0.05), &map(0.3), map(0.05));
-        assert_eq!((c.source, c.multipliers, c.jacobian), (MultiplierSource::Unresolved, None, None));
+        assert_eq!(
+            (c.source, c.multipliers, c.jacobian),
+            (MultiplierSource::Unresolved, None, None)
+        );
         assert!(c.note.unwrap().contains("unresolved"));
     }
 }

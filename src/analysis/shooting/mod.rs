@@ -145,7 +145,10 @@ impl PeriodicOrbit {
 
     /// The largest non-trivial multiplier that is real and negative (the one that can flip).
     pub fn negative_real_multiplier(&self) -> Option<f64> {
-        self.nontrivial().iter().find(|m| m.im.abs() <= 1e-9 * m.modulus && m.re < 0.0).map(|m| m.re)
+        self.nontrivial()
+            .iter()
+            .find(|m| m.im.abs() <= 1e-9 * m.modulus && m.re < 0.0)
+            .map(|m| m.re)
     }
 }
 
@@ -209,7 +212,9 @@ pub enum NoOrbit {
         residual: f64,
     },
     /// DP − I is singular: a multiplier 1.
-    #[error("the linearised Poincaré map has a multiplier 1 (DP − I is singular): a bifurcation point")]
+    #[error(
+        "the linearised Poincaré map has a multiplier 1 (DP − I is singular): a bifurcation point"
+    )]
     Singular,
     /// Eight halvings of the Newton step did not reduce the residual.
     #[error("Newton stalled at residual {residual:.3e} (no decrease after 8 step halvings)")]
@@ -260,7 +265,13 @@ fn distance_from_fixed_point(drr: &Drr, x: [f64; 2]) -> f64 {
 }
 
 /// `returns` successive returns from the section point x.
-fn returns(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], count: usize, limits: &Limits) -> Result<Vec<Return>, AnalysisError> {
+fn returns(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    x: [f64; 2],
+    count: usize,
+    limits: &Limits,
+) -> Result<Vec<Return>, AnalysisError> {
     let mut out: Vec<Return> = Vec::with_capacity(count);
     let mut start = section(x);
     for _ in 0..count {
@@ -280,11 +291,23 @@ fn map_jacobian(rs: &[Return]) -> Matrix2<f64> {
 /// The eigenvalue of the fixed-time monodromy matrix closest to 1 (the trivial multiplier).
 fn trivial_multiplier(monodromy: &Matrix3<f64>) -> Multiplier {
     let distance = |z: &nalgebra::Complex<f64>| (z.re - 1.0).hypot(z.im);
-    let z = monodromy.complex_eigenvalues().iter().copied().min_by(|a, b| distance(a).total_cmp(&distance(b))).unwrap_or_default();
+    let z = monodromy
+        .complex_eigenvalues()
+        .iter()
+        .copied()
+        .min_by(|a, b| distance(a).total_cmp(&distance(b)))
+        .unwrap_or_default();
     Multiplier { re: z.re, im: z.im, modulus: z.norm() }
 }
 
-fn orbit_from(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], rs: &[Return], newton: (usize, f64), settings: &ShootingSettings) -> PeriodicOrbit {
+fn orbit_from(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    x: [f64; 2],
+    rs: &[Return],
+    newton: (usize, f64),
+    settings: &ShootingSettings,
+) -> PeriodicOrbit {
     let (iterations, residual) = newton;
     let monodromy = rs.iter().fold(Matrix3::identity(), |acc, r| r.fundamental * acc);
     let dp = map_jacobian(rs);
@@ -330,7 +353,9 @@ fn orbit_from(integ: &mut dyn Integrator, drr: &Drr, x: [f64; 2], rs: &[Return],
 fn stability(checked: &check::Checked) -> (Option<bool>, Option<String>) {
     let Some(mu) = &checked.multipliers else { return (None, None) };
     let uncertainty = checked.check.map_or(0.0, |c| match checked.source {
-        MultiplierSource::SectionJacobianChecked => c.differences_spread.max(c.section_jacobian_difference),
+        MultiplierSource::SectionJacobianChecked => {
+            c.differences_spread.max(c.section_jacobian_difference)
+        }
         _ => c.differences_spread,
     });
     let largest = mu.iter().map(|m| m.modulus).fold(0.0, f64::max);
@@ -362,9 +387,14 @@ pub fn newton(
         let trial = [rs[count - 1].end[U], rs[count - 1].end[THETA]];
         let trs = returns(integ, drr, trial, count, &settings.limits)?;
         let (tr, tres) = residual(drr, trial, &trs[count - 1].end);
-        iterations.push(Iteration { residual: res, period: rs.iter().map(|ret| ret.period).sum(), halvings: 0 });
+        iterations.push(Iteration {
+            residual: res,
+            period: rs.iter().map(|ret| ret.period).sum(),
+            halvings: 0,
+        });
         // Fast contraction, or a small oscillation still growing away from the fixed point.
-        let growing = distance_from_fixed_point(drr, trial) > 1.01 * distance_from_fixed_point(drr, x);
+        let growing =
+            distance_from_fixed_point(drr, trial) > 1.01 * distance_from_fixed_point(drr, x);
         let fast = tres < 0.5 * res || growing;
         (x, rs, r, res) = (trial, trs, tr, tres);
         if !fast || res <= settings.tolerance {
@@ -374,10 +404,15 @@ pub fn newton(
     let warmup = iterations.len();
     loop {
         if res <= settings.tolerance {
-            let amplitude = rs.iter().map(|ret| ret.peak[W]).fold(0.0, f64::max) - rs.iter().map(|ret| ret.ln_v_min).fold(0.0, f64::min);
-            let floor = 1e-9f64.max(1e3 * (settings.limits.w_tolerance.0 + settings.limits.w_tolerance.1));
+            let amplitude = rs.iter().map(|ret| ret.peak[W]).fold(0.0, f64::max)
+                - rs.iter().map(|ret| ret.ln_v_min).fold(0.0, f64::min);
+            let floor =
+                1e-9f64.max(1e3 * (settings.limits.w_tolerance.0 + settings.limits.w_tolerance.1));
             if amplitude < floor {
-                return Ok(Newton { orbit: Err(NoOrbit::FixedPoint { amplitude, floor }), iterations });
+                return Ok(Newton {
+                    orbit: Err(NoOrbit::FixedPoint { amplitude, floor }),
+                    iterations,
+                });
             }
             let orbit = orbit_from(integ, drr, x, &rs, (iterations.len(), res), settings);
             return Ok(Newton { orbit: Ok(orbit), iterations });
@@ -387,7 +422,9 @@ pub fn newton(
             return Ok(Newton { orbit: Err(why), iterations });
         }
         let dp = map_jacobian(&rs);
-        let Some(delta) = (dp - Matrix2::identity()).lu().solve(&nalgebra::Vector2::new(-r[0], -r[1])) else {
+        let Some(delta) =
+            (dp - Matrix2::identity()).lu().solve(&nalgebra::Vector2::new(-r[0], -r[1]))
+        else {
             return Ok(Newton { orbit: Err(NoOrbit::Singular), iterations });
         };
         let period: f64 = rs.iter().map(|ret| ret.period).sum();
@@ -420,7 +457,12 @@ pub fn newton(
 }
 
 /// Reaches the section from `y0` (the first upward crossing of v = 1).
-pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits: &Limits) -> Result<[f64; 2], AnalysisError> {
+pub fn reach_section(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    y0: [f64; 3],
+    limits: &Limits,
+) -> Result<[f64; 2], AnalysisError> {
     let r = period_map::flow_to_section(integ, drr, y0, false, limits)?;
     Ok([r.end[U], r.end[THETA]])
 }
@@ -429,14 +471,27 @@ pub fn reach_section(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], limits
 fn flip_direction(dp: &Matrix2<f64>, mu: f64) -> [f64; 2] {
     // (DP − μI) e = 0: e ⟂ the first row (or the second, whichever is larger).
     let a = dp - Matrix2::identity() * mu;
-    let (p, q) = if a.row(0).norm() >= a.row(1).norm() { (a[(0, 0)], a[(0, 1)]) } else { (a[(1, 0)], a[(1, 1)]) };
+    let (p, q) = if a.row(0).norm() >= a.row(1).norm() {
+        (a[(0, 0)], a[(0, 1)])
+    } else {
+        (a[(1, 0)], a[(1, 1)])
+    };
     let n = p.hypot(q);
-    if n > 0.0 { [-q / n, p / n] } else { [1.0, 0.0] }
+    if n > 0.0 {
+        [-q / n, p / n]
+    } else {
+        [1.0, 0.0]
+    }
 }
 
 /// Shooting from the integrator's scene start `y0`: reach the section, Newton, multipliers,
 /// and the doubled orbit when the period-1 orbit has a multiplier below −1.
-pub fn analyse(integ: &mut dyn Integrator, drr: &Drr, y0: [f64; 3], settings: &ShootingSettings) -> Result<ShootingReport, AnalysisError> {
+pub fn analyse(
+    integ: &mut dyn Integrator,
+    drr: &Drr,
+    y0: [f64; 3],
+    settings: &ShootingSettings,
+) -> Result<ShootingReport, AnalysisError> {
     let x0 = reach_section(integ, drr, y0, &settings.limits)?;
     let result = newton(integ, drr, x0, 1, settings)?;
     let mut report = ShootingReport {
@@ -468,7 +523,9 @@ fn period_doubling(
     orbit: &PeriodicOrbit,
     settings: &ShootingSettings,
 ) -> Result<Option<PeriodDoubling>, AnalysisError> {
-    let (Some(mu), Some(dp)) = (flip_multiplier(orbit), orbit.map_jacobian) else { return Ok(None) };
+    let (Some(mu), Some(dp)) = (flip_multiplier(orbit), orbit.map_jacobian) else {
+        return Ok(None);
+    };
     let x = [orbit.section_point[0], orbit.section_point[2]];
     let e = flip_direction(&dp, mu);
     let mut notes = Vec::new();
@@ -479,12 +536,23 @@ fn period_doubling(
             match newton(integ, drr, start, 2, settings).map(|n| n.orbit) {
                 Ok(Ok(doubled)) => {
                     let p = [doubled.section_point[0], doubled.section_point[2]];
-                    let distinct = (p[0] - x[0]).abs().max((p[1] - x[1]).abs()) > 1e3 * settings.tolerance * (1.0 + x[0].abs().max(x[1].abs()));
+                    let distinct = (p[0] - x[0]).abs().max((p[1] - x[1]).abs())
+                        > 1e3 * settings.tolerance * (1.0 + x[0].abs().max(x[1].abs()));
                     if distinct {
-                        let note = format!("found from a displacement {:+e} along the flip eigenvector", sign * scale);
-                        return Ok(Some(PeriodDoubling { multiplier: mu, doubled: Some(doubled), note }));
+                        let note = format!(
+                            "found from a displacement {:+e} along the flip eigenvector",
+                            sign * scale
+                        );
+                        return Ok(Some(PeriodDoubling {
+                            multiplier: mu,
+                            doubled: Some(doubled),
+                            note,
+                        }));
                     }
-                    notes.push(format!("displacement {:+e}: converged back to the period-1 orbit", sign * scale));
+                    notes.push(format!(
+                        "displacement {:+e}: converged back to the period-1 orbit",
+                        sign * scale
+                    ));
                 }
                 Ok(Err(why)) => notes.push(format!("displacement {:+e}: {why}", sign * scale)),
                 Err(failure) => notes.push(format!("displacement {:+e}: {failure}", sign * scale)),

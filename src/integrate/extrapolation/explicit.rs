@@ -122,7 +122,8 @@ impl<S: OdeSystem> Extrapolation<S> {
                     // the midpoint scheme ran stability-limited at steps of 1e-158 until
                     // max_steps. Failing the check here counts as stiff and switches.
                     let norm_f0 = scaled_norm((0..n).map(|i| self.core.f0[i] / self.scal[i]));
-                    let norm_df = scaled_norm((0..n).map(|i| (w.dy[i] - self.core.f0[i]) / self.scal[i]));
+                    let norm_df =
+                        scaled_norm((0..n).map(|i| (w.dy[i] - self.core.f0[i]) / self.scal[i]));
                     hj * norm_df <= 2.0 * (hj * norm_f0).max(1.0)
                 };
                 if !stable {
@@ -175,7 +176,8 @@ impl<S: OdeSystem> Extrapolation<S> {
         let w = &mut self.work;
         // Hermite part: y0, y1 − y0, aspl, bspl.
         for i in 0..n {
-            let (y0, y1, yp0, yp1) = (self.core.y[i], w.t[1][i], h * self.core.f0[i], h * w.fnew[i]);
+            let (y0, y1, yp0, yp1) =
+                (self.core.y[i], w.t[1][i], h * self.core.f0[i], h * w.fnew[i]);
             let ydiff = y1 - y0;
             w.poly_next[0][i] = y0;
             w.poly_next[1][i] = ydiff;
@@ -219,7 +221,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                     let (mut s, mut binom) = (0.0, 1.0);
                     for r in 0..=d {
                         let idx = m + d - 2 * r;
-                        let f = if idx == 0 { self.core.f0[i] } else { w.fsafe[offsets[kk] + idx - 1][i] };
+                        let f = if idx == 0 {
+                            self.core.f0[i]
+                        } else {
+                            w.fsafe[offsets[kk] + idx - 1][i]
+                        };
                         s += if r % 2 == 0 { binom * f } else { -binom * f };
                         binom = binom * (d - r) as f64 / (r + 1) as f64;
                     }
@@ -312,8 +318,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                     // acc = Σ_{m≥r} a_m u^{m−r}/(m−r)!
                     *qr = if (kmit as usize) >= r { acc } else { 0.0 };
                 }
-                const BINOM: [[f64; 4]; 4] =
-                    [[1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 2.0, 1.0, 0.0], [1.0, 3.0, 3.0, 1.0]];
+                const BINOM: [[f64; 4]; 4] = [
+                    [1.0, 0.0, 0.0, 0.0],
+                    [1.0, 1.0, 0.0, 0.0],
+                    [1.0, 2.0, 1.0, 0.0],
+                    [1.0, 3.0, 3.0, 1.0],
+                ];
                 let k = k as usize;
                 for r in 0..=k {
                     corr += BINOM[k][r] * wd[k - r] * qd[r];

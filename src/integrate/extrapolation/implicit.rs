@@ -27,7 +27,8 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// √(u·max(1e-5, |y_i|))). False if not finite.
     pub(super) fn compute_jacobian(&mut self) -> bool {
         let w = &mut self.work;
-        let ok = stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew);
+        let ok =
+            stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew);
         self.rho_jac = if ok { jacobian_bound(&w.jac, &self.scal, self.n) } else { f64::INFINITY };
         ok
     }

@@ -226,7 +226,11 @@ impl<S: OdeSystem> Extrapolation<S> {
         core.reject_unsupported(&[
             ("max_nonlin_iters", options.max_nonlin_iters.is_some(), no_newton),
             ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
-            ("jacobian_max_age", options.jacobian_max_age.is_some(), "the Jacobian is reused by the stability-check ratio"),
+            (
+                "jacobian_max_age",
+                options.jacobian_max_age.is_some(),
+                "the Jacobian is reused by the stability-check ratio",
+            ),
         ])?;
         let atol: Vec<f64> = match &options.atol {
             Tolerance::Scalar(a) => vec![*a; n],
@@ -441,7 +445,8 @@ impl<S: OdeSystem> Extrapolation<S> {
         loop {
             failures.attempts += 1;
             if failures.attempts > MAX_ATTEMPTS {
-                let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
+                let message =
+                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
                 return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
             }
             let (planned, last) = self.prepare_attempt()?;
@@ -449,8 +454,14 @@ impl<S: OdeSystem> Extrapolation<S> {
             let h_used = self.core.h;
             match self.attempt(first) {
                 Ok(Some(kc)) => {
-                    let xph = if last { self.core.stop_time.unwrap_or(self.core.x + self.core.h) } else { self.core.x + self.core.h };
-                    if self.mode == Mode::Explicit && !self.explicit_end_holds(xph, kc, h_used, &mut failures)? {
+                    let xph = if last {
+                        self.core.stop_time.unwrap_or(self.core.x + self.core.h)
+                    } else {
+                        self.core.x + self.core.h
+                    };
+                    if self.mode == Mode::Explicit
+                        && !self.explicit_end_holds(xph, kc, h_used, &mut failures)?
+                    {
                         continue;
                     }
                     if self.mode == Mode::Implicit {
@@ -486,7 +497,9 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
             self.theta > self.thet && !self.caljac
         };
-        if (self.mode == Mode::Explicit || (need_jacobian && !self.system.has_jacobian())) && !self.ensure_f0() {
+        if (self.mode == Mode::Explicit || (need_jacobian && !self.system.has_jacobian()))
+            && !self.ensure_f0()
+        {
             return Err(self.core.error(
                 ErrorKind::RhsFailure,
                 -6,
@@ -495,7 +508,11 @@ impl<S: OdeSystem> Extrapolation<S> {
         }
         if need_jacobian {
             if !self.compute_jacobian() {
-                return Err(self.core.error(ErrorKind::RhsFailure, -6, "the Jacobian is not finite".into()));
+                return Err(self.core.error(
+                    ErrorKind::RhsFailure,
+                    -6,
+                    "the Jacobian is not finite".into(),
+                ));
             }
             self.caljac = true;
         }
@@ -509,7 +526,13 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// continuous output and the next step) and ODEX's continuous output, whose error
     /// estimate bounds the next step and rejects the step when above 10. False when the step
     /// is to be retried (h already reduced).
-    fn explicit_end_holds(&mut self, xph: f64, kc: usize, h_used: f64, failures: &mut StepFailures) -> Result<bool, SolverError> {
+    fn explicit_end_holds(
+        &mut self,
+        xph: f64,
+        kc: usize,
+        h_used: f64,
+        failures: &mut StepFailures,
+    ) -> Result<bool, SolverError> {
         let w = &mut self.work;
         self.system.rhs(xph, &w.t[1], &mut w.fnew);
         self.core.stats.rhs_evals += 1;
@@ -525,8 +548,10 @@ impl<S: OdeSystem> Extrapolation<S> {
             self.core.stats.err_test_fails += 1;
             failures.rejections += 1;
             if failures.rejections >= self.max_err_test_fails {
-                let message =
-                    format!("{} error-test failures in one step (dense output, h = {h_used:e})", failures.rejections);
+                let message = format!(
+                    "{} error-test failures in one step (dense output, h = {h_used:e})",
+                    failures.rejections
+                );
                 return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
             }
             let hnew = self.core.posneg * self.hoptde;
@@ -566,12 +591,18 @@ impl<S: OdeSystem> Extrapolation<S> {
 
     /// After a step rejected by the error test (h and k already chosen for the retry): counts
     /// it against `max_err_test_fails`, reduces h, and feeds the stiffness test.
-    fn after_rejection(&mut self, h_used: f64, failures: &mut StepFailures) -> Result<(), SolverError> {
+    fn after_rejection(
+        &mut self,
+        h_used: f64,
+        failures: &mut StepFailures,
+    ) -> Result<(), SolverError> {
         self.core.stats.err_test_fails += 1;
         failures.rejections += 1;
         if failures.rejections >= self.max_err_test_fails {
-            let message =
-                format!("{} error-test failures in one step (h = {:e}, err = {:e})", failures.rejections, h_used, self.err);
+            let message = format!(
+                "{} error-test failures in one step (h = {:e}, err = {:e})",
+                failures.rejections, h_used, self.err
+            );
             return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
         }
         let hnew = self.core.h;
@@ -584,9 +615,18 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// After a row stopped by `failure`: an error with a fixed step (testing aid) or once its
     /// kind has failed too often in this step, otherwise h reduced by the scheme's factor;
     /// the stiffness test counts an unstable explicit attempt as stiff.
-    fn after_row_failure(&mut self, failure: Failure, h_used: f64, failures: &mut StepFailures) -> Result<(), SolverError> {
+    fn after_row_failure(
+        &mut self,
+        failure: Failure,
+        h_used: f64,
+        failures: &mut StepFailures,
+    ) -> Result<(), SolverError> {
         if self.fixed.is_some() && failure != Failure::NonFinite {
-            let message = format!("row {} failed ({failure:?}) with the fixed step h = {:e}", self.last_row + 1, self.core.h);
+            let message = format!(
+                "row {} failed ({failure:?}) with the fixed step h = {:e}",
+                self.last_row + 1,
+                self.core.h
+            );
             let (kind, flag) = if failure == Failure::Singular {
                 (ErrorKind::LinearSolver, -4)
             } else {
@@ -604,10 +644,18 @@ impl<S: OdeSystem> Extrapolation<S> {
                 failures.singular += 1;
                 self.core.stats.step_solve_fails += 1;
                 if failures.singular >= MAX_SINGULAR {
-                    let message = format!("iteration matrix singular {} times (h = {:e})", failures.singular, self.core.h);
+                    let message = format!(
+                        "iteration matrix singular {} times (h = {:e})",
+                        failures.singular, self.core.h
+                    );
                     return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
                 }
-                self.core.reduce(factor * self.core.h, ErrorKind::LinearSolver, -4, "singular iteration matrix")?;
+                self.core.reduce(
+                    factor * self.core.h,
+                    ErrorKind::LinearSolver,
+                    -4,
+                    "singular iteration matrix",
+                )?;
             }
             Failure::Unstable | Failure::ErrorGrowth => {
                 failures.row_fails += 1;
@@ -619,7 +667,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                     );
                     return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
                 }
-                self.core.reduce(factor * self.core.h, ErrorKind::ConvergenceFailures, -5, "stability check")?;
+                self.core.reduce(
+                    factor * self.core.h,
+                    ErrorKind::ConvergenceFailures,
+                    -5,
+                    "stability check",
+                )?;
             }
         }
         // An explicit attempt that overflowed is unstable too (measured: a stiff start at
@@ -682,7 +735,9 @@ impl<S: OdeSystem> Stepper for Extrapolation<S> {
         if let Some((h, k)) = self.fixed {
             let km = self.control().nj.len() - 1;
             if !(h.is_finite() && h > 0.0) || k == 0 || k > km {
-                return Err(format!("fixed step {h} must be finite and > 0, column {k} in 1..={km}"));
+                return Err(format!(
+                    "fixed step {h} must be finite and > 0, column {k} in 1..={km}"
+                ));
             }
         }
         Ok(())

@@ -56,7 +56,8 @@ impl<S: OdeSystem> Extrapolation<S> {
         for i in 0..self.n {
             let noise: f64 = (1..=kc).map(|j| weights[j] * w.noise[j][i]).sum();
             let increment = w.t[1][i];
-            let bound = self.atol[i] + UROUND * (2.0 * lambda * increment.abs() + (self.core.y[i] + increment).abs());
+            let bound = self.atol[i]
+                + UROUND * (2.0 * lambda * increment.abs() + (self.core.y[i] + increment).abs());
             if bound > 0.0 {
                 ratio = ratio.max(noise / bound);
             }
@@ -69,7 +70,12 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// keep it. False when the step is to be retried (h reduced, counted as an error-test
     /// failure); an error after `max_err_test_fails` such failures in one step or when h
     /// reaches `min_step`.
-    pub(super) fn rounding_holds(&mut self, kc: usize, h_used: f64, rejections: &mut u32) -> Result<bool, SolverError> {
+    pub(super) fn rounding_holds(
+        &mut self,
+        kc: usize,
+        h_used: f64,
+        rejections: &mut u32,
+    ) -> Result<bool, SolverError> {
         self.h_rounding = f64::INFINITY;
         if self.fixed.is_some() {
             return Ok(true);

@@ -88,7 +88,9 @@ impl<S: OdeSystem> Extrapolation<S> {
         }
         let stiff = match self.rho {
             _ if unstable => true,
-            Some(rho) => h_used.abs() * rho > STIFF_FRACTION * self.lsb[self.last_row.clamp(1, self.exp.km)],
+            Some(rho) => {
+                h_used.abs() * rho > STIFF_FRACTION * self.lsb[self.last_row.clamp(1, self.exp.km)]
+            }
             None => return,
         };
         if self.record(stiff) {

@@ -62,7 +62,11 @@ fn offsets(nj: &[f64]) -> Vec<usize> {
 pub(super) fn weight_moduli(nj: &[f64], k: usize) -> Vec<f64> {
     let mut c = vec![0.0; k + 1];
     for (i, ci) in c.iter_mut().enumerate().skip(1) {
-        *ci = (1..=k).filter(|&l| l != i).map(|l| (1.0 / nj[l]) / (1.0 / nj[l] - 1.0 / nj[i])).product::<f64>().abs();
+        *ci = (1..=k)
+            .filter(|&l| l != i)
+            .map(|l| (1.0 / nj[l]) / (1.0 / nj[l] - 1.0 / nj[i]))
+            .product::<f64>()
+            .abs();
     }
     c
 }
@@ -87,7 +91,8 @@ impl Control {
     /// NSEQU = 3; first = 2: its NSEQU = 4), arrays for `km` columns, and the columns in use
     /// limited to those whose roundoff stays below `rtol` (see [`roundoff_columns`]).
     pub(super) fn seulex(km: usize, first: usize, rtol: f64) -> Self {
-        let nj: Vec<f64> = (0..=km).map(|j| if j == 0 { 0.0 } else { (first + j - 1) as f64 }).collect();
+        let nj: Vec<f64> =
+            (0..=km).map(|j| if j == 0 { 0.0 } else { (first + j - 1) as f64 }).collect();
         let mut a = vec![0.0; km + 1];
         a[1] = WK_JAC + nj[1] * WK_ROW + WK_DEC;
         for j in 2..=km {
@@ -96,19 +101,46 @@ impl Control {
         let off = offsets(&nj);
         let weights = (0..=km).map(|k| weight_moduli(&nj, k)).collect();
         let km = roundoff_columns(&nj, km, rtol);
-        Self { km, nj, off, a, fac1: 0.1, fac2: 4.0, fac3: 0.7, fac4: 0.9, safe1: 0.6, safe2: 0.93, safe3: 0.5, weights }
+        Self {
+            km,
+            nj,
+            off,
+            a,
+            fac1: 0.1,
+            fac2: 4.0,
+            fac3: 0.7,
+            fac4: 0.9,
+            safe1: 0.6,
+            safe2: 0.93,
+            safe3: 0.5,
+            weights,
+        }
     }
 
     /// ODEX with the sequence 2, 6, 10, … (its NSEQU = 3, required by its dense output).
     pub(super) fn odex(km: usize) -> Self {
-        let nj: Vec<f64> = (0..=km).map(|j| if j == 0 { 0.0 } else { 4.0 * j as f64 - 2.0 }).collect();
+        let nj: Vec<f64> =
+            (0..=km).map(|j| if j == 0 { 0.0 } else { 4.0 * j as f64 - 2.0 }).collect();
         let mut a = vec![0.0; km + 1];
         a[1] = 1.0 + nj[1];
         for j in 2..=km {
             a[j] = a[j - 1] + nj[j];
         }
         let off = offsets(&nj);
-        Self { km, nj, off, a, fac1: 0.02, fac2: 4.0, fac3: 0.8, fac4: 0.9, safe1: 0.65, safe2: 0.94, safe3: 0.5, weights: Vec::new() }
+        Self {
+            km,
+            nj,
+            off,
+            a,
+            fac1: 0.02,
+            fac2: 4.0,
+            fac3: 0.8,
+            fac4: 0.9,
+            safe1: 0.65,
+            safe2: 0.94,
+            safe3: 0.5,
+            weights: Vec::new(),
+        }
     }
 }
 
