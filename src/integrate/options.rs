@@ -9,6 +9,20 @@ pub enum Tolerance {
     PerComponent(Vec<f64>),
 }
 
+/// How one component's local error is weighed: the error test asks each component's error to
+/// stay below rtol·s_i + atol_i, where the scale s_i is the component's size (the usual, and
+/// SUNDIALS' only, rule) or a fixed number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ErrorScale {
+    /// s_i = |y_i|: the error relative to the component's size.
+    Relative,
+    /// s_i = the given number (> 0), whatever |y_i|: for a component that is a logarithm, such
+    /// as w = ln v, whose absolute error is the relative error of v and whose size says nothing
+    /// about the accuracy wanted (|ln v| = 20 at a slip's peak would loosen v's relative
+    /// accuracy twentyfold).
+    Absolute(f64),
+}
+
 /// Default step budget per call to `advance` ([`Options::max_steps`]). SUNDIALS' own default,
 /// 500, stops long stiff runs part-way (VDPOL to t = 2 at rtol 1e-8 needs thousands of steps),
 /// while an unlimited budget would let a run whose step size stagnates above the round-off
@@ -62,6 +76,10 @@ pub struct Options {
     /// [`crate::integrate::ErrorKind::StepUnderflow`]; when false it is counted in
     /// [`crate::integrate::Stats::step_underflow_warnings`] and integration goes on.
     pub fail_on_step_underflow: bool,
+    /// One [`ErrorScale`] per component; `None` weighs every component relative to its size.
+    /// CVODE and ARKStep take it through a user error-weight function (`*WFtolerances`); the
+    /// homemade integrators reject it with [`crate::integrate::ErrorKind::InvalidInput`].
+    pub error_scales: Option<Vec<ErrorScale>>,
 }
 
 impl Options {
@@ -82,6 +100,7 @@ impl Options {
             nonlin_conv_coef: None,
             jacobian_max_age: None,
             fail_on_step_underflow: true,
+            error_scales: None,
         }
     }
 
@@ -101,6 +120,22 @@ impl Options {
                 return Err(format!("atol = {v:?}: every component must be finite and ≥ 0"));
             }
             _ => {}
+        }
+        if let Some(scales) = &self.error_scales {
+            if scales.len() != dim {
+                return Err(format!(
+                    "error_scales has {} components; the system has {dim}",
+                    scales.len()
+                ));
+            }
+            if let Some(i) = scales.iter().position(
+                |s| matches!(s, ErrorScale::Absolute(c) if !(c.is_finite() && *c > 0.0)),
+            ) {
+                return Err(format!(
+                    "error_scales[{i}] = {:?}: an absolute scale must be finite and > 0",
+                    scales[i]
+                ));
+            }
         }
         let positive = [
             ("initial_step", self.initial_step),

@@ -104,6 +104,12 @@ impl Core {
             return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
         }
         options.validate(n).map_err(invalid)?;
+        if options.error_scales.is_some() {
+            return Err(invalid(format!(
+                "error_scales is not an option of {name} (its error test weighs every component \
+                 relative to its size): leave it unset (None)"
+            )));
+        }
         Ok(Self {
             name,
             max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,

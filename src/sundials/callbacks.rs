@@ -7,7 +7,9 @@
 
 use super::ffi;
 use super::vector::{slice, slice_mut};
-use crate::integrate::{panic_message, ImexSystem, JacobianMatrix, OdeSystem, RootFunction};
+use crate::integrate::{
+    panic_message, ErrorScale, ImexSystem, JacobianMatrix, OdeSystem, RootFunction,
+};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -130,6 +132,56 @@ pub(crate) struct Shared<S> {
     pub diag: Diagnostics,
     /// Kept by [`step_end`] when it is registered (ARKStep); `None` otherwise (CVODE).
     pub step_ends: Option<StepEnds>,
+    /// The tolerances behind [`error_weights`], when it is registered.
+    pub weights: Option<ErrorWeights>,
+}
+
+/// The tolerances of a user error-weight function: rtol, one atol and one [`ErrorScale`] per
+/// component.
+#[derive(Debug, Clone)]
+pub(crate) struct ErrorWeights {
+    pub rtol: f64,
+    pub atol: Vec<f64>,
+    pub scales: Vec<ErrorScale>,
+}
+
+impl ErrorWeights {
+    /// ewt_i = 1/(rtol·s_i + atol_i), with s_i = |y_i| or the component's fixed scale. False if
+    /// a weight is not finite and positive (a zero tolerance for a zero component), which
+    /// SUNDIALS must be told.
+    fn fill(&self, y: &[f64], ewt: &mut [f64]) -> bool {
+        for (i, w) in ewt.iter_mut().enumerate() {
+            let scale = match self.scales[i] {
+                ErrorScale::Relative => y[i].abs(),
+                ErrorScale::Absolute(c) => c,
+            };
+            let tolerance = self.rtol * scale + self.atol[i];
+            if !(tolerance > 0.0 && tolerance.is_finite()) {
+                return false;
+            }
+            *w = 1.0 / tolerance;
+        }
+        true
+    }
+}
+
+/// The error-weight function (CVEwtFn / ARKEwtFn) for [`crate::integrate::Options::error_scales`].
+pub(crate) unsafe extern "C" fn error_weights<S>(
+    y: ffi::N_Vector,
+    ewt: ffi::N_Vector,
+    data: *mut c_void,
+) -> c_int {
+    // SAFETY: `data` is the `Shared<S>` registered as user data, alive for the solver's life;
+    // no other reference to it is alive during a SUNDIALS call.
+    let shared = unsafe { &*(data as *const Shared<S>) };
+    let Some(weights) = shared.weights.as_ref() else { return -1 };
+    // SAFETY: `y` and `ewt` are distinct serial vectors of length `dim`, valid for this call.
+    let (y, ewt) = unsafe { (slice(y, shared.dim), slice_mut(ewt, shared.dim)) };
+    if weights.fill(y, ewt) {
+        0
+    } else {
+        -1
+    }
 }
 
 /// The ends of the last two steps ARKODE's post-step function saw. On a failure ARKStep returns

@@ -114,6 +114,7 @@ static CVODE: Api = Api {
     set_err_handler: ffi::CVodeSetErrHandlerFn,
     ss_tolerances: ffi::CVodeSStolerances,
     sv_tolerances: ffi::CVodeSVtolerances,
+    wf_tolerances: ffi::CVodeWFtolerances,
     set_linear_solver: ffi::CVodeSetLinearSolver,
     set_jac_fn: ffi::CVodeSetJacFn,
     root_init: ffi::CVodeRootInit,

@@ -1,7 +1,7 @@
 //! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
 //! table of their functions ([`Api`]) lets a single implementation drive either.
 
-use super::callbacks::{self, Diagnostics, Shared, StepEnds};
+use super::callbacks::{self, Diagnostics, ErrorWeights, Shared, StepEnds};
 use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
@@ -27,6 +27,8 @@ pub(crate) struct Api {
     pub set_err_handler: unsafe extern "C" fn(Mem, ffi::CVErrHandlerFn, *mut c_void) -> c_int,
     pub ss_tolerances: unsafe extern "C" fn(Mem, f64, f64) -> c_int,
     pub sv_tolerances: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
+    /// Registers a user error-weight function (replacing SS/SV tolerances).
+    pub wf_tolerances: unsafe extern "C" fn(Mem, ffi::CVEwtFn) -> c_int,
     pub set_linear_solver: unsafe extern "C" fn(Mem, ffi::SUNLinearSolver, ffi::SUNMatrix) -> c_int,
     pub set_jac_fn: unsafe extern "C" fn(Mem, ffi::CVLsJacFn) -> c_int,
     pub root_init: unsafe extern "C" fn(Mem, c_int, ffi::CVRootFn) -> c_int,
@@ -178,7 +180,15 @@ impl<S> Solver<S> {
             diag.warning_log = Some(log);
         }
         let shared =
-            Box::new(Shared { system, dim, roots: None, root_count: 0, diag, step_ends: None });
+            Box::new(Shared {
+            system,
+            dim,
+            roots: None,
+            root_count: 0,
+            diag,
+            step_ends: None,
+            weights: None,
+        });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
             mem,
@@ -230,6 +240,19 @@ impl<S> Solver<S> {
             }
         };
         solver._atol = atol;
+        if let Some(scales) = &options.error_scales {
+            let atol = match &options.atol {
+                Tolerance::PerComponent(v) => v.clone(),
+                Tolerance::Scalar(a) => vec![*a; dim],
+            };
+            let weights = ErrorWeights { rtol: options.rtol, atol, scales: scales.clone() };
+            // SAFETY: `shared` is the live leaked Box; no SUNDIALS call is running, so no
+            // other reference to it exists.
+            unsafe { (*solver.shared.as_ptr()).weights = Some(weights) };
+            // SAFETY: `m` is live; `error_weights::<S>` reads the `Shared<S>` registered as
+            // user data above, which outlives the solver memory.
+            solver.check(unsafe { (api.wf_tolerances)(m, Some(callbacks::error_weights::<S>)) })?;
+        }
         solver.apply_options(options)?;
         if needs_linear_solver {
             let linear = DenseLinearSolver::new(&solver.y, dim, &solver.ctx)
