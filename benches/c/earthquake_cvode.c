@@ -4,8 +4,10 @@
  * f = ln v, slip law, η = 0) in y = (u, w = ln v, θ) with CVODE exactly as stickslip's safe
  * wrapper does (src/sundials/solver.rs, cvode.rs, callbacks.rs) with the engine's options
  * (engine::integrator_for): CVodeCreate(CV_BDF), CVodeInit, an error handler that records
- * messages instead of printing them, CVodeSetMaxHnilWarns(INT_MAX), CVodeSVtolerances(rtol
- * 1e-10, atol 1e-12 per component), at most 1e6 steps per call, the engine's max step (1/8 of
+ * messages instead of printing them, CVodeSetMaxHnilWarns(INT_MAX), CVodeWFtolerances with
+ * the engine's error weights (rtol 1e-10, atol 1e-12 per component; u and θ weighed relative to
+ * their size, ln v absolutely at rtol/10: Options::error_scales), at most 1e6 steps per call,
+ * at most 20 convergence failures per step, the engine's max step (1/8 of
  * the linear period, given on the command line), at most 20 error-test failures per step,
  * dense matrix + dense linear solver, analytic Jacobian, a linear-solver setup and Jacobian at
  * every step, CVODE defaults otherwise. The RHS and Jacobian are the formulas of
@@ -153,6 +155,23 @@ static void model_rhs(const double *y, double *d) {
 static long step_underflows, nonfinite_rhs;
 static long underflows_at_call, nonfinite_at_call;
 static int stopped_for_underflow;
+
+/* callbacks::error_weights with the engine's error_scales for cvode-bdf: ewt_i =
+ * 1/(tol_i + atol_i), tol = (rtol·|u|, max(0.1·rtol, 100 ulps of w), rtol·|θ|). */
+static int ewt(N_Vector yv, N_Vector w, void *user_data) {
+  const double *y = N_VGetArrayPointer(yv);
+  double *e = N_VGetArrayPointer(w);
+  const double tols[NEQ] = {RTOL * fabs(y[U]), fmax(RTOL * 0.1, 100.0 * DBL_EPSILON * fabs(y[W])),
+                            RTOL * fabs(y[TH])};
+  int i;
+  (void)user_data;
+  for (i = 0; i < NEQ; i++) {
+    double tol = tols[i] + ATOL;
+    if (!(tol > 0.0 && isfinite(tol))) return -1;
+    e[i] = 1.0 / tol;
+  }
+  return 0;
+}
 
 static int rhs(realtype t, N_Vector yv, N_Vector ydot, void *user_data) {
   const double *y = N_VGetArrayPointer(yv);
@@ -925,6 +944,7 @@ static int run_once(int n_cycles, Result *out) {
   if (CVodeSetErrHandlerFn(tr.mem, err_handler, NULL) != CV_SUCCESS) goto done;
   if (CVodeSetMaxHnilWarns(tr.mem, INT_MAX) != CV_SUCCESS) goto done;
   if (CVodeSVtolerances(tr.mem, RTOL, atol) != CV_SUCCESS) goto done;
+  if (CVodeWFtolerances(tr.mem, ewt) != CV_SUCCESS) goto done;
   /* Solver::apply_options with the engine's Options: max_steps = DEFAULT_MAX_STEPS, the
    * initial step above if any, max_step = 1/8 of the linear period (MAX_STEP), at most 20
    * error-test failures per step. */
@@ -932,6 +952,7 @@ static int run_once(int n_cycles, Result *out) {
   if (tr.initial_step > 0.0 && CVodeSetInitStep(tr.mem, tr.initial_step) != CV_SUCCESS) goto done;
   if (MAX_STEP > 0.0 && CVodeSetMaxStep(tr.mem, MAX_STEP) != CV_SUCCESS) goto done;
   if (CVodeSetMaxErrTestFails(tr.mem, 20) != CV_SUCCESS) goto done;
+  if (CVodeSetMaxConvFails(tr.mem, 20) != CV_SUCCESS) goto done;
   A = SUNDenseMatrix(NEQ, NEQ, ctx);
   if (!A) goto done;
   LS = SUNLinSol_Dense(tr.y, A, ctx);

@@ -19,7 +19,8 @@ pub enum ErrorScale {
     /// s_i = the given number (> 0), whatever |y_i|: for a component that is a logarithm, such
     /// as w = ln v, whose absolute error is the relative error of v and whose size says nothing
     /// about the accuracy wanted (|ln v| = 20 at a slip's peak would loosen v's relative
-    /// accuracy twentyfold).
+    /// accuracy twentyfold). The tolerance is kept above 100 units of round-off of y_i, so
+    /// that it stays attainable where |y_i| is far out of its usual range.
     Absolute(f64),
 }
 
@@ -128,9 +129,10 @@ impl Options {
                     scales.len()
                 ));
             }
-            if let Some(i) = scales.iter().position(
-                |s| matches!(s, ErrorScale::Absolute(c) if !(c.is_finite() && *c > 0.0)),
-            ) {
+            if let Some(i) = scales
+                .iter()
+                .position(|s| matches!(s, ErrorScale::Absolute(c) if !(c.is_finite() && *c > 0.0)))
+            {
                 return Err(format!(
                     "error_scales[{i}] = {:?}: an absolute scale must be finite and > 0",
                     scales[i]

@@ -25,7 +25,6 @@ mod ark {
         ARKodeGetNumStepSolveFails as GetNumStepSolveFails, ARKodeGetNumSteps as GetNumSteps,
         ARKodeGetRootInfo as GetRootInfo, ARKodeReset as Reset, ARKodeRootInit as RootInit,
         ARKodeSStolerances as SStolerances, ARKodeSVtolerances as SVtolerances,
-        ARKodeWFtolerances as WFtolerances,
         ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
         ARKodeSetFixedStepBounds as SetFixedStepBounds, ARKodeSetInitStep as SetInitStep,
         ARKodeSetInterpolantType as SetInterpolantType,
@@ -38,6 +37,7 @@ mod ark {
         ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
         ARKodeSetPredictorMethod as SetPredictorMethod, ARKodeSetRootDirection as SetRootDirection,
         ARKodeSetStopTime as SetStopTime, ARKodeSetUserData as SetUserData,
+        ARKodeWFtolerances as WFtolerances,
     };
 }
 #[cfg(not(sundials7))]
@@ -55,7 +55,6 @@ mod ark {
         ARKStepGetNumStepSolveFails as GetNumStepSolveFails, ARKStepGetNumSteps as GetNumSteps,
         ARKStepGetRootInfo as GetRootInfo, ARKStepReset as Reset, ARKStepRootInit as RootInit,
         ARKStepSStolerances as SStolerances, ARKStepSVtolerances as SVtolerances,
-        ARKStepWFtolerances as WFtolerances,
         ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
         ARKStepSetFixedStepBounds as SetFixedStepBounds, ARKStepSetInitStep as SetInitStep,
         ARKStepSetInterpolantType as SetInterpolantType,
@@ -68,7 +67,7 @@ mod ark {
         ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
         ARKStepSetPredictorMethod as SetPredictorMethod,
         ARKStepSetRootDirection as SetRootDirection, ARKStepSetStopTime as SetStopTime,
-        ARKStepSetUserData as SetUserData,
+        ARKStepSetUserData as SetUserData, ARKStepWFtolerances as WFtolerances,
     };
 }
 

@@ -145,17 +145,23 @@ pub(crate) struct ErrorWeights {
     pub scales: Vec<ErrorScale>,
 }
 
+/// An absolute error scale never asks for less than this many units of round-off of the
+/// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
+/// v = 1e30) a fixed tolerance would lie below the spacing of the doubles there, and SUNDIALS
+/// would stop with "too much accuracy requested".
+const ABSOLUTE_FLOOR_ULPS: f64 = 100.0 * f64::EPSILON;
+
 impl ErrorWeights {
-    /// ewt_i = 1/(rtol·s_i + atol_i), with s_i = |y_i| or the component's fixed scale. False if
+    /// ewt_i = 1/(rtol·s_i + atol_i), with s_i = |y_i| or the component's fixed scale (at
+    /// least [`ABSOLUTE_FLOOR_ULPS`]·|y_i|/rtol). False if
     /// a weight is not finite and positive (a zero tolerance for a zero component), which
     /// SUNDIALS must be told.
     fn fill(&self, y: &[f64], ewt: &mut [f64]) -> bool {
         for (i, w) in ewt.iter_mut().enumerate() {
-            let scale = match self.scales[i] {
-                ErrorScale::Relative => y[i].abs(),
-                ErrorScale::Absolute(c) => c,
-            };
-            let tolerance = self.rtol * scale + self.atol[i];
+            let tolerance = match self.scales[i] {
+                ErrorScale::Relative => self.rtol * y[i].abs(),
+                ErrorScale::Absolute(c) => (self.rtol * c).max(ABSOLUTE_FLOOR_ULPS * y[i].abs()),
+            } + self.atol[i];
             if !(tolerance > 0.0 && tolerance.is_finite()) {
                 return false;
             }

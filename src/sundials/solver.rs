@@ -179,8 +179,7 @@ impl<S> Solver<S> {
                 .map_err(|e| invalid(format!("could not open SUNDIALS' warning log: {e}")))?;
             diag.warning_log = Some(log);
         }
-        let shared =
-            Box::new(Shared {
+        let shared = Box::new(Shared {
             system,
             dim,
             roots: None,
