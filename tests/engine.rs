@@ -305,3 +305,17 @@ fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
     let period = report.cycle.unwrap().values.expect("converges to the relaxation cycle").period;
     assert!((period - 23.151329844).abs() < 1e-7 * period, "{period}");
 }
+
+/// Issue #28: the shipped earthquake scene with the default method (cvode-bdf, rtol 1e-10)
+/// gives the period within 1e-9 of the work–precision reference (radau5 at rtol 1e-14 and
+/// rodas5p at 1e-13, docs/work-precision.md: 56.412468697640861). Weighing ln v relative to
+/// its size gave −3.4e-8.
+#[test]
+fn the_earthquake_scene_meets_1e9_with_the_default_method() {
+    let report = run_file("earthquake.json");
+    assert_eq!(report.solver.method, stickslip::solver::Method::CvodeBdf);
+    let p = report.cycle.as_ref().unwrap().values.unwrap().period;
+    let reference = 56.412468697640861;
+    let error = (p - reference).abs() / reference;
+    assert!(error < 1e-9, "period {p}: {error:.2e} from the reference {reference}");
+}
