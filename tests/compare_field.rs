@@ -1,0 +1,111 @@
+//! `compare --against` at crustal damping: the field's scene (quasi-dynamic, ageing law,
+//! ξ = 0.25, ε = 0.5, η = 5e-8; v_max ~1.4e8, slip half-width ~2e-7 of a period of ~52),
+//! where a pointwise comparison can give no verdict. A trajectory written by an independent
+//! integrator (Rodas5P, every step) is compared event by event, then between events in phase.
+
+use stickslip::compare::{self, reference::reference_steps};
+use stickslip::scene::{self, Method};
+
+/// The field's scene in dimensionless form (issue #26): σ = 10 MPa, a = 0.01, b = 0.015,
+/// D_c = 0.1 mm, V_pl = 1e-9 m/s, k = 0.5·k_c, G = 30 GPa, c_s = 3 km/s, quasi-dynamic, ageing
+/// law, start V = 0.5·V_pl, Θ = D_c/V_pl.
+const FIELD: &str = r#"{
+  "name": "field",
+  "model": { "inertia": false, "xi": 0.25, "epsilon": 0.5, "friction": "log",
+             "state_law": "ageing", "radiation_damping": 5e-8 },
+  "initial": { "v": 0.5, "theta": 0.0 },
+  "solver": { "method": "radau5", "rtol": 1e-12, "atol": [1e-12, 1e-12, 1e-12] },
+  "analyses": ["cycle"]
+}"#;
+
+const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
+
+fn field() -> scene::Scene {
+    scene::parse(FIELD, "field").unwrap()
+}
+
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("stickslip-field-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `stickslip compare FIELD --against file` with `extra` options: (exit code, stdout, stderr).
+fn compare_cli(
+    dir: &std::path::Path,
+    file: &std::path::Path,
+    extra: &[&str],
+) -> (Option<i32>, String, String) {
+    let scene = dir.join("field.json");
+    std::fs::write(&scene, FIELD).unwrap();
+    let out = std::process::Command::new(EXE)
+        .args(["compare", scene.to_str().unwrap(), "--against", file.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// 26 periods of the field scene from its initial state at t = 0 (the transient included):
+/// Rodas5P at rtol 1e-12 through the re-basing clock, every step end, as (t, (u, ln v, θ)).
+/// Rodas5P is not the reference's method (Radau5).
+fn field_trajectory() -> (Vec<f64>, Vec<[f64; 3]>) {
+    let s = field();
+    let drr = stickslip::model::Drr::new(s.params);
+    reference_steps(drr, Method::Rodas5p, 1e-12, 0.0, s.initial, 26.0 * 52.0836912767).unwrap()
+}
+
+/// The CSV of a trajectory, with two extra columns after t,u,v,theta (as stickslip's own
+/// time series has).
+fn csv(times: &[f64], states: &[[f64; 3]]) -> String {
+    let mut csv = String::from("# field scene, rodas5p at rtol 1e-12, every step\n");
+    csv += "t,u,v,theta,ln_v,slip\n";
+    for (t, y) in times.iter().zip(states) {
+        csv += &format!("{t:e},{:e},{:e},{:e},{:e},{:e}\n", y[0], y[1].exp(), y[2], y[1], y[0] + t);
+    }
+    csv
+}
+
+#[test]
+fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_the_period() {
+    let (times, states) = field_trajectory();
+    // Its period error: the recurrence of its last events against the cycle analysis's
+    // period by Radau5 at rtol 1e-12.
+    let report = stickslip::engine::run(&field(), serde_json::Value::Null).unwrap();
+    let period = report.cycle.unwrap().values.unwrap().period;
+    let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
+    let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
+    let origin: Vec<String> = (0..times.len()).map(|i| format!("step {i}")).collect();
+    let events = compare::sampled::sampled_events(&times, &w, &u, &origin).unwrap();
+    assert!(events.len() >= 25, "{} events", events.len());
+    let recurrence = events[events.len() - 1].peak - events[events.len() - 2].peak;
+    let period_error = (recurrence / period - 1.0).abs();
+    assert!(period_error <= 1e-9, "period error {period_error:e} ({recurrence} against {period})");
+    println!("{} steps, {} events, period error {period_error:.1e}", times.len(), events.len());
+
+    let dir = temp_dir("accurate");
+    let good = dir.join("good.csv");
+    std::fs::write(&good, csv(&times, &states)).unwrap();
+    let (code, stdout, stderr) = compare_cli(&dir, &good, &["--tolerance", "1e-6", "--json"]);
+    assert_eq!(code, Some(0), "{stdout}\n{stderr}");
+    println!("{stdout}");
+    let c: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(c["verdict"], "agrees");
+    assert!(c["events"][2].as_u64().unwrap() >= 25, "{}", c["events"]);
+    let accuracy = c["reference"]["accuracy"].as_object().unwrap();
+    assert_eq!(accuracy.len(), 8, "every compared quantity states its accuracy: {accuracy:?}");
+    assert!(accuracy.values().all(|a| a.as_f64().unwrap() < 1e-7), "{accuracy:?}");
+
+    // The same samples on a clock running 1e-4 slow.
+    let slow: Vec<f64> = times.iter().map(|t| (1.0 + 1e-4) * t).collect();
+    let bad = dir.join("stretched.csv");
+    std::fs::write(&bad, csv(&slow, &states)).unwrap();
+    let (code, stdout, stderr) = compare_cli(&dir, &bad, &["--tolerance", "1e-6"]);
+    assert_eq!(code, Some(3), "{stdout}\n{stderr}");
+    assert!(stdout.contains("period error: the period differs by 1.00e-4"), "{stdout}");
+    std::fs::remove_dir_all(&dir).ok();
+}
