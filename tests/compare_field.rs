@@ -108,4 +108,121 @@ fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_t
     assert_eq!(code, Some(3), "{stdout}\n{stderr}");
     assert!(stdout.contains("period error: the period differs by 1.00e-4"), "{stdout}");
     std::fs::remove_dir_all(&dir).ok();
+
+    let against = |states: &[[f64; 3]], times: &[f64]| {
+        let user = compare::Trajectory {
+            t: times.to_vec(),
+            y: states.iter().map(|y| [y[0], y[1].exp(), y[2]]).collect(),
+            origin: (0..times.len()).map(|i| format!("index {i}")).collect(),
+        };
+        compare::against_trajectory(&field(), &user, 1e-6).unwrap()
+    };
+    // Event 12 delayed by 1e-3 (every sample from 1 before its start on): the period between
+    // events 11 and 12 is off by 1e-3/52 = 1.9e-5, nothing else.
+    let from = times.iter().position(|&t| t > events[11].start - 1.0).unwrap();
+    let delayed: Vec<f64> =
+        times.iter().enumerate().map(|(i, &t)| if i >= from { t + 1e-3 } else { t }).collect();
+    let c = against(&states, &delayed);
+    assert_eq!(c.verdict, compare::Verdict::Disagrees);
+    let p = c.period_error.unwrap();
+    assert_eq!(p.event, 12);
+    assert!((p.deviation - 1e-3 / p.reference).abs() < 1e-9, "{p:?}");
+    assert!(c.reasons.iter().any(|r| r.contains("between events 11 and 12")), "{:?}", c.reasons);
+    assert!(
+        c.worst_per_quantity.iter().all(|q| {
+            q.quantity == "recurrence" || q.quantity == "peak_time" || q.deviation < 1e-8
+        }),
+        "{:?}",
+        c.worst_per_quantity
+    );
+    // The samples from halfway between the peaks of events 11 and 12 to the delay are aligned
+    // on event 12, which the delay moved: u (du/dt = v − 1 ≈ −1) is 1e-3 off there.
+    let w = c.worst_state.unwrap();
+    assert!(w.event == 12 && w.t < delayed[from] && (w.deviation - 1e-3).abs() < 1e-4, "{w:?}");
+    // ln v 1e-4 too high within 1 of the maximum of event 7: a wrong v_max, nothing else.
+    let peak = events[6].ln_v_max;
+    let high: Vec<[f64; 3]> = times
+        .iter()
+        .zip(&states)
+        .map(|(&t, y)| {
+            let inside = (t - events[6].peak).abs() < 1.0 && y[1] > peak - 1.0;
+            [y[0], if inside { y[1] + 1e-4 } else { y[1] }, y[2]]
+        })
+        .collect();
+    let c = against(&high, &times);
+    assert_eq!(c.verdict, compare::Verdict::Disagrees);
+    assert_eq!(c.reasons.len(), 1, "{:?}", c.reasons);
+    assert!(c.reasons[0].starts_with("ln_v_max differs by 1.00e-4 at event 7"), "{:?}", c.reasons);
+}
+
+/// The field scene as a user might ship it: Radau5 at rtol 1e-10.
+fn field_at_1e_minus_10() -> (scene::Scene, std::path::PathBuf) {
+    let text = FIELD.replace("\"rtol\": 1e-12", "\"rtol\": 1e-10");
+    let dir = temp_dir("report");
+    let path = dir.join("field-1e-10.json");
+    std::fs::write(&path, &text).unwrap();
+    (scene::parse(&text, "field").unwrap(), dir)
+}
+
+/// A cycle quantity of the scene run by `method` at `rtol`.
+fn cycle_value(s: &scene::Scene, method: Method, rtol: f64, key: &str) -> f64 {
+    let mut s = s.clone();
+    s.solver.method = method;
+    s.solver.rtol = rtol;
+    s.solver.atol = [rtol; 3];
+    let r = stickslip::engine::run(&s, serde_json::Value::Null).unwrap();
+    let v = r.cycle.unwrap().values.unwrap();
+    match key {
+        "t0" => v.t0,
+        "period" => v.period,
+        _ => unreachable!(),
+    }
+}
+
+#[test]
+fn a_report_t0_from_a_tight_run_agrees_at_5e_minus_9_and_an_unresolvable_tolerance_has_no_verdict()
+{
+    let (s, dir) = field_at_1e_minus_10();
+    // The user's values: CVODE BDF at rtol 1e-12, not the reference's method.
+    let t0 = cycle_value(&s, Method::CvodeBdf, 1e-12, "t0");
+    let period = cycle_value(&s, Method::CvodeBdf, 1e-12, "period");
+    // The former reference (CVODE BDF at the scene's rtol 1e-10; 1.2e-8 measured) would call
+    // this t0 a disagreement at the tolerance 5e-9.
+    let former = (cycle_value(&s, Method::CvodeBdf, 1e-10, "t0") / t0 - 1.0).abs();
+    println!("t0 {t0}, period {period}; the former reference's t0 is off by {former:.1e}");
+    assert!(former > 5e-9, "{former:e}");
+    let report = |t0: f64| format!(r#"{{"cycle": {{"t0": {t0:e}, "period": {period:e}}}}}"#);
+    let compare::UserData::Report(user) = compare::read_user_data(&report(t0)).unwrap() else {
+        panic!("a report")
+    };
+    let c = compare::against_report(&s, &user, 5e-9, None).unwrap();
+    println!("{c:?}");
+    assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
+    assert_eq!(c.reference.method, "radau5", "the scene's method");
+    assert!(c.reference.rtol <= 5e-11, "{c:?}");
+    assert!(c.rows.iter().all(|r| r.reference_accuracy <= 5e-10), "{c:?}");
+    // t0 off by 1e-6: disagrees, and only in t0.
+    let compare::UserData::Report(off) =
+        compare::read_user_data(&report(t0 * (1.0 + 1e-6))).unwrap()
+    else {
+        panic!("a report")
+    };
+    let c = compare::against_report(&s, &off, 1e-7, Some(Method::Rodas5p)).unwrap();
+    assert_eq!(c.verdict, compare::Verdict::Disagrees, "{c:?}");
+    assert_eq!(
+        (c.reference.method.as_str(), c.reference.check_method.as_str()),
+        ("rodas5p", "radau5")
+    );
+    let beyond: Vec<&str> =
+        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
+    assert_eq!(beyond, vec!["t0"]);
+    // Through the CLI: exit 0, then exit 1 (no verdict) at a tolerance no reference resolves.
+    let file = dir.join("tight.json");
+    std::fs::write(&file, report(t0)).unwrap();
+    let (code, stdout, stderr) = compare_cli(&dir, &file, &["--tolerance", "1e-7"]);
+    assert_eq!(code, Some(0), "{stdout}\n{stderr}");
+    let (code, stdout, stderr) = compare_cli(&dir, &file, &["--tolerance", "1e-14"]);
+    assert_eq!(code, Some(1), "{stdout}\n{stderr}");
+    assert!(stderr.contains("no verdict") && stderr.contains("t0"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
 }
