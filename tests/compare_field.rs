@@ -36,8 +36,18 @@ fn compare_cli(
     file: &std::path::Path,
     extra: &[&str],
 ) -> (Option<i32>, String, String) {
+    compare_cli_with(FIELD, dir, file, extra)
+}
+
+/// [`compare_cli`] with another scene.
+fn compare_cli_with(
+    scene_text: &str,
+    dir: &std::path::Path,
+    file: &std::path::Path,
+    extra: &[&str],
+) -> (Option<i32>, String, String) {
     let scene = dir.join("field.json");
-    std::fs::write(&scene, FIELD).unwrap();
+    std::fs::write(&scene, scene_text).unwrap();
     let out = std::process::Command::new(EXE)
         .args(["compare", scene.to_str().unwrap(), "--against", file.to_str().unwrap()])
         .args(extra)
@@ -54,9 +64,14 @@ fn compare_cli(
 /// Rodas5P at rtol 1e-12 through the re-basing clock, every step end, as (t, (u, ln v, θ)).
 /// Rodas5P is not the reference's method (Radau5).
 fn field_trajectory() -> (Vec<f64>, Vec<[f64; 3]>) {
-    let s = field();
+    trajectory_of(&field(), 26.0 * 52.0836912767)
+}
+
+/// Rodas5P at rtol 1e-12 through the re-basing clock from the scene's initial state at t = 0
+/// to `end`, every step end.
+fn trajectory_of(s: &scene::Scene, end: f64) -> (Vec<f64>, Vec<[f64; 3]>) {
     let drr = stickslip::model::Drr::new(s.params);
-    reference_steps(drr, Method::Rodas5p, 1e-12, 0.0, s.initial, 26.0 * 52.0836912767).unwrap()
+    reference_steps(drr, Method::Rodas5p, 1e-12, 0.0, s.initial, end).unwrap()
 }
 
 /// The CSV of a trajectory, with two extra columns after t,u,v,theta (as stickslip's own
@@ -90,7 +105,9 @@ fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_t
     let dir = temp_dir("accurate");
     let good = dir.join("good.csv");
     std::fs::write(&good, csv(&times, &states)).unwrap();
+    let clock = std::time::Instant::now();
     let (code, stdout, stderr) = compare_cli(&dir, &good, &["--tolerance", "1e-6", "--json"]);
+    println!("compare --against: {:.2} s wall time", clock.elapsed().as_secs_f64());
     assert_eq!(code, Some(0), "{stdout}\n{stderr}");
     println!("{stdout}");
     let c: serde_json::Value = serde_json::from_str(&stdout).unwrap();
@@ -224,5 +241,34 @@ fn a_report_t0_from_a_tight_run_agrees_at_5e_minus_9_and_an_unresolvable_toleran
     let (code, stdout, stderr) = compare_cli(&dir, &file, &["--tolerance", "1e-14"]);
     assert_eq!(code, Some(1), "{stdout}\n{stderr}");
     assert!(stderr.contains("no verdict") && stderr.contains("t0"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Ten times less damping (η = 5e-9): v_max 1.6e9, slip half-width 1.9e-8 of a period of 57.3.
+#[test]
+fn at_v_max_1e9_an_accurate_trajectory_still_agrees_at_1e_minus_6() {
+    let text = FIELD.replace("5e-8", "5e-9");
+    let s = scene::parse(&text, "field").unwrap();
+    let (times, states) = trajectory_of(&s, 10.0 * 57.2708416607);
+    let dir = temp_dir("1e9");
+    let file = dir.join("good.csv");
+    std::fs::write(&file, csv(&times, &states)).unwrap();
+    let (code, stdout, stderr) =
+        compare_cli_with(&text, &dir, &file, &["--tolerance", "1e-6", "--json"]);
+    assert_eq!(code, Some(0), "{stdout}\n{stderr}");
+    let c: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let ln_v_max = c["worst_per_quantity"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|q| q["quantity"] == "ln_v_max")
+        .unwrap()["reference"]
+        .as_f64()
+        .unwrap();
+    assert!(ln_v_max > 9.0 * std::f64::consts::LN_10, "v_max {:e}", ln_v_max.exp());
+    assert!(c["events"][2].as_u64().unwrap() >= 9, "{}", c["events"]);
+    let accuracy = c["reference"]["accuracy"].as_object().unwrap();
+    println!("accuracy {accuracy:?}, worst {}", c["worst_per_quantity"]);
+    assert!(accuracy.values().all(|a| a.as_f64().unwrap() < 1e-7), "{accuracy:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
