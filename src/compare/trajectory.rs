@@ -196,11 +196,19 @@ struct Side {
     rebases: u64,
 }
 
-/// For each sample, the compared event (index < `n`) whose user peak is nearest.
+/// For each sample, the compared event (index < `n`) whose user peak is nearest (times and
+/// peaks increase, so the anchors do too: one sweep).
 fn anchors(t: &[f64], user: &[SampledEvent], n: usize) -> Vec<Option<usize>> {
+    let mut k = 0;
     t.iter()
         .map(|&t| {
-            (0..n).min_by(|&a, &b| (user[a].peak - t).abs().total_cmp(&(user[b].peak - t).abs()))
+            if n == 0 {
+                return None;
+            }
+            while k + 1 < n && (user[k + 1].peak - t).abs() < (user[k].peak - t).abs() {
+                k += 1;
+            }
+            Some(k)
         })
         .collect()
 }
@@ -228,7 +236,10 @@ fn side(
     let (in_phase, rebases) = reference_states(drr, method, rtol, start, y0, &targets)?;
     let aligned = (0..n)
         .map(|k| {
-            let window: Vec<usize> = (0..user.t.len()).filter(|&i| anchor[i] == Some(k)).collect();
+            // The samples anchored on event k: a contiguous range, the anchors increasing.
+            let first = anchor.partition_point(|a| a.is_some_and(|a| a < k));
+            let window: Vec<usize> =
+                (first..user.t.len()).take_while(|&i| anchor[i] == Some(k)).collect();
             let pick = |x: &dyn Fn(usize) -> f64| window.iter().map(|&i| x(i)).collect::<Vec<_>>();
             let located = sampled_events(
                 &pick(&|i| targets[i]),
