@@ -272,3 +272,20 @@ fn at_v_max_1e9_an_accurate_trajectory_still_agrees_at_1e_minus_6() {
     assert!(accuracy.values().all(|a| a.as_f64().unwrap() < 1e-7), "{accuracy:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_bad_reference_method_is_named() {
+    let dir = temp_dir("options");
+    let report = dir.join("report.json");
+    std::fs::write(&report, r#"{"cycle": {"period": 52.08}}"#).unwrap();
+    let (code, _, stderr) = compare_cli(&dir, &report, &["--reference-method", "radau6"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--reference-method") && stderr.contains("radau6"), "{stderr}");
+    // A trajectory's reference is fixed (radau5 checked by rodas5p): the option is refused.
+    let trajectory = dir.join("t.csv");
+    std::fs::write(&trajectory, "t,u,v,theta\n0,2.77,0.5,0\n1,2.0,0.5,0.1\n").unwrap();
+    let (code, _, stderr) = compare_cli(&dir, &trajectory, &["--reference-method", "radau5"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("--reference-method applies to a report"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
