@@ -289,3 +289,39 @@ fn a_bad_reference_method_is_named() {
     assert!(stderr.contains("--reference-method applies to a report"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A scene shipped at a loose rtol (1e-6) and CVODE BDF as the reference, whose t0 error is
+/// far above its rtol here (1.2e-8 at rtol 1e-10): at tolerance/100 it is not accurate enough
+/// for 1e-6, so the reference is tightened until its check says it is. The slip half-width
+/// (2e-7 wide) it does not resolve to 1e-7 even at rtol 1e-13: no verdict, naming it, where
+/// the scene's Radau5 gives one.
+#[test]
+fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
+    let text = FIELD.replace("\"rtol\": 1e-12", "\"rtol\": 1e-6");
+    let s = scene::parse(&text, "field").unwrap();
+    let report = stickslip::engine::run(&field(), serde_json::Value::Null).unwrap();
+    let v = report.cycle.unwrap().values.unwrap();
+    let read = |keys: &str| {
+        let compare::UserData::Report(user) =
+            compare::read_user_data(&format!(r#"{{"cycle": {{{keys}}}}}"#)).unwrap()
+        else {
+            panic!("a report")
+        };
+        user
+    };
+    let three =
+        format!(r#""period": {:e}, "t0": {:e}, "ln_v_max": {:e}"#, v.period, v.t0, v.ln_v_max);
+    let c = compare::against_report(&s, &read(&three), 1e-6, Some(Method::CvodeBdf)).unwrap();
+    println!("{c:?}");
+    assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
+    assert!(c.reference.rtol < 1e-8, "tightened from tolerance/100: {c:?}");
+    assert!(c.rows.iter().all(|r| r.reference_accuracy <= 1e-7), "{c:?}");
+    let four = format!(r#"{three}, "slip_half_width": {:e}"#, v.slip_half_width.unwrap());
+    let e = compare::against_report(&s, &read(&four), 1e-6, Some(Method::CvodeBdf)).unwrap_err();
+    println!("{e}");
+    let compare::CompareError::InaccurateReference { quantities, .. } = &e else { panic!("{e}") };
+    assert_eq!(quantities.len(), 1, "{e}");
+    assert_eq!(quantities[0].0, "slip_half_width", "{e}");
+    let c = compare::against_report(&s, &read(&four), 1e-6, None).unwrap();
+    assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
+}

@@ -166,7 +166,7 @@ pub enum CompareError {
     /// The reference's own accuracy is not below tolerance/10 for some quantities.
     #[error(
         "the reference's own accuracy is not below tolerance/10 = {:.1e} for {}, so no verdict; \
-         use a larger --tolerance",
+         use a larger --tolerance (for a report, or another --reference-method)",
         tolerance / 10.0,
         quantities.iter().map(|(q, a)| format!("{q} ({a:.1e})")).collect::<Vec<_>>().join(", ")
     )]
