@@ -60,6 +60,10 @@ enum Command {
         /// ln v). Exit 0 if the file agrees within it, 3 if it disagrees: see docs/compare.md.
         #[arg(long, default_value_t = 1e-4)]
         tolerance: f64,
+        /// The reference's method for a report given to --against (default: the scene's),
+        /// e.g. radau5; it runs at min(the scene's rtol, tolerance/100).
+        #[arg(long, value_name = "METHOD", requires = "against")]
+        reference_method: Option<String>,
         /// Print JSON.
         #[arg(long)]
         json: bool,
@@ -282,14 +286,20 @@ fn compare_command(
     methods: Vec<String>,
     against: Option<PathBuf>,
     tolerance: f64,
+    reference_method: Option<String>,
     json: bool,
 ) -> Result<(), Failure> {
     let scene = read_scene(&path)?;
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }
+    let reference_method = reference_method
+        .map(|m| {
+            m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--reference-method: {e}")))
+        })
+        .transpose()?;
     match against {
-        Some(file) => compare_against(&scene, &file, tolerance, json),
+        Some(file) => compare_against(&scene, &file, tolerance, reference_method, json),
         None => compare_methods(&scene, &methods, json),
     }
 }
@@ -300,6 +310,7 @@ fn compare_against(
     scene: &scene::Scene,
     file: &std::path::Path,
     tolerance: f64,
+    reference_method: Option<scene::Method>,
     json: bool,
 ) -> Result<(), Failure> {
     let text = std::fs::read_to_string(file)
@@ -308,6 +319,14 @@ fn compare_against(
         .map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
     let verdict = match data {
         compare::UserData::Trajectory(t) => {
+            if reference_method.is_some() {
+                return Err(Failure(
+                    2,
+                    "--reference-method applies to a report; a trajectory's reference is \
+                     radau5 checked by rodas5p (docs/compare.md)"
+                        .into(),
+                ));
+            }
             let c = compare::against_trajectory(scene, &t, tolerance).map_err(|e| match e {
                 e @ (compare::CompareError::Input(_)
                 | compare::CompareError::UnresolvedReference(_)) => {
@@ -318,46 +337,30 @@ fn compare_against(
             if json {
                 print_json(&c);
             } else {
-                let r = &c.reference;
-                println!(
-                    "{} samples, {} complete cycles (reference: {})",
-                    c.samples, c.cycles[0], c.cycles[1]
-                );
-                println!("reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy {:.1e} (against rodas5p)", r.rtol, r.rebases, r.accuracy);
-                for q in &c.worst_per_quantity {
-                    println!(
-                        "{:<16} worst in cycle {:<3} yours {:<22} reference {:<22} {:.2e}",
-                        q.quantity, q.cycle, q.user, q.reference, q.deviation
-                    );
-                }
-                let m = &c.max_state_deviation;
-                println!(
-                    "state in phase: max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}",
-                    m.u, m.ln_v, m.theta
-                );
-                if let Some(w) = &c.worst_state {
-                    println!(
-                        "worst: {} at t = {} ({}, cycle {}, phase {}): yours {}, reference {}",
-                        w.quantity, w.t, w.at, w.cycle, w.phase, w.user, w.reference
-                    );
-                }
-                for reason in &c.reasons {
-                    println!("DISAGREES: {reason}");
-                }
+                print_trajectory_comparison(&c);
             }
             c.verdict
         }
         compare::UserData::Report(r) => {
-            let c = compare::against_report(scene, &r, tolerance)
-                .map_err(|e| Failure(1, format!("reference run failed: {e}")))?;
+            let c = compare::against_report(scene, &r, tolerance, reference_method)
+                .map_err(|e| Failure(1, e.to_string()))?;
             if json {
                 print_json(&c);
             } else {
+                let r = &c.reference;
+                println!(
+                    "reference: {} at rtol {:.0e}, checked by {} at rtol {:.0e}",
+                    r.method, r.rtol, r.check_method, r.check_rtol
+                );
                 for row in &c.rows {
                     let flag = if row.beyond_tolerance { "  BEYOND TOLERANCE" } else { "" };
                     println!(
-                        "{:<16} yours {:<22} ours {:<22} {:.1e}{flag}",
-                        row.quantity, row.user, row.reference, row.deviation
+                        "{:<16} yours {:<22} ours {:<22} {:.1e} (ours ±{:.0e}){flag}",
+                        row.quantity,
+                        row.user,
+                        row.reference,
+                        row.deviation,
+                        row.reference_accuracy
                     );
                 }
             }
@@ -379,6 +382,43 @@ fn compare_against(
                 file.display()
             ),
         )),
+    }
+}
+
+/// The summary of a trajectory comparison.
+fn print_trajectory_comparison(c: &compare::TrajectoryComparison) {
+    println!(
+        "{} samples; complete events: {} yours, {} the reference's, {} compared",
+        c.samples, c.events[0], c.events[1], c.events[2]
+    );
+    let r = &c.reference;
+    let accuracy: Vec<String> = r.accuracy.iter().map(|(q, a)| format!("{q} {a:.1e}")).collect();
+    println!(
+        "reference: radau5, rtol {:.0e}, re-based {} times; its own accuracy (against rodas5p at rtol {:.0e}): {}",
+        r.rtol,
+        r.rebases,
+        r.check_rtol,
+        accuracy.join(", ")
+    );
+    for q in &c.worst_per_quantity {
+        println!(
+            "{:<12} worst at event {:<4} yours {:<22} reference {:<22} {:.2e}",
+            q.quantity, q.event, q.user, q.reference, q.deviation
+        );
+    }
+    let m = &c.max_state_deviation;
+    println!(
+        "state between events ({} samples, in phase): max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}",
+        c.state_samples, m.u, m.ln_v, m.theta
+    );
+    if let Some(w) = &c.worst_state {
+        println!(
+            "worst: {} at t = {} ({}, {} from the peak of event {}): yours {}, reference {}",
+            w.quantity, w.t, w.at, w.phase, w.event, w.user, w.reference
+        );
+    }
+    for reason in &c.reasons {
+        println!("DISAGREES: {reason}");
     }
 }
 
@@ -643,8 +683,8 @@ fn main() -> ExitCode {
             sweep_command(scene, params, out, resume, shard, threads)
         }
         Command::Merge { out, total, inputs } => merge_command(out, total, inputs),
-        Command::Compare { scene, methods, against, tolerance, json } => {
-            compare_command(scene, methods, against, tolerance, json)
+        Command::Compare { scene, methods, against, tolerance, reference_method, json } => {
+            compare_command(scene, methods, against, tolerance, reference_method, json)
         }
         Command::Reproduce { out, threads, reduced } => reproduce_command(out, threads, reduced),
         Command::NoiseCurves { out, reports } => noise_curves_command(out, reports),

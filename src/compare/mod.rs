@@ -3,18 +3,21 @@
 //!
 //! User trajectories are CSV with a header `t,u,v,theta` (any order, extra columns ignored,
 //! `#` comment lines allowed) or JSON `{"t": [...], "u": [...], "v": [...], "theta": [...]}`;
-//! times must increase ([`input`]); they are compared cycle by cycle ([`trajectory`]). A user
-//! report is JSON with a `cycle` object holding keys of docs/reports.md. See docs/compare.md.
+//! times must increase ([`input`]); they are compared event by event, then between events in
+//! phase ([`trajectory`], events on samples: [`sampled`], the reference runs: [`reference`]).
+//! A user report is JSON with a `cycle` object holding keys of docs/reports.md. See
+//! docs/compare.md.
 
 pub mod input;
+pub mod reference;
+pub mod sampled;
 pub mod trajectory;
 
 pub use input::{read_user_data, InputError, Trajectory, UserCycle, UserData};
-pub use trajectory::{
-    against_trajectory, CompareError, SamplingError, TrajectoryComparison, Verdict,
-};
+pub use sampled::SamplingError;
+pub use trajectory::{against_trajectory, CompareError, TrajectoryComparison, Verdict};
 
-use crate::engine::{self, EngineError};
+use crate::engine;
 use crate::report::Report;
 use crate::scene::{Method, Scene, SolverSpec};
 use serde::Serialize;
@@ -161,51 +164,109 @@ pub struct ReportRow {
     pub reference: f64,
     /// |user − ours| relative to the value (durations, slip) or to max(|value|, 1) (ln v, u, θ).
     pub deviation: f64,
+    /// The reference's own accuracy in the same measure: its difference from the check run.
+    pub reference_accuracy: f64,
     /// Whether the deviation exceeds the tolerance.
     pub beyond_tolerance: bool,
 }
 
-/// A user's report against ours (the scene run with CVODE BDF at its own tolerances).
+/// The reference run of a report comparison and its check.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReportReference {
+    /// The reference's method: the scene's, or the one named (`--reference-method`).
+    pub method: String,
+    /// Its relative tolerance: min(the scene's rtol, tolerance/100), divided by 100 while
+    /// the check finds it too inaccurate, at least 1e-13.
+    pub rtol: f64,
+    /// The check run's method: rodas5p, or radau5 when the reference is rodas5p.
+    pub check_method: String,
+    /// The check run's relative tolerance: the reference's / 10, at least 1e-13.
+    pub check_rtol: f64,
+}
+
+/// A user's report against ours (the scene's cycle analysis run tightly enough for the
+/// tolerance, its accuracy checked by an independent method).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReportComparison {
     /// "agrees" or "disagrees".
     pub verdict: Verdict,
     /// Relative tolerance used.
     pub tolerance: f64,
-    /// The reference: method and tolerances.
-    pub reference: String,
+    /// The reference and its check.
+    pub reference: ReportReference,
     /// Per key the user gave.
     pub rows: Vec<ReportRow>,
 }
 
-/// Compares the `cycle` keys a user's report has with the reference run of the scene.
+/// The tightest relative tolerance a reference run is asked for.
+pub const TIGHTEST_RTOL: f64 = 1e-13;
+
+/// The scene's cycle analysis alone, by `method` at `rtol` (absolute tolerances no looser).
+fn cycle_run(scene: &Scene, method: Method, rtol: f64) -> Result<Report, engine::EngineError> {
+    let mut s = scene.clone();
+    s.solver = SolverSpec {
+        method,
+        rtol,
+        atol: scene.solver.atol.map(|a| a.min(rtol)),
+        table: None,
+        explicit_table: None,
+    };
+    let cycle = s.analyses.cycle.take().unwrap_or_default();
+    s.analyses = crate::scene::Analyses { cycle: Some(cycle), ..Default::default() };
+    engine::run(&s, serde_json::Value::Null)
+}
+
+/// Compares the `cycle` keys a user's report has with the scene's cycle analysis run by
+/// `method` (None: the scene's) at rtol = min(scene's rtol, tolerance/100) (at least
+/// [`TIGHTEST_RTOL`]). Its accuracy per key is its difference from an independent method
+/// (rodas5p, or radau5 for rodas5p) at a 10 times tighter rtol; while that is not below
+/// tolerance/10 the rtol is divided by 100; where it is still not below at
+/// [`TIGHTEST_RTOL`] there is no verdict ([`CompareError::InaccurateReference`]).
 pub fn against_report(
     scene: &Scene,
     user: &UserCycle,
     tolerance: f64,
-) -> Result<ReportComparison, EngineError> {
-    let mut s = scene.clone();
-    s.solver.method = Method::CvodeBdf;
-    s.solver.table = None;
-    s.solver.explicit_table = None;
-    s.analyses.cycle.get_or_insert_with(Default::default);
-    s.analyses.noise = None;
-    let ours = engine::run(&s, serde_json::Value::Null)?;
-    let rows: Vec<ReportRow> = QUANTITIES
-        .iter()
-        .filter_map(|&key| {
-            let theirs = user.get(key)?;
-            let mine = quantity(&ours, key)?;
+    method: Option<Method>,
+) -> Result<ReportComparison, CompareError> {
+    let method = method.unwrap_or(scene.solver.method);
+    let check_method = if method == Method::Rodas5p { Method::Radau5 } else { Method::Rodas5p };
+    let mut rtol = scene.solver.rtol.min(tolerance / 100.0).max(TIGHTEST_RTOL);
+    // Tightened by 100 while the check finds the reference too inaccurate for the tolerance.
+    let (rows, check_rtol) = loop {
+        let check_rtol = (rtol / 10.0).max(TIGHTEST_RTOL);
+        let ours = cycle_run(scene, method, rtol).map_err(CompareError::ReferenceRun)?;
+        let check =
+            cycle_run(scene, check_method, check_rtol).map_err(CompareError::ReferenceRun)?;
+        let mut rows = Vec::new();
+        let mut inaccurate = Vec::new();
+        for key in QUANTITIES {
+            let Some(theirs) = user.get(key) else { continue };
+            let (Some(mine), Some(checked)) = (quantity(&ours, key), quantity(&check, key)) else {
+                inaccurate.push((format!("{key} (not computed by the reference)"), f64::NAN));
+                continue;
+            };
             let deviation = (theirs - mine).abs() / scale(key, mine);
-            Some(ReportRow {
+            let reference_accuracy = (checked - mine).abs() / scale(key, mine);
+            if !trajectory::within(reference_accuracy, tolerance / 10.0) {
+                inaccurate.push((key.to_string(), reference_accuracy));
+            }
+            rows.push(ReportRow {
                 quantity: key.into(),
                 user: theirs,
                 reference: mine,
                 deviation,
-                beyond_tolerance: deviation.is_nan() || deviation > tolerance,
-            })
-        })
-        .collect();
+                reference_accuracy,
+                beyond_tolerance: !trajectory::within(deviation, tolerance),
+            });
+        }
+        if inaccurate.is_empty() {
+            break (rows, check_rtol);
+        }
+        if rtol <= TIGHTEST_RTOL {
+            return Err(CompareError::InaccurateReference { quantities: inaccurate, tolerance });
+        }
+        rtol = (rtol / 100.0).max(TIGHTEST_RTOL);
+    };
     Ok(ReportComparison {
         verdict: if rows.iter().any(|r| r.beyond_tolerance) {
             Verdict::Disagrees
@@ -213,7 +274,12 @@ pub fn against_report(
             Verdict::Agrees
         },
         tolerance,
-        reference: format!("the scene's cycle analysis with cvode-bdf at rtol {:e}", s.solver.rtol),
+        reference: ReportReference {
+            method: method.name().into(),
+            rtol,
+            check_method: check_method.name().into(),
+            check_rtol,
+        },
         rows,
     })
 }

@@ -1,32 +1,36 @@
-//! A user's trajectory against the reference, cycle by cycle.
+//! A user's trajectory against the reference: the events first, aligned on each event, then
+//! the state between events in phase.
 //!
-//! The reference is Radau5 at rtol = min(1e-12, tolerance/100) driven by [`Clock`] (re-based
-//! before its steps outrun the local clock, global time kept exactly), started from the
-//! user's first sample with the scene's parameters. Rodas5P at a 10 times tighter rtol is run
-//! too: the largest difference between the two at the user's sample times is the reference's
-//! stated accuracy (an estimate of its error; independent method, more accurate run). Where
-//! it is not below tolerance/10, no verdict is given.
+//! The reference is Radau5 at rtol = min(1e-12, tolerance/100) through the re-basing clock
+//! ([`super::reference`]), started from the user's first sample with the scene's parameters.
+//! Rodas5P at a 10 times tighter rtol (an independent method, run more accurately) is
+//! processed the same way; the difference between the two, per compared quantity, is the
+//! reference's stated accuracy. Where a quantity's accuracy is not below tolerance/10, no
+//! verdict is given.
 //!
-//! Events (upward crossings of v = 1, the v maximum, the half-maximum crossings) are located
-//! the same way on the user's samples and on the reference evaluated at the same times, so the
-//! interpolation between samples is common to both. Per cycle the period, t0, slip
-//! half-width and ln v_max are compared; then the state along each cycle in phase: the user's
-//! sample at time τ after its cycle's own crossing against the reference at τ after the
-//! reference's crossing of the same cycle.
+//! Events (slip episodes, v ≥ 1; [`super::sampled`]) are located on the user's samples and on
+//! the reference's own steps, and matched in order (both start from the same state). Each
+//! event k gives a shift s_k between the reference's and the user's v maximum. The user's
+//! sample at t is compared with the reference at t + s_k, k the event whose peak is nearest:
+//! the reference's events are located again on those shifted sample times (the interpolation
+//! between samples is then common to both), and the state between events (v < 1, where no
+//! slip's steepness can swamp it) is compared at the same time from the same event's peak.
 
 use super::input::Trajectory;
-use crate::engine;
-use crate::integrate::{Clock, SolverError, Time};
+use super::reference::{reference_states, reference_steps};
+use super::sampled::{sampled_events, SampledEvent, SamplingError};
+use crate::integrate::SolverError;
 use crate::model::Drr;
-use crate::scene::{Method, Scene, SolverSpec};
+use crate::scene::{Method, Scene};
 use serde::Serialize;
+use std::collections::BTreeMap;
 
-/// Largest |Δ ln v| between the two samples around an event (a crossing of v = 1 or of the
-/// half maximum) for the event to be located by interpolation.
-pub const MAX_EVENT_JUMP: f64 = 0.5;
-/// Largest drop of ln v from the sampled maximum to its neighbours for the parabola through
-/// the three to locate the v maximum.
-pub const MAX_PEAK_DROP: f64 = 0.1;
+/// The per-event quantities compared: the peak time from the first sample, the recurrence
+/// (peak to previous peak: the period), the rise time (start to peak), ln v_max and the slip.
+pub const EVENT_QUANTITIES: [&str; 5] =
+    ["peak_time", "recurrence", "rise_time", "ln_v_max", "slip"];
+/// The state quantities compared between events.
+pub const STATE_QUANTITIES: [&str; 3] = ["u", "ln_v", "theta"];
 
 /// Agreement or not within the tolerance.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -34,41 +38,26 @@ pub const MAX_PEAK_DROP: f64 = 0.1;
 pub enum Verdict {
     /// Every deviation is within the tolerance.
     Agrees,
-    /// Some deviation exceeds the tolerance (or the cycle counts differ).
+    /// Some deviation exceeds the tolerance (or the event counts differ).
     Disagrees,
 }
 
-/// Events of one complete cycle, located on samples.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct CycleEvents {
-    /// Time of the upward crossing of v = 1 that starts the cycle.
-    pub start: f64,
-    /// Time to the next upward crossing.
-    pub period: f64,
-    /// From the crossing to the v maximum.
-    pub t0: f64,
-    /// Full width of v at half its maximum (null if v stays above half the maximum).
-    pub slip_half_width: Option<f64>,
-    /// ln v_max.
-    pub ln_v_max: f64,
-}
-
-/// One quantity of one cycle, the user's against the reference.
+/// One quantity of one event, the user's against the reference.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct QuantityDeviation {
-    /// "period", "t0", "slip_half_width" or "ln_v_max".
+    /// One of [`EVENT_QUANTITIES`].
     pub quantity: String,
-    /// Cycle number (1 = the first complete cycle).
-    pub cycle: usize,
+    /// Event number (1 = the first complete event).
+    pub event: usize,
     /// The user's value.
     pub user: f64,
     /// The reference's value.
     pub reference: f64,
-    /// Relative difference for durations, absolute for ln v_max.
+    /// Relative difference (|Δ| / |reference|), absolute for ln v_max.
     pub deviation: f64,
 }
 
-/// The worst deviation of the state along the cycles (compared in phase).
+/// The worst deviation of the state between events (compared in phase).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StateDeviation {
     /// "u", "ln_v" or "theta".
@@ -77,9 +66,9 @@ pub struct StateDeviation {
     pub t: f64,
     /// Where the sample is in the file.
     pub at: String,
-    /// Cycle number (0: before the first crossing, compared at equal times).
-    pub cycle: usize,
-    /// Time since the cycle's own upward crossing of v = 1.
+    /// The event it is aligned on (0: no event compared, at equal times).
+    pub event: usize,
+    /// Time from that event's v maximum (negative before it).
     pub phase: f64,
     /// The user's value.
     pub user: f64,
@@ -92,14 +81,16 @@ pub struct StateDeviation {
 /// The reference integration and its own accuracy.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReferenceInfo {
-    /// Method, tolerances and time bookkeeping, in words.
+    /// Method, tolerances, time bookkeeping and accuracy estimate, in words.
     pub method: String,
-    /// Its relative tolerance.
+    /// Its relative (and absolute) tolerance.
     pub rtol: f64,
-    /// Largest difference (same measure as the state deviations) between the reference and
-    /// Rodas5P at a 10 times tighter rtol, at the user's sample times: an estimate of the
-    /// reference's own error.
-    pub accuracy: f64,
+    /// The check run's (Rodas5P) tolerance.
+    pub check_rtol: f64,
+    /// Per compared quantity ([`EVENT_QUANTITIES`], [`STATE_QUANTITIES`]), the largest
+    /// difference between the reference and the check run, in the measure of the deviations:
+    /// an estimate of the reference's own error.
+    pub accuracy: BTreeMap<String, f64>,
     /// Re-bases of its clock.
     pub rebases: u64,
 }
@@ -109,22 +100,26 @@ pub struct ReferenceInfo {
 pub struct TrajectoryComparison {
     /// "agrees" or "disagrees".
     pub verdict: Verdict,
-    /// Tolerance: relative for durations, u and θ (u, θ against max(|value|, 1)); absolute for
-    /// ln v.
+    /// Tolerance: relative for durations, the slip, u and θ (u, θ against max(|value|, 1));
+    /// absolute for ln v.
     pub tolerance: f64,
-    /// Samples compared.
+    /// Samples in the file.
     pub samples: usize,
-    /// Complete cycles in the user's trajectory and in the reference over the same span.
-    pub cycles: [usize; 2],
+    /// Complete events in the user's trajectory, in the reference over the same span, and
+    /// compared (those in both).
+    pub events: [usize; 3],
     /// The reference and its accuracy.
     pub reference: ReferenceInfo,
-    /// Largest relative period deviation over the cycles (null without a complete cycle).
+    /// The event with the largest relative recurrence (period) deviation (null with fewer
+    /// than two events).
     pub period_error: Option<QuantityDeviation>,
-    /// Per quantity, the worst cycle.
+    /// Per quantity, the worst event.
     pub worst_per_quantity: Vec<QuantityDeviation>,
-    /// Every cycle's quantities.
-    pub per_cycle: Vec<QuantityDeviation>,
-    /// The worst state deviation along the cycles, in phase.
+    /// Every event's quantities.
+    pub per_event: Vec<QuantityDeviation>,
+    /// Samples compared between events (v < 1).
+    pub state_samples: usize,
+    /// The worst state deviation between events, in phase.
     pub worst_state: Option<StateDeviation>,
     /// Largest state deviation per quantity (u, ln_v, theta), in phase.
     pub max_state_deviation: StateMaxima,
@@ -152,185 +147,8 @@ fn state_deviation(user: &[f64; 3], reference: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// The state (u, w = ln v, θ) at `times` (any order, all ≥ `start`), integrated by
-/// `method` through a [`Clock`] from (start, y0). Returns the states and the re-bases made.
-pub fn reference_states(
-    drr: Drr,
-    method: Method,
-    rtol: f64,
-    start: f64,
-    y0: [f64; 3],
-    times: &[f64],
-) -> Result<(Vec<[f64; 3]>, u64), SolverError> {
-    let mut order: Vec<usize> = (0..times.len()).collect();
-    order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
-    let spec = SolverSpec { method, rtol, atol: [rtol; 3], table: None, explicit_table: None };
-    let (mut integ, _) = engine::integrator(drr, &spec, &y0)?;
-    let mut clock = Clock::new(integ.as_mut(), Time::new(start));
-    let mut out = vec![y0; times.len()];
-    let mut next = order.iter().take_while(|&&i| times[i] <= start).count();
-    while next < order.len() {
-        let step = clock.step().map_err(|e| clock.at_global(e))?;
-        let epoch = clock.global(0.0);
-        while next < order.len() {
-            let local = Time::new(times[order[next]]).since(epoch);
-            if local > step.t {
-                break;
-            }
-            let y = match clock.integrator().dense(local.max(step.start), 0) {
-                Ok(y) => [y[0], y[1], y[2]],
-                Err(e) => return Err(clock.at_global(e)),
-            };
-            out[order[next]] = y;
-            next += 1;
-        }
-    }
-    Ok((out, clock.rebases()))
-}
-
-/// The Radau5 step ends (global time, (u, w, θ)) from (start, y0) to past `end`, through a
-/// [`Clock`].
-fn reference_steps(
-    drr: Drr,
-    rtol: f64,
-    start: f64,
-    y0: [f64; 3],
-    end: f64,
-) -> Result<(Vec<f64>, Vec<[f64; 3]>), SolverError> {
-    let spec = SolverSpec {
-        method: Method::Radau5,
-        rtol,
-        atol: [rtol; 3],
-        table: None,
-        explicit_table: None,
-    };
-    let (mut integ, _) = engine::integrator(drr, &spec, &y0)?;
-    let mut clock = Clock::new(integ.as_mut(), Time::new(start));
-    let (mut times, mut states) = (vec![start], vec![y0]);
-    while clock.now().to_f64() < end {
-        clock.step().map_err(|e| clock.at_global(e))?;
-        let y = clock.state();
-        times.push(clock.now().to_f64());
-        states.push([y[0], y[1], y[2]]);
-    }
-    Ok((times, states))
-}
-
-/// Linear interpolation of the time where w crosses `level` between samples i and i + 1;
-/// an error if the samples are too far apart in w to locate it.
-fn crossing(
-    t: &[f64],
-    w: &[f64],
-    i: usize,
-    level: f64,
-    event: &'static str,
-    origin: &[String],
-) -> Result<f64, SamplingError> {
-    if (w[i + 1] - w[i]).abs() > MAX_EVENT_JUMP {
-        return Err(SamplingError::Event {
-            from: origin[i].clone(),
-            to: origin[i + 1].clone(),
-            ln_v: [w[i], w[i + 1]],
-            event,
-        });
-    }
-    Ok(t[i] + (level - w[i]) / (w[i + 1] - w[i]) * (t[i + 1] - t[i]))
-}
-
-/// The complete cycles of a sampled trajectory (t, w = ln v). `origin` names the samples for
-/// messages.
-pub fn cycle_events(
-    t: &[f64],
-    w: &[f64],
-    origin: &[String],
-) -> Result<Vec<CycleEvents>, SamplingError> {
-    let ups: Vec<usize> = (0..t.len() - 1).filter(|&i| w[i] < 0.0 && w[i + 1] >= 0.0).collect();
-    let times = ups
-        .iter()
-        .map(|&i| crossing(t, w, i, 0.0, "upward crossing of v = 1", origin))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut cycles = Vec::new();
-    for k in 0..ups.len().saturating_sub(1) {
-        let (a, b) = (ups[k] + 1, ups[k + 1]);
-        let j = (a..=b).max_by(|&x, &y| w[x].total_cmp(&w[y])).expect("a non-empty range");
-        if j == 0
-            || j + 1 >= t.len()
-            || w[j] - w[j - 1] > MAX_PEAK_DROP
-            || w[j] - w[j + 1] > MAX_PEAK_DROP
-        {
-            return Err(SamplingError::Peak { at: origin[j].clone(), cycle: k + 1, ln_v: w[j] });
-        }
-        // The parabola through the three samples around the maximum.
-        let (t1, t2, t3, w1, w2, w3) = (t[j - 1], t[j], t[j + 1], w[j - 1], w[j], w[j + 1]);
-        let d1 = (w2 - w1) / (t2 - t1);
-        let d2 = (w3 - w2) / (t3 - t2);
-        let c = (d2 - d1) / (t3 - t1);
-        let (t_peak, w_max) = if c < 0.0 {
-            let tp = 0.5 * (t1 + t2) - d1 / (2.0 * c);
-            (tp, w1 + (tp - t1) * (d1 + c * (tp - t2)))
-        } else {
-            (t2, w2)
-        };
-        let level = w_max - std::f64::consts::LN_2;
-        let rise = (a.saturating_sub(1)..j).rev().find(|&i| w[i] < level);
-        let fall = (j..b).find(|&i| w[i + 1] < level);
-        let slip_half_width = match (rise, fall) {
-            (Some(r), Some(f)) => Some(
-                crossing(t, w, f, level, "half maximum", origin)?
-                    - crossing(t, w, r, level, "half maximum", origin)?,
-            ),
-            _ => None,
-        };
-        cycles.push(CycleEvents {
-            start: times[k],
-            period: times[k + 1] - times[k],
-            t0: t_peak - times[k],
-            slip_half_width,
-            ln_v_max: w_max,
-        });
-    }
-    Ok(cycles)
-}
-
-/// Why the events of a sampled trajectory cannot be located: the samples around one are too
-/// far apart; the message names the samples and the spacing needed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SamplingError {
-    /// ln v jumps too far across a crossing.
-    #[error(
-        "{from}–{to}: ln v jumps from {:.3} to {:.3} across the {event}; sampled too coarsely to locate it \
-         (|Δ ln v| ≤ {max} is needed between the samples around each event)",
-        ln_v[0],
-        ln_v[1],
-        max = MAX_EVENT_JUMP
-    )]
-    Event {
-        /// The sample before the event.
-        from: String,
-        /// The sample after it.
-        to: String,
-        /// ln v at the two samples.
-        ln_v: [f64; 2],
-        /// The event: "upward crossing of v = 1" or "half maximum".
-        event: &'static str,
-    },
-    /// The samples either side of a cycle's v maximum are too far below it.
-    #[error(
-        "{at}: the v maximum of cycle {cycle} (ln v = {ln_v:.3}) is sampled too coarsely to locate it \
-         (ln v must be within {max} of the maximum at the samples either side)",
-        max = MAX_PEAK_DROP
-    )]
-    Peak {
-        /// The sample at the maximum.
-        at: String,
-        /// The cycle (1-based).
-        cycle: usize,
-        /// ln v there.
-        ln_v: f64,
-    },
-}
-
-/// Why a comparison cannot be made: bad input (exit 2) or a failed reference (exit 1).
+/// Why a comparison cannot be made: bad input (exit 2) or a failed or inaccurate reference
+/// (exit 1).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CompareError {
     /// The user's data cannot be compared (sampled too coarsely); the message says why.
@@ -342,11 +160,19 @@ pub enum CompareError {
     /// The reference integration failed.
     #[error("reference run failed: {0}")]
     Reference(SolverError),
-    /// The reference's own accuracy (against Rodas5P at rtol/10) is not below tolerance/10.
-    #[error("the reference's own accuracy {accuracy:.1e} is not below tolerance/10 = {:.1e}, so no verdict; use a larger --tolerance", tolerance / 10.0)]
+    /// The reference run of a report comparison failed.
+    #[error("reference run failed: {0}")]
+    ReferenceRun(crate::engine::EngineError),
+    /// The reference's own accuracy is not below tolerance/10 for some quantities.
+    #[error(
+        "the reference's own accuracy is not below tolerance/10 = {:.1e} for {}, so no verdict; \
+         use a larger --tolerance (for a report, or another --reference-method)",
+        tolerance / 10.0,
+        quantities.iter().map(|(q, a)| format!("{q} ({a:.1e})")).collect::<Vec<_>>().join(", ")
+    )]
     InaccurateReference {
-        /// Its accuracy.
-        accuracy: f64,
+        /// The quantities and their accuracy.
+        quantities: Vec<(String, f64)>,
         /// The tolerance asked for.
         tolerance: f64,
     },
@@ -358,9 +184,121 @@ impl From<SolverError> for CompareError {
     }
 }
 
-/// Compares a user's trajectory with the reference of `scene`'s model, cycle by cycle (see
-/// the module docs). Fails with [`CompareError::Reference`] also when the reference's own
-/// accuracy is not below tolerance/10 (its verdict would not mean anything).
+/// One reference method processed against the user's samples.
+struct Side {
+    /// Its events on its own steps.
+    own: Vec<SampledEvent>,
+    /// The compared events, located on the user's sample times shifted per event.
+    aligned: Vec<SampledEvent>,
+    /// Its state at each user sample's time shifted by its event's shift.
+    in_phase: Vec<[f64; 3]>,
+    /// Re-bases of the in-phase run's clock.
+    rebases: u64,
+}
+
+/// For each sample, the compared event (index < `n`) whose user peak is nearest (times and
+/// peaks increase, so the anchors do too: one sweep).
+fn anchors(t: &[f64], user: &[SampledEvent], n: usize) -> Vec<Option<usize>> {
+    let mut k = 0;
+    t.iter()
+        .map(|&t| {
+            if n == 0 {
+                return None;
+            }
+            while k + 1 < n && (user[k + 1].peak - t).abs() < (user[k].peak - t).abs() {
+                k += 1;
+            }
+            Some(k)
+        })
+        .collect()
+}
+
+/// Runs `method` at `rtol` from the user's first sample and aligns it on the user's events.
+fn side(
+    drr: Drr,
+    method: Method,
+    rtol: f64,
+    user: &Trajectory,
+    y0: [f64; 3],
+    user_events: &[SampledEvent],
+) -> Result<Side, CompareError> {
+    let (start, last) = (user.t[0], *user.t.last().expect("two samples"));
+    let (fine, states) = reference_steps(drr, method, rtol, start, y0, last)?;
+    let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
+    let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
+    let origin: Vec<String> = fine.iter().map(|t| format!("reference at t = {t}")).collect();
+    let own = sampled_events(&fine, &w, &u, &origin).map_err(CompareError::UnresolvedReference)?;
+    let n = own.len().min(user_events.len());
+    let anchor = anchors(&user.t, user_events, n);
+    let shift: Vec<f64> = (0..n).map(|k| own[k].peak - user_events[k].peak).collect();
+    let targets: Vec<f64> =
+        user.t.iter().zip(&anchor).map(|(t, a)| a.map_or(*t, |k| t + shift[k])).collect();
+    let (in_phase, rebases) = reference_states(drr, method, rtol, start, y0, &targets)?;
+    let aligned = (0..n)
+        .map(|k| {
+            // The samples anchored on event k: a contiguous range, the anchors increasing.
+            let first = anchor.partition_point(|a| a.is_some_and(|a| a < k));
+            let window: Vec<usize> =
+                (first..user.t.len()).take_while(|&i| anchor[i] == Some(k)).collect();
+            let pick = |x: &dyn Fn(usize) -> f64| window.iter().map(|&i| x(i)).collect::<Vec<_>>();
+            let located = sampled_events(
+                &pick(&|i| targets[i]),
+                &pick(&|i| in_phase[i][1]),
+                &pick(&|i| in_phase[i][0]),
+                &window.iter().map(|&i| user.origin[i].clone()).collect::<Vec<_>>(),
+            );
+            // Where the reference cannot be located on the user's times (far off the user's
+            // event), on its own steps.
+            located
+                .ok()
+                .and_then(|e| {
+                    e.into_iter().min_by(|a, b| {
+                        (a.peak - own[k].peak).abs().total_cmp(&(b.peak - own[k].peak).abs())
+                    })
+                })
+                .unwrap_or(own[k])
+        })
+        .collect();
+    Ok(Side { own, aligned, in_phase, rebases })
+}
+
+/// The compared quantities of event k (see [`EVENT_QUANTITIES`]): (name, value, relative).
+fn event_quantities(
+    events: &[SampledEvent],
+    k: usize,
+    start: f64,
+) -> Vec<(&'static str, f64, bool)> {
+    let e = events[k];
+    let mut q = vec![("peak_time", e.peak - start, true)];
+    if k > 0 {
+        q.push(("recurrence", e.peak - events[k - 1].peak, true));
+    }
+    q.extend([
+        ("rise_time", e.peak - e.start, true),
+        ("ln_v_max", e.ln_v_max, false),
+        ("slip", e.slip, true),
+    ]);
+    q
+}
+
+/// Whether `x` ≤ `limit`; false for NaN, which is never within a limit.
+pub(crate) fn within(x: f64, limit: f64) -> bool {
+    x <= limit
+}
+
+fn deviation(user: f64, reference: f64, relative: bool) -> f64 {
+    let d = (user - reference).abs();
+    if relative {
+        d / reference.abs().max(f64::MIN_POSITIVE)
+    } else {
+        d
+    }
+}
+
+/// Compares a user's trajectory with the reference of `scene`'s model, events first, then
+/// the state between events in phase (see the module docs). Fails with
+/// [`CompareError::InaccurateReference`] when the reference's own accuracy is not below
+/// tolerance/10 for some compared quantity (its verdict would not mean anything).
 pub fn against_trajectory(
     scene: &Scene,
     user: &Trajectory,
@@ -368,144 +306,156 @@ pub fn against_trajectory(
 ) -> Result<TrajectoryComparison, CompareError> {
     let drr = Drr::new(scene.params);
     let rtol = (tolerance / 100.0).min(1e-12);
+    let check_rtol = rtol / 10.0;
     let start = user.t[0];
-    let y0 = [user.y[0][0], user.y[0][1].ln(), user.y[0][2]];
     let uw: Vec<[f64; 3]> = user.y.iter().map(|y| [y[0], y[1].ln(), y[2]]).collect();
-    let (reference, rebases) = reference_states(drr, Method::Radau5, rtol, start, y0, &user.t)?;
-    let (check, _) = reference_states(drr, Method::Rodas5p, rtol / 10.0, start, y0, &user.t)?;
-    let accuracy =
-        reference.iter().zip(&check).flat_map(|(a, b)| state_deviation(a, b)).fold(0.0, f64::max);
-    let reference_info = ReferenceInfo {
-        method: format!("radau5 through the re-basing clock, rtol {rtol:e}, atol {rtol:e}, from the first sample; accuracy: its largest difference from rodas5p at rtol {:e}", rtol / 10.0),
-        rtol,
-        accuracy,
-        rebases,
-    };
-    if accuracy > tolerance / 10.0 {
-        return Err(CompareError::InaccurateReference { accuracy, tolerance });
-    }
+    let y0 = uw[0];
     let w_user: Vec<f64> = uw.iter().map(|y| y[1]).collect();
-    let w_ref: Vec<f64> = reference.iter().map(|y| y[1]).collect();
-    let user_cycles = cycle_events(&user.t, &w_user, &user.origin).map_err(CompareError::Input)?;
-    // The reference's events on the user's sample times (interpolation common to both); where
-    // the reference is too far off the user's to be resolved at those times (e.g. out of
-    // phase), on its own Radau5 steps.
-    let ref_cycles = match cycle_events(&user.t, &w_ref, &user.origin) {
-        Ok(c) => c,
-        Err(_) => {
-            let (fine, states) =
-                reference_steps(drr, rtol, start, y0, *user.t.last().expect("two samples"))?;
-            let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
-            let origin: Vec<String> =
-                fine.iter().map(|t| format!("reference at t = {t}")).collect();
-            cycle_events(&fine, &w, &origin).map_err(CompareError::UnresolvedReference)?
+    let u_user: Vec<f64> = uw.iter().map(|y| y[0]).collect();
+    let user_events =
+        sampled_events(&user.t, &w_user, &u_user, &user.origin).map_err(CompareError::Input)?;
+    let reference = side(drr, Method::Radau5, rtol, user, y0, &user_events)?;
+    let check = side(drr, Method::Rodas5p, check_rtol, user, y0, &user_events)?;
+    let n = reference.aligned.len();
+    // Samples between events: the user's v < 1.
+    let between: Vec<usize> = (0..user.t.len()).filter(|&i| w_user[i] < 0.0).collect();
+    // The reference's own accuracy per quantity: its difference from the check run.
+    let mut accuracy: BTreeMap<String, f64> = BTreeMap::new();
+    for k in 0..n.min(check.aligned.len()) {
+        let ours = event_quantities(&reference.aligned, k, start);
+        let theirs = event_quantities(&check.aligned, k, start);
+        for ((name, r, relative), (_, c, _)) in ours.into_iter().zip(theirs) {
+            let a = accuracy.entry(name.into()).or_insert(0.0);
+            *a = a.max(deviation(c, r, relative));
         }
-    };
-    let mut reasons = Vec::new();
-    if user_cycles.len() != ref_cycles.len() {
-        reasons.push(format!(
-            "{} complete cycles against the reference's {} over the same span",
-            user_cycles.len(),
-            ref_cycles.len()
-        ));
     }
-    let mut per_cycle = Vec::new();
-    for (k, (u, r)) in user_cycles.iter().zip(&ref_cycles).enumerate() {
-        let mut push = |name: &str, user: f64, reference: f64, relative: bool| {
-            let scale = if relative { reference.abs() } else { 1.0 };
-            per_cycle.push(QuantityDeviation {
-                quantity: name.into(),
-                cycle: k + 1,
-                user,
-                reference,
-                deviation: (user - reference).abs() / scale,
-            });
-        };
-        push("period", u.period, r.period, true);
-        push("t0", u.t0, r.t0, true);
-        if let (Some(a), Some(b)) = (u.slip_half_width, r.slip_half_width) {
-            push("slip_half_width", a, b, true);
+    if check.aligned.len() != n {
+        return Err(CompareError::InaccurateReference {
+            quantities: vec![(
+                format!("the event count ({n} against {} by the check run)", check.aligned.len()),
+                f64::INFINITY,
+            )],
+            tolerance,
+        });
+    }
+    for &i in &between {
+        let d = state_deviation(&check.in_phase[i], &reference.in_phase[i]);
+        for (name, d) in STATE_QUANTITIES.iter().zip(d) {
+            let a = accuracy.entry((*name).into()).or_insert(0.0);
+            *a = a.max(d);
         }
-        push("ln_v_max", u.ln_v_max, r.ln_v_max, false);
+    }
+    let inaccurate: Vec<(String, f64)> = accuracy
+        .iter()
+        .filter(|(_, a)| !within(**a, tolerance / 10.0))
+        .map(|(q, a)| (q.clone(), *a))
+        .collect();
+    if !inaccurate.is_empty() {
+        return Err(CompareError::InaccurateReference { quantities: inaccurate, tolerance });
+    }
+    let reference_info = ReferenceInfo {
+        method: format!(
+            "radau5 through the re-basing clock, rtol {rtol:e}, atol {rtol:e}, from the first \
+             sample; accuracy: its largest difference from rodas5p at rtol {check_rtol:e}, \
+             processed the same way"
+        ),
+        rtol,
+        check_rtol,
+        accuracy,
+        rebases: reference.rebases,
+    };
+
+    let mut reasons = Vec::new();
+    let span = user.t.last().expect("two samples") - start;
+    let own_count = reference.own.len();
+    if user_events.len() != own_count {
+        // One event more in one of them is only an edge effect if it ends within the
+        // tolerance (of the span) of the file's end.
+        let longer = if user_events.len() > own_count { &user_events } else { &reference.own };
+        let at_the_edge = user_events.len().abs_diff(own_count) == 1
+            && (user.t.last().expect("two samples") - longer[longer.len() - 1].end).abs()
+                <= tolerance * span;
+        if !at_the_edge {
+            reasons.push(format!(
+                "{} complete events against the reference's {} over the same span",
+                user_events.len(),
+                own_count
+            ));
+        }
+    }
+    let mut per_event = Vec::new();
+    for k in 0..n {
+        let ours = event_quantities(&user_events, k, start);
+        let theirs = event_quantities(&reference.aligned, k, start);
+        for ((name, u, relative), (_, r, _)) in ours.into_iter().zip(theirs) {
+            per_event.push(QuantityDeviation {
+                quantity: name.into(),
+                event: k + 1,
+                user: u,
+                reference: r,
+                deviation: deviation(u, r, relative),
+            });
+        }
     }
     let worst = |name: &str| {
-        per_cycle
+        per_event
             .iter()
             .filter(|q| q.quantity == name)
             .max_by(|a, b| a.deviation.total_cmp(&b.deviation))
             .cloned()
     };
     let worst_per_quantity: Vec<QuantityDeviation> =
-        ["period", "t0", "slip_half_width", "ln_v_max"].iter().filter_map(|n| worst(n)).collect();
-    for q in worst_per_quantity.iter().filter(|q| q.deviation > tolerance) {
-        reasons.push(format!(
-            "{} differs by {:.2e} in cycle {} (yours {}, reference {})",
-            if q.quantity == "period" { "period error: the period" } else { q.quantity.as_str() },
-            q.deviation,
-            q.cycle,
-            q.user,
-            q.reference
-        ));
+        EVENT_QUANTITIES.iter().filter_map(|n| worst(n)).collect();
+    for q in worst_per_quantity.iter().filter(|q| !within(q.deviation, tolerance)) {
+        let what = match q.quantity.as_str() {
+            "recurrence" => format!(
+                "period error: the period differs by {:.2e} between events {} and {} (peak to peak)",
+                q.deviation,
+                q.event - 1,
+                q.event
+            ),
+            name => format!("{name} differs by {:.2e} at event {}", q.deviation, q.event),
+        };
+        reasons.push(format!("{what} (yours {}, reference {})", q.user, q.reference));
     }
-    // The state in phase: the reference at the same time since its own crossing of the cycle.
-    let mut cycle_of = vec![0usize; user.t.len()];
-    let mut phase: Vec<f64> = user.t.iter().map(|t| t - start).collect();
-    let mut targets = user.t.clone();
-    for (i, &t) in user.t.iter().enumerate() {
-        if let Some(k) = user_cycles.iter().rposition(|c| c.start <= t) {
-            // Samples past the last complete cycle's end belong to the cycle after it.
-            let k = if t >= user_cycles[k].start + user_cycles[k].period { k + 1 } else { k };
-            let (user_start, ref_start) = if k < user_cycles.len() {
-                (user_cycles[k].start, ref_cycles.get(k).map(|c| c.start))
-            } else {
-                let (u, r) = (user_cycles[k - 1], ref_cycles.get(k - 1));
-                (u.start + u.period, r.map(|r| r.start + r.period))
-            };
-            if let Some(ref_start) = ref_start {
-                cycle_of[i] = k + 1;
-                phase[i] = t - user_start;
-                targets[i] = ref_start + phase[i];
-            }
-        }
-    }
-    let (in_phase, _) = reference_states(drr, Method::Radau5, rtol, start, y0, &targets)?;
+    // The state between events, in phase.
+    let anchor = anchors(&user.t, &user_events, n);
     let mut maxima = [0.0f64; 3];
     let mut worst_state: Option<StateDeviation> = None;
-    let names = ["u", "ln_v", "theta"];
-    for i in 0..user.t.len() {
-        let d = state_deviation(&uw[i], &in_phase[i]);
+    for &i in &between {
+        let d = state_deviation(&uw[i], &reference.in_phase[i]);
         for k in 0..3 {
             maxima[k] = maxima[k].max(d[k]);
-            if worst_state.as_ref().is_none_or(|w| d[k] > w.deviation) {
+            if worst_state.as_ref().is_none_or(|w| !within(d[k], w.deviation)) {
                 worst_state = Some(StateDeviation {
-                    quantity: names[k].into(),
+                    quantity: STATE_QUANTITIES[k].into(),
                     t: user.t[i],
                     at: user.origin[i].clone(),
-                    cycle: cycle_of[i],
-                    phase: phase[i],
+                    event: anchor[i].map_or(0, |e| e + 1),
+                    phase: anchor[i].map_or(user.t[i] - start, |e| user.t[i] - user_events[e].peak),
                     user: uw[i][k],
-                    reference: in_phase[i][k],
+                    reference: reference.in_phase[i][k],
                     deviation: d[k],
                 });
             }
         }
     }
-    if let Some(w) = worst_state.as_ref().filter(|w| w.deviation > tolerance) {
+    if let Some(w) = worst_state.as_ref().filter(|w| !within(w.deviation, tolerance)) {
         reasons.push(format!(
-            "state along the cycle: {} = {} against the reference's {} ({:.2e}) at t = {} ({}, cycle {}, {} after its crossing of v = 1)",
-            w.quantity, w.user, w.reference, w.deviation, w.t, w.at, w.cycle, w.phase
+            "state between events: {} = {} against the reference's {} ({:.2e}) at t = {} ({}, {} from the v maximum of event {})",
+            w.quantity, w.user, w.reference, w.deviation, w.t, w.at, w.phase, w.event
         ));
     }
-    let period_error = worst("period");
     Ok(TrajectoryComparison {
         verdict: if reasons.is_empty() { Verdict::Agrees } else { Verdict::Disagrees },
         tolerance,
         samples: user.t.len(),
-        cycles: [user_cycles.len(), ref_cycles.len()],
+        events: [user_events.len(), own_count, n],
         reference: reference_info,
-        period_error,
+        period_error: worst("recurrence"),
         worst_per_quantity,
-        per_cycle,
+        per_event,
+        state_samples: between.len(),
         worst_state,
         max_state_deviation: StateMaxima { u: maxima[0], ln_v: maxima[1], theta: maxima[2] },
         reasons,
