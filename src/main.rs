@@ -460,8 +460,7 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     let (rows, missing) =
         sweep::merge(&paths, total).map_err(|e| Failure(2, format!("cannot read inputs: {e}")))?;
-    let text: String =
-        rows.iter().map(|r| serde_json::to_string(r).expect("a row serialises") + "\n").collect();
+    let text: String = rows.iter().map(|line| format!("{line}\n")).collect();
     report::write_atomic(&out, &text)
         .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
     println!("merge: {} rows into {}", rows.len(), out.display());
