@@ -151,6 +151,15 @@ pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
     Ok(Axis { name: name.into(), values })
 }
 
+impl std::str::FromStr for Axis {
+    type Err = SweepError;
+
+    /// As [`parse_axis`] (clap parses `--param` with it).
+    fn from_str(spec: &str) -> Result<Self, SweepError> {
+        parse_axis(spec)
+    }
+}
+
 /// The points of the grid (the cartesian product of the axes, first axis slowest).
 pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
     let mut points = vec![BTreeMap::new()];
@@ -203,6 +212,15 @@ pub fn parse_shard(spec: &str) -> Result<Shard, SweepError> {
         return Err(SweepError::ShardRange { spec: spec.into() });
     }
     Ok(Shard { k, n })
+}
+
+impl std::str::FromStr for Shard {
+    type Err = SweepError;
+
+    /// As [`parse_shard`] (clap parses `--shard` with it).
+    fn from_str(spec: &str) -> Result<Self, SweepError> {
+        parse_shard(spec)
+    }
 }
 
 /// The scene JSON with the point's parameters set (model.gamma, model.xi, model.epsilon,

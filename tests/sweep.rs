@@ -216,6 +216,27 @@ fn bad_sweep_arguments_exit_2() {
         }
         all.extend(args);
         let r = Command::new(EXE).args(&all).output().unwrap();
-        assert_eq!(r.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&r.stderr));
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(&format!("{} \"{}\"", args[0], args[1])), "{args:?}: {stderr}");
     }
+}
+
+/// clap parses `--methods` (compare, stress) with the one parser of method names: an unknown
+/// name exits 2 before anything runs, and the message lists the valid ones.
+#[test]
+fn an_unknown_method_exits_2_naming_the_valid_ones() {
+    let d = dir("methods");
+    let s = scene(&d);
+    for args in [
+        vec!["compare", s.to_str().unwrap(), "--methods", "radau5,bogus"],
+        vec!["stress", "--quick", "--methods", "bogus"],
+    ] {
+        let r = Command::new(EXE).args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("--methods"), "{args:?}: {stderr}");
+        assert!(stderr.contains("\"bogus\" is not a method; use one of cvode-bdf"), "{stderr}");
+    }
+    std::fs::remove_dir_all(&d).ok();
 }
