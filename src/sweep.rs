@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Mutex;
 
-/// One swept parameter: NAME=START:STOP:COUNT[:log].
+/// One swept parameter: `NAME=START:STOP:COUNT[:log]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
     /// Scene field: gamma, xi, epsilon, radiation_damping (η) or alpha (power-law exponent).
