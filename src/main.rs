@@ -52,7 +52,7 @@ enum Command {
         scene: PathBuf,
         /// Comma-separated methods, e.g. cvode-bdf,arkode-dirk,radau5.
         #[arg(long, value_delimiter = ',', conflicts_with = "against")]
-        methods: Vec<String>,
+        methods: Vec<scene::Method>,
         /// A user's trajectory or report to check against the reference.
         #[arg(long, value_name = "FILE")]
         against: Option<PathBuf>,
@@ -73,8 +73,8 @@ enum Command {
         /// Scene file (model given as gamma/xi/epsilon).
         scene: PathBuf,
         /// NAME=START:STOP:COUNT[:log] for gamma, xi, epsilon, radiation_damping or alpha; repeat for a grid.
-        #[arg(long = "param", required = true)]
-        params: Vec<String>,
+        #[arg(long = "param", required = true, value_name = "NAME=START:STOP:COUNT[:log]")]
+        params: Vec<sweep::Axis>,
         /// Output file (JSON Lines).
         #[arg(long)]
         out: PathBuf,
@@ -82,8 +82,8 @@ enum Command {
         #[arg(long)]
         resume: bool,
         /// K/N: run only the points with index % N == K − 1 (for cluster job arrays).
-        #[arg(long)]
-        shard: Option<String>,
+        #[arg(long, value_name = "K/N")]
+        shard: Option<sweep::Shard>,
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
@@ -125,7 +125,7 @@ enum Command {
         known: Option<PathBuf>,
         /// Only these methods' cells (comma-separated, e.g. arkode-dirk,radau5); default: all.
         #[arg(long, value_delimiter = ',')]
-        methods: Vec<String>,
+        methods: Vec<scene::Method>,
     },
     /// Remake the paper's figures (SVG), their JSON reports and a summary of its claims
     /// against ours (summary.md, summary.html) in DIR.
@@ -283,7 +283,7 @@ fn print_json(value: &impl serde::Serialize) {
 
 fn compare_command(
     path: PathBuf,
-    methods: Vec<String>,
+    methods: Vec<scene::Method>,
     against: Option<PathBuf>,
     tolerance: f64,
     reference_method: Option<String>,
@@ -423,15 +423,15 @@ fn print_trajectory_comparison(c: &compare::TrajectoryComparison) {
 }
 
 /// `compare --methods a,b,…`: the scene's cycle by several methods.
-fn compare_methods(scene: &scene::Scene, methods: &[String], json: bool) -> Result<(), Failure> {
+fn compare_methods(
+    scene: &scene::Scene,
+    methods: &[scene::Method],
+    json: bool,
+) -> Result<(), Failure> {
     if methods.is_empty() {
         return Err(Failure(2, "give --methods a,b,... or --against FILE".into()));
     }
-    let parsed = methods
-        .iter()
-        .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
-        .collect::<Result<Vec<_>, _>>()?;
-    let c = compare::methods(scene, &parsed);
+    let c = compare::methods(scene, methods);
     if json {
         print_json(&c);
     } else {
@@ -468,24 +468,17 @@ fn worker_threads(threads: Option<usize>) -> usize {
 
 fn sweep_command(
     path: PathBuf,
-    specs: Vec<String>,
+    axes: Vec<sweep::Axis>,
     out: PathBuf,
     resume: bool,
-    shard: Option<String>,
+    shard: Option<sweep::Shard>,
     threads: Option<usize>,
 ) -> Result<(), Failure> {
     let text = read_scene_text(&path)?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))?;
     let base: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let axes = specs
-        .iter()
-        .map(|s| sweep::parse_axis(s))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| Failure(2, e.to_string()))?;
     sweep::check_base(&base, &axes).map_err(|e| Failure(2, format!("{}: {e}", path.display())))?;
-    let shard =
-        shard.map(|s| sweep::parse_shard(&s)).transpose().map_err(|e| Failure(2, e.to_string()))?;
     let progress = Progress::new("sweep", "points");
     let ran = sweep::run(&base, &axes, &out, resume, shard, worker_threads(threads), &|d, t| {
         progress.update(d, t)
@@ -500,8 +493,7 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
     let paths: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
     let (rows, missing) =
         sweep::merge(&paths, total).map_err(|e| Failure(2, format!("cannot read inputs: {e}")))?;
-    let text: String =
-        rows.iter().map(|r| serde_json::to_string(r).expect("a row serialises") + "\n").collect();
+    let text: String = rows.iter().map(|line| format!("{line}\n")).collect();
     report::write_atomic(&out, &text)
         .map_err(|e| Failure(1, format!("cannot write {}: {e}", out.display())))?;
     println!("merge: {} rows into {}", rows.len(), out.display());
@@ -517,7 +509,7 @@ fn merge_command(out: PathBuf, total: Option<usize>, inputs: Vec<PathBuf>) -> Re
 
 fn stress_command(
     grid: stress::Grid,
-    methods: &[String],
+    methods: &[scene::Method],
     json: bool,
     threads: Option<usize>,
     table: Option<PathBuf>,
@@ -530,10 +522,6 @@ fn stress_command(
             })?),
             None => None,
         };
-    let methods = methods
-        .iter()
-        .map(|m| m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--methods: {e}"))))
-        .collect::<Result<Vec<_>, _>>()?;
     let mut cells = stress::grid(grid);
     if !methods.is_empty() {
         cells.retain(|cell| methods.contains(&cell.method));

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("scene {source_name}: {field}: {message}")]
 pub struct SceneError {
-    /// The scene file (or "<built-in>").
+    /// The scene file (or `"<built-in>"`).
     pub source_name: String,
     /// Path of the offending field, e.g. "model.gamma".
     pub field: String,

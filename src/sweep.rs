@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Mutex;
 
-/// One swept parameter: NAME=START:STOP:COUNT[:log].
+/// One swept parameter: `NAME=START:STOP:COUNT[:log]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
     /// Scene field: gamma, xi, epsilon, radiation_damping (η) or alpha (power-law exponent).
@@ -151,6 +151,15 @@ pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
     Ok(Axis { name: name.into(), values })
 }
 
+impl std::str::FromStr for Axis {
+    type Err = SweepError;
+
+    /// As [`parse_axis`] (clap parses `--param` with it).
+    fn from_str(spec: &str) -> Result<Self, SweepError> {
+        parse_axis(spec)
+    }
+}
+
 /// The points of the grid (the cartesian product of the axes, first axis slowest).
 pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
     let mut points = vec![BTreeMap::new()];
@@ -203,6 +212,15 @@ pub fn parse_shard(spec: &str) -> Result<Shard, SweepError> {
         return Err(SweepError::ShardRange { spec: spec.into() });
     }
     Ok(Shard { k, n })
+}
+
+impl std::str::FromStr for Shard {
+    type Err = SweepError;
+
+    /// As [`parse_shard`] (clap parses `--shard` with it).
+    fn from_str(spec: &str) -> Result<Self, SweepError> {
+        parse_shard(spec)
+    }
 }
 
 /// The scene JSON with the point's parameters set (model.gamma, model.xi, model.epsilon,
@@ -272,24 +290,31 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
 /// Reads the rows already in `path` (for --resume), dropping a trailing partial line left by
 /// a kill and rewriting the file without it.
 pub fn read_done(path: &Path) -> std::io::Result<Vec<Row>> {
+    Ok(read_lines(path)?.into_iter().map(|(row, _)| row).collect())
+}
+
+/// The complete rows of a sweep output, each with its line as written (without the newline),
+/// dropping a trailing partial line left by a kill and rewriting the file without it.
+fn read_lines(path: &Path) -> std::io::Result<Vec<(Row, String)>> {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Err(e) => return Err(e),
     };
     let mut rows = Vec::new();
-    let mut good = String::new();
+    let mut good = 0;
     for line in text.split_inclusive('\n') {
-        match (line.ends_with('\n'), serde_json::from_str::<Row>(line.trim_end())) {
+        let complete = line.trim_end_matches('\n');
+        match (line.ends_with('\n'), serde_json::from_str::<Row>(complete)) {
             (true, Ok(row)) => {
-                good.push_str(line);
-                rows.push(row);
+                good += line.len();
+                rows.push((row, complete.to_string()));
             }
             _ => break,
         }
     }
-    if good.len() != text.len() {
-        crate::report::write_atomic(path, &good)?;
+    if good != text.len() {
+        crate::report::write_atomic(path, &text[..good])?;
     }
     Ok(rows)
 }
@@ -328,16 +353,18 @@ pub fn run(
     Ok(todo.len())
 }
 
-/// Merges shard outputs: rows sorted by index, duplicates dropped (they are identical), and
-/// the missing indices of the full grid listed.
-pub fn merge(inputs: &[&Path], total: Option<usize>) -> std::io::Result<(Vec<Row>, Vec<usize>)> {
-    let mut rows: BTreeMap<usize, Row> = BTreeMap::new();
+/// Merges shard outputs: the rows' lines sorted by index, each exactly as the sweep wrote it
+/// (parsing and printing a row again could change a number's last digit: serde_json's
+/// default float parsing is not correctly rounded), duplicates dropped (they are identical),
+/// and the missing indices of the full grid listed.
+pub fn merge(inputs: &[&Path], total: Option<usize>) -> std::io::Result<(Vec<String>, Vec<usize>)> {
+    let mut lines: BTreeMap<usize, String> = BTreeMap::new();
     for path in inputs {
-        for row in read_done(path)? {
-            rows.entry(row.index).or_insert(row);
+        for (row, line) in read_lines(path)? {
+            lines.entry(row.index).or_insert(line);
         }
     }
     let missing =
-        total.map_or_else(Vec::new, |n| (0..n).filter(|i| !rows.contains_key(i)).collect());
-    Ok((rows.into_values().collect(), missing))
+        total.map_or_else(Vec::new, |n| (0..n).filter(|i| !lines.contains_key(i)).collect());
+    Ok((lines.into_values().collect(), missing))
 }

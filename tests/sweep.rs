@@ -137,6 +137,30 @@ fn shards_merge_into_the_full_sweep() {
     std::fs::remove_dir_all(&d).ok();
 }
 
+/// `merge` writes each row exactly as the sweep did: 12.589254117941675 (γ at index 1 of
+/// `gamma=1e1:1e12:111:log`) is one of the numbers that serde_json's default parser reads
+/// one ulp off, so parsing and printing a row again would change it (found by tools/slurm.sh
+/// comparing merged Slurm shards with an unsharded sweep).
+#[test]
+fn merge_keeps_each_row_as_written() {
+    let d = dir("verbatim");
+    let rows = [
+        r#"{"index":0,"params":{"gamma":10.0},"report":{"cycle":{"period":12.48191460503766}},"error":null}"#,
+        r#"{"index":1,"params":{"gamma":12.589254117941675},"report":null,"error":"e"}"#,
+    ];
+    std::fs::write(d.join("b.jsonl"), format!("{}\n", rows[1])).unwrap();
+    std::fs::write(d.join("a.jsonl"), format!("{}\n{}\n", rows[1], rows[0])).unwrap();
+    let merged = d.join("merged.jsonl");
+    let out = Command::new(EXE)
+        .args(["merge", "--out", merged.to_str().unwrap(), "--total", "2"])
+        .args([d.join("b.jsonl"), d.join("a.jsonl")])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(&merged).unwrap(), format!("{}\n{}\n", rows[0], rows[1]));
+    std::fs::remove_dir_all(&d).ok();
+}
+
 /// A sweep over the radiation damping η under the ageing law: each row's Hopf threshold is
 /// ε_c(η) = η + ξγ²(1 + η)/(ξ + γ²(1 + η)) (docs/state-laws.md, f = ln v, κ = 1).
 #[test]
@@ -192,6 +216,27 @@ fn bad_sweep_arguments_exit_2() {
         }
         all.extend(args);
         let r = Command::new(EXE).args(&all).output().unwrap();
-        assert_eq!(r.status.code(), Some(2), "{args:?}: {}", String::from_utf8_lossy(&r.stderr));
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(&format!("{} \"{}\"", args[0], args[1])), "{args:?}: {stderr}");
     }
+}
+
+/// clap parses `--methods` (compare, stress) with the one parser of method names: an unknown
+/// name exits 2 before anything runs, and the message lists the valid ones.
+#[test]
+fn an_unknown_method_exits_2_naming_the_valid_ones() {
+    let d = dir("methods");
+    let s = scene(&d);
+    for args in [
+        vec!["compare", s.to_str().unwrap(), "--methods", "radau5,bogus"],
+        vec!["stress", "--quick", "--methods", "bogus"],
+    ] {
+        let r = Command::new(EXE).args(&args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("--methods"), "{args:?}: {stderr}");
+        assert!(stderr.contains("\"bogus\" is not a method; use one of cvode-bdf"), "{stderr}");
+    }
+    std::fs::remove_dir_all(&d).ok();
 }

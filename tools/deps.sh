@@ -29,3 +29,9 @@ if ! command -v cargo >/dev/null; then
     echo "stickslip: no Rust toolchain (cargo) on PATH; install one with rustup (https://rustup.rs)" >&2
     exit 1
 fi
+for tool in fmt clippy; do
+    cargo "$tool" --version >/dev/null 2>&1 || {
+        echo "stickslip: cargo $tool is missing (the test command runs it); install it with: rustup component add ${tool/fmt/rustfmt}" >&2
+        exit 1
+    }
+done

@@ -1,8 +1,15 @@
 #!/usr/bin/env bash
-# The test suite: installs missing Debian packages, then runs every default test.
+# The test suite: installs missing Debian packages, checks the style gates (cargo fmt --check,
+# clippy with -D warnings over every target, cargo doc with -D warnings; missing_docs is
+# warned by Cargo.toml's [lints], so an undocumented public item fails clippy), then runs
+# every default test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/deps.sh
+# Style gates first (seconds when the tree is clean): formatting, lints, the API docs.
+cargo fmt --check || { echo "tools/test.sh: run cargo fmt" >&2; exit 1; }
+cargo clippy --release --all-targets --quiet -- -D warnings
+RUSTDOCFLAGS='-D warnings' cargo doc --no-deps --quiet
 cargo test --release "$@"
 # The library guide's example (docs/library.md): every stiff method on a user's system.
 cargo run --release --quiet --example own_system

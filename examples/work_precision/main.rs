@@ -142,8 +142,9 @@ pub struct WrapperRow {
     pub c_s: f64,
     /// library_s / c_s.
     pub ratio: f64,
-    /// Alternating rounds, and timed runs per side in each.
+    /// Alternating rounds (library, then C, in each).
     pub rounds: usize,
+    /// Timed runs per side in each round.
     pub runs_per_round: usize,
 }
 

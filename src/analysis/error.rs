@@ -10,7 +10,7 @@ use crate::integrate::{Clock, SolverError};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{field}: {message}")]
 pub struct InvalidOption {
-    /// The field, e.g. "gammas" or "amplitudes[1]" (empty: the whole object).
+    /// The field, e.g. `gammas` or `amplitudes[1]` (empty: the whole object).
     pub field: String,
     /// What is wrong and what would be valid.
     pub message: String,
@@ -22,7 +22,7 @@ impl InvalidOption {
         Self { field: field.into(), message: message.into() }
     }
 
-    /// The field's full path below `base` (e.g. "analyses[2].noise"), as a scene names it.
+    /// The field's full path below `base` (e.g. `analyses[2].noise`), as a scene names it.
     pub fn path_below(&self, base: &str) -> String {
         if self.field.is_empty() {
             base.to_string()

@@ -4,7 +4,7 @@
 
 use serde::ser::{self, Serialize};
 
-/// The path (e.g. "lyapunov.along_cycle.re_slow[12]") of the first NaN or infinity in
+/// The path (e.g. `lyapunov.along_cycle.re_slow[12]`) of the first NaN or infinity in
 /// `value`, or None if every number is finite. `root` names the value.
 pub fn first_non_finite<T: Serialize + ?Sized>(value: &T, root: &str) -> Option<String> {
     let mut walker = Walker { path: vec![root.to_string()], found: None };

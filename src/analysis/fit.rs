@@ -3,7 +3,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-/// A fitted linear model y ≈ Σ coefficients[k]·basis_k(x).
+/// A fitted linear model `y ≈ Σ coefficients[k]·basis_k(x)`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Fit {
     /// The model, in words, e.g. "a + b ln γ + c ln ln γ".
@@ -18,7 +18,7 @@ pub struct Fit {
     pub points: usize,
 }
 
-/// Fits y ≈ Σ c_k basis[k](x) over the points; None if there are fewer points than terms, the
+/// Fits `y ≈ Σ c_k basis[k](x)` over the points; None if there are fewer points than terms, the
 /// basis is rank deficient on them, or a value is not finite.
 pub fn least_squares(
     model: &str,

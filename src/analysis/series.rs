@@ -4,7 +4,7 @@
 //! the first, the last and the extrema of every spacing column.
 
 /// Indices (increasing) of at most `max_points` (≥ 2) samples of the curve
-/// (x, columns[0], columns[1], …), chosen at equal steps of arc length in coordinates
+/// (x, `columns[0]`, `columns[1]`, …), chosen at equal steps of arc length in coordinates
 /// normalised by their ranges. All indices if there are at most `max_points` samples.
 pub fn decimate(x: &[f64], columns: &[&[f64]], max_points: usize) -> Vec<usize> {
     let n = x.len();

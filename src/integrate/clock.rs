@@ -104,8 +104,8 @@ const HORIZON: f64 = 1e6;
 
 impl<'a> Clock<'a> {
     /// Drives `integ` from its current point, whose global time is `start`, with the
-    /// threshold its kind of re-base calls for ([`DEFAULT_THRESHOLD`] for an exact time shift,
-    /// [`RESTART_THRESHOLD`] for a restart).
+    /// threshold its kind of re-base calls for (`DEFAULT_THRESHOLD` for an exact time shift,
+    /// `RESTART_THRESHOLD` for a restart).
     pub fn new(integ: &'a mut dyn Integrator, start: Time) -> Self {
         let epoch = start.plus(-integ.t());
         let threshold = if integ.rebase_restarts() { RESTART_THRESHOLD } else { DEFAULT_THRESHOLD };

@@ -19,7 +19,7 @@ pub(crate) use error::panic_message;
 pub use error::{ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
-pub use options::{ErrorScale, Options, Tolerance, DEFAULT_MAX_STEPS};
+pub use options::{ErrorScale, Options, OptionsError, Tolerance, DEFAULT_MAX_STEPS};
 #[cfg(test)]
 pub(crate) use problem::jacobian_against_differences;
 pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};

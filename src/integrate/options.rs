@@ -106,37 +106,29 @@ impl Options {
     }
 
     /// Checks the options against a system of dimension `dim`; the error names the field.
-    pub fn validate(&self, dim: usize) -> Result<(), String> {
+    pub fn validate(&self, dim: usize) -> Result<(), OptionsError> {
         if !(self.rtol.is_finite() && self.rtol > 0.0) {
-            return Err(format!("rtol = {} must be finite and > 0 (e.g. 1e-8)", self.rtol));
+            return Err(OptionsError::Rtol { rtol: self.rtol });
         }
         match &self.atol {
             Tolerance::Scalar(a) if !(a.is_finite() && *a >= 0.0) => {
-                return Err(format!("atol = {a} must be finite and ≥ 0"));
+                return Err(OptionsError::Atol { atol: *a });
             }
             Tolerance::PerComponent(v) if v.len() != dim => {
-                return Err(format!("atol has {} components; the system has {dim}", v.len()));
+                return Err(OptionsError::AtolLength { len: v.len(), dim });
             }
             Tolerance::PerComponent(v) if v.iter().any(|a| !(a.is_finite() && *a >= 0.0)) => {
-                return Err(format!("atol = {v:?}: every component must be finite and ≥ 0"));
+                return Err(OptionsError::AtolComponent { atol: v.clone() });
             }
             _ => {}
         }
         if let Some(scales) = &self.error_scales {
             if scales.len() != dim {
-                return Err(format!(
-                    "error_scales has {} components; the system has {dim}",
-                    scales.len()
-                ));
+                return Err(OptionsError::ErrorScalesLength { len: scales.len(), dim });
             }
-            if let Some(i) = scales
-                .iter()
-                .position(|s| matches!(s, ErrorScale::Absolute(c) if !(c.is_finite() && *c > 0.0)))
-            {
-                return Err(format!(
-                    "error_scales[{i}] = {:?}: an absolute scale must be finite and > 0",
-                    scales[i]
-                ));
+            let bad = |s: &ErrorScale| matches!(s, ErrorScale::Absolute(c) if !(c.is_finite() && *c > 0.0));
+            if let Some(index) = scales.iter().position(bad) {
+                return Err(OptionsError::ErrorScale { index, scale: scales[index] });
             }
         }
         let positive = [
@@ -148,13 +140,13 @@ impl Options {
         for (name, value) in positive {
             if let Some(v) = value {
                 if !(v.is_finite() && v > 0.0) {
-                    return Err(format!("{name} = {v} must be finite and > 0"));
+                    return Err(OptionsError::NotPositive { name, value: v });
                 }
             }
         }
         if let Some(t) = self.stop_time {
             if !t.is_finite() {
-                return Err(format!("stop_time = {t} must be finite"));
+                return Err(OptionsError::StopTime { stop_time: t });
             }
         }
         let counts = [
@@ -168,10 +160,112 @@ impl Options {
         for (name, value) in counts {
             if let Some(v) = value {
                 if v < 1 {
-                    return Err(format!("{name} = {v} must be ≥ 1"));
+                    return Err(OptionsError::CountBelowOne { name, value: v });
                 }
             }
         }
         Ok(())
+    }
+}
+
+/// Why [`Options::validate`] refuses the options; each message names the field and what would
+/// be valid. Integrators report it as [`crate::integrate::ErrorKind::InvalidInput`] with this
+/// message.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OptionsError {
+    /// `rtol` is not finite or not > 0.
+    #[error("rtol = {rtol} must be finite and > 0 (e.g. 1e-8)")]
+    Rtol {
+        /// The value given.
+        rtol: f64,
+    },
+    /// A scalar `atol` is not finite or is negative.
+    #[error("atol = {atol} must be finite and ≥ 0")]
+    Atol {
+        /// The value given.
+        atol: f64,
+    },
+    /// A per-component `atol` whose length is not the system's dimension.
+    #[error("atol has {len} components; the system has {dim}")]
+    AtolLength {
+        /// Components given.
+        len: usize,
+        /// The system's dimension.
+        dim: usize,
+    },
+    /// A per-component `atol` with a component not finite or negative.
+    #[error("atol = {atol:?}: every component must be finite and ≥ 0")]
+    AtolComponent {
+        /// The values given.
+        atol: Vec<f64>,
+    },
+    /// `error_scales` whose length is not the system's dimension.
+    #[error("error_scales has {len} components; the system has {dim}")]
+    ErrorScalesLength {
+        /// Components given.
+        len: usize,
+        /// The system's dimension.
+        dim: usize,
+    },
+    /// An absolute error scale not finite or not > 0.
+    #[error("error_scales[{index}] = {scale:?}: an absolute scale must be finite and > 0")]
+    ErrorScale {
+        /// The component.
+        index: usize,
+        /// The scale given.
+        scale: ErrorScale,
+    },
+    /// A step size or coefficient (`initial_step`, `min_step`, `max_step`,
+    /// `nonlin_conv_coef`) not finite or not > 0.
+    #[error("{name} = {value} must be finite and > 0")]
+    NotPositive {
+        /// The field.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// `stop_time` is not finite.
+    #[error("stop_time = {stop_time} must be finite")]
+    StopTime {
+        /// The value given.
+        stop_time: f64,
+    },
+    /// A count (`max_order`, `max_steps`, `jacobian_max_age`, …) below 1.
+    #[error("{name} = {value} must be ≥ 1")]
+    CountBelowOne {
+        /// The field.
+        name: &'static str,
+        /// The value given.
+        value: i64,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each refusal is its own variant, and its message is the one the integrators have always
+    /// reported (tests/contract.rs matches on some of them).
+    #[test]
+    fn validate_names_the_field_with_a_typed_error() {
+        let ok = Options::new(1e-8, Tolerance::Scalar(1e-10));
+        assert_eq!(ok.validate(3), Ok(()));
+        let rtol = Options::new(0.0, Tolerance::Scalar(1e-10)).validate(3).unwrap_err();
+        assert_eq!(rtol, OptionsError::Rtol { rtol: 0.0 });
+        assert_eq!(rtol.to_string(), "rtol = 0 must be finite and > 0 (e.g. 1e-8)");
+        let short = Options::new(1e-8, Tolerance::PerComponent(vec![1e-10; 2])).validate(3);
+        assert_eq!(short.unwrap_err().to_string(), "atol has 2 components; the system has 3");
+        let negative = Options::new(1e-8, Tolerance::PerComponent(vec![1e-10, -1.0]));
+        assert_eq!(
+            negative.validate(2).unwrap_err().to_string(),
+            "atol = [1e-10, -1.0]: every component must be finite and ≥ 0"
+        );
+        let max_step = Options { max_step: Some(f64::NAN), ..ok.clone() }.validate(3);
+        assert_eq!(max_step.unwrap_err().to_string(), "max_step = NaN must be finite and > 0");
+        let stop = Options { stop_time: Some(f64::INFINITY), ..ok.clone() }.validate(3);
+        assert_eq!(stop.unwrap_err(), OptionsError::StopTime { stop_time: f64::INFINITY });
+        let age = Options { jacobian_max_age: Some(0), ..ok }.validate(3).unwrap_err();
+        assert_eq!(age, OptionsError::CountBelowOne { name: "jacobian_max_age", value: 0 });
+        assert_eq!(age.to_string(), "jacobian_max_age = 0 must be ≥ 1");
     }
 }

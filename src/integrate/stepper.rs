@@ -103,7 +103,7 @@ impl Core {
         if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
             return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
         }
-        options.validate(n).map_err(invalid)?;
+        options.validate(n).map_err(|e| invalid(e.to_string()))?;
         if options.error_scales.is_some() {
             return Err(invalid(format!(
                 "error_scales is not an option of {name} (its error test weighs every component \
@@ -298,6 +298,29 @@ pub(super) fn all_finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// A testing aid's fixed step (see [`Stepper::check_fixed`]) that cannot be taken; reported
+/// as [`ErrorKind::InvalidInput`] with this message.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(super) enum FixedStepError {
+    /// The fixed step size is not finite or not > 0.
+    #[error("fixed step {h} must be finite and > 0")]
+    Step {
+        /// The step size given.
+        h: f64,
+    },
+    /// Extrapolation's fixed step and tableau column: the step not finite or not > 0, or the
+    /// column outside 1..=km.
+    #[error("fixed step {h} must be finite and > 0, column {k} in 1..={km}")]
+    StepAndColumn {
+        /// The step size given.
+        h: f64,
+        /// The column given.
+        k: usize,
+        /// The last column of the tableau.
+        km: usize,
+    },
+}
+
 /// What a method provides to the shared driver.
 pub(super) trait Stepper {
     /// Highest derivative [`dense`] gives.
@@ -309,10 +332,10 @@ pub(super) trait Stepper {
     /// Testing aid: the constant step size, if any.
     fn fixed_h(&self) -> Option<f64>;
     /// Checks the testing aids before a call to `advance` (by default: the fixed step).
-    fn check_fixed(&self) -> Result<(), String> {
+    fn check_fixed(&self) -> Result<(), FixedStepError> {
         if let Some(h) = self.fixed_h() {
             if !(h.is_finite() && h > 0.0) {
-                return Err(format!("fixed step {h} must be finite and > 0"));
+                return Err(FixedStepError::Step { h });
             }
         }
         Ok(())
@@ -366,7 +389,7 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
     if !tout.is_finite() {
         return Err(m.core().invalid(format!("tout = {tout} must be finite")));
     }
-    m.check_fixed().map_err(|message| m.core().invalid(message))?;
+    m.check_fixed().map_err(|e| m.core().invalid(e.to_string()))?;
     start(m, tout, task)?;
     // A stop time reached by a step whose call returned an earlier tout: return it now.
     if m.core().stop_pending

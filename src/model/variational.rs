@@ -74,7 +74,7 @@ impl<S: OdeSystem, const N: usize> Variational<S, N> {
         z
     }
 
-    /// The fundamental matrix Φ from an augmented state, as rows (Φ[row][col]).
+    /// The fundamental matrix Φ from an augmented state, as rows (`Φ[row][col]`).
     pub fn matrix(z: &[f64]) -> [[f64; N]; N] {
         let mut phi = [[0.0; N]; N];
         for (row, r) in phi.iter_mut().enumerate() {

@@ -518,7 +518,7 @@ impl<S: ImexSystem> Solver<S> {
     }
 }
 
-/// The default IMEX pair: Kennedy & Carpenter's ARK4(3)6L[2]SA (L-stable implicit part).
+/// The default IMEX pair: Kennedy & Carpenter's ARK4(3)6L\[2\]SA (L-stable implicit part).
 pub fn default_imex_tables() -> (DirkTable, ErkTable) {
     (
         DirkTable(ffi::ARKODE_DIRKTableID_ARKODE_ARK436L2SA_DIRK_6_3_4),

@@ -157,7 +157,7 @@ impl<S> Solver<S> {
         if let Some(i) = y0.iter().position(|v| !v.is_finite()) {
             return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
         }
-        options.validate(dim).map_err(invalid)?;
+        options.validate(dim).map_err(|e| invalid(e.to_string()))?;
         let resource = |what: &str| invalid(format!("could not allocate the SUNDIALS {what}"));
 
         let ctx = Context::new().ok_or_else(|| resource("context"))?;

@@ -9,7 +9,7 @@
 use super::CycleAt;
 use crate::analysis::cycle::{CycleStatus, CycleValues};
 use crate::model::{Drr, DrrParams};
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 
 /// The cycle quantities the asymptotic fits use (dimensionless).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -53,13 +53,32 @@ impl ScanValues {
     }
 }
 
+/// How a scan point's run ended: serialised as its [`CycleStatus`] ("periodic", "period_n",
+/// "fixed_point", "not_converged") or "failed".
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScanStatus {
+    /// The cycle analysis ran; what the integration settled to.
+    Cycle(CycleStatus),
+    /// The run failed with a typed error (the row's `error`).
+    Failed,
+}
+
+impl Serialize for ScanStatus {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            ScanStatus::Cycle(status) => status.serialize(serializer),
+            ScanStatus::Failed => serializer.serialize_str("failed"),
+        }
+    }
+}
+
 /// One γ of the scan.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ScanRow {
     /// γ.
     pub gamma: f64,
-    /// "periodic", "period_n", "fixed_point", "not_converged" or "failed".
-    pub status: String,
+    /// What the run settled to, or that it failed.
+    pub status: ScanStatus,
     /// The typed error of a failed run.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
@@ -90,19 +109,15 @@ pub fn run(
             let drr = Drr::new(DrrParams { gamma, ..*params });
             match cycle_at(&drr, start) {
                 Ok(report) => {
-                    let status = serde_json::to_value(report.status)
-                        .ok()
-                        .and_then(|v| v.as_str().map(String::from))
-                        .unwrap_or_default();
                     let values = report
                         .values
                         .filter(|_| report.status == CycleStatus::Periodic)
                         .map(|c| ScanValues::of(&c, gamma));
-                    ScanRow { gamma, status, error: None, values }
+                    ScanRow { gamma, status: ScanStatus::Cycle(report.status), error: None, values }
                 }
                 Err(e) => ScanRow {
                     gamma,
-                    status: "failed".into(),
+                    status: ScanStatus::Failed,
                     error: Some(e.to_string()),
                     values: None,
                 },
@@ -120,4 +135,25 @@ pub fn usable(rows: &[ScanRow], min_gamma: f64) -> Vec<(f64, ScanValues)> {
         .collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scan row's status reads as the cycle's own status, or "failed".
+    #[test]
+    fn scan_status_serialises_as_the_cycle_status_or_failed() {
+        let json = |s: ScanStatus| serde_json::to_string(&s).unwrap();
+        for status in [
+            CycleStatus::Periodic,
+            CycleStatus::PeriodN,
+            CycleStatus::FixedPoint,
+            CycleStatus::NotConverged,
+        ] {
+            assert_eq!(json(ScanStatus::Cycle(status)), serde_json::to_string(&status).unwrap());
+        }
+        assert_eq!(json(ScanStatus::Cycle(CycleStatus::PeriodN)), "\"period_n\"");
+        assert_eq!(json(ScanStatus::Failed), "\"failed\"");
+    }
 }

@@ -30,7 +30,7 @@ pub struct EnsembleData {
     pub realisations: usize,
     /// Event time of each realisation.
     pub event_times: Vec<f64>,
-    /// Observables at the grid, realisation-major: [r][observable][k].
+    /// Observables at the grid, realisation-major: `[r][observable][k]`.
     pub samples: Vec<f64>,
     /// Rodas5P's statistics summed over realisations.
     pub stats: Stats,

@@ -101,7 +101,7 @@ mod switching;
 mod tableau;
 
 use super::linalg::rms;
-use super::stepper::{self, all_finite, Core, Stepper, UROUND};
+use super::stepper::{self, all_finite, Core, FixedStepError, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
@@ -731,13 +731,11 @@ impl<S: OdeSystem> Stepper for Extrapolation<S> {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed.map(|(h, _)| h)
     }
-    fn check_fixed(&self) -> Result<(), String> {
+    fn check_fixed(&self) -> Result<(), FixedStepError> {
         if let Some((h, k)) = self.fixed {
             let km = self.control().nj.len() - 1;
             if !(h.is_finite() && h > 0.0) || k == 0 || k > km {
-                return Err(format!(
-                    "fixed step {h} must be finite and > 0, column {k} in 1..={km}"
-                ));
+                return Err(FixedStepError::StepAndColumn { h, k, km });
             }
         }
         Ok(())
