@@ -60,11 +60,13 @@ fn scene_error(py: Python<'_>, e: &SceneError) -> PyErr {
 /// failure its time, kind and integrator.
 fn run_error(py: Python<'_>, name: &str, e: &EngineError) -> PyErr {
     let attributes = PyDict::new(py);
-    let (t, kind, solver) = match e.kind.as_ref() {
-        AnalysisError::Solver(s) => (Some(s.t), Some(format!("{:?}", s.kind)), Some(s.solver)),
-        AnalysisError::Failed { t, .. } => (Some(*t), None, None),
-        _ => (None, None, None),
+    let (t, solver) = match e.kind.as_ref() {
+        AnalysisError::Solver(s) => (Some(s.t), Some(s.solver)),
+        AnalysisError::Failed { t, .. } | AnalysisError::Budget { t, .. } => (Some(*t), None),
+        _ => (None, None),
     };
+    // The stress grid's one-word label: the integrator's error kind, or the variant's.
+    let kind = e.kind.label();
     let filled = (|| -> PyResult<()> {
         attributes.set_item("analysis", e.analysis)?;
         attributes.set_item("state", numpy::PyArray1::from_slice(py, &e.state))?;
@@ -262,7 +264,12 @@ fn solve_ivp<'py>(
         first_step: float("first_step")?,
         max_step: float("max_step")?,
         min_step: float("min_step")?,
-        max_steps: int("max_steps")?,
+        max_steps: match int("max_steps")? {
+            Some(m) if m < 1 => {
+                return Err(PyValueError::new_err(format!("max_steps = {m} must be ≥ 1")))
+            }
+            other => other,
+        },
         max_order: int("max_order")?.map(|v| v as i32),
         jacobian_max_age: int("jacobian_max_age")?,
     };

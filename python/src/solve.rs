@@ -43,6 +43,7 @@ pub struct Problem<'py> {
     pub first_step: Option<f64>,
     pub max_step: Option<f64>,
     pub min_step: Option<f64>,
+    /// Most internal steps of the whole integration (None: no limit, as in scipy).
     pub max_steps: Option<i64>,
     pub max_order: Option<i32>,
     pub jacobian_max_age: Option<i64>,
@@ -186,7 +187,6 @@ pub fn solve<'py>(py: Python<'py>, p: Problem<'py>) -> PyResult<Bound<'py, PyDic
     options.initial_step = p.first_step;
     options.max_step = p.max_step;
     options.min_step = p.min_step;
-    options.max_steps = p.max_steps;
     options.max_order = p.max_order;
     options.jacobian_max_age = p.jacobian_max_age;
     if p.t_bound != p.t0 {
@@ -222,8 +222,28 @@ pub fn solve<'py>(py: Python<'py>, p: Problem<'py>) -> PyResult<Bound<'py, PyDic
     let mut t_eval_i = 0;
     let mut status = if p.t_bound == p.t0 { 0 } else { 2 };
     let mut failure = None;
+    let mut steps: i64 = 0;
     while status == 2 {
         let t_old = integ.t();
+        // max_steps bounds the whole integration (the integrator's own budget is per call,
+        // and each call here is one step).
+        if p.max_steps.is_some_and(|m| steps >= m) {
+            let message = format!(
+                "max_steps = {} internal steps taken before t_bound = {:e} (raise max_steps)",
+                steps, p.t_bound
+            );
+            failure = Some(SolverError {
+                solver: method.name(),
+                kind: ErrorKind::TooMuchWork,
+                t: t_old,
+                state: integ.state().to_vec(),
+                flag: 0,
+                message,
+            });
+            status = -1;
+            break;
+        }
+        steps += 1;
         let step = match integ.advance(p.t_bound, Task::OneStep) {
             Ok(s) => s,
             Err(e) => {

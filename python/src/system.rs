@@ -23,6 +23,14 @@ pub enum Jacobian<'py> {
     Constant(Vec<f64>),
 }
 
+/// A shape as Python writes it: (3,) or (3, 3).
+fn python_shape(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!("({})", shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")),
+    }
+}
+
 /// The payload of the unwind that stops an integrator after a Python exception.
 struct PythonRaised;
 
@@ -91,9 +99,9 @@ impl<'py> PySystem<'py> {
         let array = array.cast_into::<numpy::PyArrayDyn<f64>>().map_err(PyErr::from)?;
         if array.shape() != shape {
             return Err(PyValueError::new_err(format!(
-                "{what} returned an array of shape {:?}; expected {:?}",
-                array.shape(),
-                shape
+                "{what} returned an array of shape {}; expected {}",
+                python_shape(array.shape()),
+                python_shape(shape)
             )));
         }
         let readonly = array.readonly();

@@ -85,6 +85,10 @@ def resolve_method(method: Any) -> tuple:
 def _events(events: Any, args: Optional[tuple]) -> list:
     if callable(events):
         events = (events,)
+    try:
+        events = list(events)
+    except TypeError as e:
+        raise TypeError(f"`events` must be a callable or a sequence of callables, got {events!r}") from e
     prepared = []
     for event in events:
         if not callable(event):
@@ -130,7 +134,7 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
     ``"LSODA"`` has no counterpart and raises ValueError naming the alternatives.
 
     ``options``: ``first_step``, ``max_step``, ``min_step`` (scipy's names), and stickslip's
-    ``max_steps`` (internal steps, default 1e6), ``max_order`` (cvode, extrapolation),
+    ``max_steps`` (internal steps of the whole integration, default no limit), ``max_order`` (cvode, extrapolation),
     ``jacobian_max_age`` and ``table`` (an ARKODE Butcher table name). An option a method
     does not have is a ValueError; an unknown option warns, as in scipy.
 

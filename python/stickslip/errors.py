@@ -37,13 +37,14 @@ class RunError(StickslipError, RuntimeError):
     """A scene's run failed.
 
     Attributes: ``analysis`` (e.g. ``"cycle"``), ``state`` (numpy array, empty if unknown),
-    ``t`` (time of the failure or None), ``kind`` (the integrator's error kind or None),
+    ``t`` (time of the failure or None), ``kind`` (one word: the integrator's error kind,
+    e.g. ``"ConvergenceFailures"``, or the analysis's, e.g. ``"TooMuchWork"`` for a budget),
     ``solver`` (the integrator's name or None), ``bad_input`` (an option that does not fit the
     computed orbit: the CLI's exit code 2).
     """
 
     def __init__(self, message: str, *, analysis: str, state: Any, t: Optional[float],
-                 kind: Optional[str], solver: Optional[str], bad_input: bool) -> None:
+                 kind: str, solver: Optional[str], bad_input: bool) -> None:
         super().__init__(message)
         self.analysis = analysis
         self.state = state
