@@ -14,7 +14,8 @@ import pytest
 import stickslip
 from problems import REPO
 
-CLI = os.path.join(REPO, "target", "release", "stickslip")
+# The CLI that tools/test.sh built (CARGO_TARGET_DIR as cargo reads it: relative to the repo).
+CLI = os.path.join(REPO, os.environ.get("CARGO_TARGET_DIR", "target"), "release", "stickslip")
 # The shipped scenes that run in under a second (the others are ensembles or long scans).
 FAST_SCENES = ["earthquake", "earthquake-ageing", "earthquake-ageing-damped", "fig1", "ice-stream",
                "period-doubling", "power-law", "power-law-lyapunov", "prz", "quasi-dynamic"]
