@@ -90,7 +90,17 @@ impl<'py> PySystem<'py> {
         shape: &[usize],
         out: &mut [f64],
     ) -> PyResult<()> {
-        let value = if value.hasattr("toarray")? && shape.len() == 2 {
+        // The common case first: a contiguous float64 array of the right shape, copied
+        // without numpy.asarray (a Python call per evaluation).
+        if let Ok(array) = value.cast::<numpy::PyArrayDyn<f64>>() {
+            if array.shape() == shape {
+                if let Ok(s) = array.readonly().as_slice() {
+                    out.copy_from_slice(s);
+                    return Ok(());
+                }
+            }
+        }
+        let value = if shape.len() == 2 && value.hasattr("toarray")? {
             value.call_method0("toarray")?
         } else {
             value
