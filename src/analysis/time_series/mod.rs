@@ -398,7 +398,7 @@ impl Run<'_, '_> {
                 return Ok(y);
             }
             if matches!(self.settings.sampling, Sampling::Steps)
-                || matches!(self.settings.sampling, Sampling::Every(n) if self.steps % n == 0)
+                || matches!(self.settings.sampling, Sampling::Every(n) if self.steps.is_multiple_of(n))
             {
                 self.write(end, &y)?;
             }
