@@ -6,7 +6,9 @@ use crate::analysis::cycle::CycleOptions;
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
-use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
+use crate::model::{
+    Drr, DrrParams, Friction, PhysicalScales, SaddleNodeParams, StateLaw, VanDerPolParams,
+};
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
 
@@ -228,6 +230,8 @@ pub struct Scene {
     pub dimensional: Option<Dimensional>,
     /// Physical time units for reports.
     pub units: Option<Units>,
+    /// The physical scales (D_c/v0, v0, D_c, aσ, σ, k, μ0 at V_ref), with dimensional input.
+    pub scales: Option<PhysicalScales>,
     /// Initial state (u, ln v, θ).
     pub initial: [f64; 3],
     /// Solver settings.
@@ -591,6 +595,15 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         params,
         dimensional: m.dimensional,
         units,
+        scales: m.dimensional.map(|d| PhysicalScales {
+            d_c: d.d_c,
+            v0: d.v0,
+            a_sigma: d.a,
+            b_sigma: d.b,
+            sigma: None,
+            k: d.k,
+            reference: None,
+        }),
         initial,
         solver,
         analyses,
