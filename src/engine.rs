@@ -6,8 +6,7 @@ use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting;
 use crate::analysis::time_series::{
-    self, DiscardSink, SeriesCollector, SeriesScales, SeriesSink, TimeSeriesOutcome,
-    TimeSeriesSettings,
+    self, DiscardSink, SeriesCollector, SeriesSink, TimeSeriesOutcome, TimeSeriesSettings,
 };
 use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tolerance};
@@ -15,7 +14,7 @@ use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
-use crate::scene::{Dimensional, Method, OtherModel, OtherScene, Scene, SolverSpec};
+use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -444,12 +443,6 @@ fn shooting_step(
     Ok((a.shooting.is_some().then_some(report), curve))
 }
 
-/// The multipliers from dimensionless quantities to the dimensional input's units: time
-/// D_c/v0, slip rate v0, slip D_c, stress A.
-pub fn series_scales(d: &Dimensional) -> SeriesScales {
-    SeriesScales { time: d.d_c / d.v0, velocity: d.v0, slip: d.d_c, stress: d.a }
-}
-
 /// "time_series": from t = 0 to t_max with the scene's integrator and start, rows to
 /// `series`; its integrator is the report's when nothing was integrated before.
 fn time_series_step(
@@ -460,8 +453,8 @@ fn time_series_step(
     series: &mut dyn SeriesSink,
 ) -> Result<Option<TimeSeriesOutcome>, EngineError> {
     let Some(o) = &scene.analyses.time_series else { return Ok(None) };
-    let scales = scene.dimensional.as_ref().map(series_scales);
-    let t_max = o.t_max / scales.map_or(1.0, |s| s.time);
+    let scales = scene.scales;
+    let t_max = o.t_max / scales.map_or(1.0, |s| s.time_scale());
     if !(t_max.is_finite() && t_max > 0.0) {
         let option = crate::analysis::InvalidOption::new(
             "time_series.t_max",

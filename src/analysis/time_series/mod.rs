@@ -33,6 +33,7 @@ use super::events;
 use super::AnalysisError;
 use crate::integrate::{Clock, Integrator, OdeSystem, Time};
 use crate::model::drr::{Drr, THETA, U, W};
+use crate::model::scales::{dimensionless_friction, PhysicalScales};
 use serde::Serialize;
 
 /// How the analysis runs (dimensionless).
@@ -50,24 +51,16 @@ pub struct TimeSeriesSettings {
     pub w_tolerance: (f64, f64),
 }
 
-/// Multipliers from the dimensionless quantities to the input's physical units.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SeriesScales {
-    /// One time unit D_c/v0.
-    pub time: f64,
-    /// One unit of slip rate, v0.
-    pub velocity: f64,
-    /// One unit of slip (and of u), D_c.
-    pub slip: f64,
-    /// One unit of stress, A = aσ.
-    pub stress: f64,
-}
-
 /// The dimensionless columns, in order: the first four are what `compare --against` reads.
 pub const COLUMNS: [&str; 7] = ["t", "u", "v", "theta", "ln_v", "slip", "stress"];
 
-/// The physical columns that follow [`COLUMNS`] with dimensional input.
+/// The physical columns that follow [`COLUMNS`] with dimensional input: t, v, slip and the
+/// shear stress relative to steady sliding at v0 ([`PhysicalScales::shear_stress_change`]).
 pub const PHYSICAL_COLUMNS: [&str; 4] = ["t_phys", "v_phys", "slip_phys", "stress_phys"];
+
+/// The columns that follow [`PHYSICAL_COLUMNS`] when the scene gives the absolute friction
+/// level (σ, μ0 at V_ref): the shear stress τ = σμ and the friction coefficient μ.
+pub const ABSOLUTE_COLUMNS: [&str; 2] = ["tau_phys", "mu"];
 
 /// One event's quantities (dimensionless, or in physical units in [`Event::physical`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -84,27 +77,11 @@ pub struct EventValues {
     pub slip: f64,
     /// t_end − t_start.
     pub duration: f64,
-    /// Drop of the frictional shear stress f(v) + θ (units of A = aσ) from t_start to
-    /// t_end; at both ends v is the threshold, so it is θ(t_start) − θ(t_end) under the log law.
+    /// Drop of the spring stress from t_start to t_end, ξ·(u(t_end) − u(t_start)) in units
+    /// of A = aσ (k·D_c·Δu physical, [`PhysicalScales::stress_drop`]).
     pub stress_drop: f64,
     /// Time since the previous event's peak (null for the first event).
     pub recurrence: Option<f64>,
-}
-
-impl EventValues {
-    /// The same quantities in physical units.
-    pub fn scaled(&self, s: &SeriesScales) -> Self {
-        Self {
-            t_start: self.t_start * s.time,
-            t_peak: self.t_peak * s.time,
-            t_end: self.t_end * s.time,
-            v_max: self.v_max * s.velocity,
-            slip: self.slip * s.slip,
-            duration: self.duration * s.time,
-            stress_drop: self.stress_drop * s.stress,
-            recurrence: self.recurrence.map(|r| r * s.time),
-        }
-    }
 }
 
 /// One entry of the event catalogue.
@@ -186,7 +163,9 @@ enum Crossing {
 struct Rows<'s> {
     sink: &'s mut dyn SeriesSink,
     drr: &'s Drr,
-    scales: Option<SeriesScales>,
+    scales: Option<PhysicalScales>,
+    /// Whether the absolute shear stress and friction are known (σ, μ0 at V_ref).
+    absolute: bool,
     u0: f64,
     last_t: f64,
     written: u64,
@@ -201,14 +180,23 @@ impl Rows<'_> {
             self.merged += 1;
             return Ok(());
         }
-        let (f, _) = self.drr.params().friction.eval(y[W]);
         let v = y[W].exp();
         let slip = y[U] - self.u0 + t;
-        let stress = f + y[THETA];
+        let stress = dimensionless_friction(self.drr.params().friction, y[THETA], y[W]);
         self.buffer.clear();
         self.buffer.extend([t, y[U], v, y[THETA], y[W], slip, stress]);
         if let Some(s) = &self.scales {
-            self.buffer.extend([t * s.time, v * s.velocity, slip * s.slip, stress * s.stress]);
+            self.buffer.extend([
+                s.time(t),
+                s.velocity(v),
+                s.slip(slip),
+                s.shear_stress_change(stress),
+            ]);
+            if let (true, Some(tau), Some(mu)) =
+                (self.absolute, s.shear_stress(stress), s.friction_coefficient(stress))
+            {
+                self.buffer.extend([tau, mu]);
+            }
         }
         self.sink.row(&self.buffer)?;
         self.last_t = t;
@@ -224,7 +212,7 @@ pub fn run(
     integ: &mut dyn Integrator,
     drr: &Drr,
     settings: &TimeSeriesSettings,
-    scales: Option<SeriesScales>,
+    scales: Option<PhysicalScales>,
     sink: &mut dyn SeriesSink,
 ) -> Result<TimeSeriesOutcome, AnalysisError> {
     let y0 = integ.state();
@@ -233,8 +221,12 @@ pub fn run(
     drr.rhs(integ.t(), &y0, &mut d0);
     let prev = Sample { t: integ.t(), y: y0, d: d0 };
     let mut columns: Vec<&'static str> = COLUMNS.to_vec();
+    let absolute = scales.is_some_and(|s| s.shear_stress(0.0).is_some());
     if scales.is_some() {
         columns.extend(PHYSICAL_COLUMNS);
+    }
+    if absolute {
+        columns.extend(ABSOLUTE_COLUMNS);
     }
     let io = |e: std::io::Error, t: f64, y: &[f64]| AnalysisError::Failed {
         analysis: "time_series",
@@ -251,6 +243,7 @@ pub fn run(
         prev,
         open: None,
         events: Vec::new(),
+        scales,
         last_peak: None,
         steps: 0,
         next_point: 0,
@@ -258,6 +251,7 @@ pub fn run(
             sink,
             drr,
             scales,
+            absolute,
             u0: y0[U],
             last_t: 0.0,
             written: 0,
@@ -272,13 +266,9 @@ pub fn run(
     let Run { rows, events, open, steps, clock, .. } = run;
     let rebases = clock.rebases();
     rows.sink.finish().map_err(|e| io(e, settings.t_max, &final_state))?;
-    let events: Vec<Event> = events
-        .into_iter()
-        .map(|values| Event { values, physical: scales.map(|s| values.scaled(&s)) })
-        .collect();
     let report = TimeSeriesReport {
         t_max: settings.t_max,
-        t_max_physical: scales.map(|s| settings.t_max * s.time),
+        t_max_physical: scales.map(|s| s.time(settings.t_max)),
         sampling: settings.sampling,
         columns,
         rows: rows.written,
@@ -302,7 +292,8 @@ struct Run<'a, 's> {
     level: f64,
     prev: Sample,
     open: Option<OpenEvent>,
-    events: Vec<EventValues>,
+    events: Vec<Event>,
+    scales: Option<PhysicalScales>,
     last_peak: Option<Time>,
     steps: u64,
     /// Index of the next uniform row (`Sampling::Points`).
@@ -490,19 +481,29 @@ impl Run<'_, '_> {
     }
 
     fn close(&mut self, e: OpenEvent, end: Time, y: [f64; 3]) {
-        let friction = self.drr.params().friction;
-        let stress = |y: &[f64; 3]| friction.eval(y[W]).0 + y[THETA];
         let duration = end.since(e.start);
-        self.events.push(EventValues {
+        let recurrence = self.last_peak.map(|p| e.peak.since(p));
+        let values = EventValues {
             t_start: e.start.to_f64(),
             t_peak: e.peak.to_f64(),
             t_end: end.to_f64(),
             v_max: e.w_peak.exp(),
             slip: y[U] - e.y_start[U] + duration,
             duration,
-            stress_drop: stress(&e.y_start) - stress(&y),
-            recurrence: self.last_peak.map(|p| e.peak.since(p)),
+            stress_drop: self.drr.params().xi * (y[U] - e.y_start[U]),
+            recurrence,
+        };
+        let physical = self.scales.map(|s| EventValues {
+            t_start: s.time(values.t_start),
+            t_peak: s.time(values.t_peak),
+            t_end: s.time(values.t_end),
+            v_max: s.velocity(values.v_max),
+            slip: s.slip(values.slip),
+            duration: s.time(duration),
+            stress_drop: s.stress_drop(e.y_start[U], y[U]),
+            recurrence: recurrence.map(|r| s.time(r)),
         });
+        self.events.push(Event { values, physical });
         self.last_peak = Some(e.peak);
     }
 }
