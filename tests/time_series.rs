@@ -341,3 +341,34 @@ fn bad_time_series_input_exits_2_naming_the_field() {
     assert!(stderr.contains("--series") && stderr.contains("cannot create"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn absolute_friction_level_adds_shear_stress_and_friction_columns() {
+    // σ and μ0 at V_ref set on the scene's PhysicalScales (the scene form of branch field
+    // gives them as model.dimensional.sigma, mu0, v_ref): τ = σμ and μ follow the stress
+    // change column, μ = μ_ref + a·stress with μ_ref = μ0 + (a − b) ln(v0/V_ref).
+    let text = r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
+        "dimensional": {"k": 2.5e8, "a": 1e5, "b": 1.5e5, "d_c": 1e-4, "v0": 1e-9,
+                        "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
+        "initial": {"v": 0.5, "theta": 0},
+        "solver": {"method": "radau5", "rtol": 1e-8},
+        "analyses": [{"time_series": {"t_max": 2e7, "points": 101}}]}"#;
+    let mut scene = scene::parse(text, "test").unwrap();
+    let scales = scene.scales.as_mut().unwrap();
+    scales.sigma = Some(1e7);
+    scales.reference = Some(stickslip::model::FrictionReference { mu0: 0.6, v_ref: 1e-6 });
+    let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
+    let columns = &report.time_series.as_ref().unwrap().columns;
+    assert_eq!(columns[columns.len() - 2..], ["tau_phys", "mu"]);
+    let mu_ref = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();
+    let (stress, tau, mu) = (
+        series.column("stress").unwrap(),
+        series.column("tau_phys").unwrap(),
+        series.column("mu").unwrap(),
+    );
+    assert_eq!(mu.len(), 101);
+    for i in 0..101 {
+        assert!((mu[i] - (mu_ref + 0.01 * stress[i])).abs() < 1e-14, "{} {}", mu[i], stress[i]);
+        assert!((tau[i] / (1e7 * mu[i]) - 1.0).abs() < 1e-14);
+    }
+}
