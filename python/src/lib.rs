@@ -21,6 +21,7 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{mpsc, Arc};
 use std::time::Duration;
+use stickslip::analysis::time_series::SeriesCollector;
 use stickslip::analysis::AnalysisError;
 use stickslip::engine::{self, EngineError};
 use stickslip::scene::{self, AnyScene, SceneError};
@@ -128,24 +129,44 @@ fn worker_threads(threads: Option<usize>) -> PyResult<usize> {
     }
 }
 
+/// A report as JSON text and the rows of its "time_series" analysis, column by column (empty
+/// when the scene asks for none).
+type RunOutput = (String, Vec<(String, Vec<f64>)>);
+
 /// Runs a scene (JSON text; `source` names it in errors) as `stickslip run --json` does and
-/// returns the report as JSON text.
+/// returns the report as JSON text with the rows of its "time_series" analysis (the rows
+/// `stickslip run --series FILE` writes), kept in memory.
 #[pyfunction]
 #[pyo3(signature = (text, source, threads=None))]
-fn run(py: Python<'_>, text: String, source: String, threads: Option<usize>) -> PyResult<String> {
+fn run(
+    py: Python<'_>,
+    text: String,
+    source: String,
+    threads: Option<usize>,
+) -> PyResult<(String, Vec<(String, Bound<'_, numpy::PyArray1<f64>>)>)> {
     let threads = worker_threads(threads)?;
     let scene = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let outcome = off_the_gil(py, Arc::new(AtomicBool::new(false)), move || match &scene {
-        AnyScene::Drr(s) => engine::run_with(s, echo, threads, &|_, _| {})
-            .map(|r| r.to_json())
-            .map_err(|e| (s.name.clone(), e)),
-        AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
-            .map(|r| r.to_json())
-            .map_err(|e| (s.name.clone(), e)),
-    })?;
-    outcome.map_err(|(name, e)| run_error(py, &name, &e))
+    let outcome =
+        off_the_gil(py, Arc::new(AtomicBool::new(false)), move || -> Result<RunOutput, _> {
+            match &scene {
+                AnyScene::Drr(s) => {
+                    let mut series = SeriesCollector::default();
+                    let report = engine::run_with_series(s, echo, threads, &|_, _| {}, &mut series)
+                        .map_err(|e| (s.name.clone(), e))?;
+                    let columns =
+                        series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
+                    Ok((report.to_json(), columns))
+                }
+                AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
+                    .map(|r| (r.to_json(), Vec::new()))
+                    .map_err(|e| (s.name.clone(), e)),
+            }
+        })?;
+    let (json, columns) = outcome.map_err(|(name, e)| run_error(py, &name, &e))?;
+    let columns = columns.into_iter().map(|(n, c)| (n, numpy::PyArray1::from_vec(py, c))).collect();
+    Ok((json, columns))
 }
 
 /// Runs a sweep of the scene (JSON text) over `axes` ((name, values or "START:STOP:COUNT[:log]")

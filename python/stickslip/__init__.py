@@ -65,7 +65,13 @@ def run(scene: Scene, threads: Optional[int] = None, arrays: bool = True) -> Dic
     ``{"trajectory": {"cycles": k}}`` records comes back as numpy arrays (``report["cycle"]
     ["trajectory"][i]["t"]``, ``"u"``, ``"v"``, ``"theta"``; t counts from each cycle's upward
     crossing of v = 1, as in the JSON report); ``arrays=False`` leaves every value as the JSON
-    report has it. The GIL is released while the scene runs; Ctrl-C raises KeyboardInterrupt
+    report has it.
+
+    A scene with a ``"time_series"`` analysis (a run from t = 0 in absolute time, see
+    docs/scenes.md) also gets the one key the JSON report does not have: ``"series"``, its rows
+    (those ``stickslip run --series FILE`` writes) as a dict of numpy arrays by column:
+    ``report["series"]["t"]`` (absolute time), ``"u"``, ``"v"``, ``"theta"``, ``"ln_v"``,
+    ``"slip"``, ``"stress"`` (and the physical columns with ``model.dimensional``). The GIL is released while the scene runs; Ctrl-C raises KeyboardInterrupt
     at once (the abandoned run finishes in the background and is dropped).
 
     Raises :class:`SceneError` (a ValueError; ``field`` is the path of the bad field, e.g.
@@ -73,7 +79,10 @@ def run(scene: Scene, threads: Optional[int] = None, arrays: bool = True) -> Dic
     fails (``analysis``, ``t``, ``state``, ``kind``).
     """
     text, source = _scene_text(scene)
-    report = json.loads(_core.run(text, source, threads))
+    report_json, series = _core.run(text, source, threads)
+    report = json.loads(report_json)
+    if series:
+        report["series"] = dict(series)
     return _arrays(report) if arrays else report
 
 

@@ -4,8 +4,8 @@ from typing import Any, Optional, Sequence
 
 DENSE_NODES: int
 
-def run(text: str, source: str, threads: Optional[int] = None) -> str:
-    """Runs a scene (JSON text) and returns the report as JSON text."""
+def run(text: str, source: str, threads: Optional[int] = None) -> tuple[str, list[tuple[str, Any]]]:
+    """Runs a scene (JSON text): the report as JSON text and the time series' columns (name, numpy array)."""
 
 def sweep(text: str, source: str, axes: Sequence[tuple[str, Any]], threads: Optional[int] = None) -> str:
     """Runs a sweep of the scene over the axes and returns the rows as a JSON array."""
