@@ -8,7 +8,9 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use stickslip::integrate::{ErrorKind, Integrator, Options, SolverError, Task, Tolerance};
+use stickslip::integrate::{
+    ErrorKind, Integrator, OdeSystem as _, Options, SolverError, Task, Tolerance,
+};
 use stickslip::solver::{self, Method, MethodSettings};
 
 /// Samples of each step's interpolant handed to Python's `OdeSolution`: Chebyshev–Lobatto
@@ -410,5 +412,3 @@ fn finish<'py>(
     )?;
     Ok(d)
 }
-
-use stickslip::integrate::OdeSystem as _;

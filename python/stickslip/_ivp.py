@@ -234,7 +234,9 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
     result = OdeResult(
         t=raw["t"], y=raw["y"], sol=sol,
         t_events=raw["t_events"] if events is not None else None,
-        y_events=raw["y_events"] if events is not None else None,
+        # scipy's y_events[i] is np.asarray of a list: shape (k, n), or (0,) without zeros.
+        y_events=[ye if len(ye) else np.empty((0,)) for ye in raw["y_events"]]
+        if events is not None else None,
         nfev=raw["nfev"], njev=raw["njev"], nlu=raw["nlu"], status=status,
         message=error["message"] if error else _MESSAGES[status], success=status >= 0)
     if error:

@@ -39,6 +39,8 @@ class OdeSolution:
         self._weights = w
 
     def _segments(self, t: np.ndarray) -> np.ndarray:
+        """The step of each time, as scipy's OdeSolution picks it (a boundary belongs to the
+        step that ends there)."""
         ind = np.searchsorted(self._ts_sorted, t, side="left")
         seg = np.clip(ind - 1, 0, self.n_segments - 1)
         return seg if self._ascending else self.n_segments - 1 - seg
