@@ -133,6 +133,9 @@ fn worker_threads(threads: Option<usize>) -> PyResult<usize> {
 /// when the scene asks for none).
 type RunOutput = (String, Vec<(String, Vec<f64>)>);
 
+/// The time series' columns handed to Python: (name, numpy array).
+type Columns<'py> = Vec<(String, Bound<'py, numpy::PyArray1<f64>>)>;
+
 /// Runs a scene (JSON text; `source` names it in errors) as `stickslip run --json` does and
 /// returns the report as JSON text with the rows of its "time_series" analysis (the rows
 /// `stickslip run --series FILE` writes), kept in memory.
@@ -143,7 +146,7 @@ fn run(
     text: String,
     source: String,
     threads: Option<usize>,
-) -> PyResult<(String, Vec<(String, Bound<'_, numpy::PyArray1<f64>>)>)> {
+) -> PyResult<(String, Columns<'_>)> {
     let threads = worker_threads(threads)?;
     let scene = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?;
     let echo: serde_json::Value =
