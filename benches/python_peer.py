@@ -3,6 +3,8 @@
 
 Usage (in a venv with stickslip, scipy, numpy; see docs/python.md):
     python benches/python_peer.py [PROBLEM ...]   (default: every problem but MEDAKZO)
+    python benches/python_peer.py SLIDER          (issue #27's done-when: the spring-slider
+                                                   of python/tests/problems.py to t = 40)
 
 Both sides get the same Python right-hand sides and analytic Jacobians (benches/
 test_set_scipy.py, the problems of docs/test-set.md), tolerances (atol as the Test Set
@@ -57,7 +59,30 @@ def callback_cost(f, jac, t0, y0):
     return out
 
 
+def slider():
+    """The spring-slider (fig. 1, in (u, ln v, θ)) to t = 40 at rtol 1e-10, atol 1e-12 with the
+    upward ln v = 0 crossings: best of 3 for stickslip, one run for scipy."""
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python", "tests"))
+    import problems
+
+    kw = dict(rtol=1e-10, atol=1e-12, jac=problems.slider_jac, events=problems.upward)
+    for side, solve, methods, runs in [("stickslip", stickslip.solve_ivp, ["Radau", "BDF", "rodas5p"], 3),
+                                       ("scipy", scipy_solve_ivp, ["Radau", "BDF", "LSODA"], 1)]:
+        for method in methods:
+            best = None
+            for _ in range(runs):
+                start = time.perf_counter()
+                r = solve(problems.slider, (0, 40), problems.SLIDER_Y0, method=method, **kw)
+                took = time.perf_counter() - start
+                best = took if best is None else min(best, took)
+            print(f"| {side} {method} | {best:.3f} | {r.nfev} | {r.njev} | {len(r.t_events[0])} |", flush=True)
+
+
 def main(names):
+    if names == ["SLIDER"]:
+        print("| method | time (s) | f calls | J calls | events |")
+        print("|---|---|---|---|---|")
+        return slider()
     makers = {m().__getitem__(0): m for m in [ts.hires, ts.orego, ts.rober, ts.e5, ts.pollu, ts.vdpol, ts.medakzo]}
     names = names or [n for n in makers if n != "MEDAKZO"]
     print("| problem | rtol | method | scd | time (ms) | f calls | J calls | in callbacks |")
