@@ -5,6 +5,9 @@ use crate::analysis::cycle::CycleOptions;
 use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting;
+use crate::analysis::time_series::{
+    self, DiscardSink, SeriesCollector, SeriesSink, TimeSeriesOutcome, TimeSeriesSettings,
+};
 use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{
     ErrorScale, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance,
@@ -281,12 +284,40 @@ pub fn run_with(
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Report, EngineError> {
+    run_with_series(scene, scene_json, threads, progress, &mut DiscardSink)
+}
+
+/// [`run`] keeping the "time_series" rows in memory (for short runs; the report's
+/// `time_series` and `events` as with [`run`]). Without a "time_series" analysis in the scene
+/// the series is empty.
+pub fn run_collecting(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+) -> Result<(Report, SeriesCollector), EngineError> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut series = SeriesCollector::default();
+    let report = run_with_series(scene, scene_json, threads, &|_, _| {}, &mut series)?;
+    Ok((report, series))
+}
+
+/// [`run_with`] streaming the "time_series" rows to `series` (e.g. a file of
+/// [`crate::series_file`], or a [`SeriesCollector`]); nothing is written to it when the scene
+/// asks for no time series.
+pub fn run_with_series(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    series: &mut dyn SeriesSink,
+) -> Result<Report, EngineError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
     let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref())?;
     let (shooting, continuation) = shooting_step(scene, &drr, &mut integration, cycle.is_some())?;
+    let integrated = cycle.is_some() || a.shooting.is_some() || a.continuation.is_some();
+    let series = time_series_step(scene, &drr, &mut integration, integrated, series)?;
     let asymptotics = asymptotics_step(scene, &drr, cycle.as_ref())?;
     let lyapunov = lyapunov_step(scene, &drr, cycle.as_ref())?;
     // The trajectory recorded only for the analyses above is not reported.
@@ -354,6 +385,8 @@ pub fn run_with(
         shooting,
         continuation,
         noise,
+        time_series: series.as_ref().map(|s| s.report.clone()),
+        events: series.map(|s| s.events),
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     refuse_non_finite(&report)?;
@@ -433,6 +466,47 @@ fn shooting_step(
     Ok((a.shooting.is_some().then_some(report), curve))
 }
 
+/// "time_series": from t = 0 to t_max with the scene's integrator and start, rows to
+/// `series`; its integrator is the report's when nothing was integrated before.
+fn time_series_step(
+    scene: &Scene,
+    drr: &Drr,
+    integration: &mut Integration,
+    integrated: bool,
+    series: &mut dyn SeriesSink,
+) -> Result<Option<TimeSeriesOutcome>, EngineError> {
+    let Some(o) = &scene.analyses.time_series else { return Ok(None) };
+    let scales = scene.scales;
+    let t_max = o.t_max / scales.map_or(1.0, |s| s.time_scale());
+    if !(t_max.is_finite() && t_max > 0.0) {
+        let option = crate::analysis::InvalidOption::new(
+            "time_series.t_max",
+            format!(
+                "{} in the input's time unit is {t_max:e} in units of D_c/v0; it must be a \
+                 finite time > 0",
+                o.t_max
+            ),
+        );
+        return Err(EngineError::new("time_series", option.into()));
+    }
+    let settings = TimeSeriesSettings {
+        t_max,
+        sampling: o.sampling(),
+        event_threshold: o.event_threshold.unwrap_or(1.0),
+        max_steps: o.max_steps.unwrap_or(time_series::options::DEFAULT_MAX_STEPS),
+        w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
+    };
+    let (mut integ, tables) =
+        integrator(*drr, &scene.solver, &scene.initial).map_err(failed(drr, "time_series"))?;
+    let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
+        .map_err(failed(drr, "time_series"))?;
+    if !integrated {
+        (integration.name, integration.tables) = (integ.name().to_string(), tables);
+    }
+    integration.stats.accumulate(&integ.stats());
+    Ok(Some(outcome))
+}
+
 /// "asymptotics", with the γ scan's cycles run by [`cycle_with`] at the scene's options.
 fn asymptotics_step(
     scene: &Scene,
@@ -484,6 +558,8 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
         first_non_finite_in("physical", r.physical.as_ref()),
         first_non_finite_in("paper", r.paper.as_ref()),
         first_non_finite_in("noise", r.noise.as_ref()),
+        first_non_finite_in("time_series", r.time_series.as_ref()),
+        first_non_finite_in("events", r.events.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
     match sections.into_iter().flatten().next() {

@@ -19,6 +19,7 @@ pub mod report;
 pub mod reproduce;
 pub mod robertson_examples;
 pub mod scene;
+pub mod series_file;
 pub mod solver;
 pub mod stress;
 pub mod sundials;

@@ -2,7 +2,7 @@
 //! Exit codes: 0 success, 1 failed computation, 2 bad input, 3 `compare`: disagrees.
 
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
@@ -40,6 +40,10 @@ enum Command {
         /// not depend on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Write the "time_series" analysis's rows to FILE as they are computed: CSV if FILE
+        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it).
+        #[arg(long, value_name = "FILE")]
+        series: Option<PathBuf>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -213,6 +217,7 @@ fn run_command(
     json: bool,
     out: Option<PathBuf>,
     threads: Option<usize>,
+    series: Option<PathBuf>,
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
@@ -226,9 +231,20 @@ fn run_command(
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
-            let report = engine::run_with(scene, echo, threads, &update)
-                .map_err(|e| failed(&scene.name, e))?;
+            let report = match &series {
+                Some(file) => run_writing_series(scene, echo, threads, &update, file)?,
+                None => engine::run_with(scene, echo, threads, &update)
+                    .map_err(|e| failed(&scene.name, e))?,
+            };
             (report.to_json(), report.summary())
+        }
+        scene::AnyScene::Other(_) if series.is_some() => {
+            return Err(Failure(
+                2,
+                "--series: this scene has no \"time_series\" analysis (only DRR scenes have one); \
+                 add {\"time_series\": {\"t_max\": T}} to its analyses"
+                    .into(),
+            ));
         }
         scene::AnyScene::Other(scene) => {
             let report = engine::run_other(scene, echo, threads, &update)
@@ -256,6 +272,34 @@ fn run_command(
         }
     }
     Ok(())
+}
+
+/// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix);
+/// the file is removed if the run fails.
+fn run_writing_series(
+    scene: &scene::Scene,
+    echo: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    file: &Path,
+) -> Result<report::Report, Failure> {
+    if scene.analyses.time_series.is_none() {
+        return Err(Failure(
+            2,
+            format!(
+                "--series {}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
+                file.display(),
+                scene.name
+            ),
+        ));
+    }
+    let mut sink = stickslip::series_file::create(file).map_err(|e| {
+        Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
+    })?;
+    engine::run_with_series(scene, echo, threads, progress, sink.as_mut()).map_err(|e| {
+        drop(std::fs::remove_file(file));
+        failed(&scene.name, e)
+    })
 }
 
 /// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and
@@ -661,7 +705,9 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out, threads } => run_command(scene, json, out, threads),
+        Command::Run { scene, json, out, threads, series } => {
+            run_command(scene, json, out, threads, series)
+        }
         Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };

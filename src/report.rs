@@ -8,6 +8,7 @@ use crate::analysis::cycle::{CycleReport, CycleStatus};
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::ShootingReport;
+use crate::analysis::time_series::{Event, TimeSeriesReport};
 use crate::integrate::Stats;
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
@@ -117,6 +118,12 @@ pub struct Report {
     /// The "noise" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub noise: Option<NoiseReport>,
+    /// The "time_series" analysis (its rows go to `--series FILE`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_series: Option<TimeSeriesReport>,
+    /// The event catalogue of the "time_series" run: one entry per slip episode.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events: Option<Vec<Event>>,
     /// Wall-clock time of the computation (seconds).
     pub wall_time_s: f64,
 }
@@ -228,6 +235,28 @@ impl Report {
         }
         if let Some(p) = &self.physical {
             s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
+        }
+        if let Some(t) = &self.time_series {
+            s += &format!(
+                "time series: t = 0 … {:e}, {} rows ({} steps), {} events above v = {}{}\n",
+                t.t_max,
+                t.rows,
+                t.steps,
+                t.event_count,
+                t.event_threshold,
+                if t.in_event_at_end { " (one more under way at t_max)" } else { "" }
+            );
+            if let Some(last) = self.events.as_ref().and_then(|e| e.last()) {
+                let e = &last.values;
+                s += &format!(
+                    "  last event: peak at t = {:.10e}, v_max {:.6e}, slip {:.6e}, stress drop {:.6e}, recurrence {}\n",
+                    e.t_peak,
+                    e.v_max,
+                    e.slip,
+                    e.stress_drop,
+                    e.recurrence.map_or("-".to_string(), |r| format!("{r:.10e}"))
+                );
+            }
         }
         if let Some(a) = &self.asymptotics {
             s += &crate::analysis::asymptotics::summary(a);

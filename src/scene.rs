@@ -5,7 +5,10 @@
 use crate::analysis::cycle::CycleOptions;
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
-use crate::model::{Drr, DrrParams, Friction, SaddleNodeParams, StateLaw, VanDerPolParams};
+use crate::analysis::time_series::TimeSeriesOptions;
+use crate::model::{
+    Drr, DrrParams, Friction, PhysicalScales, SaddleNodeParams, StateLaw, VanDerPolParams,
+};
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
 
@@ -209,6 +212,9 @@ pub struct Analyses {
     pub continuation: Option<ContinuationOptions>,
     /// Response to noise: ensembles and linear response (None: not asked).
     pub noise: Option<NoiseOptions>,
+    /// A run of fixed length from t = 0 with its event catalogue (None: not asked); `t_max`
+    /// as the scene gave it, in the scene's time unit (D_c/v0, or the dimensional input's).
+    pub time_series: Option<TimeSeriesOptions>,
 }
 
 /// A validated scene.
@@ -224,6 +230,8 @@ pub struct Scene {
     pub dimensional: Option<Dimensional>,
     /// Physical time units for reports.
     pub units: Option<Units>,
+    /// The physical scales (D_c/v0, v0, D_c, aσ, σ, k, μ0 at V_ref), with dimensional input.
+    pub scales: Option<PhysicalScales>,
     /// Initial state (u, ln v, θ).
     pub initial: [f64; 3],
     /// Solver settings.
@@ -232,7 +240,7 @@ pub struct Scene {
     pub analyses: Analyses,
 }
 
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
+const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, {\"time_series\": {\"t_max\": T}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -388,8 +396,9 @@ fn validate_other(
         || analyses.continuation.is_some()
         || analyses.asymptotics.is_some()
         || analyses.lyapunov.is_some()
+        || analyses.time_series.is_some()
     {
-        return Err(err("analyses", format!("the {kind} model runs only the \"noise\" analysis (hopf, cycle, paper, trajectory, shooting, continuation, asymptotics and lyapunov need the DRR model)")));
+        return Err(err("analyses", format!("the {kind} model runs only the \"noise\" analysis (hopf, cycle, paper, trajectory, shooting, continuation, asymptotics, lyapunov and time_series need the DRR model)")));
     }
     let noise = analyses.noise.ok_or_else(|| err("analyses", format!("the {kind} model runs only the \"noise\" analysis; add {{\"noise\": {{\"amplitudes\": [...]}}}}")))?;
     Ok(OtherScene { name: raw.name, description: raw.description, model, noise })
@@ -586,6 +595,15 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         params,
         dimensional: m.dimensional,
         units,
+        scales: m.dimensional.map(|d| PhysicalScales {
+            d_c: d.d_c,
+            v0: d.v0,
+            a_sigma: d.a,
+            b_sigma: d.b,
+            sigma: None,
+            k: d.k,
+            reference: None,
+        }),
         initial,
         solver,
         analyses,
@@ -1003,6 +1021,20 @@ fn analyses(
                 noise_options::validate(&o, dim, kind, gamma2)
                     .map_err(|e| err(&e.path_below(&format!("{field}.noise")), e.message))?;
                 out.noise = Some(o);
+            }
+            "time_series" => {
+                let Some(v) = options.clone() else {
+                    return Err(err(&field, "\"time_series\" needs its length: {\"time_series\": {\"t_max\": T}} (T in the scene's time unit; docs/scenes.md)".into()));
+                };
+                if !v.is_object() {
+                    return Err(err(
+                        &format!("{field}.time_series"),
+                        "options must be an object, e.g. {\"t_max\": 1000}".into(),
+                    ));
+                }
+                let o = TimeSeriesOptions::from_json(v)
+                    .map_err(|e| err(&e.path_below(&format!("{field}.time_series")), e.message))?;
+                out.time_series = Some(o);
             }
             other => {
                 return Err(err(

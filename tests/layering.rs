@@ -21,6 +21,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("analysis", &["integrate", "model", "parallel", "solver", "sundials"]),
     ("scene", &["analysis", "model", "solver", "sundials"]),
     ("report", &["analysis", "integrate", "model", "scene"]),
+    // The time-series files (CSV, .npy): sinks for the analysis's rows, an output layer.
+    ("series_file", &["analysis"]),
     ("engine", &["analysis", "integrate", "model", "report", "scene", "solver", "sundials"]),
     ("figure", &["report"]),
     ("compare", &["engine", "integrate", "model", "report", "scene"]),

@@ -2,7 +2,9 @@
 # Checks a Debian release from scratch, as a new user would: builds a clean minbase root
 # filesystem with debootstrap, clones this repository's HEAD into it, runs the README's two
 # commands (tools/run.sh, tools/test.sh) inside, and reports the linked SUNDIALS version, the
-# earthquake period and step count, the test summary and ldd of the binary.
+# earthquake period and step count, the test summary (cargo and the Python package's pytest,
+# which tools/test.sh runs in a fresh venv with Debian's python3), the earthquake period as
+# `import stickslip` prints it, and ldd of the binary.
 #
 #   usage (as root): bash tools/debian.sh 12|13 [ROOTFS_DIR]
 #
@@ -90,7 +92,12 @@ fi
         awk '{p+=$4; f+=$6; i+=$8} END {print p " passed, " f " failed, " i " ignored in " NR " test binaries"}')
     echo "tests: $passed"
     grep -E "^test .* FAILED|^failures:" "$root/check/test.log" || true
+    echo "python tests (pytest): $(grep -E "^[0-9]+ (passed|failed)|^=+ .*(passed|failed)" "$root/check/test.log" | tail -1)"
 }
+if [ -x "$root/root/target/venv/bin/python" ]; then
+    echo "python: $(inside "/root/target/venv/bin/python --version") prints the earthquake period" \
+        "$(inside "/root/target/venv/bin/python -c \"import stickslip; print(stickslip.run('data/scenes/earthquake.json')['cycle']['period'])\"" || true)"
+fi
 if [ -x "$root/root/target/release/stickslip" ]; then
     echo "ldd target/release/stickslip | grep -E 'sundials|mpi':"
     inside "ldd /root/target/release/stickslip" | grep -E "sundials|libmpi" || true

@@ -3,7 +3,8 @@
 # Debian's SUNDIALS (headers and shared libraries; on 13 it pulls in the OpenMPI headers its
 # MPI-enabled build needs), libclang (bindgen reads the SUNDIALS headers), a C compiler
 # (linking, and the SUN_COMM_NULL shim on 13), pkg-config (finds MPI) and the CA certificates
-# cargo needs to download crates. Needs root (or sudo) only when something is missing. Also
+# cargo needs to download crates; with STICKSLIP_WITH_PYTHON=1 also python3 and python3-venv
+# (the Python package's tests). Needs root (or sudo) only when something is missing. Also
 # checks for a Rust toolchain.
 set -euo pipefail
 
@@ -14,6 +15,12 @@ for p in "${packages[@]}"; do
 done
 if [ "${STICKSLIP_WITH_VALGRIND:-0}" = 1 ] && ! command -v valgrind >/dev/null; then
     missing+=(valgrind)
+fi
+# The Python package's tests (tools/test.sh): Debian's python3 with venv (pip comes with it).
+if [ "${STICKSLIP_WITH_PYTHON:-0}" = 1 ]; then
+    for p in python3 python3-venv; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+    done
 fi
 
 if [ ${#missing[@]} -gt 0 ]; then

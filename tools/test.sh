@@ -5,7 +5,7 @@
 # every default test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash tools/deps.sh
+STICKSLIP_WITH_PYTHON=1 bash tools/deps.sh
 # Style gates first (seconds when the tree is clean): formatting, lints, the API docs.
 cargo fmt --check || { echo "tools/test.sh: run cargo fmt" >&2; exit 1; }
 cargo clippy --release --all-targets --quiet -- -D warnings
@@ -15,3 +15,15 @@ cargo test --release "$@"
 cargo run --release --quiet --example own_system
 # The work–precision runner (docs/work-precision.md) still runs: one small cell, nothing written.
 cargo run --release --quiet --example work_precision -- --smoke
+# The Python package (docs/python.md): a fresh venv of its own, `pip install ./python` (maturin
+# builds the extension against the same SUNDIALS), then its pytest suite (which compares with
+# the CLI built above and with scipy) and the examples, headless.
+venv="${STICKSLIP_VENV:-${CARGO_TARGET_DIR:-target}/venv}"
+rm -rf "$venv"
+python3 -m venv "$venv"
+"$venv/bin/pip" install --quiet --upgrade pip
+"$venv/bin/pip" install --quiet ./python pytest scipy numpy matplotlib
+"$venv/bin/python" -m pytest -q python/tests
+for example in examples/python/*.py; do
+    MPLBACKEND=Agg "$venv/bin/python" "$example" "${CARGO_TARGET_DIR:-target}/python-figures"
+done

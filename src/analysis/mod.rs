@@ -16,5 +16,6 @@ pub mod paper;
 pub mod period_map;
 pub mod series;
 pub mod shooting;
+pub mod time_series;
 
 pub use error::{AnalysisError, InvalidOption};

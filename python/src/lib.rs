@@ -1,0 +1,318 @@
+//! `stickslip._core`: the compiled half of the Python package `stickslip` (python/stickslip/
+//! is the other: argument checks, scipy's conventions, `OdeResult`, `OdeSolution`,
+//! exceptions). Three entry points: `run` (a scene → its report as JSON text), `sweep` (a
+//! scene and axes → rows as JSON text) and `solve_ivp` (the stepping loop of
+//! `stickslip.solve_ivp`, see [`solve`]).
+//!
+//! `run` and `sweep` release the GIL: the work runs on a thread of its own while the calling
+//! thread waits in slices of 50 ms and checks for signals, so Ctrl-C raises KeyboardInterrupt
+//! at once. A sweep then starts no new point; a single run cannot be interrupted inside the
+//! library (it has no cancellation point), so it finishes in the background and its report is
+//! dropped.
+
+mod solve;
+mod system;
+
+use numpy::PyReadonlyArrayDyn;
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
+use stickslip::analysis::time_series::SeriesCollector;
+use stickslip::analysis::AnalysisError;
+use stickslip::engine::{self, EngineError};
+use stickslip::scene::{self, AnyScene, SceneError};
+use stickslip::{parallel, sweep};
+
+/// Instantiates `stickslip.errors.<class>` with `message` and keyword attributes.
+fn python_error(
+    py: Python<'_>,
+    class: &str,
+    message: String,
+    attributes: Bound<'_, PyDict>,
+) -> PyErr {
+    let made = py
+        .import("stickslip.errors")
+        .and_then(|m| m.getattr(class))
+        .and_then(|c| c.call((message,), Some(&attributes)));
+    match made {
+        Ok(instance) => PyErr::from_value(instance),
+        Err(e) => e,
+    }
+}
+
+/// A scene error as `stickslip.SceneError` (also a ValueError), with its field path.
+fn scene_error(py: Python<'_>, e: &SceneError) -> PyErr {
+    let attributes = PyDict::new(py);
+    let filled = attributes
+        .set_item("field", &e.field)
+        .and_then(|_| attributes.set_item("source", &e.source_name))
+        .and_then(|_| attributes.set_item("detail", &e.message));
+    match filled {
+        Ok(()) => python_error(py, "SceneError", e.to_string(), attributes),
+        Err(err) => err,
+    }
+}
+
+/// A failed run as `stickslip.RunError`: the analysis, the state, and for an integration
+/// failure its time, kind and integrator.
+fn run_error(py: Python<'_>, name: &str, e: &EngineError) -> PyErr {
+    let attributes = PyDict::new(py);
+    let (t, solver) = match e.kind.as_ref() {
+        AnalysisError::Solver(s) => (Some(s.t), Some(s.solver)),
+        AnalysisError::Failed { t, .. } | AnalysisError::Budget { t, .. } => (Some(*t), None),
+        _ => (None, None),
+    };
+    // The stress grid's one-word label: the integrator's error kind, or the variant's.
+    let kind = e.kind.label();
+    let filled = (|| -> PyResult<()> {
+        attributes.set_item("analysis", e.analysis)?;
+        attributes.set_item("state", numpy::PyArray1::from_slice(py, &e.state))?;
+        attributes.set_item("t", t)?;
+        attributes.set_item("kind", kind)?;
+        attributes.set_item("solver", solver)?;
+        attributes.set_item("bad_input", e.is_bad_input())?;
+        Ok(())
+    })();
+    match filled {
+        Ok(()) => python_error(py, "RunError", format!("scene {name}: {e}"), attributes),
+        Err(err) => err,
+    }
+}
+
+/// Runs `work` on a thread of its own without the GIL, checking for signals every 50 ms;
+/// on a signal's exception `cancel` is set and the exception returned.
+fn off_the_gil<T: Send + 'static>(
+    py: Python<'_>,
+    cancel: Arc<AtomicBool>,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> PyResult<T> {
+    let (tx, rx) = mpsc::channel();
+    // A Mutex makes the receiver shareable with the GIL-free closure below.
+    let rx = std::sync::Mutex::new(rx);
+    std::thread::Builder::new()
+        .name("stickslip".into())
+        .spawn(move || {
+            let _ = tx.send(work());
+        })
+        .map_err(|e| PyValueError::new_err(format!("cannot start a thread: {e}")))?;
+    loop {
+        match py.detach(|| {
+            let rx = rx.lock().unwrap_or_else(|e| e.into_inner());
+            rx.recv_timeout(Duration::from_millis(50))
+        }) {
+            Ok(value) => return Ok(value),
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(PyValueError::new_err("the stickslip worker thread died (a bug)"));
+            }
+        }
+    }
+}
+
+/// The worker threads for `threads` (None: every core).
+fn worker_threads(threads: Option<usize>) -> PyResult<usize> {
+    match threads {
+        Some(0) => {
+            Err(PyValueError::new_err("threads = 0: give at least 1 (or None for every core)"))
+        }
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+/// A report as JSON text and the rows of its "time_series" analysis, column by column (empty
+/// when the scene asks for none).
+type RunOutput = (String, Vec<(String, Vec<f64>)>);
+
+/// The time series' columns handed to Python: (name, numpy array).
+type Columns<'py> = Vec<(String, Bound<'py, numpy::PyArray1<f64>>)>;
+
+/// Runs a scene (JSON text; `source` names it in errors) as `stickslip run --json` does and
+/// returns the report as JSON text with the rows of its "time_series" analysis (the rows
+/// `stickslip run --series FILE` writes), kept in memory.
+#[pyfunction]
+#[pyo3(signature = (text, source, threads=None))]
+fn run(
+    py: Python<'_>,
+    text: String,
+    source: String,
+    threads: Option<usize>,
+) -> PyResult<(String, Columns<'_>)> {
+    let threads = worker_threads(threads)?;
+    let scene = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?;
+    let echo: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let outcome =
+        off_the_gil(py, Arc::new(AtomicBool::new(false)), move || -> Result<RunOutput, _> {
+            match &scene {
+                AnyScene::Drr(s) => {
+                    let mut series = SeriesCollector::default();
+                    let report = engine::run_with_series(s, echo, threads, &|_, _| {}, &mut series)
+                        .map_err(|e| (s.name.clone(), e))?;
+                    let columns =
+                        series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
+                    Ok((report.to_json(), columns))
+                }
+                AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
+                    .map(|r| (r.to_json(), Vec::new()))
+                    .map_err(|e| (s.name.clone(), e)),
+            }
+        })?;
+    let (json, columns) = outcome.map_err(|(name, e)| run_error(py, &name, &e))?;
+    let columns = columns.into_iter().map(|(n, c)| (n, numpy::PyArray1::from_vec(py, c))).collect();
+    Ok((json, columns))
+}
+
+/// Runs a sweep of the scene (JSON text) over `axes` ((name, values or "START:STOP:COUNT[:log]")
+/// pairs, the first varying slowest) on `threads` threads; returns the rows as a JSON array.
+#[pyfunction(name = "sweep")]
+#[pyo3(signature = (text, source, axes, threads=None))]
+fn sweep_scene(
+    py: Python<'_>,
+    text: String,
+    source: String,
+    axes: Vec<(String, Bound<'_, PyAny>)>,
+    threads: Option<usize>,
+) -> PyResult<String> {
+    let threads = worker_threads(threads)?;
+    scene::parse(&text, &source).map_err(|e| scene_error(py, &e))?;
+    let base: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let mut parsed = Vec::with_capacity(axes.len());
+    for (name, values) in &axes {
+        let bad = |e: sweep::SweepError| PyValueError::new_err(format!("params: {e}"));
+        if let Ok(spec) = values.extract::<String>() {
+            parsed.push(sweep::parse_axis(&format!("{name}={spec}")).map_err(bad)?);
+            continue;
+        }
+        // The name is checked by the one parser of axes; the values are the user's.
+        let mut axis = sweep::parse_axis(&format!("{name}=1:1:1")).map_err(bad)?;
+        axis.values = values.extract::<Vec<f64>>().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "params[{name:?}] must be a sequence of numbers or a string \"START:STOP:COUNT[:log]\""
+            ))
+        })?;
+        if let Some(v) = axis.values.iter().find(|v| !v.is_finite()) {
+            return Err(PyValueError::new_err(format!("params[{name:?}]: {v} is not finite")));
+        }
+        parsed.push(axis);
+    }
+    sweep::check_base(&base, &parsed)
+        .map_err(|e| PyValueError::new_err(format!("{source}: {e}")))?;
+    let points: Vec<BTreeMap<String, f64>> = sweep::points(&parsed);
+    let cancel = Arc::new(AtomicBool::new(false));
+    let stop = cancel.clone();
+    let rows = off_the_gil(py, cancel, move || {
+        let rows = parallel::map(points.len(), threads, &|_, _| {}, |i| {
+            (!stop.load(Ordering::Relaxed)).then(|| sweep::run_point(&base, i, &points[i]))
+        });
+        serde_json::to_string(&rows.into_iter().flatten().collect::<Vec<_>>())
+    })?;
+    rows.map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// The stepping loop of `stickslip.solve_ivp` (see python/stickslip/_ivp.py, which checks
+/// and normalises the arguments first).
+#[pyfunction]
+#[pyo3(signature = (fun, jac, method, table, t0, t_bound, y0, rtol, atol, t_eval, dense_output, events, options))]
+#[allow(clippy::too_many_arguments)]
+fn solve_ivp<'py>(
+    py: Python<'py>,
+    fun: Bound<'py, PyAny>,
+    jac: Bound<'py, PyAny>,
+    method: String,
+    table: Option<String>,
+    t0: f64,
+    t_bound: f64,
+    y0: Vec<f64>,
+    rtol: f64,
+    atol: Vec<f64>,
+    t_eval: Option<Vec<f64>>,
+    dense_output: bool,
+    events: Vec<Bound<'py, PyTuple>>,
+    options: Bound<'py, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let n = y0.len();
+    let jac = if jac.is_none() {
+        system::Jacobian::None
+    } else if jac.is_callable() {
+        system::Jacobian::Callable(jac)
+    } else {
+        let m: PyReadonlyArrayDyn<f64> = jac.extract()?;
+        let m = m.as_array();
+        if m.shape() != [n, n] {
+            return Err(PyValueError::new_err(format!(
+                "`jac` is expected to have shape ({n}, {n}), but actually has {:?}",
+                m.shape()
+            )));
+        }
+        system::Jacobian::Constant(m.iter().copied().collect())
+    };
+    let events = events
+        .iter()
+        .map(|e| {
+            Ok(solve::Event {
+                function: e.get_item(0)?,
+                direction: e.get_item(1)?.extract()?,
+                max_events: e.get_item(2)?.extract()?,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let get = |key: &str| -> PyResult<Option<Bound<'py, PyAny>>> {
+        Ok(options.get_item(key)?.filter(|v| !v.is_none()))
+    };
+    let float = |key: &str| -> PyResult<Option<f64>> { get(key)?.map(|v| v.extract()).transpose() };
+    let int = |key: &str| -> PyResult<Option<i64>> { get(key)?.map(|v| v.extract()).transpose() };
+    let problem = solve::Problem {
+        fun,
+        jac,
+        method,
+        table,
+        t0,
+        t_bound,
+        y0,
+        rtol,
+        atol,
+        t_eval,
+        dense_output,
+        events,
+        first_step: float("first_step")?,
+        max_step: float("max_step")?,
+        min_step: float("min_step")?,
+        max_steps: match int("max_steps")? {
+            Some(m) if m < 1 => {
+                return Err(PyValueError::new_err(format!("max_steps = {m} must be ≥ 1")))
+            }
+            other => other,
+        },
+        max_order: int("max_order")?.map(|v| v as i32),
+        jacobian_max_age: int("jacobian_max_age")?,
+    };
+    solve::solve(py, problem)
+}
+
+/// The SUNDIALS version the package runs with.
+#[pyfunction]
+fn sundials_version() -> String {
+    stickslip::sundials::version()
+}
+
+/// The compiled part of the `stickslip` package.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_ivp, m)?)?;
+    m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
+    m.add("DENSE_NODES", solve::DENSE_NODES)?;
+    Ok(())
+}

@@ -1,0 +1,374 @@
+//! The "time_series" analysis (issue #26 items 3–4): a run of fixed length from t = 0 in
+//! absolute time, written by `stickslip run --series FILE` as CSV or .npy, and its event
+//! catalogue in the report under `events`. Checked against the cycle analysis of the same
+//! scene run tight (an independent event rule: upward crossings of v = 1 averaged over
+//! settled cycles, against the time series' peak-to-peak recurrences).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use stickslip::series_file::{self, ReadSeries};
+use stickslip::{engine, scene};
+
+const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
+
+/// The field scene of issue #26 in dimensionless form: ξ = 0.25, ε = 0.5, η = 5e-8,
+/// quasi-dynamic, ageing law, v = 0.5, θ = 0; its cycle run tight (convergence tolerance
+/// 1e-11) beside a time series of `t_max`.
+fn field_scene(time_series: &str) -> String {
+    format!(
+        r#"{{"name": "field", "model": {{"xi": 0.25, "epsilon": 0.5, "radiation_damping": 5e-8,
+            "inertia": false, "state_law": "ageing"}},
+          "initial": {{"v": 0.5, "theta": 0}},
+          "solver": {{"method": "radau5", "rtol": 1e-12}},
+          "analyses": [{{"cycle": {{"tolerance": 1e-11}}}}, {{"time_series": {time_series}}}]}}"#
+    )
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("stickslip-ts-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `stickslip run SCENE --out REPORT [--series FILE]`; returns the exit code, stderr and
+/// the report (if written).
+fn run_cli(dir: &Path, scene: &str, series: Option<&Path>) -> (i32, String, serde_json::Value) {
+    let scene_path = dir.join("scene.json");
+    let out = dir.join("report.json");
+    std::fs::write(&scene_path, scene).unwrap();
+    std::fs::remove_file(&out).ok();
+    let mut cmd = Command::new(EXE);
+    cmd.args(["run", scene_path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    if let Some(s) = series {
+        cmd.args(["--series", s.to_str().unwrap()]);
+    }
+    let run = cmd.output().unwrap();
+    let report = std::fs::read_to_string(&out)
+        .ok()
+        .map_or(serde_json::Value::Null, |t| serde_json::from_str(&t).unwrap());
+    (run.status.code().unwrap(), String::from_utf8_lossy(&run.stderr).into(), report)
+}
+
+fn read_csv(path: &Path) -> ReadSeries {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let names: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let mut columns = vec![Vec::new(); names.len()];
+    for line in lines {
+        for (c, cell) in columns.iter_mut().zip(line.split(',')) {
+            c.push(cell.parse::<f64>().unwrap());
+        }
+    }
+    ReadSeries { names, columns }
+}
+
+fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {v}"))
+}
+
+#[test]
+fn field_scene_25_cycles_csv_and_npy_recur_at_the_cycle_period() {
+    let dir = temp_dir("field");
+    // 25 periods of 52.08 and a little more.
+    let scene = field_scene(r#"{"t_max": 1310}"#);
+    let csv = dir.join("series.csv");
+    let (code, stderr, report) = run_cli(&dir, &scene, Some(&csv));
+    assert_eq!(code, 0, "{stderr}");
+    let npy = dir.join("series.npy");
+    let (code, stderr, report_npy) = run_cli(&dir, &scene, Some(&npy));
+    assert_eq!(code, 0, "{stderr}");
+    assert_eq!(report["events"], report_npy["events"], "the format does not change the run");
+
+    let period = num(&report["cycle"], "period");
+    assert_eq!(report["cycle"]["status"], "periodic");
+    let events = report["events"].as_array().unwrap();
+    assert!(events.len() >= 20, "{} events", events.len());
+    assert!(events[0]["recurrence"].is_null(), "the first event has no predecessor");
+    // The transient from v = 0.5 is over after the first cycle (measured: the first
+    // recurrence is 1.3e-6 off, the next ones 1e-14).
+    for (k, e) in events.iter().enumerate().skip(2) {
+        let r = num(e, "recurrence");
+        assert!((r / period - 1.0).abs() <= 1e-8, "event {k}: recurrence {r} against {period}");
+        for key in ["t_start", "t_peak", "t_end", "v_max", "slip", "duration", "stress_drop"] {
+            assert!(num(e, key).is_finite(), "{key}");
+        }
+        assert!(num(e, "t_start") < num(e, "t_peak") && num(e, "t_peak") < num(e, "t_end"));
+        assert!(num(e, "stress_drop") > 0.0 && num(e, "slip") > 0.0);
+        let slip = num(&report["cycle"], "slip");
+        assert!((num(e, "slip") / slip - 1.0).abs() < 1e-6, "slip per event {}", num(e, "slip"));
+        let v_max = num(&report["cycle"], "v_max");
+        assert!((num(e, "v_max") / v_max - 1.0).abs() < 1e-6);
+    }
+    // Absolute times: the peaks of the settled events lie a whole number of periods apart.
+    let (first, last) = (&events[1], events.last().unwrap());
+    let n = (events.len() - 2) as f64;
+    let span = num(last, "t_peak") - num(first, "t_peak");
+    assert!((span / (n * period) - 1.0).abs() < 1e-10, "{span} over {n} periods of {period}");
+
+    // The files: the same rows, t from 0 to t_max strictly increasing, t,u,v,theta first.
+    let ts = &report["time_series"];
+    let a = read_csv(&csv);
+    let b = series_file::read_npy(&npy).unwrap();
+    assert_eq!(a.names, ["t", "u", "v", "theta", "ln_v", "slip", "stress"]);
+    assert_eq!(a.names, b.names);
+    assert_eq!(a.columns, b.columns, "CSV and .npy hold the same doubles");
+    let t = a.column("t").unwrap();
+    assert_eq!(t.len() as u64, ts["rows"].as_u64().unwrap());
+    assert_eq!((t[0], *t.last().unwrap()), (0.0, 1310.0));
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "times increase strictly");
+    // Rows are the integrator's steps (plus the start and t_max), less the merged ones.
+    let steps = ts["steps"].as_u64().unwrap();
+    assert_eq!(t.len() as u64 + ts["merged_rows"].as_u64().unwrap(), steps + 1);
+    // The derived columns follow from the first four.
+    let (v, ln_v, theta, stress) = (
+        a.column("v").unwrap(),
+        a.column("ln_v").unwrap(),
+        a.column("theta").unwrap(),
+        a.column("stress").unwrap(),
+    );
+    for i in (0..t.len()).step_by(97) {
+        assert!((ln_v[i].exp() / v[i] - 1.0).abs() < 1e-14);
+        assert_eq!(stress[i], ln_v[i] + theta[i], "log law: stress = ln v + θ");
+    }
+    // The peak rows hold v_max up to the sampling: the largest v written in the settled
+    // cycles is within the dense output's reach of the catalogue's v_max.
+    let v_written = v.iter().copied().fold(0.0, f64::max);
+    let v_max = events.iter().map(|e| num(e, "v_max")).fold(0.0, f64::max);
+    assert!(v_written <= v_max * (1.0 + 1e-9) && v_written > 0.5 * v_max, "{v_written} {v_max}");
+
+    // numpy reads the binary file in one call, when it is installed.
+    let numpy = Command::new("python3").args(["-c", "import numpy"]).output();
+    if numpy.is_ok_and(|o| o.status.success()) {
+        let script = format!(
+            "import numpy as np; a = np.load('{}'); assert a.dtype.names[:4] == ('t','u','v','theta'); \
+             assert a.shape == ({},); assert a['t'][0] == 0.0 and a['t'][-1] == 1310.0; print('ok')",
+            npy.display(),
+            t.len()
+        );
+        let out = Command::new("python3").args(["-c", &script]).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    } else {
+        eprintln!("python3 with numpy not available: the .npy file was checked by npyz's reader");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn gamma_1e8_absolute_time_keeps_its_digits() {
+    // The earthquake scene (γ = 1e8): the arrests take steps far below the spacing of t ~ 400,
+    // so many steps merge into one row, yet the recurrences, differences of absolute times,
+    // equal the tight cycle period.
+    let text = r#"{"name": "eq", "model": {"gamma": 1e8, "xi": 0.8, "epsilon": 1.0},
+        "initial": {"u": 1.0, "v": 0.45, "theta": 0.0},
+        "solver": {"method": "radau5", "rtol": 1e-11},
+        "analyses": [{"cycle": {"tolerance": 1e-9}}, {"time_series": {"t_max": 400}}]}"#;
+    let scene = scene::parse(text, "test").unwrap();
+    let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
+    let period = report.cycle.as_ref().unwrap().values.unwrap().period;
+    let events = report.events.as_ref().unwrap();
+    assert!(events.len() >= 6, "{}", events.len());
+    for e in &events[2..] {
+        let r = e.values.recurrence.unwrap();
+        assert!((r / period - 1.0).abs() < 1e-9, "recurrence {r} against {period}");
+    }
+    let ts = report.time_series.as_ref().unwrap();
+    assert!(ts.merged_rows > 0, "the arrest's steps fall below the spacing of t");
+    let t = series.column("t").unwrap();
+    assert_eq!(t.len() as u64, ts.rows);
+    assert!(t.windows(2).all(|w| w[1] > w[0]));
+    assert_eq!(*t.last().unwrap(), 400.0);
+}
+
+#[test]
+fn every_and_points_choose_the_rows() {
+    let base = |ts: &str| {
+        let text = field_scene(ts).replace("1e-12", "1e-8");
+        engine::run_collecting(&scene::parse(&text, "test").unwrap(), serde_json::Value::Null)
+            .unwrap()
+    };
+    let (all, s_all) = base(r#"{"t_max": 120}"#);
+    let (every, s_every) = base(r#"{"t_max": 120, "every": 10}"#);
+    let (points, s_points) = base(r#"{"t_max": 120, "points": 241}"#);
+    let steps = all.time_series.as_ref().unwrap().steps;
+    assert_eq!(every.time_series.as_ref().unwrap().steps, steps, "same integration");
+    // Every 10th step, the start and t_max.
+    assert_eq!(s_every.len() as u64, steps / 10 + 2 - every.time_series.unwrap().merged_rows);
+    let t = s_points.column("t").unwrap();
+    assert_eq!(t.len(), 241);
+    for (i, t) in t.iter().enumerate() {
+        assert_eq!(*t, 120.0 * i as f64 / 240.0);
+    }
+    // Dense output agrees with the steps: u is smooth, so the uniform rows interpolate the
+    // step rows closely.
+    let (ta, ua) = (s_all.column("t").unwrap(), s_all.column("u").unwrap());
+    let up = s_points.column("u").unwrap();
+    for (i, t) in t.iter().enumerate().step_by(20) {
+        let j = ta.partition_point(|x| x < t);
+        if ta[j] == *t {
+            assert!((ua[j] - up[i]).abs() < 1e-6);
+        }
+    }
+    assert_eq!(all.events, points.events, "the rows do not change the events");
+}
+
+#[test]
+fn event_threshold_selects_the_episodes() {
+    let run = |ts: &str| {
+        let text = field_scene(ts).replace("1e-12", "1e-8");
+        engine::run(&scene::parse(&text, "test").unwrap(), serde_json::Value::Null).unwrap()
+    };
+    let one = run(r#"{"t_max": 300}"#);
+    let high = run(r#"{"t_max": 300, "event_threshold": 1e4}"#);
+    let (e1, e4) = (one.events.unwrap(), high.events.unwrap());
+    assert_eq!(e1.len(), e4.len(), "every slip passes v = 1e4");
+    for (a, b) in e1.iter().zip(&e4) {
+        assert!(b.values.t_start > a.values.t_start && b.values.t_end < a.values.t_end);
+        assert!(b.values.duration < a.values.duration && b.values.slip < a.values.slip);
+        assert!((b.values.t_peak - a.values.t_peak).abs() < 1e-9, "one peak");
+    }
+    assert_eq!(high.time_series.unwrap().event_threshold, 1e4);
+}
+
+#[test]
+fn dimensional_input_adds_physical_columns_and_keys() {
+    // The field scene in SI with the stress-unit coefficients A = aσ = 1e5 Pa, B = bσ =
+    // 1.5e5 Pa, k = 0.5 k_c = 2.5e8 Pa/m; D_c/v0 = 1e5 s, so t_max = 3e7 s is 300 units.
+    let text = r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
+        "dimensional": {"k": 2.5e8, "a": 1e5, "b": 1.5e5, "d_c": 1e-4, "v0": 1e-9,
+                        "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
+        "initial": {"v": 0.5, "theta": 0},
+        "solver": {"method": "radau5", "rtol": 1e-9},
+        "analyses": [{"time_series": {"t_max": 3e7}}]}"#;
+    let dir = temp_dir("si");
+    let csv = dir.join("si.csv");
+    let (code, stderr, report) = run_cli(&dir, text, Some(&csv));
+    assert_eq!(code, 0, "{stderr}");
+    let ts = &report["time_series"];
+    assert_eq!(num(ts, "t_max"), 300.0);
+    assert_eq!(num(ts, "t_max_physical"), 3e7);
+    for key in [
+        "sampling",
+        "columns",
+        "rows",
+        "merged_rows",
+        "steps",
+        "rebases",
+        "event_threshold",
+        "event_count",
+        "in_event_at_end",
+        "final_state",
+    ] {
+        assert!(!ts[key].is_null(), "time_series.{key}");
+    }
+    let events = report["events"].as_array().unwrap();
+    assert_eq!(events.len() as u64, ts["event_count"].as_u64().unwrap());
+    assert!(events.len() >= 5);
+    let scale = [
+        ("t_start", 1e5),
+        ("t_peak", 1e5),
+        ("t_end", 1e5),
+        ("v_max", 1e-9),
+        ("slip", 1e-4),
+        ("duration", 1e5),
+        ("stress_drop", 1e5),
+        ("recurrence", 1e5),
+    ];
+    for e in &events[1..] {
+        for (key, s) in scale {
+            let (d, p) = (num(e, key), num(&e["physical"], key));
+            assert!((p / (d * s) - 1.0).abs() < 1e-14, "{key}: {p} against {d} × {s}");
+        }
+        assert!(num(&e["physical"], "stress_drop") > 0.0, "a positive stress drop in Pa");
+    }
+    let series = read_csv(&csv);
+    assert_eq!(
+        series.names,
+        [
+            "t",
+            "u",
+            "v",
+            "theta",
+            "ln_v",
+            "slip",
+            "stress",
+            "t_phys",
+            "v_phys",
+            "slip_phys",
+            "stress_phys"
+        ]
+    );
+    let (t, tp) = (series.column("t").unwrap(), series.column("t_phys").unwrap());
+    assert_eq!(*tp.last().unwrap(), 3e7);
+    assert!(t.iter().zip(tp).all(|(t, tp)| (t * 1e5 - tp).abs() <= 1e-15 * tp.abs()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_time_series_input_exits_2_naming_the_field() {
+    let dir = temp_dir("bad");
+    let cases = [
+        (r#"{"t_max": -5}"#, "analyses[1].time_series.t_max"),
+        (r#"{"t_max": 0}"#, "analyses[1].time_series.t_max"),
+        (r#"{"t_max": 10, "every": 0}"#, "analyses[1].time_series.every"),
+        (r#"{"t_max": 10, "points": 1}"#, "analyses[1].time_series.points"),
+        (r#"{"t_max": 10, "points": 5, "every": 2}"#, "analyses[1].time_series.points"),
+        (r#"{"t_max": 10, "event_threshold": 0}"#, "analyses[1].time_series.event_threshold"),
+        (r#"{"t_max": 10, "event_threshold": -1}"#, "analyses[1].time_series.event_threshold"),
+        (r#"{"t_max": 10, "max_steps": 0}"#, "analyses[1].time_series.max_steps"),
+        (r#"{"t_max": 10, "tmax": 5}"#, "analyses[1].time_series"),
+        (r#"{"every": 5}"#, "analyses[1].time_series"),
+        (r#"[10]"#, "analyses[1].time_series"),
+    ];
+    for (options, field) in cases {
+        let (code, stderr, report) = run_cli(&dir, &field_scene(options), None);
+        assert_eq!(code, 2, "{options}: {stderr}");
+        assert!(stderr.contains(&format!("{field}:")), "{options}: {stderr}");
+        assert!(report.is_null(), "no report on bad input");
+    }
+    // "time_series" without options.
+    let bare = field_scene("{}").replace(r#"{"time_series": {}}"#, r#""time_series""#);
+    let (code, stderr, _) = run_cli(&dir, &bare, None);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("analyses[1]") && stderr.contains("t_max"), "{stderr}");
+    // --series without a time_series analysis, and to a path that cannot be created.
+    let cycle_only = field_scene("{}").replace(r#", {"time_series": {}}"#, "");
+    let (code, stderr, _) = run_cli(&dir, &cycle_only, Some(&dir.join("x.csv")));
+    assert_eq!(code, 2);
+    assert!(stderr.contains("--series") && stderr.contains("time_series"), "{stderr}");
+    let nowhere = Path::new("/nonexistent-dir/series.npy");
+    let (code, stderr, _) = run_cli(&dir, &field_scene(r#"{"t_max": 10}"#), Some(nowhere));
+    assert_eq!(code, 2);
+    assert!(stderr.contains("--series") && stderr.contains("cannot create"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn absolute_friction_level_adds_shear_stress_and_friction_columns() {
+    // σ and μ0 at V_ref set on the scene's PhysicalScales (the scene form of branch field
+    // gives them as model.dimensional.sigma, mu0, v_ref): τ = σμ and μ follow the stress
+    // change column, μ = μ_ref + a·stress with μ_ref = μ0 + (a − b) ln(v0/V_ref).
+    let text = r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
+        "dimensional": {"k": 2.5e8, "a": 1e5, "b": 1.5e5, "d_c": 1e-4, "v0": 1e-9,
+                        "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
+        "initial": {"v": 0.5, "theta": 0},
+        "solver": {"method": "radau5", "rtol": 1e-8},
+        "analyses": [{"time_series": {"t_max": 2e7, "points": 101}}]}"#;
+    let mut scene = scene::parse(text, "test").unwrap();
+    let scales = scene.scales.as_mut().unwrap();
+    scales.sigma = Some(1e7);
+    scales.reference = Some(stickslip::model::FrictionReference { mu0: 0.6, v_ref: 1e-6 });
+    let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
+    let columns = &report.time_series.as_ref().unwrap().columns;
+    assert_eq!(columns[columns.len() - 2..], ["tau_phys", "mu"]);
+    let mu_ref = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();
+    let (stress, tau, mu) = (
+        series.column("stress").unwrap(),
+        series.column("tau_phys").unwrap(),
+        series.column("mu").unwrap(),
+    );
+    assert_eq!(mu.len(), 101);
+    for i in 0..101 {
+        assert!((mu[i] - (mu_ref + 0.01 * stress[i])).abs() < 1e-14, "{} {}", mu[i], stress[i]);
+        assert!((tau[i] / (1e7 * mu[i]) - 1.0).abs() < 1e-14);
+    }
+}
