@@ -222,6 +222,9 @@ fn run_command(
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
+            for warning in &scene.warnings {
+                eprintln!("stickslip: warning: {warning}");
+            }
             let report = engine::run_with(scene, echo, threads, &update)
                 .map_err(|e| failed(&scene.name, e))?;
             (report.to_json(), report.summary())
