@@ -364,6 +364,15 @@ impl Report {
         if let Some(p) = &self.physical {
             s += &format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0);
         }
+        if let Some(p) = self.cycle.as_ref().and_then(|c| c.physical.as_ref()) {
+            s += &format!(
+                "  in the input's units (cycle.physical): v_max {:.6e}, v_min {:.6e}, slip {:.6e}, stress drop {:.6e}\n",
+                p.v_max, p.v_min, p.slip, p.stress_drop
+            );
+        }
+        for w in &self.warnings {
+            s += &format!("warning: {w}\n");
+        }
         if let Some(a) = &self.asymptotics {
             s += &crate::analysis::asymptotics::summary(a);
         }

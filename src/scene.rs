@@ -498,9 +498,8 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         no_inertial_keys(m, err)?;
     }
     let scales = m.dimensional.as_ref().map(|d| dimensional_scales(d, err)).transpose()?;
-    let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
-        (Some(d), None, None, None) => {
-            let s = scales.expect("built from the dimensional input above");
+    let (gamma, xi, epsilon) = match (m.dimensional.zip(scales), m.gamma, m.xi, m.epsilon) {
+        (Some((d, s)), None, None, None) => {
             let gamma = if inertia {
                 let mass = d.mass.ok_or_else(|| err("model.dimensional.mass", "missing: the block mass M (per unit area), or \"inertia\": false for the quasi-dynamic model".into()))?;
                 let mass = positive("model.dimensional.mass", mass, "a physical parameter", err)?;
