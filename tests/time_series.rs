@@ -198,6 +198,9 @@ fn every_and_points_choose_the_rows() {
     for (i, t) in t.iter().enumerate() {
         assert_eq!(*t, 120.0 * i as f64 / 240.0);
     }
+    // A t_max whose multiples round (0.1·3/3 > 0.1): the last row is still t_max itself.
+    let (_, odd) = base(r#"{"t_max": 0.1, "points": 4}"#);
+    assert_eq!(odd.column("t").unwrap(), [0.0, 0.1 / 3.0, 0.2 / 3.0, 0.1]);
     // Dense output agrees with the steps: u is smooth, so the uniform rows interpolate the
     // step rows closely.
     let (ta, ua) = (s_all.column("t").unwrap(), s_all.column("u").unwrap());
