@@ -13,7 +13,9 @@ use crate::integrate::{ImexSystem, Integrator, Options, SolverError, Stats, Tole
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
-use crate::report::{ModelReport, ModelSection, Physical, Report, SolverSection};
+use crate::report::{
+    CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report, SolverSection,
+};
 use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
@@ -304,6 +306,15 @@ pub fn run_with_series(
         }
     }
     let values = cycle.as_ref().and_then(|c| c.values);
+    // The explicit `units` only: the scene's default ones (from the dimensional input) are the
+    // input's own time unit, given by `period` etc. already.
+    let explicit_units = scene.units.as_ref().filter(|_| scene_json.get("units").is_some());
+    let cycle_physical = scene
+        .scales
+        .as_ref()
+        .zip(values.as_ref())
+        .map(|(s, v)| CyclePhysical::new(v, s, &scene.params, explicit_units));
+    let cycle = cycle.map(|analysis| CycleSection { analysis, physical: cycle_physical });
     let physical = scene.units.as_ref().zip(values).map(|(u, v)| Physical {
         time_unit: u.time_unit.clone(),
         time_scale: u.time_scale,
@@ -364,6 +375,7 @@ pub fn run_with_series(
         noise,
         time_series: series.as_ref().map(|s| s.report.clone()),
         events: series.map(|s| s.events),
+        warnings: scene.warnings.clone(),
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     refuse_non_finite(&report)?;

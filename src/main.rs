@@ -227,6 +227,9 @@ fn run_command(
     let threads = worker_threads(threads);
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
+            for warning in &scene.warnings {
+                eprintln!("stickslip: warning: {warning}");
+            }
             let report = match &series {
                 Some(file) => run_writing_series(scene, echo, threads, &update, file)?,
                 None => engine::run_with(scene, echo, threads, &update)

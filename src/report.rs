@@ -4,12 +4,13 @@
 use crate::analysis::asymptotics::AsymptoticsReport;
 use crate::analysis::claims::Claim;
 use crate::analysis::continuation::ContinuationReport;
-use crate::analysis::cycle::{CycleReport, CycleStatus};
+use crate::analysis::cycle::{CycleReport, CycleStatus, CycleValues};
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::time_series::{Event, TimeSeriesReport};
 use crate::integrate::Stats;
+use crate::model::{DrrParams, PhysicalScales};
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
 use std::io::Write;
@@ -73,6 +74,136 @@ pub struct Physical {
     pub slip_duration: f64,
 }
 
+/// The "cycle" section: the analysis's report, and with dimensional input its values in
+/// physical units (`physical`). Dereferences to the [`CycleReport`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CycleSection {
+    /// The cycle analysis (its keys appear at the section's top level).
+    #[serde(flatten)]
+    pub analysis: CycleReport,
+    /// The converged cycle in the input's units (dimensional input and a periodic cycle).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub physical: Option<CyclePhysical>,
+}
+
+impl std::ops::Deref for CycleSection {
+    type Target = CycleReport;
+    fn deref(&self) -> &CycleReport {
+        &self.analysis
+    }
+}
+
+impl std::ops::DerefMut for CycleSection {
+    fn deref_mut(&mut self) -> &mut CycleReport {
+        &mut self.analysis
+    }
+}
+
+/// The converged cycle in the units of the dimensional input (SI: s, m/s, m, Pa); docs/reports.md
+/// defines each key. Built by [`CyclePhysical::new`] from the dimensionless values and the
+/// scene's [`PhysicalScales`], the one definition of the conversion.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CyclePhysical {
+    /// Period (time units of the input).
+    pub period: f64,
+    /// From V rising through v0 to the V maximum (time units).
+    pub t0: f64,
+    /// Time with V > v0 (time units).
+    pub slip_duration: f64,
+    /// The same durations in `units.time_unit`, when the scene gives `units`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub in_time_unit: Option<Durations>,
+    /// Maximum slip rate (velocity units).
+    pub v_max: f64,
+    /// Minimum slip rate (velocity units).
+    pub v_min: f64,
+    /// Slip per event, ∫V dt while V > v0 (length units).
+    pub slip: f64,
+    /// Drop of the spring stress over the event, k·D_c·(u_max − u_min) > 0 (stress units).
+    pub stress_drop: f64,
+    /// The shear stress τ = σμ where V rises through v0 (the event's start): absolute with
+    /// μ0 and v_ref, else relative to steady sliding at v0 (see `shear_stress_reference`).
+    /// Quasi-dynamic model only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shear_stress_before: Option<f64>,
+    /// The shear stress τ = σμ where V falls back through v0 (the event's end).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shear_stress_after: Option<f64>,
+    /// What the shear stresses are measured from: "absolute (σμ)" or "relative to σμ_ref,
+    /// steady sliding at v0".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shear_stress_reference: Option<&'static str>,
+    /// The friction coefficient μ at the event's start (with μ0, v_ref and σ).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_before: Option<f64>,
+    /// The friction coefficient μ at the event's end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_after: Option<f64>,
+    /// μ_ref = μ0 + (a − b) ln(v0/V_ref), steady-state friction at v0 (with μ0, v_ref, σ).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_steady: Option<f64>,
+}
+
+/// Cycle durations in a named time unit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Durations {
+    /// The unit, e.g. "years".
+    pub time_unit: String,
+    /// Period.
+    pub period: f64,
+    /// t0.
+    pub t0: f64,
+    /// Time with V > v0.
+    pub slip_duration: f64,
+}
+
+impl CyclePhysical {
+    /// The cycle `v` (dimensionless) in physical units. In the quasi-dynamic model the force
+    /// balance θ + f(v) = −ξu − ηv gives the dimensionless friction φ exactly at the crossings
+    /// of v = 1, where u is at its minimum (start) and maximum (end); the inertial model's
+    /// friction there is not fixed by u, so its shear stresses are left out.
+    pub fn new(
+        v: &CycleValues,
+        s: &PhysicalScales,
+        params: &DrrParams,
+        units: Option<&Units>,
+    ) -> Self {
+        let phi_at = |u: f64| (!params.inertia).then(|| -params.xi * u - params.eta);
+        let (phi_before, phi_after) = (phi_at(v.u_min), phi_at(v.u_max));
+        let stress = |phi: Option<f64>| {
+            phi.map(|phi| s.shear_stress(phi).unwrap_or_else(|| s.shear_stress_change(phi)))
+        };
+        let absolute = s.reference_friction().is_some();
+        Self {
+            period: s.time(v.period),
+            t0: s.time(v.t0),
+            slip_duration: s.time(v.slip_duration),
+            in_time_unit: units.map(|u| Durations {
+                time_unit: u.time_unit.clone(),
+                period: v.period * u.time_scale,
+                t0: v.t0 * u.time_scale,
+                slip_duration: v.slip_duration * u.time_scale,
+            }),
+            v_max: s.velocity(v.v_max),
+            v_min: s.velocity(v.v_min),
+            slip: s.slip(v.slip),
+            stress_drop: s.stress_drop(v.u_min, v.u_max),
+            shear_stress_before: stress(phi_before),
+            shear_stress_after: stress(phi_after),
+            shear_stress_reference: phi_before.map(|_| {
+                if absolute {
+                    "absolute (σμ)"
+                } else {
+                    "relative to σμ_ref, steady sliding at v0"
+                }
+            }),
+            friction_before: phi_before.and_then(|phi| s.friction_coefficient(phi)),
+            friction_after: phi_after.and_then(|phi| s.friction_coefficient(phi)),
+            friction_steady: s.reference_friction(),
+        }
+    }
+}
+
 /// The report of one scene. Sections appear only when the scene asked for them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
@@ -94,9 +225,9 @@ pub struct Report {
     /// The "hopf" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hopf: Option<HopfReport>,
-    /// The "cycle" analysis.
+    /// The "cycle" analysis, with its values in physical units under `physical`.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub cycle: Option<CycleReport>,
+    pub cycle: Option<CycleSection>,
     /// The "asymptotics" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub asymptotics: Option<AsymptoticsReport>,
@@ -124,6 +255,10 @@ pub struct Report {
     /// The event catalogue of the "time_series" run: one entry per slip episode.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub events: Option<Vec<Event>>,
+    /// Derived parameters far outside the physical range (dimensional input), each naming its
+    /// input fields; absent when there are none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
     /// Wall-clock time of the computation (seconds).
     pub wall_time_s: f64,
 }

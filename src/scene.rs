@@ -7,7 +7,8 @@ use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::model::{
-    Drr, DrrParams, Friction, PhysicalScales, SaddleNodeParams, StateLaw, VanDerPolParams,
+    Drr, DrrParams, Friction, FrictionReference, PhysicalScales, SaddleNodeParams, StateLaw,
+    VanDerPolParams,
 };
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
@@ -77,31 +78,57 @@ struct RawModel {
     y0: Option<f64>,
 }
 
-/// Dimensional parameters (any consistent units, per unit area of the interface):
-/// γ = (D_c/v0)·√(k/M), ξ = k·D_c/A, ε = (B−A)/A, and the radiation damping
-/// η = G·v0/(2·c_s·A) when the shear modulus G and shear-wave speed c_s are given.
+/// Dimensional parameters in the field's terms (any consistent units, SI in the docs; per unit
+/// area of the interface), as in QDYN's spring-block: the friction coefficients a, b with the
+/// effective normal stress σ (or A = aσ, B = bσ directly as `a_sigma`, `b_sigma`), D_c, the
+/// loading velocity v0, the stiffness k (or G/L), the mass M for inertia, G and c_s for
+/// radiation damping and optionally μ0 at V_ref. They give
+/// γ = (D_c/v0)·√(k/M), ξ = k·D_c/(aσ), ε = b/a − 1 and η = G·v0/(2·c_s·aσ)
+/// (docs/from-qdyn.md).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Dimensional {
-    /// Spring stiffness k.
-    pub k: f64,
+    /// Direct-effect friction coefficient a (dimensionless; needs `sigma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a: Option<f64>,
+    /// State-effect friction coefficient b (dimensionless; needs `sigma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub b: Option<f64>,
+    /// Effective normal stress σ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// A = aσ in stress units (instead of `a` with `sigma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a_sigma: Option<f64>,
+    /// B = bσ in stress units (instead of `b` with `sigma`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub b_sigma: Option<f64>,
+    /// Critical slip distance D_c.
+    pub d_c: f64,
+    /// Loading velocity v0 (QDYN's V_pl).
+    pub v0: f64,
+    /// Spring stiffness k (or `shear_modulus` with `length`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// Length L of the slipping patch: k = G/L with `shear_modulus` (instead of `k`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length: Option<f64>,
     /// Block mass M (absent in a quasi-dynamic scene, which has no inertia).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass: Option<f64>,
-    /// Direct-effect coefficient A.
-    pub a: f64,
-    /// State-effect coefficient B.
-    pub b: f64,
-    /// Critical slip distance D_c.
-    pub d_c: f64,
-    /// Driving velocity v0.
-    pub v0: f64,
-    /// Shear modulus G of the surrounding medium (radiation damping; with `shear_wave_speed`).
+    /// Shear modulus G of the surrounding medium (radiation damping with `shear_wave_speed`;
+    /// stiffness with `length`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shear_modulus: Option<f64>,
     /// Shear-wave speed c_s (radiation damping; with `shear_modulus`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shear_wave_speed: Option<f64>,
+    /// μ0, the steady-state friction coefficient at `v_ref` (with `v_ref` and σ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu0: Option<f64>,
+    /// V_ref, the velocity at which the steady-state friction is `mu0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v_ref: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -129,6 +156,10 @@ struct RawInitial {
     u: Option<f64>,
     v: Option<f64>,
     theta: Option<f64>,
+    /// The slip rate V (velocity units; with `model.dimensional`), instead of v = V/v0.
+    velocity: Option<f64>,
+    /// The state Θ (time units; with `model.dimensional`), instead of θ = (b/a) ln(v0Θ/D_c).
+    state: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -232,6 +263,9 @@ pub struct Scene {
     pub units: Option<Units>,
     /// The physical scales (D_c/v0, v0, D_c, aσ, σ, k, μ0 at V_ref), with dimensional input.
     pub scales: Option<PhysicalScales>,
+    /// Derived parameters far outside the physical range, each naming its input fields
+    /// (reported in the report's `warnings` and on stderr).
+    pub warnings: Vec<String>,
     /// Initial state (u, ln v, θ).
     pub initial: [f64; 3],
     /// Solver settings.
@@ -468,20 +502,18 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     if !inertia {
         no_inertial_keys(m, err)?;
     }
+    let scales = m.dimensional.as_ref().map(|d| dimensional_scales(d, err)).transpose()?;
     let (gamma, xi, epsilon) = match (m.dimensional, m.gamma, m.xi, m.epsilon) {
         (Some(d), None, None, None) => {
-            let mass = if inertia {
-                d.mass.ok_or_else(|| err("model.dimensional.mass", "missing: the block mass M (per unit area), or \"inertia\": false for the quasi-dynamic model".into()))?
+            let s = scales.expect("built from the dimensional input above");
+            let gamma = if inertia {
+                let mass = d.mass.ok_or_else(|| err("model.dimensional.mass", "missing: the block mass M (per unit area), or \"inertia\": false for the quasi-dynamic model".into()))?;
+                let mass = positive("model.dimensional.mass", mass, "a physical parameter", err)?;
+                s.time_scale() * (s.k / mass).sqrt()
             } else {
-                1.0
+                f64::INFINITY
             };
-            for (name, v) in
-                [("k", d.k), ("mass", mass), ("a", d.a), ("b", d.b), ("d_c", d.d_c), ("v0", d.v0)]
-            {
-                positive(&format!("model.dimensional.{name}"), v, "a physical parameter", err)?;
-            }
-            let gamma = if inertia { (d.d_c / d.v0) * (d.k / mass).sqrt() } else { f64::INFINITY };
-            (gamma, d.k * d.d_c / d.a, (d.b - d.a) / d.a)
+            (gamma, s.k * s.d_c / s.a_sigma, (s.b_sigma - s.a_sigma) / s.a_sigma)
         }
         (Some(_), ..) => {
             return Err(err(
@@ -501,7 +533,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             return Err(err(
                 "model",
                 format!(
-                    "missing {} (or give \"dimensional\": {{k, mass, a, b, d_c, v0}})",
+                    "missing {} (or give \"dimensional\": {{a, b, sigma, d_c, v0, k, mass}})",
                     missing.join(", ")
                 ),
             ));
@@ -544,7 +576,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             )
         })?,
     };
-    let eta = radiation_damping(m, err)?;
+    let eta = radiation_damping(m, scales.as_ref(), err)?;
     if !inertia && eta == 0.0 {
         return Err(err(
             "model.radiation_damping",
@@ -552,6 +584,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         ));
     }
     let params = DrrParams { gamma, xi, epsilon, friction, state_law, eta, inertia };
+    if scales.is_some_and(|s| s.reference.is_some()) && friction != Friction::Log {
+        return Err(err("model.dimensional.mu0", format!("μ0 at v_ref defines μ = μ0 + a ln(V/V_ref) + b ln(ΘV_ref/D_c), the logarithmic friction law; this scene's friction is {}: drop mu0 and v_ref (shear stress is then reported relative to steady sliding at v0)", friction.label())));
+    }
     let drr = Drr::new(params);
 
     let units = match raw.units.clone() {
@@ -576,13 +611,15 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             }
             Some(u)
         }
-        None => m.dimensional.map(|d| Units {
+        None => scales.map(|s| Units {
             time_unit: "s (if the dimensional input is SI)".into(),
-            time_scale: d.d_c / d.v0,
+            time_scale: s.time_scale(),
         }),
     };
 
-    let initial = initial_state(&drr, raw.initial.as_ref(), err)?;
+    let field_initial =
+        raw.initial.as_ref().map(|r| field_start(r, scales.as_ref(), &params, err)).transpose()?;
+    let initial = initial_state(&drr, field_initial.as_ref().or(raw.initial.as_ref()), err)?;
     let solver = solver_spec(raw.solver.as_ref(), err)?;
     let analyses = analyses(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
     papers_model_only(&params, &analyses, err)?;
@@ -595,29 +632,149 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         params,
         dimensional: m.dimensional,
         units,
-        scales: m.dimensional.map(|d| PhysicalScales {
-            d_c: d.d_c,
-            v0: d.v0,
-            a_sigma: d.a,
-            b_sigma: d.b,
-            sigma: None,
-            k: d.k,
-            reference: None,
-        }),
+        scales,
+        warnings: scales.map_or_else(Vec::new, |s| field_warnings(&s, &params)),
         initial,
         solver,
         analyses,
     })
 }
 
+/// The physical scales from `model.dimensional`: A and B from a, b with σ or from a_sigma,
+/// b_sigma; k directly or as G/L; μ0 with V_ref. Each missing or conflicting key is named.
+fn dimensional_scales(
+    d: &Dimensional,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<PhysicalScales, SceneError> {
+    let field = |name: &str| format!("model.dimensional.{name}");
+    let phys = |name: &str, v: f64, hint: &str| positive(&field(name), v, hint, err);
+    let d_c = phys("d_c", d.d_c, "the critical slip distance D_c, e.g. 1e-4 (m)")?;
+    let v0 = phys("v0", d.v0, "the loading velocity V_pl, e.g. 1e-9 (m/s)")?;
+    let sigma = d
+        .sigma
+        .map(|s| phys("sigma", s, "the effective normal stress σ, e.g. 1e7 (Pa)"))
+        .transpose()?;
+    let coefficient = |name: &str, stress_name: &str, value: Option<f64>, stress: Option<f64>| {
+        match (value, stress, sigma) {
+            (Some(_), Some(_), _) => Err(err(
+                &field(name),
+                format!("give {name} (a friction coefficient, with sigma) or {stress_name} (= {name}σ in stress units), not both"),
+            )),
+            (Some(c), None, Some(s)) => {
+                Ok(phys(name, c, "a dimensionless friction coefficient, e.g. 0.01")? * s)
+            }
+            (Some(_), None, None) => Err(err(
+                &field("sigma"),
+                format!("missing: {name} is a dimensionless friction coefficient (e.g. 0.01) and needs the effective normal stress sigma beside it (e.g. 1e7 Pa); to give the coefficients in stress units use a_sigma and b_sigma (A = aσ, B = bσ) instead"),
+            )),
+            (None, Some(st), _) => phys(stress_name, st, "a stress, e.g. 1e5 (Pa)"),
+            (None, None, _) => Err(err(
+                &field(name),
+                format!("missing: give the friction coefficient {name} with sigma, e.g. \"a\": 0.01, \"b\": 0.015, \"sigma\": 1e7 (or {stress_name} in stress units)"),
+            )),
+        }
+    };
+    let a_sigma = coefficient("a", "a_sigma", d.a, d.a_sigma)?;
+    let b_sigma = coefficient("b", "b_sigma", d.b, d.b_sigma)?;
+    if d.a.is_some() != d.b.is_some() {
+        let (given, other) = if d.a.is_some() { ("a", "b") } else { ("b", "a") };
+        return Err(err(
+            &field(other),
+            format!(
+                "{given} is a friction coefficient, so give {other} as one too (not {other}_sigma)"
+            ),
+        ));
+    }
+    let k = match (d.k, d.shear_modulus, d.length) {
+        (Some(_), _, Some(_)) => {
+            return Err(err(
+                &field("length"),
+                "give k or shear_modulus with length (k = G/L), not both".into(),
+            ));
+        }
+        (Some(k), _, None) => phys("k", k, "the spring stiffness, e.g. 1e8 (Pa/m)")?,
+        (None, Some(g), Some(l)) => {
+            phys("shear_modulus", g, "the shear modulus G, e.g. 3e10 (Pa)")?
+                / phys("length", l, "the patch length L, e.g. 1e3 (m)")?
+        }
+        (None, None, Some(_)) => {
+            return Err(err(
+                &field("shear_modulus"),
+                "missing: k = G/L needs shear_modulus beside length".into(),
+            ));
+        }
+        (None, _, None) => {
+            return Err(err(
+                &field("k"),
+                "missing: give the spring stiffness k (stress per length), or shear_modulus and length (k = G/L)".into(),
+            ));
+        }
+    };
+    let reference = match (d.mu0, d.v_ref) {
+        (Some(mu0), Some(v_ref)) => {
+            if sigma.is_none() {
+                return Err(err(&field("sigma"), "missing: mu0 is a friction coefficient, so the shear stress σμ needs the effective normal stress sigma".into()));
+            }
+            Some(FrictionReference {
+                mu0: phys("mu0", mu0, "the steady-state friction coefficient at v_ref, e.g. 0.6")?,
+                v_ref: phys(
+                    "v_ref",
+                    v_ref,
+                    "the velocity at which friction is mu0, e.g. 1e-6 (m/s)",
+                )?,
+            })
+        }
+        (Some(_), None) => {
+            return Err(err(&field("v_ref"), "missing: mu0 is the friction at a reference velocity; give v_ref too (e.g. 1e-6 m/s)".into()));
+        }
+        (None, Some(_)) => {
+            return Err(err(&field("mu0"), "missing: v_ref is the velocity at which the steady-state friction is mu0; give mu0 too (e.g. 0.6)".into()));
+        }
+        (None, None) => None,
+    };
+    Ok(PhysicalScales { d_c, v0, a_sigma, b_sigma, sigma, k, reference })
+}
+
+/// Warnings for dimensional input whose derived parameters lie far outside the physical range
+/// (a value in the wrong units, typically), each naming the fields behind it. The bounds, from
+/// DESIGN.md's crustal and laboratory numbers: friction coefficients a, b ≈ 1e-3 … 3e-2 (warn
+/// above 0.1: likely a stress given as a coefficient); ξ = k·D_c/(aσ) is O(1e-2 … 10) near
+/// the instability ξ_c = ε (warn outside 1e-4 … 1e3); ε = b/a − 1 ≈ −0.5 … 1 (warn above 10);
+/// η = G·v0/(2·c_s·aσ) ≈ 5e-8 on crustal faults (warn at η ≥ 0.1, where radiation damping
+/// caps the slip rate at v0/η ≤ 10 v0 and no fast slip can happen); μ0 ≈ 0.6 (warn above 2).
+fn field_warnings(s: &PhysicalScales, p: &DrrParams) -> Vec<String> {
+    let mut w = Vec::new();
+    if let Some((a, b)) = s.friction_coefficients() {
+        for (name, value) in [("a", a), ("b", b)] {
+            if value > 0.1 {
+                w.push(format!("model.dimensional.{name}/sigma: the friction coefficient {name} = {value:e} is far above the usual 1e-3 … 3e-2; if it is a stress, give it as {name}_sigma"));
+            }
+        }
+    }
+    if !(1e-4..=1e3).contains(&p.xi) {
+        w.push(format!("model.dimensional.k/d_c/a/sigma: ξ = k·D_c/(aσ) = {:e} is far outside the physical 1e-4 … 1e3 (k/k_c = ξ/ε; crustal and laboratory values are O(0.01 … 10)); check the units of k, d_c, a and sigma", p.xi));
+    }
+    if p.epsilon > 10.0 {
+        w.push(format!("model.dimensional.a/b: ε = b/a − 1 = {:e}: b/a above 11 is far outside laboratory values (b/a ≈ 0.5 … 2)", p.epsilon));
+    }
+    if p.eta >= 0.1 {
+        w.push(format!("model.dimensional.shear_modulus/shear_wave_speed/a/sigma: η = G·v0/(2·c_s·aσ) = {:e} ≥ 0.1 (crustal faults: ≈ 5e-8): radiation damping caps the slip rate near v0/η = {:e} v0, so no fast slip can happen; check the units of a/sigma (or a_sigma), shear_modulus and shear_wave_speed", p.eta, 1.0 / p.eta));
+    }
+    if let Some(r) = s.reference.filter(|r| r.mu0 > 2.0) {
+        w.push(format!("model.dimensional.mu0: μ0 = {} is far above rock friction (≈ 0.6)", r.mu0));
+    }
+    w
+}
+
 /// η from `model.radiation_damping` (dimensionless) or from `model.dimensional`'s shear
-/// modulus G and shear-wave speed c_s: η = G·v0/(2·c_s·A); 0 when neither is given.
+/// modulus G and shear-wave speed c_s: η = G·v0/(2·c_s·aσ); 0 when neither is given.
 fn radiation_damping(
     m: &RawModel,
+    scales: Option<&PhysicalScales>,
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<f64, SceneError> {
-    let from_medium = match m.dimensional {
-        Some(Dimensional { shear_modulus: Some(g), shear_wave_speed: Some(c), a, v0, .. }) => {
+    let from_medium = match (m.dimensional, scales) {
+        (Some(Dimensional { shear_modulus: Some(g), shear_wave_speed: Some(c), .. }), Some(s)) => {
             let g = positive(
                 "model.dimensional.shear_modulus",
                 g,
@@ -630,13 +787,16 @@ fn radiation_damping(
                 "the shear-wave speed c_s, e.g. 3e3 (m/s)",
                 err,
             )?;
-            Some(g * v0 / (2.0 * c * a))
+            Some(g * s.v0 / (2.0 * c * s.a_sigma))
         }
-        Some(Dimensional { shear_modulus: Some(_), shear_wave_speed: None, .. }) => {
-            return Err(err("model.dimensional.shear_wave_speed", "missing: radiation damping η = G·v0/(2·c_s·A) needs both shear_modulus and shear_wave_speed".into()));
+        (Some(Dimensional { shear_modulus: Some(_), shear_wave_speed: None, length, .. }), _) => {
+            if length.is_none() {
+                return Err(err("model.dimensional.shear_wave_speed", "missing: radiation damping η = G·v0/(2·c_s·aσ) needs both shear_modulus and shear_wave_speed (or give length for k = G/L)".into()));
+            }
+            None
         }
-        Some(Dimensional { shear_modulus: None, shear_wave_speed: Some(_), .. }) => {
-            return Err(err("model.dimensional.shear_modulus", "missing: radiation damping η = G·v0/(2·c_s·A) needs both shear_modulus and shear_wave_speed".into()));
+        (Some(Dimensional { shear_modulus: None, shear_wave_speed: Some(_), .. }), _) => {
+            return Err(err("model.dimensional.shear_modulus", "missing: radiation damping η = G·v0/(2·c_s·aσ) needs both shear_modulus and shear_wave_speed".into()));
         }
         _ => None,
     };
@@ -652,7 +812,7 @@ fn radiation_damping(
         return Err(err(
             "model.radiation_damping",
             format!(
-                "{eta:e} must be in 0 … 1e100 (η = G·v0/(2·c_s·A) ≥ 0; 0 = no radiation damping)"
+                "{eta:e} must be in 0 … 1e100 (η = G·v0/(2·c_s·aσ) ≥ 0; 0 = no radiation damping)"
             ),
         ));
     }
@@ -755,6 +915,57 @@ fn papers_model_only(
         }
     }
     Ok(())
+}
+
+/// `initial.velocity` (V) and `initial.state` (Θ) in the input's units, converted to the model's
+/// v = V/v0 and θ = (b/a) ln(v0Θ/D_c) (docs/from-qdyn.md): the start with them replaced, or
+/// None when neither is given. Θ is the state of Dieterich's, Ruina's and the PRZ law alike
+/// (steady state D_c/V, or 2D_c/V for PRZ) under logarithmic friction; with another friction
+/// law it has no such meaning and is refused.
+fn field_start(
+    r: &RawInitial,
+    scales: Option<&PhysicalScales>,
+    params: &DrrParams,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<RawInitial, SceneError> {
+    if r.velocity.is_none() && r.state.is_none() {
+        return Ok(r.clone());
+    }
+    let Some(s) = scales else {
+        let name = if r.velocity.is_some() { "velocity" } else { "state" };
+        return Err(err(&format!("initial.{name}"), format!("{name} is in physical units and needs model.dimensional (d_c, v0, a, b, sigma) to convert; with dimensionless parameters give v (= V/v0) and theta instead")));
+    };
+    if r.velocity.is_some() && r.v.is_some() {
+        return Err(err(
+            "initial.velocity",
+            "give velocity (the slip rate V) or v (= V/v0), not both".into(),
+        ));
+    }
+    if r.state.is_some() && r.theta.is_some() {
+        return Err(err(
+            "initial.state",
+            "give state (Θ in time units) or theta (= (b/a) ln(v0Θ/D_c)), not both".into(),
+        ));
+    }
+    let v = match r.velocity {
+        Some(big_v) => Some(
+            positive("initial.velocity", big_v, "the slip rate V, e.g. 5e-10 (m/s)", err)? / s.v0,
+        ),
+        None => r.v,
+    };
+    let theta = match r.state {
+        Some(_) if params.friction != Friction::Log => {
+            return Err(err("initial.state", format!("the state Θ means θ = (b/a) ln(v0Θ/D_c) only under logarithmic friction (μ = μ0 + a ln(V/V_ref) + b ln(ΘV_ref/D_c)); this scene's friction is {}: give theta instead", params.friction.label())));
+        }
+        Some(big_theta) => Some(s.theta_from_state(positive(
+            "initial.state",
+            big_theta,
+            "the state Θ in time units, e.g. D_c/v0 = 1e5 (s)",
+            err,
+        )?)),
+        None => r.theta,
+    };
+    Ok(RawInitial { u: r.u, v, theta, velocity: None, state: None })
 }
 
 /// The start: given values, with v (or u) completed on the slow manifold when missing.

@@ -158,13 +158,13 @@ fn scene_fields_are_validated_naming_the_field() {
         (format!("{{{qd}, \"radiation_damping\": 0}}"), "", "model.radiation_damping", "η > 0"),
         (format!("{{{qd}, \"radiation_damping\": 0.05, \"gamma\": 1e8}}"), "", "model.gamma", "drop \"gamma\""),
         (
-            r#"{"inertia": false, "radiation_damping": 0.05, "dimensional": {"k": 1e6, "mass": 1e3, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9}}"#.to_string(),
+            r#"{"inertia": false, "radiation_damping": 0.05, "dimensional": {"k": 1e6, "mass": 1e3, "a_sigma": 5e5, "b_sigma": 6e5, "d_c": 0.01, "v0": 1e-9}}"#.to_string(),
             "",
             "model.dimensional.mass",
             "drop \"mass\"",
         ),
         (format!("{{{qd}, \"radiation_damping\": 0.05}}"), r#", "initial": {"u": 1, "v": 0.5}"#, "initial.v", "not both"),
-        (r#"{"dimensional": {"k": 1e6, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9}}"#.to_string(), "", "model.dimensional.mass", "missing"),
+        (r#"{"dimensional": {"k": 1e6, "a_sigma": 5e5, "b_sigma": 6e5, "d_c": 0.01, "v0": 1e-9}}"#.to_string(), "", "model.dimensional.mass", "missing"),
     ];
     for (model, rest, field, hint) in cases {
         let e = parse_error(&model, rest);
@@ -194,7 +194,7 @@ fn scene_fields_are_validated_naming_the_field() {
     assert_eq!(e.field, "analyses[1].continuation.to", "{e}");
     // Dimensional input without the mass: ξ, ε and η from k, a, b, d_c, v0, G, c_s.
     let s = scene::parse(
-        r#"{"name": "t", "model": {"inertia": false, "dimensional": {"k": 1e6, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9, "shear_modulus": 3e10, "shear_wave_speed": 3e3}}, "analyses": ["hopf"]}"#,
+        r#"{"name": "t", "model": {"inertia": false, "dimensional": {"k": 1e6, "a_sigma": 5e5, "b_sigma": 6e5, "d_c": 0.01, "v0": 1e-9, "shear_modulus": 3e10, "shear_wave_speed": 3e3}}, "analyses": ["hopf"]}"#,
         "test",
     )
     .unwrap();

@@ -130,7 +130,7 @@ fn domain_errors_name_the_field_and_what_is_valid() {
         ),
         (
             scene_with(
-                r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "dimensional": {"k":1,"mass":1,"a":1,"b":2,"d_c":1,"v0":1}}"#,
+                r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "dimensional": {"k":1,"mass":1,"a_sigma": 1,"b_sigma": 2,"d_c":1,"v0":1}}"#,
                 "",
             ),
             "model",
@@ -174,7 +174,7 @@ fn unknown_keys_and_wrong_types_name_the_path() {
 #[test]
 fn dimensional_input_converts_to_gamma_xi_epsilon() {
     let text = scene_with(
-        r#"{"dimensional": {"k": 4.0, "mass": 1.0, "a": 2.0, "b": 5.0, "d_c": 3.0, "v0": 0.5}}"#,
+        r#"{"dimensional": {"k": 4.0, "mass": 1.0, "a_sigma": 2.0, "b_sigma": 5.0, "d_c": 3.0, "v0": 0.5}}"#,
         "",
     );
     let s = scene::parse(&text, "t").unwrap();

@@ -151,8 +151,7 @@ fn scene_fields_are_validated_naming_the_field_and_the_valid_values() {
         r#"["hopf"]"#,
     );
     assert_eq!(e.field, "model.radiation_damping");
-    let dimensional =
-        r#""dimensional": {"k": 1e6, "mass": 1e3, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9"#;
+    let dimensional = r#""dimensional": {"k": 1e6, "mass": 1e3, "a_sigma": 5e5, "b_sigma": 6e5, "d_c": 0.01, "v0": 1e-9"#;
     let e = parse_error(&format!(r#"{{{dimensional}, "shear_modulus": 3e10}}}}"#), r#"["hopf"]"#);
     assert_eq!(e.field, "model.dimensional.shear_wave_speed");
     let e = parse_error(
@@ -183,7 +182,7 @@ fn scene_fields_are_validated_naming_the_field_and_the_valid_values() {
 #[test]
 fn radiation_damping_from_the_shear_modulus_and_wave_speed() {
     // η = G v0/(2 c_s A) = 3e10 · 1e-9/(2 · 3e3 · 5e5) = 1e-8.
-    let text = r#"{"name": "t", "model": {"dimensional": {"k": 1e6, "mass": 1e3, "a": 5e5, "b": 6e5, "d_c": 0.01, "v0": 1e-9,
+    let text = r#"{"name": "t", "model": {"dimensional": {"k": 1e6, "mass": 1e3, "a_sigma": 5e5, "b_sigma": 6e5, "d_c": 0.01, "v0": 1e-9,
                    "shear_modulus": 3e10, "shear_wave_speed": 3e3}, "state_law": "prz"}, "analyses": ["hopf"]}"#;
     let s = scene::parse(text, "test").unwrap();
     assert!((s.params.eta - 1e-8).abs() < 1e-22, "{}", s.params.eta);
