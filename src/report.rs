@@ -373,8 +373,10 @@ impl Report {
         }
         if let Some(t) = &self.time_series {
             s += &format!(
-                "time series: t = 0 … {:e}, {} rows ({} steps), {} events above v = {}{}\n",
+                "time series: t = 0 … {:e}{}, {} rows ({} steps), {} events above v = {}{}\n",
                 t.t_max,
+                t.t_max_physical
+                    .map_or(String::new(), |p| format!(" ({p:e} in the input's time unit)")),
                 t.rows,
                 t.steps,
                 t.event_count,

@@ -198,6 +198,9 @@ fn every_and_points_choose_the_rows() {
     for (i, t) in t.iter().enumerate() {
         assert_eq!(*t, 120.0 * i as f64 / 240.0);
     }
+    // A t_max whose multiples round (0.1·3/3 > 0.1): the last row is still t_max itself.
+    let (_, odd) = base(r#"{"t_max": 0.1, "points": 4}"#);
+    assert_eq!(odd.column("t").unwrap(), [0.0, 0.1 / 3.0, 0.2 / 3.0, 0.1]);
     // Dense output agrees with the steps: u is smooth, so the uniform rows interpolate the
     // step rows closely.
     let (ta, ua) = (s_all.column("t").unwrap(), s_all.column("u").unwrap());
@@ -231,12 +234,12 @@ fn event_threshold_selects_the_episodes() {
 
 #[test]
 fn dimensional_input_adds_physical_columns_and_keys() {
-    // The field scene in SI with the stress-unit coefficients A = aσ = 1e5 Pa, B = bσ =
-    // 1.5e5 Pa, k = 0.5 k_c = 2.5e8 Pa/m; D_c/v0 = 1e5 s, so t_max = 3e7 s is 300 units.
+    // The field scene in SI: σ = 10 MPa, a = 0.01, b = 0.015 (A = aσ = 1e5 Pa), k = 0.5 k_c =
+    // 2.5e8 Pa/m; D_c/v0 = 1e5 s, so t_max = 3e7 s is 300 units.
     let text = r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
-        "dimensional": {"k": 2.5e8, "a": 1e5, "b": 1.5e5, "d_c": 1e-4, "v0": 1e-9,
-                        "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
-        "initial": {"v": 0.5, "theta": 0},
+        "dimensional": {"sigma": 1e7, "a": 0.01, "b": 0.015, "d_c": 1e-4, "v0": 1e-9,
+                        "k": 2.5e8, "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
+        "initial": {"velocity": 5e-10, "state": 1e5},
         "solver": {"method": "radau5", "rtol": 1e-9},
         "analyses": [{"time_series": {"t_max": 3e7}}]}"#;
     let dir = temp_dir("si");
@@ -344,19 +347,16 @@ fn bad_time_series_input_exits_2_naming_the_field() {
 
 #[test]
 fn absolute_friction_level_adds_shear_stress_and_friction_columns() {
-    // σ and μ0 at V_ref set on the scene's PhysicalScales (the scene form of branch field
-    // gives them as model.dimensional.sigma, mu0, v_ref): τ = σμ and μ follow the stress
-    // change column, μ = μ_ref + a·stress with μ_ref = μ0 + (a − b) ln(v0/V_ref).
+    // σ and μ0 at V_ref given: τ = σμ and μ follow the stress change column,
+    // μ = μ_ref + a·stress with μ_ref = μ0 + (a − b) ln(v0/V_ref).
     let text = r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
-        "dimensional": {"k": 2.5e8, "a": 1e5, "b": 1.5e5, "d_c": 1e-4, "v0": 1e-9,
-                        "shear_modulus": 3e10, "shear_wave_speed": 3e3}},
-        "initial": {"v": 0.5, "theta": 0},
+        "dimensional": {"sigma": 1e7, "a": 0.01, "b": 0.015, "d_c": 1e-4, "v0": 1e-9,
+                        "k": 2.5e8, "shear_modulus": 3e10, "shear_wave_speed": 3e3,
+                        "mu0": 0.6, "v_ref": 1e-6}},
+        "initial": {"velocity": 5e-10, "state": 1e5},
         "solver": {"method": "radau5", "rtol": 1e-8},
         "analyses": [{"time_series": {"t_max": 2e7, "points": 101}}]}"#;
-    let mut scene = scene::parse(text, "test").unwrap();
-    let scales = scene.scales.as_mut().unwrap();
-    scales.sigma = Some(1e7);
-    scales.reference = Some(stickslip::model::FrictionReference { mu0: 0.6, v_ref: 1e-6 });
+    let scene = scene::parse(text, "test").unwrap();
     let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
     let columns = &report.time_series.as_ref().unwrap().columns;
     assert_eq!(columns[columns.len() - 2..], ["tau_phys", "mu"]);

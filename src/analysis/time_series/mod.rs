@@ -323,6 +323,8 @@ impl Run<'_, '_> {
     /// The time of the uniform row `i`.
     fn point_time(&self, i: u64) -> Option<Time> {
         match self.settings.sampling {
+            // The last row exactly at t_max (t_max·i/(n − 1) may round above it).
+            Sampling::Points(n) if i + 1 == n => Some(Time::new(self.settings.t_max)),
             Sampling::Points(n) if i < n => {
                 Some(Time::new(self.settings.t_max * i as f64 / (n - 1) as f64))
             }
