@@ -315,7 +315,7 @@ fn the_earthquake_scene_meets_1e9_with_the_default_method() {
     let report = run_file("earthquake.json");
     assert_eq!(report.solver.method, stickslip::solver::Method::CvodeBdf);
     let p = report.cycle.as_ref().unwrap().values.unwrap().period;
-    let reference = 56.412468697640861;
+    let reference = 56.412_468_697_640_86;
     let error = (p - reference).abs() / reference;
     assert!(error < 1e-9, "period {p}: {error:.2e} from the reference {reference}");
 }
