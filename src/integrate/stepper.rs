@@ -627,6 +627,7 @@ macro_rules! integrator_via_stepper {
         impl<S: OdeSystem> Integrator for $T<S> {
             fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
                 $T::advance(self, tout, task)
+                    .map_err(|e| super::problem::jacobian_hint(&self.system, e))
             }
             fn state(&self) -> &[f64] {
                 $T::state(self)
@@ -658,6 +659,13 @@ macro_rules! integrator_via_stepper {
             }
             fn name(&self) -> &'static str {
                 self.core().name
+            }
+            fn max_dense_order(&self) -> u32 {
+                if self.core().have_step {
+                    <Self as stepper::Stepper>::MAX_DENSE_ORDER
+                } else {
+                    1
+                }
             }
         }
     };
