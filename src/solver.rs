@@ -713,7 +713,8 @@ mod tests {
     /// `reject_unsupported`); likewise the Butcher tables and the IMEX split.
     #[test]
     fn the_capability_table_agrees_with_the_integrators() {
-        let set: [(&str, fn(&mut Options)); 5] = [
+        type Setter = fn(&mut Options);
+        let set: [(&str, Setter); 5] = [
             ("max_order", |o| o.max_order = Some(4)),
             ("max_nonlin_iters", |o| o.max_nonlin_iters = Some(4)),
             ("max_conv_fails", |o| o.max_conv_fails = Some(4)),

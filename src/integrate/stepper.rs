@@ -255,7 +255,8 @@ impl Core {
         let n = self.y.len();
         if y0.len() != n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
             let message = format!(
-                "reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {y0:?}"
+                "reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {}",
+                super::brief_state(y0)
             );
             return Err(self.invalid(message));
         }

@@ -144,8 +144,14 @@ fn print_without_stop_time() {
     for method in [Method::Radau5, Method::Rodas5p, Method::Extrapolation, Method::CvodeBdf] {
         for rtol in RTOLS {
             let with = |scd: f64| format!("{scd:.2}");
-            let rober = (run::<Rober>(method, rtol).map(|r| scd_of::<Rober>(&r.y, rtol)).unwrap(), without_stop_time::<Rober>(method, rtol));
-            let vdpol = (run::<Vdpol>(method, rtol).map(|r| scd_of::<Vdpol>(&r.y, rtol)).unwrap(), without_stop_time::<Vdpol>(method, rtol));
+            let rober = (
+                run::<Rober>(method, rtol).map(|r| scd_of::<Rober>(&r.y, rtol)).unwrap(),
+                without_stop_time::<Rober>(method, rtol),
+            );
+            let vdpol = (
+                run::<Vdpol>(method, rtol).map(|r| scd_of::<Vdpol>(&r.y, rtol)).unwrap(),
+                without_stop_time::<Vdpol>(method, rtol),
+            );
             println!(
                 "| {method} | {rtol:.0e} | ROBER {} → {} | VDPOL {} → {} |",
                 with(rober.0),
