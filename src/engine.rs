@@ -79,12 +79,8 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // v = 1e-30 starts go to 3, and the earthquake scene takes 18394 CVODE steps, not 31528.
     // Not for cvode-adams (a non-stiff method, used at small γ): there the fresh Jacobian
     // only costs steps (γ = 10, ξ = 0.8, ε = 1: 1053 → 778 steps per cycle at rtol 1e-6, 1864
-    // → 1503 at 1e-8, the same period error).
-    let jacobian_max_age = matches!(
-        spec.method,
-        Method::CvodeBdf | Method::ArkodeDirk | Method::ArkodeImex | Method::Radau5
-    )
-    .then_some(1);
+    // → 1503 at 1e-8, the same period error). Which methods: `Capabilities::engine`.
+    let engine = spec.method.capabilities().engine;
     // ARKStep DIRK: a Newton test 100 times tighter than ARKODE's default 0.1, with up to 5
     // iterations instead of 3. The Jacobian is fresh at each step but not at each stage, and
     // on the stick the stiff rate γ²e^(−w)/ξ falls by e^(ξ c_i h) from the step's start to
@@ -102,7 +98,8 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // 1000 u / rtol: 100 u still fails there, 1000 u converges (5 cycles: 56 970 steps,
     // 47 251 since solver::dirk_settings); 5000 u also fails there (20 M steps). Physical
     // grid's arkode-dirk cells: 936 of 936.
-    // CVODE BDF: ln v's error is measured absolutely, at a tenth of rtol. An absolute error in
+    // CVODE BDF (`EngineSettings::absolute_ln_v`): ln v's error is measured absolutely, at a
+    // tenth of rtol. An absolute error in
     // w = ln v is v's relative error, and the size of w (up to 21 at the earthquake's peak,
     // down to −690 for v = 1e-300) says nothing about the accuracy wanted; weighed relative to
     // it, the slip's v was held to 20·rtol. BDF's global error on this problem is also some
@@ -115,27 +112,33 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // default 10 convergence failures (each cutting h by 4) stop the run at t = 0 from
     // rtol 1e-11 on; 20 let it shrink h by 4^20 (rtol 1e-11, 1e-12, 1e-13: period errors
     // −1.6e-10, −1.1e-10, −8.4e-11, where every rtol ≥ 1e-12 failed before).
-    let cvode_bdf = spec.method == Method::CvodeBdf;
-    let error_scales = cvode_bdf.then(|| {
+    let error_scales = engine.absolute_ln_v.map(|c| {
         (0..system.dim())
-            .map(|i| if i == W { ErrorScale::Absolute(0.1) } else { ErrorScale::Relative })
+            .map(|i| if i == W { ErrorScale::Absolute(c) } else { ErrorScale::Relative })
             .collect()
     });
-    let dirk = spec.method == Method::ArkodeDirk;
+    // ARKStep's implicit methods deduce their stage derivatives here
+    // (`MethodSettings::deduce_implicit_rhs`): evaluating f_I at converged stages
+    // re-amplifies the Newton residual by the stiffness in ARKStep's error estimate, which
+    // makes it fail at γ ≥ 1e3.
+    let dirk = engine.dirk_newton;
     let dirk_conv_coef = (1e3 * f64::EPSILON / spec.rtol).clamp(1e-3, 0.1);
     let options = &Options {
         max_step: Some(max_step),
         max_err_test_fails: Some(20),
         initial_step,
-        jacobian_max_age,
+        jacobian_max_age: engine.jacobian_max_age,
         nonlin_conv_coef: dirk.then_some(dirk_conv_coef),
         max_nonlin_iters: dirk.then_some(5),
         error_scales,
-        max_conv_fails: cvode_bdf.then_some(20),
+        max_conv_fails: engine.absolute_ln_v.map(|_| 20),
         ..Options::new(spec.rtol, atol)
     };
-    let built =
-        solver::build(spec.method, &MethodSettings::of(spec, true), system, 0.0, y0, options)?;
+    let settings = MethodSettings {
+        deduce_implicit_rhs: engine.deduce_implicit_rhs,
+        ..MethodSettings::of(spec, true)
+    };
+    let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
     Ok((built.integrator, built.tables))
 }
 
@@ -266,7 +269,7 @@ pub fn cycle_with(
     let stable = linear.max_real_part < 0.0;
     let report =
         cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
-    Ok((report, integ.name().to_string(), tables, integ.stats()))
+    Ok((report, scene.solver.method.capabilities().family.to_string(), tables, integ.stats()))
 }
 
 /// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
@@ -455,7 +458,8 @@ fn shooting_step(
     let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings)
         .map_err(failed(drr, "shooting"))?;
     if !cycle_ran {
-        (integration.name, integration.tables) = (integ.name().to_string(), tables);
+        let family = scene.solver.method.capabilities().family.to_string();
+        (integration.name, integration.tables) = (family, tables);
     }
     integration.stats.accumulate(&integ.stats());
     let curve = a.continuation.as_ref().map(|c| {

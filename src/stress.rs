@@ -64,7 +64,7 @@ impl Cell {
         let eps_c = hopf::epsilon_c(&Drr::new(params));
         if !self.method.is_stiff() {
             Expectation::Limit("explicit method: its steps are stability-limited to ~1/γ², too much work at large γ")
-        } else if self.method == Method::ArkodeImex {
+        } else if !self.method.capabilities().physical_region {
             Expectation::Limit(
                 "IMEX: only the plate drive is explicit; not part of the physical-region guarantee",
             )
@@ -206,8 +206,9 @@ pub enum Grid {
 }
 
 /// The stiff methods the physical region guarantees (issue #13).
-const PHYSICAL_METHODS: [Method; 5] =
-    [Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5, Method::Rodas5p, Method::Extrapolation];
+fn physical_methods() -> impl Iterator<Item = Method> {
+    Method::ALL.into_iter().map(|(_, m)| m).filter(|m| m.capabilities().physical_region)
+}
 /// The models besides the paper's that the `laws` grid and the quick grid cover: (state law, η).
 const OTHER_LAWS: [(StateLaw, f64); 4] =
     [(StateLaw::Ageing, 0.0), (StateLaw::Ageing, 0.1), (StateLaw::Prz, 0.0), (StateLaw::Prz, 0.1)];
@@ -327,7 +328,7 @@ fn laws_grid() -> Vec<Cell> {
             for xi in [0.2, 0.7, 2.0] {
                 for epsilon in [1.0, 2.0, 3.0, 5.0, 10.0] {
                     for rtol in [1e-6, 1e-10] {
-                        for method in PHYSICAL_METHODS {
+                        for method in physical_methods() {
                             let cell = Cell {
                                 gamma,
                                 xi,
@@ -365,7 +366,7 @@ fn physical_grid() -> Vec<Cell> {
                     continue;
                 }
                 for rtol in [1e-6, 1e-8, 1e-10] {
-                    for method in PHYSICAL_METHODS {
+                    for method in physical_methods() {
                         cells.push(Cell {
                             gamma,
                             xi,

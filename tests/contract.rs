@@ -224,6 +224,161 @@ fn the_stop_time_is_reached_exactly_then_disabled() {
     }
 }
 
+/// When `tout` equals the stop time, the output time comes first: every method returns
+/// `Reached` exactly there (not `StopTime`), and the stop time is disabled all the same, so
+/// that the next call goes on past it (as documented on `Integrator::set_stop_time`).
+#[test]
+fn tout_at_the_stop_time_is_reached_then_the_stop_time_is_disabled() {
+    for method in methods() {
+        let options =
+            Options { stop_time: Some(0.75), ..Options::new(1e-8, Tolerance::Scalar(1e-10)) };
+        let mut integ = build(method, &options);
+        assert_eq!(
+            integ.advance(0.75, Task::Normal).unwrap(),
+            Step { t: 0.75, event: StepEvent::Reached },
+            "{method}"
+        );
+        assert!(error_at(integ.as_ref()) < 1e-6, "{method}");
+        let next = integ.advance(1.0, Task::Normal).unwrap_or_else(|e| panic!("{method}: {e}"));
+        assert_eq!(next, Step { t: 1.0, event: StepEvent::Reached }, "{method}");
+    }
+}
+
+/// Each integrator names its method, and `max_dense_order` is the bound `dense` keeps: 1
+/// before the first step, then the method's (`Capabilities::dense_order`; CVODE the order of
+/// its last step).
+#[test]
+fn integrators_name_their_method_and_their_dense_order() {
+    let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+    for method in methods() {
+        let mut integ = build(method, &options);
+        assert_eq!(integ.name(), method.name());
+        assert_eq!(integ.max_dense_order(), 1, "{method} before a step");
+        assert!(integ.dense(0.0, 1).is_ok() && integ.dense(0.0, 2).is_err(), "{method}");
+        integ.advance(1.0, Task::Normal).unwrap();
+        let max = integ.max_dense_order();
+        let bound = method.capabilities().dense_order;
+        assert!(max >= 1 && max <= bound, "{method}: {max} against {bound}");
+        if !method.name().starts_with("cvode") {
+            assert_eq!(max, bound, "{method}");
+        }
+        assert!(integ.dense(1.0, max).is_ok(), "{method}: k = {max}");
+        let error = integ.dense(1.0, max + 1).unwrap_err();
+        assert_eq!(error.kind, ErrorKind::InvalidInput, "{method}: k = {}", max + 1);
+        assert!(integ.warnings().is_empty(), "{method}: {:?}", integ.warnings());
+    }
+}
+
+/// The oscillator with its Jacobian transposed (J[0][1] = −1, J[1][0] = 1): made stiff
+/// (y' = 1e6 (y1 − y0) …) so that a wrong Newton matrix matters.
+#[derive(Clone, Copy)]
+struct Transposed;
+
+impl OdeSystem for Transposed {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = -1e6 * y[0] + 1e3 * y[1];
+        dydt[1] = -y[1];
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 0, -1e6);
+        jac.set(1, 0, 1e3);
+        jac.set(1, 1, -1.0);
+    }
+}
+
+all_implicit!(Transposed);
+
+/// A wrong (transposed) Jacobian: `check_jacobian` finds it, and a stiff method that fails
+/// on it says so in its error message instead of only "raise max_steps".
+#[test]
+fn a_wrong_jacobian_is_named_in_the_error() {
+    use stickslip::integrate::check_jacobian;
+    let mismatch = check_jacobian(&Transposed, 0.0, &[1.0, 1.0]).unwrap_err();
+    assert!([(0, 1), (1, 0)].contains(&(mismatch.row, mismatch.col)), "{mismatch}");
+    assert!(check_jacobian(&Oscillator, 0.0, &[0.3, 0.7]).is_ok());
+    let options = Options { max_steps: Some(200), ..Options::new(1e-8, Tolerance::Scalar(1e-10)) };
+    let mut named = 0;
+    for method in methods().filter(|m| m.is_stiff()) {
+        let built = solver::build(
+            method,
+            &MethodSettings::default(),
+            Transposed,
+            0.0,
+            &[1.0, 1.0],
+            &options,
+        );
+        let mut integ = built.unwrap_or_else(|e| panic!("{method}: {e}")).integrator;
+        match integ.advance(100.0, Task::Normal) {
+            Ok(_) => println!("{method}: succeeds with the transposed Jacobian"),
+            Err(e) => {
+                println!("{method}: {e}");
+                let text = e.to_string();
+                assert!(text.contains("the analytic Jacobian disagrees"), "{method}: {e}");
+                assert!(text.contains("J[0][1]") || text.contains("J[1][0]"), "{method}: {e}");
+                named += 1;
+            }
+        }
+    }
+    assert!(named > 0, "no stiff method failed on the transposed Jacobian");
+}
+
+/// Options an explicit method has no use for are typed errors naming them, whichever
+/// constructor is used.
+#[test]
+fn newton_options_on_arkode_erk_are_named() {
+    use stickslip::sundials::{ArkMethod, ErkTable, Solver};
+    let options =
+        Options { max_nonlin_iters: Some(4), ..Options::new(1e-8, Tolerance::Scalar(1e-10)) };
+    let error = solver::build(
+        Method::ArkodeErk,
+        &MethodSettings::default(),
+        Oscillator,
+        0.0,
+        &[0.0, 1.0],
+        &options,
+    )
+    .err()
+    .unwrap();
+    assert_eq!(error.kind, ErrorKind::InvalidInput);
+    assert!(error.message.contains("max_nonlin_iters"), "{error}");
+    let direct = Solver::arkstep(
+        Oscillator,
+        ArkMethod::Erk(ErkTable::default()),
+        Default::default(),
+        0.0,
+        &[0.0, 1.0],
+        &options,
+    )
+    .err()
+    .unwrap();
+    assert_eq!(direct.kind, ErrorKind::InvalidInput);
+    assert_eq!(direct.solver, "arkode-erk");
+    assert!(direct.message.contains("max_nonlin_iters"), "{direct}");
+}
+
+/// A long state is shortened in messages: its first components, its size and its largest
+/// magnitude.
+#[test]
+fn long_states_are_shortened_in_messages() {
+    let error = SolverError {
+        solver: "radau5",
+        kind: ErrorKind::TooMuchWork,
+        t: 1.0,
+        state: (0..400).map(f64::from).collect(),
+        flag: -1,
+        message: String::new(),
+    };
+    let text = error.to_string();
+    assert!(text.len() < 250, "{text}");
+    assert!(text.contains("400 components") && text.contains("3.99e2"), "{text}");
+}
+
 #[test]
 fn the_max_step_can_be_changed_between_steps() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));

@@ -275,7 +275,7 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
 fn dense_derivatives_restarts_and_jacobian_counts() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     let mut solver = Radau5::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap();
-    assert_eq!(solver.name(), "Radau5");
+    assert_eq!(solver.name(), "radau5");
     solver.advance(1.0, Task::Normal).unwrap();
     let end = solver.advance(10.0, Task::OneStep).unwrap().t;
     let (y, dy) = (solver.state().to_vec(), solver.dense(end, 1).unwrap().to_vec());

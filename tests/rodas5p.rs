@@ -423,7 +423,7 @@ fn drr_at_gamma_1e8_from_the_slow_manifold() {
 fn dense_derivatives_restarts_and_jacobian_counts() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     let mut solver = Rodas5p::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap();
-    assert_eq!(solver.name(), "Rodas5P");
+    assert_eq!(solver.name(), "rodas5p");
     // Before any step: the derivative at t0 only up to the first.
     assert_eq!(solver.dense(0.0, 2).unwrap_err().kind, ErrorKind::InvalidInput);
     solver.advance(1.0, Task::Normal).unwrap();

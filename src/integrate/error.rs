@@ -44,9 +44,9 @@ pub enum ErrorKind {
 
 /// A failed integration: what, where (t and state) and the integrator's own message.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{solver} failed at t = {t:e} (state {state:?}): {kind}{}", detail(.message))]
+#[error("{solver} failed at t = {t:e} (state {}): {kind}{}", brief_state(.state), detail(.message))]
 pub struct SolverError {
-    /// Integrator name, e.g. "CVODE" or "ARKStep".
+    /// The method's scene name, e.g. "cvode-bdf" or "radau5" ([`super::Integrator::name`]).
     pub solver: &'static str,
     /// Classification of the failure.
     pub kind: ErrorKind,
@@ -58,6 +58,18 @@ pub struct SolverError {
     pub flag: i32,
     /// The integrator's message, or ours.
     pub message: String,
+}
+
+/// A state for a message: every component of a short one; the first four, the number of
+/// components and the largest magnitude of a long one.
+pub fn brief_state(state: &[f64]) -> String {
+    const SHOWN: usize = 4;
+    if state.len() <= 2 * SHOWN {
+        return format!("{state:?}");
+    }
+    let first: Vec<String> = state[..SHOWN].iter().map(|v| format!("{v:?}")).collect();
+    let largest = state.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    format!("[{}, … ({} components, max |y_i| = {largest:e})]", first.join(", "), state.len())
 }
 
 fn detail(message: &str) -> String {

@@ -21,9 +21,13 @@ pub trait Integrator {
     /// Restarts at (t0, y0).
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError>;
     /// Sets (or moves) the time the integrator must not step past, as
-    /// [`Options::stop_time`](super::Options::stop_time) does at construction; a step that
-    /// ends there returns [`StepEvent::StopTime`](super::StepEvent::StopTime), after which the
-    /// stop time is disabled. A non-finite time is an `InvalidInput` error.
+    /// [`Options::stop_time`](super::Options::stop_time) does at construction. A call whose
+    /// `tout` lies beyond the stop time returns there with
+    /// [`StepEvent::StopTime`](super::StepEvent::StopTime); a call whose `tout` equals it
+    /// returns [`StepEvent::Reached`](super::StepEvent::Reached) (the output time came
+    /// first), at exactly the stop time, with the same state; either way the stop time is then
+    /// disabled, and the next call may go on past it (every method alike, tests/contract.rs).
+    /// A non-finite time is an `InvalidInput` error.
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError>;
     /// Sets the largest step the integrator may take from its next step on (`None`: no
     /// limit), as [`Options::max_step`](super::Options::max_step) does at construction (a step
@@ -48,6 +52,18 @@ pub trait Integrator {
     }
     /// Statistics over the integrator's life.
     fn stats(&self) -> Stats;
-    /// Short name of the integrator family.
+    /// The method's scene name, e.g. "cvode-bdf" or "radau5" (as
+    /// [`SolverError::solver`](super::SolverError::solver)).
     fn name(&self) -> &'static str;
+    /// The largest k that [`Integrator::dense`] accepts now: 1 before the first step (and
+    /// after a restart), then the method's bound (radau5 3, rodas5p 4, extrapolation 3,
+    /// ARKStep DIRK and ERK 5, ARKStep IMEX 3; CVODE the order of its last step, at most 5 for
+    /// BDF and 12 for Adams).
+    fn max_dense_order(&self) -> u32;
+    /// Warnings the integrator issued and went on after (SUNDIALS': "t + h = t" and the like,
+    /// the first 64); the homemade methods issue none (they count step underflows in
+    /// [`Stats::step_underflow_warnings`]).
+    fn warnings(&self) -> &[String] {
+        &[]
+    }
 }

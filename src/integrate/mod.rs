@@ -16,13 +16,17 @@ mod stepper;
 
 pub use clock::{Clock, ClockStep, Time};
 pub(crate) use error::panic_message;
-pub use error::{ErrorKind, SolverError};
+pub use error::{brief_state, ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{ErrorScale, Options, OptionsError, Tolerance, DEFAULT_MAX_STEPS};
 #[cfg(test)]
 pub(crate) use problem::jacobian_against_differences;
-pub use problem::{ImexSystem, JacobianMatrix, OdeSystem, RootFunction, Roots};
+pub use problem::{
+    check_implicit_jacobian, check_jacobian, ImexSystem, JacobianMatrix, JacobianMismatch,
+    OdeSystem, RootFunction, Roots,
+};
+pub(crate) use problem::{implicit_jacobian_hint, jacobian_hint};
 pub use radau5::Radau5;
 pub use rodas5p::Rodas5p;
 pub use stats::Stats;

@@ -138,6 +138,135 @@ impl std::fmt::Debug for Roots {
     }
 }
 
+/// Where an analytic Jacobian disagrees with central differences of the right-hand side:
+/// the worst entry ([`check_jacobian`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("the analytic Jacobian disagrees with central differences of f at t = {t:e}: J[{row}][{col}] = {analytic:e}, differences give {differences:e} (check OdeSystem::jacobian: entry (row, col) is ∂f_row/∂y_col)")]
+pub struct JacobianMismatch {
+    /// Time of the check.
+    pub t: f64,
+    /// Row (component of f).
+    pub row: usize,
+    /// Column (component of y).
+    pub col: usize,
+    /// The analytic entry.
+    pub analytic: f64,
+    /// The central difference.
+    pub differences: f64,
+}
+
+/// Checks `system`'s analytic Jacobian at (t, y) against central differences of its
+/// right-hand side, column by column with the step 1e-6·max(|y_j|, 1e-3·max|y|, 1e-150). An
+/// entry passes within 1e-3 of its own size plus 1e-6 of the largest entry of its row (what
+/// the differences resolve); the worst failing entry is the error. `Ok` when the system has
+/// no analytic Jacobian. 2n right-hand-side calls.
+pub fn check_jacobian<S: OdeSystem + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+) -> Result<(), JacobianMismatch> {
+    if !system.has_jacobian() {
+        return Ok(());
+    }
+    compare(t, y, |t, y, jac| system.jacobian(t, y, jac), |t, y, f| system.rhs(t, y, f))
+}
+
+/// [`check_jacobian`] for the implicit part of an IMEX system: ∂f_I/∂y against differences
+/// of f_I.
+pub fn check_implicit_jacobian<S: ImexSystem + ?Sized>(
+    system: &S,
+    t: f64,
+    y: &[f64],
+) -> Result<(), JacobianMismatch> {
+    if !system.has_implicit_jacobian() {
+        return Ok(());
+    }
+    compare(
+        t,
+        y,
+        |t, y, jac| system.implicit_jacobian(t, y, jac),
+        |t, y, f| system.rhs_implicit(t, y, f),
+    )
+}
+
+fn compare(
+    t: f64,
+    y: &[f64],
+    jacobian: impl Fn(f64, &[f64], &mut JacobianMatrix<'_>),
+    rhs: impl Fn(f64, &[f64], &mut [f64]),
+) -> Result<(), JacobianMismatch> {
+    let n = y.len();
+    let mut storage = vec![0.0; n * n];
+    let mut jac = JacobianMatrix::new(&mut storage, n);
+    jacobian(t, y, &mut jac);
+    let mut differences = vec![0.0; n * n];
+    let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+    for col in 0..n {
+        let h = 1e-6 * y[col].abs().max(1e-3 * scale).max(1e-150);
+        let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+        yp[col] += h;
+        ym[col] -= h;
+        rhs(t, &yp, &mut fp);
+        rhs(t, &ym, &mut fm);
+        for row in 0..n {
+            differences[col * n + row] = (fp[row] - fm[row]) / (yp[col] - ym[col]);
+        }
+    }
+    let mut worst: Option<(f64, JacobianMismatch)> = None;
+    for row in 0..n {
+        let entry = |col: usize| (jac.get(row, col), differences[col * n + row]);
+        let row_scale = (0..n).map(|c| entry(c).0.abs().max(entry(c).1.abs())).fold(0.0, f64::max);
+        for col in 0..n {
+            let (analytic, fd) = entry(col);
+            if !(analytic.is_finite() && fd.is_finite()) {
+                continue;
+            }
+            let excess = (analytic - fd).abs()
+                / (1e-3 * analytic.abs().max(fd.abs()) + 1e-6 * row_scale + f64::MIN_POSITIVE);
+            if excess > 1.0 && worst.as_ref().is_none_or(|(w, _)| excess > *w) {
+                let mismatch = JacobianMismatch { t, row, col, analytic, differences: fd };
+                worst = Some((excess, mismatch));
+            }
+        }
+    }
+    worst.map_or(Ok(()), |(_, m)| Err(m))
+}
+
+/// The kinds of failure a wrong Jacobian shows as: the Newton iteration stalls, the steps
+/// shrink.
+fn may_be_jacobian(kind: &super::ErrorKind) -> bool {
+    use super::ErrorKind::*;
+    matches!(kind, TooMuchWork | ErrorTestFailures | ConvergenceFailures | StepUnderflow)
+}
+
+/// Appends to `error` the Jacobian's disagreement with differences at the failure point,
+/// where the failure is one a wrong Jacobian causes and the check finds one.
+pub(crate) fn jacobian_hint<S: OdeSystem + ?Sized>(
+    system: &S,
+    mut error: super::SolverError,
+) -> super::SolverError {
+    if may_be_jacobian(&error.kind) && error.state.len() == system.dim() {
+        if let Err(m) = check_jacobian(system, error.t, &error.state) {
+            error.message.push_str(&format!(" [likely cause: {m}]"));
+        }
+    }
+    error
+}
+
+/// [`jacobian_hint`] for the implicit part of an IMEX system.
+pub(crate) fn implicit_jacobian_hint<S: ImexSystem + ?Sized>(
+    system: &S,
+    mut error: super::SolverError,
+) -> super::SolverError {
+    if may_be_jacobian(&error.kind) && error.state.len() == system.dim() {
+        if let Err(m) = check_implicit_jacobian(system, error.t, &error.state) {
+            error.message.push_str(&format!(" [likely cause: {m}]"));
+        }
+    }
+    error
+}
+
 /// Test support: the system's analytic Jacobian beside central differences of its right-hand
 /// side at y, with step `step(y_col)` per column, as (row, col, analytic, difference).
 #[cfg(test)]

@@ -38,7 +38,7 @@ use super::linalg::{lu_real, rms, solve_real};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
-const NAME: &str = "Radau5";
+const NAME: &str = "radau5";
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// Jacobian reuse threshold on the Newton contraction θ.

@@ -52,7 +52,7 @@ use super::linalg::{lu_real, rms, solve_real, solve_refined};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
-const NAME: &str = "Rodas5P";
+const NAME: &str = "rodas5p";
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// 1/FAC1 ≤ h_new/h ≤ 1/FAC2 (RODAS's WORK(3) = 0.2, WORK(4) = 6).

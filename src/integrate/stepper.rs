@@ -261,7 +261,8 @@ impl Core {
         let n = self.y.len();
         if y0.len() != n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
             let message = format!(
-                "reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {y0:?}"
+                "reinit needs finite t0 and {n} finite components, got t0 = {t0}, y0 = {}",
+                super::brief_state(y0)
             );
             return Err(self.invalid(message));
         }
@@ -656,6 +657,7 @@ macro_rules! integrator_via_stepper {
         impl<S: OdeSystem> Integrator for $T<S> {
             fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
                 $T::advance(self, tout, task)
+                    .map_err(|e| super::problem::jacobian_hint(&self.system, e))
             }
             fn state(&self) -> &[f64] {
                 $T::state(self)
@@ -687,6 +689,13 @@ macro_rules! integrator_via_stepper {
             }
             fn name(&self) -> &'static str {
                 self.core().name
+            }
+            fn max_dense_order(&self) -> u32 {
+                if self.core().have_step {
+                    <Self as stepper::Stepper>::MAX_DENSE_ORDER
+                } else {
+                    1
+                }
             }
         }
     };

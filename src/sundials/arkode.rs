@@ -344,20 +344,47 @@ static ARKSTEP: Api = Api {
     read_stats,
     classify,
     explain,
+    dense_order_is_last_order: false,
 };
 
-fn dimension_error(dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
+fn dimension_error(name: &'static str, dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
     if y0.len() == dim {
         return Ok(());
     }
     Err(SolverError {
-        solver: ARKSTEP.name,
+        solver: name,
         kind: ErrorKind::InvalidInput,
         t: t0,
         state: y0.to_vec(),
         flag: 0,
         message: format!("y0 has {} components; the system has {dim}", y0.len()),
     })
+}
+
+/// An explicit method has no Newton iteration: its options are an error naming the first one
+/// set (SUNDIALS' own answer is a raw "no nonlinear solver" message).
+fn no_newton(
+    name: &'static str,
+    options: &Options,
+    t0: f64,
+    y0: &[f64],
+) -> Result<(), SolverError> {
+    let newton = [
+        ("max_nonlin_iters", options.max_nonlin_iters.is_some()),
+        ("max_conv_fails", options.max_conv_fails.is_some()),
+        ("nonlin_conv_coef", options.nonlin_conv_coef.is_some()),
+    ];
+    match newton.iter().find(|(_, set)| *set) {
+        None => Ok(()),
+        Some((option, _)) => Err(SolverError {
+            solver: name,
+            kind: ErrorKind::InvalidInput,
+            t: t0,
+            state: y0.to_vec(),
+            flag: 0,
+            message: format!("{option} is not an option of {name} (an explicit method has no Newton iteration): leave it unset (None)"),
+        }),
+    }
 }
 
 impl<S> Solver<S> {
@@ -371,7 +398,7 @@ impl<S> Solver<S> {
         if let Some(order) = options.max_order {
             let message = format!("max_order = {order} applies to CVODE; ARKStep's order is that of its Butcher table");
             return Err(SolverError {
-                solver: ARKSTEP.name,
+                solver: self.name(),
                 kind: ErrorKind::InvalidInput,
                 t: self.t(),
                 state: self.state().to_vec(),
@@ -439,11 +466,20 @@ impl<S: OdeSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        dimension_error(system.dim(), t0, y0)?;
         let implicit = matches!(method, ArkMethod::Dirk(_));
+        let name = if implicit { "arkode-dirk" } else { "arkode-erk" };
+        dimension_error(name, system.dim(), t0, y0)?;
+        if !implicit {
+            no_newton(name, options, t0, y0)?;
+        }
+        let jacobian_hint: fn(&S, SolverError) -> SolverError =
+            if implicit { crate::integrate::jacobian_hint::<S> } else { |_, e| e };
         let jacobian: ffi::CVLsJacFn =
             if implicit && system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {
+            name,
+            max_dense_order: 5,
+            jacobian_hint,
             system,
             t0,
             y0: y0.to_vec(),
@@ -481,13 +517,17 @@ impl<S: ImexSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        dimension_error(system.dim(), t0, y0)?;
+        dimension_error("arkode-imex", system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn = if system.has_implicit_jacobian() {
             Some(callbacks::implicit_jacobian::<S>)
         } else {
             None
         };
+        // The Lagrange interpolant (below) of ARKODE's default degree 3.
         let creation = Creation {
+            name: "arkode-imex",
+            max_dense_order: 3,
+            jacobian_hint: crate::integrate::implicit_jacobian_hint::<S>,
             system,
             t0,
             y0: y0.to_vec(),

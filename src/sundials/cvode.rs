@@ -137,6 +137,7 @@ static CVODE: Api = Api {
     read_stats,
     classify,
     explain: |_| None,
+    dense_order_is_last_order: true,
 };
 
 impl<S: OdeSystem> Solver<S> {
@@ -149,9 +150,13 @@ impl<S: OdeSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
+        let (name, max_dense_order) = match settings.method {
+            CvodeMethod::Bdf => ("cvode-bdf", 5),
+            CvodeMethod::Adams => ("cvode-adams", 12),
+        };
         if y0.len() != system.dim() {
             return Err(SolverError {
-                solver: CVODE.name,
+                solver: name,
                 kind: ErrorKind::InvalidInput,
                 t: t0,
                 state: y0.to_vec(),
@@ -162,6 +167,9 @@ impl<S: OdeSystem> Solver<S> {
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {
+            name,
+            max_dense_order,
+            jacobian_hint: crate::integrate::jacobian_hint::<S>,
             system,
             t0,
             y0: y0.to_vec(),

@@ -61,6 +61,10 @@ pub(crate) struct Api {
     pub classify: fn(c_int) -> ErrorKind,
     /// Why the solver stopped, for return codes whose kind and SUNDIALS message leave it out.
     pub explain: fn(c_int) -> Option<&'static str>,
+    /// Whether the order of the last step bounds the dense output's derivatives (CVODE, whose
+    /// `GetDky` refuses a higher k itself); otherwise the interpolant's degree does
+    /// ([`Creation::max_dense_order`], checked by the wrapper: ARKODE answers zero above it).
+    pub dense_order_is_last_order: bool,
 }
 
 /// What is attached to the solver memory, so that [`Api::read_stats`] asks only the getters
@@ -83,6 +87,12 @@ pub(crate) struct Attached {
 pub struct Solver<S> {
     mem: NonNull<c_void>,
     api: &'static Api,
+    /// The method's scene name (see [`Creation::name`]).
+    name: &'static str,
+    /// See [`Creation::max_dense_order`].
+    max_dense_order: u32,
+    /// See [`Creation::jacobian_hint`].
+    jacobian_hint: fn(&S, SolverError) -> SolverError,
     // Field order is drop order: all of these must go before `ctx`.
     linear: Option<DenseLinearSolver>,
     y: SerialVector,
@@ -118,6 +128,14 @@ pub struct Solver<S> {
 
 /// Which right-hand side(s) a new solver memory is created with; used by the constructors.
 pub(crate) struct Creation<S> {
+    /// The method's scene name, e.g. "cvode-bdf" (errors and `Integrator::name`).
+    pub name: &'static str,
+    /// The largest k of dense output after a step (CVODE: further limited by the order of
+    /// the last step).
+    pub max_dense_order: u32,
+    /// Appends to an error the Jacobian's disagreement with differences at the failure point
+    /// (`integrate::jacobian_hint`), or leaves it.
+    pub jacobian_hint: fn(&S, SolverError) -> SolverError,
     pub system: S,
     pub t0: f64,
     pub y0: Vec<f64>,
@@ -138,10 +156,20 @@ impl<S> Solver<S> {
         options: &Options,
         create: impl FnOnce(&SerialVector, &Context) -> Mem,
     ) -> Result<Self, SolverError> {
-        let Creation { system, t0, y0, needs_linear_solver, jacobian, rhs } = creation;
+        let Creation {
+            name,
+            max_dense_order,
+            jacobian_hint,
+            system,
+            t0,
+            y0,
+            needs_linear_solver,
+            jacobian,
+            rhs,
+        } = creation;
         let dim = y0.len();
         let invalid = |message: String| SolverError {
-            solver: api.name,
+            solver: name,
             kind: ErrorKind::InvalidInput,
             t: t0,
             state: y0.clone(),
@@ -192,6 +220,9 @@ impl<S> Solver<S> {
         let mut solver = Self {
             mem,
             api,
+            name,
+            max_dense_order,
+            jacobian_hint,
             linear: None,
             y,
             scratch,
@@ -357,7 +388,7 @@ impl<S> Solver<S> {
 
     fn error(&self, kind: ErrorKind, flag: c_int, message: String) -> SolverError {
         SolverError {
-            solver: self.api.name,
+            solver: self.name,
             kind,
             t: self.t,
             state: self.state().to_vec(),
@@ -391,6 +422,15 @@ impl<S> Solver<S> {
         // callbacks reach `shared`, which outlives the call.
         let mut flag =
             unsafe { (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code) };
+        if flag == 1 && t == t_before && self.stepped {
+            // The stop time without progress: the last call's output time was the stop time,
+            // which SUNDIALS returns there as `Reached` and now, once more, as the stop time
+            // (disabling it). The contract disables it with the first return: go on.
+            // SAFETY: as above.
+            flag = unsafe {
+                (self.api.evolve)(self.mem.as_ptr(), tout, self.y.raw(), &mut t, task_code)
+            };
+        }
         // The counter is read only when the check applies: after every step it cost an ERK cycle
         // 4 % of its instructions.
         if flag == 0 && steps_before.is_some_and(|before| before == self.raw_steps()) {
@@ -456,7 +496,7 @@ impl<S> Solver<S> {
             if underflows > 0 {
                 e.message.push_str(&format!(" [{underflows} steps below the spacing of t (t + h = t)]"));
             }
-            e
+            (self.jacobian_hint)(&self.shared().system, e)
         })?;
         if self.fail_on_step_underflow && underflows > 0 {
             return Err(self.underflow_error(underflows, flag));
@@ -562,6 +602,13 @@ impl<S> Solver<S> {
             self.scratch.as_mut_slice().copy_from_slice(&value);
             return Ok(self.scratch.as_slice());
         }
+        if !self.api.dense_order_is_last_order && k > self.max_dense_order {
+            let message = format!(
+                "{} gives dense output up to k = {}, got k = {k}",
+                self.name, self.max_dense_order
+            );
+            return Err(self.error(ErrorKind::InvalidInput, 0, message));
+        }
         // SAFETY: live solver memory; `scratch` has the system's length.
         let f = unsafe { (self.api.get_dky)(self.mem.as_ptr(), t, k as c_int, self.scratch.raw()) };
         self.check(f)?;
@@ -648,8 +695,9 @@ impl<S> Solver<S> {
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         if y0.len() != self.shared().dim || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
             let message = format!(
-                "reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {y0:?}",
-                self.shared().dim
+                "reinit needs finite t0 and {} finite components, got t0 = {t0}, y0 = {}",
+                self.shared().dim,
+                crate::integrate::brief_state(y0)
             );
             return Err(self.error(ErrorKind::InvalidInput, 0, message));
         }
@@ -723,9 +771,23 @@ impl<S> Solver<S> {
         &self.shared().system
     }
 
-    /// The solver family name ("CVODE" or "ARKStep").
+    /// The method's scene name ("cvode-bdf", "cvode-adams", "arkode-dirk", "arkode-erk" or
+    /// "arkode-imex").
     pub fn name(&self) -> &'static str {
-        self.api.name
+        self.name
+    }
+
+    /// The largest k that [`Solver::dense`] accepts now (see
+    /// [`Integrator::max_dense_order`]).
+    pub fn max_dense_order(&self) -> u32 {
+        if !self.stepped {
+            return 1;
+        }
+        if self.api.dense_order_is_last_order {
+            (self.raw_stats().last_order.max(1) as u32).min(self.max_dense_order)
+        } else {
+            self.max_dense_order
+        }
     }
 }
 
@@ -759,6 +821,12 @@ impl<S> Integrator for Solver<S> {
     }
     fn name(&self) -> &'static str {
         Solver::name(self)
+    }
+    fn max_dense_order(&self) -> u32 {
+        Solver::max_dense_order(self)
+    }
+    fn warnings(&self) -> &[String] {
+        Solver::warnings(self)
     }
 }
 

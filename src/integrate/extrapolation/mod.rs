@@ -106,7 +106,7 @@ use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step,
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
-const NAME: &str = "Extrapolation";
+const NAME: &str = "extrapolation";
 /// Consecutive singular iteration matrices before giving up.
 const MAX_SINGULAR: u32 = 5;
 const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
