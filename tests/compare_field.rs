@@ -325,3 +325,35 @@ fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
     let c = compare::against_report(&s, &read(&four), 1e-6, None).unwrap();
     assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
 }
+
+/// Issue #26's done-when: a 25-cycle time series of the shipped field scene, written by
+/// `stickslip run --series` as CSV (t, u, v, θ first, then the derived and physical columns;
+/// absolute time from t = 0, transient included), agrees with `compare --against` at
+/// `--tolerance 1e-6`.
+#[test]
+fn the_field_scenes_own_series_agrees_at_1e_minus_6() {
+    let dir = temp_dir("series");
+    let path = format!("{}/data/scenes/qdyn-spring-block.json", env!("CARGO_MANIFEST_DIR"));
+    let mut scene: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    // 25 periods of 5.2084e6 s.
+    scene["analyses"] = serde_json::json!([{"time_series": {"t_max": 1.31e8}}]);
+    let scene_file = dir.join("scene.json");
+    std::fs::write(&scene_file, scene.to_string()).unwrap();
+    let series = dir.join("series.csv");
+    let run = std::process::Command::new(EXE)
+        .args(["run", scene_file.to_str().unwrap(), "--series", series.to_str().unwrap()])
+        .args(["--out", dir.join("report.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let out = std::process::Command::new(EXE)
+        .args(["compare", scene_file.to_str().unwrap(), "--against", series.to_str().unwrap()])
+        .args(["--tolerance", "1e-6"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(stdout.contains("25 compared"), "{stdout}");
+    std::fs::remove_dir_all(dir).ok();
+}
