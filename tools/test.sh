@@ -8,3 +8,7 @@ cargo test --release "$@"
 cargo run --release --quiet --example own_system
 # The work–precision runner (docs/work-precision.md) still runs: one small cell, nothing written.
 cargo run --release --quiet --example work_precision -- --smoke
+# The instruction-count guard (docs/benchmarks.md): fails if a benchmark case runs more than 3 %
+# more instructions than benches/instructions/baseline.txt records (skipped in tools/debian.sh's
+# chroot and wherever the toolchain differs from the baseline's).
+bash tools/instructions.sh
