@@ -7,7 +7,7 @@
 #   bash tools/instructions.sh                    # check: fail if a case > 1.03 × its baseline
 #   bash tools/instructions.sh --update "reason"  # measure and rewrite the baseline, appending
 #                                                 # the one-line reason to its history
-#   bash tools/instructions.sh --case NAME        # measure one case only and print it
+#   bash tools/instructions.sh --case NAME        # check one case only
 #
 # The check fails (exit 1) when a case's count exceeds 1.03 × its baseline, when a case has no
 # baseline, or when the baseline file lacks a reason line for its last update. A commit that
@@ -34,7 +34,7 @@ case "${1:-}" in
         fi
         case "$reason" in *$'\n'*) echo "instructions.sh: the reason must be one line" >&2; exit 2;; esac
         ;;
-    --case) mode=one; only="${2:-}" ;;
+    --case) only="${2:-}" ;;
     "") ;;
     *) echo "instructions.sh: unknown argument '$1' (give nothing, --update \"reason\" or --case NAME)" >&2; exit 2 ;;
 esac
@@ -92,12 +92,16 @@ count() {
     sed -n 's/.*I *refs: *//p' "$log" | tr -d ','
 }
 
+if [ -n "$only" ] && ! printf '%s\n' "${cases[@]}" | grep -q "^$only|"; then
+    echo "instructions.sh: unknown case '$only'" >&2
+    exit 2
+fi
 status=0
 lines=()
 for entry in "${cases[@]}"; do
     name=${entry%%|*}
     command=${entry#*|}
-    [ "$mode" = one ] && [ "$name" != "$only" ] && continue
+    [ -n "$only" ] && [ "$name" != "$only" ] && continue
     n=$(count "$command")
     lines+=("$name $n")
     if [ "$mode" = check ]; then
