@@ -27,3 +27,7 @@ python3 -m venv "$venv"
 for example in examples/python/*.py; do
     MPLBACKEND=Agg "$venv/bin/python" "$example" "${CARGO_TARGET_DIR:-target}/python-figures"
 done
+# The instruction-count guard (docs/benchmarks.md): fails if a benchmark case runs more than 3 %
+# more instructions than benches/instructions/baseline.txt records (skipped in tools/debian.sh's
+# chroot and wherever the toolchain differs from the baseline's).
+bash tools/instructions.sh

@@ -29,6 +29,7 @@ macro_rules! with_small_n {
         }
     };
 }
+pub(super) use with_small_n;
 
 /// LU factorisation with partial pivoting of the column-major n×n matrix `a` (LINPACK DGEFA
 /// layout: row interchanges applied to the columns to the right only). False if singular.

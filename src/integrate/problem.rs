@@ -43,6 +43,17 @@ pub trait OdeSystem {
     fn has_linear_invariants(&self) -> bool {
         true
     }
+
+    /// Whether [`OdeSystem::time_derivative`] is implemented (Rodas5P, which needs ∂f/∂t at
+    /// every step of a non-autonomous system, takes a forward difference in t otherwise: one
+    /// more right-hand side per step and an error ~1e-8 relative).
+    fn has_time_derivative(&self) -> bool {
+        false
+    }
+
+    /// Writes ∂f/∂t at (t, y) into `out`. Called only when
+    /// [`OdeSystem::has_time_derivative`] returns true.
+    fn time_derivative(&self, _t: f64, _y: &[f64], _out: &mut [f64]) {}
 }
 
 /// A system split as f = f_E + f_I for implicit–explicit (IMEX) methods: f_E is integrated

@@ -34,8 +34,9 @@
 //! forward-difference one (RADAU5's increments, n extra right-hand-side calls) works, but its
 //! O(√u) error goes straight into the stages — there is no Newton iteration to correct it.
 //!
-//! Time dependence: the method needs ∂f/∂t as well, which [`OdeSystem`] does not provide. It is
-//! taken by a forward difference in t (as RODAS does with IFCN = 1; one extra right-hand-side
+//! Time dependence: the method needs ∂f/∂t as well. A system that provides it
+//! ([`OdeSystem::has_time_derivative`], e.g. the noise realisations' cubic forcing) gives it
+//! exactly; otherwise it is taken by a forward difference in t (as RODAS does with IFCN = 1; one extra right-hand-side
 //! call per Jacobian, counted in [`Stats::rhs_evals_jacobian`]); it is exact (zero) for an
 //! autonomous system, where [`Rodas5p::autonomous`] saves that call. For non-autonomous
 //! systems this finite difference limits the attainable accuracy (relative error ~1e-8 in
@@ -48,7 +49,7 @@
 // The published coefficients are kept with all their digits.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real, solve_refined};
+use super::linalg::{lu_real, rms, solve_real, solve_refined, with_small_n};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
@@ -351,6 +352,10 @@ impl<S: OdeSystem> Rodas5p<S> {
         if self.autonomous {
             return true;
         }
+        if self.system.has_time_derivative() {
+            self.system.time_derivative(self.core.x, &self.core.y, &mut w.dfdt);
+            return all_finite(&w.dfdt);
+        }
         let n = self.n;
         let delt = (UROUND * self.core.x.abs().max(1e-5)).sqrt();
         for direction in [self.core.posneg, -self.core.posneg] {
@@ -390,9 +395,18 @@ impl<S: OdeSystem> Rodas5p<S> {
     }
 
     /// The eight stages and the new solution `work.ynew` (the embedded one in `work.u`). False
-    /// if a right-hand side was not finite.
+    /// if a right-hand side was not finite. (For n = 3 and 4 the loops run with n a
+    /// compile-time constant, [`with_small_n`]: the same arithmetic in the same order, without
+    /// the bounds checks and loop bookkeeping that were two thirds of a noise realisation's
+    /// own Rodas5P work, issue #30.)
     fn stages(&mut self) -> bool {
         let n = self.n;
+        with_small_n!(n, self.stages_n(n))
+    }
+
+    /// [`Rodas5p::stages`]'s body for dimension `n`.
+    #[inline(always)]
+    fn stages_n(&mut self, n: usize) -> bool {
         let (x, h) = (self.core.x, self.core.h);
         let w = &mut self.work;
         for s in 0..STAGES {
@@ -608,15 +622,18 @@ impl<S: OdeSystem> Rodas5p<S> {
         self.core.hold = h;
         self.core.x = xph;
         let w = &mut self.work;
-        for (m, row) in HD.iter().enumerate() {
-            for i in 0..n {
-                let mut v = 0.0;
-                for (s, c) in row.iter().enumerate() {
-                    v += c * w.k[s * n + i];
+        with_small_n!(n, {
+            let k = &w.k[..STAGES * n];
+            for (m, row) in HD.iter().enumerate() {
+                for i in 0..n {
+                    let mut v = 0.0;
+                    for (s, c) in row.iter().enumerate() {
+                        v += c * k[s * n + i];
+                    }
+                    w.cont[m * n + i] = v;
                 }
-                w.cont[m * n + i] = v;
             }
-        }
+        });
         w.yold.copy_from_slice(&self.core.y);
         std::mem::swap(&mut self.core.y, &mut w.ynew);
         std::mem::swap(&mut self.core.f0, &mut w.fnew);

@@ -222,8 +222,20 @@ impl NoiseModel {
     /// [`Drr`]'s, with its state law and radiation damping: one definition of the dynamics)
     /// plus the forcing.
     pub fn forced_rhs(&self, t: f64, x: &[f64], eta: &[f64], out: &mut [f64]) {
+        if let NoiseModel::Drr { system, amplitudes } = self {
+            // The same sums as below, with one exponential (issue #30).
+            system.rhs_with_velocity_force(x, amplitudes[1], eta[W], out);
+            out[0] += amplitudes[0] * eta[0];
+            out[2] += amplitudes[2] * eta[2];
+            return;
+        }
         self.rhs(t, x, out);
         self.add_forcing(x, eta, out);
+    }
+
+    /// Whether the drift F is autonomous (true but for the saddle-node's ramp μ0 − r t).
+    pub fn drift_is_autonomous(&self) -> bool {
+        !matches!(self, NoiseModel::SaddleNode { .. })
     }
 
     /// Adds ∂(B(x)η)/∂x to `jac` (only the DRR's w entry depends on x: −η_v e^{−w} η_w).
@@ -264,6 +276,17 @@ impl OdeSystem for NoiseModel {
             NoiseModel::SaddleNode { system, .. } => system.jacobian(t, y, jac),
             NoiseModel::VanDerPol { system, .. } => system.jacobian(t, y, jac),
             NoiseModel::Linear { rate, .. } => jac.set(0, 0, -rate),
+        }
+    }
+
+    /// The deterministic system's answer (the DRR has none); the other models keep the
+    /// default (true).
+    fn has_linear_invariants(&self) -> bool {
+        match self {
+            NoiseModel::Drr { system, .. } => system.has_linear_invariants(),
+            NoiseModel::SaddleNode { system, .. } => system.has_linear_invariants(),
+            NoiseModel::VanDerPol { system, .. } => system.has_linear_invariants(),
+            NoiseModel::Linear { .. } => true,
         }
     }
 }
