@@ -16,7 +16,8 @@ mod orego;
 #[path = "../tests/test_set/problem.rs"]
 mod problem;
 
-use problem::{run, scd_of, Method, TestProblem};
+use problem::{run, scd_of, TestProblem};
+use stickslip::solver::Method;
 
 /// Relative tolerance of every case (the test set's middle one).
 const RTOL: f64 = 1e-7;

@@ -4,7 +4,7 @@
 //! User trajectories are CSV with a header `t,u,v,theta` (any order, extra columns ignored,
 //! `#` comment lines allowed) or JSON `{"t": [...], "u": [...], "v": [...], "theta": [...]}`;
 //! times must increase ([`input`]); they are compared event by event, then between events in
-//! phase ([`trajectory`], events on samples: [`sampled`], the reference runs: [`reference`]).
+//! phase ([`trajectory`], events on samples: [`sampled`], the reference runs: [`reference`](mod@reference)).
 //! A user report is JSON with a `cycle` object holding keys of docs/reports.md. See
 //! docs/compare.md.
 

@@ -315,7 +315,7 @@ impl Drr {
     /// The right-hand side with an extra force `amplitude`·`force` on dv/dt, which enters
     /// dw/dt = (dv/dt)/v as (`amplitude`·e^(−w))·`force` (the noise analysis's forcing on v).
     ///
-    /// With inertia it takes one exponential where [`Drr::split`] takes three: v = e^w, then
+    /// With inertia it takes one exponential where `Drr::split` takes three: v = e^w, then
     /// du/dt = v − 1 and e^(−w) = 1/v (for the arrest rate and the force). The same formulas;
     /// only the last bits differ (v − 1 against e^w − 1 computed as such: an absolute 1e-16),
     /// far below the tolerances of the noise ensembles, which evaluate it tens of millions of
