@@ -233,12 +233,14 @@ impl Report {
                 (CycleStatus::FixedPoint, _) => {
                     s += "cycle: none; the oscillation dies out and the fixed point is stable\n"
                 }
-                _ => s += &format!(
+                _ => {
+                    s += &format!(
                     "cycle: NOT converged after {} cycles / t = {:.6e}{} (see cycle.last_cycles)\n",
                     c.cycles_computed,
                     c.time_integrated,
                     c.stopped_by.map_or(String::new(), |l| format!(", stopped by the limit {l}"))
-                ),
+                )
+                }
             }
         }
         if let Some(p) = &self.physical {
