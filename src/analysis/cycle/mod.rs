@@ -867,8 +867,12 @@ pub fn analyse(
                     let start = tracker.closed.len().saturating_sub(window).max(1);
                     // Settled, or out of limits with the rule met: the estimate says how far
                     // the window is from settled.
-                    if settled::settled(&tracker.closed, start, settings.w_tolerance)
-                        || out_of_cycles
+                    if settled::settled(
+                        &tracker.closed,
+                        start,
+                        settings.w_tolerance,
+                        settings.tolerance,
+                    ) || out_of_cycles
                         || out_of_time
                     {
                         break CycleStatus::Periodic;

@@ -10,10 +10,11 @@
 //! Model of the per-cycle sequence of a quantity: x_k = x_∞ + A ρ^k + noise_k, with ρ the
 //! leading Floquet multiplier's modulus. The differences d_k = x_k − x_{k−1} that stand
 //! clearly above the noise (|d_k| > [`CLEAN`] × noise) give ρ (the largest of the last three
-//! ratios |d_k / d_{k−1}| of such pairs) and the transient's size at the last of them, c:
-//! |x_c − x_∞| ≈ |d_c| ρ/(1 − ρ); at the window's first cycle j it is |d_c| ρ^{j−c+1}/(1 − ρ).
-//! With no clean pair ρ is taken as [`RHO_UNKNOWN`] and |d| at the first difference as the
-//! clean threshold (the transient was already below it). The noise is half the range of the
+//! ratios |d_k / d_{k−1}| below 1 of such pairs) and the transient's size at the last of them,
+//! c: |x_c − x_∞| ≈ |d_c| ρ/(1 − ρ); at the window's first cycle j it is |d_c| ρ^{j−c+1}/(1 − ρ).
+//! A clean difference followed by one within the noise bounds ρ by their ratio; with neither,
+//! ρ is taken as [`RHO_UNKNOWN`], and with no clean difference at all the largest difference
+//! up to the window stands for d_c. The noise is half the range of the
 //! window plus the integration's error floor.
 //!
 //! The floor: an integration error common to every cycle is invisible in their scatter, so a
@@ -108,9 +109,13 @@ fn quantity(closed: &[f64], start: usize, floor: impl Fn(f64) -> f64) -> (f64, f
         .min(RHO_UNKNOWN)
     }
     .min(RHO_MAX);
+    // With no clean difference, the largest one up to the window's first cycle stands for
+    // the transient there (those inside the window are part of its range, i.e. the noise).
     let (c, dc) = match last_clean {
         Some(c) => (c, d(c).abs()),
-        None => (1, clean),
+        None => (1..=start.min(closed.len() - 1))
+            .map(|k| (k, d(k).abs()))
+            .fold((1, 0.0), |best, (k, x)| if x >= best.1 { (k, x) } else { best }),
     };
     // Transient at cycle c: |d_c| ρ/(1 − ρ); at the window's first cycle it has decayed by
     // ρ^{start − c} (grown, if a clean difference lies inside the window).
@@ -155,8 +160,21 @@ fn of(q: &Quantity, closed: &[CycleValues], start: usize, w_tolerance: (f64, f64
 
 /// Whether the window `closed[start..]` is settled (see the module doc), for an integration
 /// with tolerance `w_tolerance` = (rtol, atol) on w.
-pub(super) fn settled(closed: &[CycleValues], start: usize, w_tolerance: (f64, f64)) -> bool {
+///
+/// Every consecutive pair of the window must also agree under the convergence rule's
+/// `tolerance` ([`super::agree`]): a window that still holds a jump of the transient (e.g. the
+/// last small oscillation before the relaxation cycle) has a range, i.e. a "noise", that
+/// would hide it.
+pub(super) fn settled(
+    closed: &[CycleValues],
+    start: usize,
+    w_tolerance: (f64, f64),
+    tolerance: f64,
+) -> bool {
     if start < 1 || closed.len() <= start {
+        return false;
+    }
+    if !closed[start..].windows(2).all(|w| super::agree(&w[1], &w[0], tolerance)) {
         return false;
     }
     [PERIOD, V_MAX, SLIP].iter().all(|q| {
@@ -220,7 +238,7 @@ mod tests {
         let x = sequence(12, 0.0, 0.0, 1e-9);
         let (transient, noise) = quantity(&x, 6, |m| 1e-12 * m);
         assert!(transient <= TRANSIENT_SHARE * noise && noise >= 1e-9, "{transient} {noise}");
-        let (transient, noise) = quantity(&x, 2, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 1, |m| 1e-12 * m);
         assert!(transient > TRANSIENT_SHARE * noise, "too soon for the assumed ρ = 0.5");
     }
 }
