@@ -843,7 +843,7 @@ pub fn analyse(
                 t: tracker.clock.now().to_f64(),
                 state: tracker.clock.state().to_vec(),
                 message: format!(
-                    "{} {} steps without settling on a cycle after {} cycles (limit max_steps = {}; \
+                    "{} {} steps without settling on a cycle after {} cycles (cycle.max_steps = {}; \
                      raise it with {{\"cycle\": {{\"max_steps\": N}}}})",
                     tracker.steps,
                     tracker.clock.name(),

@@ -13,8 +13,8 @@
 //! ratios |d_k / d_{k−1}| below 1 of such pairs) and the transient's size at the last of them,
 //! c: |x_c − x_∞| ≈ |d_c| ρ/(1 − ρ); at the window's first cycle j it is |d_c| ρ^{j−c+1}/(1 − ρ).
 //! A clean difference followed by one within the noise bounds ρ by their ratio; with neither,
-//! ρ is taken as [`RHO_UNKNOWN`], and with no clean difference at all the largest difference
-//! up to the window stands for d_c. The noise is half the range of the
+//! ρ is taken as [`RHO_UNKNOWN`], and with no clean difference at all d_1 as the clean level
+//! (the transient was below it from the first cycle on). The noise is half the range of the
 //! window plus the integration's error floor.
 //!
 //! The floor: an integration error common to every cycle is invisible in their scatter, so a
@@ -109,13 +109,11 @@ fn quantity(closed: &[f64], start: usize, floor: impl Fn(f64) -> f64) -> (f64, f
         .min(RHO_UNKNOWN)
     }
     .min(RHO_MAX);
-    // With no clean difference, the largest one up to the window's first cycle stands for
-    // the transient there (those inside the window are part of its range, i.e. the noise).
+    // With no clean difference the transient was below the clean level from cycle 1 on (a
+    // jump inside the window is excluded by `settled`'s pairwise agreement).
     let (c, dc) = match last_clean {
         Some(c) => (c, d(c).abs()),
-        None => (1..=start.min(closed.len() - 1))
-            .map(|k| (k, d(k).abs()))
-            .fold((1, 0.0), |best, (k, x)| if x >= best.1 { (k, x) } else { best }),
+        None => (1, clean),
     };
     // Transient at cycle c: |d_c| ρ/(1 − ρ); at the window's first cycle it has decayed by
     // ρ^{start − c} (grown, if a clean difference lies inside the window).
@@ -234,11 +232,23 @@ mod tests {
     }
 
     #[test]
+    fn a_window_holding_the_jump_to_the_cycle_is_not_settled() {
+        // The last small oscillation (period 12.7) before the relaxation cycle (62.56), as at
+        // γ = 1e12, ξ = 0.7, ε = 0.72: its range would pass for noise.
+        let x = [8.9, 9.35, 10.16, 12.69, 62.137, 62.5552, 62.5552, 62.5552, 62.5552];
+        let (transient, noise) = quantity(&x, 3, |m| 1e-12 * m);
+        assert!(noise > 20.0, "{noise}");
+        let (transient_after, noise_after) = quantity(&x, 5, |m| 1e-12 * m);
+        assert!(transient_after > TRANSIENT_SHARE * noise_after, "62.137 is still transient");
+        let _ = transient;
+    }
+
+    #[test]
     fn noise_alone_settles_after_the_assumed_decay() {
         let x = sequence(12, 0.0, 0.0, 1e-9);
         let (transient, noise) = quantity(&x, 6, |m| 1e-12 * m);
         assert!(transient <= TRANSIENT_SHARE * noise && noise >= 1e-9, "{transient} {noise}");
-        let (transient, noise) = quantity(&x, 1, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 2, |m| 1e-12 * m);
         assert!(transient > TRANSIENT_SHARE * noise, "too soon for the assumed ρ = 0.5");
     }
 }
