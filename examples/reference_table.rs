@@ -21,6 +21,13 @@
 //!
 //!     cargo run --release --example reference_table -- cost
 //!
+//! With the argument `quasi`, the 12 quasi-dynamic cases of issue #28,
+//! data/reference/quasi_dynamic_cycles.json: slip and ageing law × k/k_c = 0.9, 0.5, 0.2
+//! (ξ = 0.5 k/k_c, ε = 0.5) × η = 5e-8, 1e-3, from v = 0.5, θ = 0, by Rodas5P and Radau5 at
+//! rtol 1e-13, atol 1e-15, cycle tolerance 1e-10 (see [`quasi`]):
+//!
+//!     cargo run --release --example reference_table -- quasi
+//!
 //! The reference value of each quantity is the mean of the two; `agreement` is their relative
 //! difference. Tests check the engine against these tables (tests/reference.rs,
 //! tests/reference_ageing.rs, tests/reference_far.rs).
@@ -84,8 +91,9 @@ fn main() {
         Some("ageing") => true,
         Some("far") => return far(),
         Some("cost") => return cost(),
+        Some("quasi") => return quasi(),
         Some(other) => {
-            eprintln!("reference_table: unknown argument \"{other}\"; use no argument (slip law), \"ageing\", \"far\" or \"cost\"");
+            eprintln!("reference_table: unknown argument \"{other}\"; use no argument (slip law), \"ageing\", \"far\", \"quasi\" or \"cost\"");
             std::process::exit(2);
         }
     };
@@ -325,4 +333,59 @@ fn cost() {
             }
         }
     }
+}
+
+/// data/reference/quasi_dynamic_cycles.json: the 12 quasi-dynamic cases of issue #28 from
+/// Rodas5P and Radau5 at rtol 1e-13 (atol 1e-15, cycle tolerance 1e-10); the reference is
+/// Rodas5P's value (the quieter of the two, per-cycle scatter ~1e-13), `relative_agreement`
+/// the relative difference of the two methods.
+fn quasi() {
+    let mut rows = Vec::new();
+    let mut worst = [0.0f64; 2];
+    for law in ["slip", "ageing"] {
+        for k_over_kc in [0.9, 0.5, 0.2] {
+            for eta in [5e-8, 1e-3] {
+                let xi = 0.5 * k_over_kc;
+                let run = |method: &str| {
+                    let text = json!({
+                        "name": format!("quasi-dynamic {law} k/k_c={k_over_kc} η={eta:e} {method}"),
+                        "model": { "inertia": false, "xi": xi, "epsilon": 0.5, "state_law": law, "radiation_damping": eta },
+                        "initial": { "v": 0.5, "theta": 0.0 },
+                        "solver": { "method": method, "rtol": 1e-13, "atol": 1e-15 },
+                        "analyses": [{ "cycle": { "tolerance": 1e-10 } }]
+                    });
+                    let scene = scene::parse(&text.to_string(), "reference").expect("valid scene");
+                    let report = engine::run(&scene, text)
+                        .unwrap_or_else(|e| panic!("{law} {k_over_kc} {eta} {method}: {e}"));
+                    let c = report.cycle.expect("cycle asked");
+                    let v = c.values.unwrap_or_else(|| {
+                        panic!("{law} {k_over_kc} {eta} {method}: {:?}", c.status)
+                    });
+                    (v.period, v.v_max, c.cycles_computed)
+                };
+                let (a, b) = (run("rodas5p"), run("radau5"));
+                let rel = |x: f64, y: f64| (x - y).abs() / x.abs().max(y.abs());
+                let agreement = [rel(a.0, b.0), rel(a.1, b.1)];
+                worst = [worst[0].max(agreement[0]), worst[1].max(agreement[1])];
+                eprintln!("{law} {k_over_kc} {eta:e}: period {:.13} v_max {:.13e} agreement {:.1e} {:.1e}", a.0, a.1, agreement[0], agreement[1]);
+                rows.push(json!({
+                    "state_law": law, "k_over_kc": k_over_kc, "xi": xi, "epsilon": 0.5, "radiation_damping": eta,
+                    "period": a.0, "v_max": a.1,
+                    "relative_agreement": { "period": agreement[0], "v_max": agreement[1] },
+                    "rodas5p": { "period": a.0, "v_max": a.1, "cycles_computed": a.2 },
+                    "radau5": { "period": b.0, "v_max": b.1, "cycles_computed": b.2 },
+                }));
+            }
+        }
+    }
+    let table = json!({
+        "description": "Limit cycle of the quasi-dynamic spring-block (\"inertia\": false, f = ln v), issue #28's 12 cases: ξ = 0.5 k/k_c, ε = 0.5, radiation damping η, start v = 0.5, θ = 0. Reference = Rodas5P at rtol 1e-13, atol 1e-15, cycle tolerance 1e-10; relative_agreement = |a − b|/max(|a|, |b|) against Radau5 at the same settings.",
+        "command": "cargo run --release --example reference_table -- quasi",
+        "worst_agreement": { "period": worst[0], "v_max": worst[1] },
+        "rows": rows,
+    });
+    let path = "data/reference/quasi_dynamic_cycles.json";
+    std::fs::write(path, serde_json::to_string_pretty(&table).expect("serialisable") + "\n")
+        .expect("writable data/reference");
+    eprintln!("wrote {path}: worst agreement period {:.1e}, v_max {:.1e}", worst[0], worst[1]);
 }

@@ -1,5 +1,6 @@
 //! The `stickslip` command line. Subcommands are thin: parse, call the library, print.
-//! Exit codes: 0 success, 1 failed computation, 2 bad input, 3 `compare`: disagrees.
+//! Exit codes: 0 success, 1 failed computation, 2 bad input, 3 `compare`: disagrees, 4 `run`:
+//! the cycle analysis did not converge within its limits (the report is still written).
 
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -201,7 +202,8 @@ fn robertson_command() -> Result<(), String> {
     Ok(())
 }
 
-/// A failure and its exit code: 2 for bad input, 1 for a failed computation.
+/// A failure and its exit code: 2 for bad input, 1 for a failed computation, 4 for a cycle
+/// analysis that did not converge.
 struct Failure(u8, String);
 
 /// A failed run of the scene `name`: exit code 2 when an option does not fit the computed
@@ -229,6 +231,7 @@ fn run_command(
     let progress = Progress::new("noise", "realisations");
     let update = |d, t| progress.update(d, t);
     let threads = worker_threads(threads);
+    let mut not_converged = None;
     let (report_json, summary) = match &scene {
         scene::AnyScene::Drr(scene) => {
             for warning in &scene.warnings {
@@ -239,6 +242,7 @@ fn run_command(
                 None => engine::run_with(scene, echo, threads, &update)
                     .map_err(|e| failed(&scene.name, e))?,
             };
+            not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
             (report.to_json(), report.summary())
         }
         scene::AnyScene::Other(_) if series.is_some() => {
@@ -274,7 +278,26 @@ fn run_command(
             println!("report written to {}", file.display());
         }
     }
-    Ok(())
+    match not_converged {
+        Some(message) => Err(Failure(4, message)),
+        None => Ok(()),
+    }
+}
+
+/// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
+/// limit, and what to raise.
+fn unconverged(name: &str, c: &stickslip::analysis::cycle::CycleReport) -> Option<String> {
+    if c.status != stickslip::analysis::cycle::CycleStatus::NotConverged {
+        return None;
+    }
+    let limit = c.stopped_by.unwrap_or("max_cycles");
+    Some(format!(
+        "scene {name}: cycle: NOT converged after {} cycles / t = {:e}: stopped by the limit \
+         {limit}; raise it (e.g. {{\"cycle\": {{\"{limit}\": ...}}}}), or loosen \
+         cycle.tolerance if the last cycles (cycle.last_cycles in the report) only scatter \
+         (exit code 4)",
+        c.cycles_computed, c.time_integrated
+    ))
 }
 
 /// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix);

@@ -320,26 +320,41 @@ impl Report {
             match (c.status, &c.values) {
                 (CycleStatus::Periodic, Some(v)) => {
                     s += &format!(
-                        "cycle: periodic after {} cycles ({} used, spread of period {:.1e})\n",
-                        c.cycles_computed,
-                        c.cycles_used,
-                        c.spread.map_or(0.0, |s| s.period)
+                        "cycle: periodic after {} cycles (mean of the last {}; ± estimated error: transient left plus cycle-to-cycle noise)\n",
+                        c.cycles_computed, c.cycles_used,
                     );
+                    let e = c.error_estimate;
+                    let pm = |x: Option<f64>| x.map_or(String::new(), |x| format!(" ± {x:.1e}"));
                     s += &format!(
-                        "  period          {:.10}\n  t0              {:.10}\n",
-                        v.period, v.t0
+                        "  period          {:.10}{}\n  t0              {:.10}{}\n",
+                        v.period,
+                        pm(e.map(|e| e.period)),
+                        v.t0,
+                        pm(e.map(|e| e.t0))
                     );
+                    let hw = pm(e.and_then(|e| e.slip_half_width));
                     match v.slip_half_width {
                         Some(w) if m.inertia => {
-                            s +=
-                                &format!("  slip half-width {:.6e} (× γ = {:.6})\n", w, w * m.gamma)
+                            s += &format!(
+                                "  slip half-width {:.6e}{hw} (× γ = {:.6})\n",
+                                w,
+                                w * m.gamma
+                            )
                         }
-                        Some(w) => s += &format!("  slip half-width {:.6e}\n", w),
+                        Some(w) => s += &format!("  slip half-width {:.6e}{hw}\n", w),
                         None => {}
                     }
                     s += &format!(
-                        "  v_max           {:.6e} (ln {:.9})\n  v_min           {:.6e}\n  u, θ at v_max   {:.9}, {:.9}\n  slip            {:.9}\n",
-                        v.v_max, v.ln_v_max, v.v_min, v.u_at_v_max, v.theta_at_v_max, v.slip
+                        "  v_max           {:.10e}{} (ln {:.9})\n  v_min           {:.6e}{}\n  u, θ at v_max   {:.9}, {:.9}\n  slip            {:.9}{}\n",
+                        v.v_max,
+                        pm(e.map(|e| e.v_max)),
+                        v.ln_v_max,
+                        v.v_min,
+                        pm(e.map(|e| e.v_min)),
+                        v.u_at_v_max,
+                        v.theta_at_v_max,
+                        v.slip,
+                        pm(e.map(|e| e.slip))
                     );
                 }
                 (CycleStatus::PeriodN, _) => {
@@ -362,8 +377,10 @@ impl Report {
                 }
                 _ => {
                     s += &format!(
-                    "cycle: NOT converged after {} cycles / t = {:.6e} (see cycle.last_cycles)\n",
-                    c.cycles_computed, c.time_integrated
+                    "cycle: NOT converged after {} cycles / t = {:.6e}{} (see cycle.last_cycles)\n",
+                    c.cycles_computed,
+                    c.time_integrated,
+                    c.stopped_by.map_or(String::new(), |l| format!(", stopped by the limit {l}"))
                 )
                 }
             }

@@ -40,7 +40,11 @@ fn quasi_dynamic_cycle_is_the_inertial_limit_with_every_stiff_method() {
     // rtol 1e-10. Measured (docs/state-laws.md): radau5, rodas5p and extrapolation within
     // 1.4e-10 (period), 2.6e-10 (slip) and 6.9e-9 (v_max, from the step points) relative of
     // the inertial run; cvode-bdf 3.4e-9, 5.5e-9 and 2.6e-8.
-    for (law, limit) in [("slip", 9.6180474670), ("ageing", 9.6891841756)] {
+    // The limits: Rodas5P and Radau5 at rtol 1e-13, atol 1e-15, cycle tolerance 1e-10, both
+    // models (quasi-dynamic and γ = 1e8) agree to 1e-11 (issue #28). The former 9.6180474670
+    // and 9.6891841756 were means over cycles that still carried the transient (Floquet
+    // multiplier 0.12; the cycle rule before issue #28), 3.5e-9 and 8.6e-9 low.
+    for (law, limit) in [("slip", 9.61804750103), ("ageing", 9.68918425999)] {
         let (p0, s0, v0) = cycle(&run(&scene(law, Some(1e8), "radau5", r#"["cycle"]"#)));
         assert!((p0 - limit).abs() < 1e-9 * limit, "{law}: inertial {p0} vs the docs' {limit}");
         for (method, period_tol, slip_tol, v_tol) in [

@@ -61,6 +61,10 @@ pub struct UserCycle {
     _cycles_per_period: Option<IgnoredAny>,
     #[serde(default, rename = "spread")]
     _spread: Option<IgnoredAny>,
+    #[serde(default, rename = "error_estimate")]
+    _error_estimate: Option<IgnoredAny>,
+    #[serde(default, rename = "stopped_by")]
+    _stopped_by: Option<IgnoredAny>,
     #[serde(default, rename = "orbit")]
     _orbit: Option<IgnoredAny>,
     #[serde(default, rename = "orbit_period")]

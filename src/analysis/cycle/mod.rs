@@ -31,8 +31,10 @@
 //! means the oscillation died out.
 
 mod options;
+mod settled;
 
 pub use options::CycleOptions;
+pub use settled::ErrorEstimate;
 
 use super::events::{self, Knot};
 use super::AnalysisError;
@@ -184,6 +186,10 @@ pub struct CycleReport {
     /// full period with the other fields null (see `orbit`); null when not converged.
     #[serde(flatten)]
     pub values: Option<CycleValues>,
+    /// Estimated absolute error of each value (same keys): the transient left in the cycles
+    /// used plus their cycle-to-cycle noise (see the `settled` module); null when not
+    /// periodic.
+    pub error_estimate: Option<ErrorEstimate>,
     /// Relative spread (max − min)/|mean| of each quantity over the cycles used.
     pub spread: Option<CycleValues>,
     /// The distinct cycles of the orbit: one for period 1, n for period n.
@@ -198,6 +204,9 @@ pub struct CycleReport {
     pub cycles_computed: usize,
     /// Total time integrated (dimensionless).
     pub time_integrated: f64,
+    /// The limit that stopped a run that did not converge ("max_cycles" or "max_time"; null
+    /// otherwise).
+    pub stopped_by: Option<&'static str>,
     /// Sticks crossed in closed form because ln v lay below −500 there, where v is zero in
     /// double precision (see [`crate::model::deep_stick`]); 0 when none (key omitted).
     #[serde(skip_serializing_if = "is_zero")]
@@ -295,6 +304,11 @@ struct Tracker<'a> {
     steps: u64,
     /// Sticks crossed in closed form ([`Tracker::cross`]).
     deep_sticks: u64,
+    /// Their total duration: not counted against `max_time`.
+    stick_time: f64,
+    /// The largest |u| reached: the load point needs about this long to bring the block back
+    /// from there, so `max_time` is extended by twice it.
+    u_extent: f64,
     /// The fixed point (u, w, θ).
     fixed: [f64; 3],
     /// The steps are limited to [`EscapeStep::near`] ([`Tracker::escape`]).
@@ -471,6 +485,7 @@ impl<'a> Tracker<'a> {
         self.clock.reinit(at, &stick.exit)?;
         self.steps += 1;
         self.deep_sticks += 1;
+        self.stick_time += stick.duration;
         // On the slow manifold dw/dt = −(ξ du/dt + dθ/dt) exactly; the right-hand side's dw/dt
         // there is G's round-off times the held rate.
         let mut next = first_sample(self.drr, 0.0, stick.exit);
@@ -634,6 +649,7 @@ impl<'a> Tracker<'a> {
         }
         self.update_ranges(&y);
         self.record(next.t, &y);
+        self.u_extent = self.u_extent.max(y[U].abs());
         if let Some(last) = self.rise.last() {
             if next.t > last.t {
                 self.rise.push(Knot { t: next.t, x: y[W], dx: next.d[W] });
@@ -657,14 +673,15 @@ pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rat
     drr.offset_feedback(y[W]).abs() * error_g <= 1e-3 * rate
 }
 
-/// Whether two cycles agree within the tolerance (period relative; ln v_max relative, or
-/// absolute below 1; the ln v range relative). t0 is not compared: it locates a flat maximum
+/// Whether two cycles agree within the tolerance (period, v_max and the ln v range relative).
+/// v_min is not compared: in a deep stick its relative accuracy is rtol·|ln v_min|. t0 is not compared: it locates a flat maximum
 /// (w'' ~ γ²), fixed only to ~√(error/γ²), e.g. 1e-7 at γ = 10 while the period is fixed to
 /// 1e-11.
 fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
     let range = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
     (a.period - b.period).abs() <= tolerance * a.period.abs()
-        && (a.ln_v_max - b.ln_v_max).abs() <= tolerance * a.ln_v_max.abs().max(1.0)
+        // v_max relative to itself (ln v_max ≈ 19 would make a test on ln v_max 19× looser).
+        && (a.v_max - b.v_max).abs() <= tolerance * a.v_max
         // The ln v range relative to itself: a small oscillation growing slowly away from an
         // unstable fixed point keeps its period and an ln v_max near 0 (found: γ = 1e4,
         // ε = 0.72 from v = 1e-30 settled on "period 7.51, ln v_max 4.5e-8", growing ~8 % per
@@ -726,6 +743,12 @@ fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: b
         && closed[closed.len() - n..]
             .windows(2)
             .all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
+}
+
+/// The number of cycles averaged into the reported values: 2·settle (at least 4), all after
+/// the first cycle and settled ([`settled::settled`]).
+fn settled_window(settings: &CycleSettings) -> usize {
+    settings.settle.saturating_mul(2).max(4)
 }
 
 /// Applies `f` to every real-valued field of a set of cycles, building one CycleValues.
@@ -798,11 +821,15 @@ pub fn analyse(
         rise_rate: 0.0,
         steps: 0,
         deep_sticks: 0,
+        stick_time: 0.0,
+        u_extent: start.y[U].abs(),
         fixed,
         escaping: false,
         escapes: 0,
     };
     let mut seen = 0;
+    let window = settled_window(settings);
+    let mut stopped_by = None;
     let outcome = loop {
         if let Err(e) = tracker.step() {
             return Err(e.at_global(&tracker.clock));
@@ -816,27 +843,49 @@ pub fn analyse(
                 t: tracker.clock.now().to_f64(),
                 state: tracker.clock.state().to_vec(),
                 message: format!(
-                    "{} {} steps without settling on a cycle (cycle.max_steps = {}; raise it)",
+                    "{} {} steps without settling on a cycle after {} cycles (cycle.max_steps = {}; \
+                     raise it with {{\"cycle\": {{\"max_steps\": N}}}})",
                     tracker.steps,
                     tracker.clock.name(),
+                    tracker.closed.len(),
                     settings.max_steps
                 ),
             });
         }
-        let time = tracker.clock.now().since(t_start);
+        // Time in closed-form deep sticks does not count, and the limit grows with how far the
+        // block slid: the load point needs ~|u| to bring it back.
+        let time = tracker.clock.now().since(t_start) - tracker.stick_time;
+        let out_of_time = time >= settings.max_time + 2.0 * tracker.u_extent;
+        let out_of_cycles = tracker.closed.len() >= settings.max_cycles;
         if tracker.closed.len() > seen {
             seen = tracker.closed.len();
             if decaying(&tracker.closed, settings, linearly_stable) {
                 break CycleStatus::FixedPoint;
             }
-            if let Some(n) = periodicity(&tracker.closed, settings) {
-                break if n == 1 { CycleStatus::Periodic } else { CycleStatus::PeriodN };
+            match periodicity(&tracker.closed, settings) {
+                Some(1) => {
+                    let start = tracker.closed.len().saturating_sub(window).max(1);
+                    // Settled, or out of limits with the rule met: the estimate says how far
+                    // the window is from settled.
+                    if settled::settled(
+                        &tracker.closed,
+                        start,
+                        settings.w_tolerance,
+                        settings.tolerance,
+                    ) || out_of_cycles
+                        || out_of_time
+                    {
+                        break CycleStatus::Periodic;
+                    }
+                }
+                Some(_) => break CycleStatus::PeriodN,
+                None => {}
             }
-            if seen >= settings.max_cycles {
+            if out_of_cycles {
+                stopped_by = Some("max_cycles");
                 break CycleStatus::NotConverged;
             }
         }
-        let out_of_time = time >= settings.max_time;
         if linearly_stable && (out_of_time || tracker.steps.is_multiple_of(256)) {
             let y = tracker.clock.state();
             let near = (0..3).all(|i| (y[i] - fixed[i]).abs() < 1e-10 * (1.0 + fixed[i].abs()));
@@ -845,6 +894,10 @@ pub fn analyse(
             }
         }
         if out_of_time {
+            if periodicity(&tracker.closed, settings) == Some(1) {
+                break CycleStatus::Periodic;
+            }
+            stopped_by = Some("max_time");
             break CycleStatus::NotConverged;
         }
     };
@@ -855,7 +908,7 @@ pub fn analyse(
         .filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
     let (values, spread, orbit, used) = match (outcome, n) {
         (CycleStatus::Periodic, _) => {
-            let used = &closed[closed.len() - (settings.settle + 1)..];
+            let used = &closed[closed.len().saturating_sub(window).max(1)..];
             let values = combine(used, mean);
             (Some(values), Some(combine(used, relative_spread)), vec![values], used.len())
         }
@@ -865,6 +918,8 @@ pub fn analyse(
         }
         _ => (None, None, Vec::new(), 0),
     };
+    let error_estimate =
+        values.map(|_| settled::estimate(&closed, closed.len() - used, settings.w_tolerance));
     let orbit_period = (!orbit.is_empty()).then(|| orbit.iter().map(|c| c.period).sum::<f64>());
     let last_cycles = if values.is_none() && orbit.is_empty() {
         closed[closed.len().saturating_sub(10)..].to_vec()
@@ -877,6 +932,7 @@ pub fn analyse(
         cycles_per_period: n,
         steps_per_cycle: values.map(|v| v.steps as f64),
         values,
+        error_estimate,
         spread,
         orbit,
         orbit_period,
@@ -884,16 +940,19 @@ pub fn analyse(
         cycles_used: used,
         cycles_computed: closed.len(),
         time_integrated,
+        stopped_by,
         deep_sticks,
         fixed_point_escapes,
         convergence_rule: format!(
-            "periodic when period, ln v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
+            "periodic when period, v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
              pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \
-             max(1e-9, 1e3 (rtol + atol)); fixed point, only when \
+             max(1e-9, 1e3 (rtol + atol)), then the values are the mean of the last {} cycles once the transient \
+             left in them (geometric, from the per-cycle differences) is below 0.3 of their noise; fixed point, only when \
              linearly stable, when the w range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks \
              over {} consecutive cycles, or the state is within 1e-10 of the fixed point",
             settings.tolerance,
             settings.settle,
+            window,
             settings.settle.saturating_mul(2).saturating_add(1)
         ),
         tolerance: settings.tolerance,

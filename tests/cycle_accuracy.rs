@@ -1,0 +1,146 @@
+//! Issue #28: cycle values from settled cycles within a stated error, far starts that reach
+//! the cycle with default options, and a non-zero exit when a run does not converge.
+//!
+//! The reference for the quasi-dynamic cases is data/reference/quasi_dynamic_cycles.json
+//! (`cargo run --release --example reference_table -- quasi`: Rodas5P at rtol 1e-13, checked
+//! against Radau5 at the same settings, agreement ≤ 9.4e-13 in the period and 1.8e-10 in
+//! v_max). The earthquake period's reference, 56.4124686977, is docs/work-precision.md's.
+
+use std::process::Command;
+use stickslip::analysis::cycle::CycleStatus;
+use stickslip::{engine, scene};
+
+fn run(text: &str) -> stickslip::report::Report {
+    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
+    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The 12 quasi-dynamic cases (slip and ageing law × k/k_c = 0.9, 0.5, 0.2 × η = 5e-8, 1e-3;
+/// ξ = 0.5 k/k_c, ε = 0.5, from v = 0.5, θ = 0), radau5 at rtol 1e-10 with the default cycle
+/// analysis: the period within 1e-9 of the reference, and both the period's and v_max's error
+/// estimates bound their actual deviation.
+///
+/// v_max itself is not within 1e-9 in every case: at rtol 1e-10 the integration's own
+/// (global) error in v_max reaches 1.2e-8 relative (ageing, k/k_c = 0.9, η = 1e-3: every cycle
+/// of radau5 at 1e-10 agrees with the next to 1e-9 and sits 1.2e-8 below the reference; at
+/// rtol 1e-11 the gap is 1e-9). The analysis cannot remove that; its estimate covers it
+/// (the integration floor, src/analysis/cycle/settled.rs), and 2e-8 is asserted here.
+#[test]
+fn quasi_dynamic_cycles_are_within_their_error_estimates() {
+    let table: serde_json::Value =
+        serde_json::from_str(include_str!("../data/reference/quasi_dynamic_cycles.json")).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 12);
+    for row in rows {
+        let f = |k: &str| row[k].as_f64().unwrap();
+        let (law, eta) = (row["state_law"].as_str().unwrap(), f("radiation_damping"));
+        let text = format!(
+            r#"{{"name": "t", "model": {{"inertia": false, "xi": {}, "epsilon": 0.5, "state_law": "{law}", "radiation_damping": {eta:e}}},
+                "initial": {{"v": 0.5, "theta": 0}},
+                "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#,
+            f("xi")
+        );
+        let c = run(&text).cycle.unwrap();
+        let case = format!("{law} k/k_c = {} η = {eta:e}", f("k_over_kc"));
+        assert_eq!(c.status, CycleStatus::Periodic, "{case}");
+        let (v, e) = (c.values.unwrap(), c.error_estimate.unwrap());
+        let (period, v_max) = (f("period"), f("v_max"));
+        let dp = (v.period - period).abs();
+        let dv = (v.v_max - v_max).abs();
+        assert!(dp <= 1e-9 * period, "{case}: period {} vs {period}", v.period);
+        assert!(dp <= e.period, "{case}: period off by {dp:e}, estimate {:e}", e.period);
+        assert!(dv <= e.v_max, "{case}: v_max off by {dv:e}, estimate {:e}", e.v_max);
+        assert!(dv <= 2e-8 * v_max, "{case}: v_max {} vs {v_max}", v.v_max);
+        // The estimate states the error, it does not hide the value: within 1e-6.
+        assert!(e.period < 1e-8 * period && e.v_max < 1e-6 * v_max, "{case}: {e:?}");
+    }
+}
+
+const EARTHQUAKE_PERIOD: f64 = 56.4124686977;
+
+fn earthquake(method: &str, initial: &str) -> String {
+    format!(
+        r#"{{"name": "far", "model": {{"gamma": 1e8, "xi": 0.8, "epsilon": 1.0, "friction": "log"}},
+            "initial": {{{initial}}},
+            "solver": {{"method": "{method}", "rtol": 1e-10, "atol": [1e-12, 1e-12, 1e-12]}},
+            "analyses": ["cycle"]}}"#
+    )
+}
+
+/// From (u, v, θ) = (0, 1e30, 0) the block slides to u ≈ 1e22 and the load point needs ~1e22
+/// time units to bring it back (a deep stick crossed in closed form); from (−1e6, 1, 0)
+/// likewise. Neither may be stopped by the time limit: default options reach the earthquake
+/// period within 1e-7.
+#[test]
+fn far_starts_reach_the_earthquake_cycle_with_default_options() {
+    for method in ["cvode-bdf", "radau5"] {
+        for initial in [r#""u": 0, "v": 1e30, "theta": 0"#, r#""u": -1e6, "v": 1, "theta": 0"#] {
+            let c = run(&earthquake(method, initial)).cycle.unwrap();
+            assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
+            let p = c.values.unwrap().period;
+            assert!(
+                (p - EARTHQUAKE_PERIOD).abs() <= 1e-7 * EARTHQUAKE_PERIOD,
+                "{method} from {initial}: period {p}"
+            );
+        }
+    }
+}
+
+/// A run stopped by `max_cycles` exits 4, names the limit, and still writes its report.
+#[test]
+fn an_unconverged_run_exits_4_naming_the_limit() {
+    let dir = std::env::temp_dir().join(format!("stickslip-exit4-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene: serde_json::Value =
+        serde_json::from_str(include_str!("../data/scenes/earthquake.json")).unwrap();
+    let mut scene = scene;
+    scene["analyses"] = serde_json::json!(["hopf", {"cycle": {"max_cycles": 3}}, "paper"]);
+    let (path, out) = (dir.join("scene.json"), dir.join("report.json"));
+    std::fs::write(&path, scene.to_string()).unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["run", path.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("max_cycles") && stderr.contains("raise"), "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(report["cycle"]["status"], "not_converged");
+    assert_eq!(report["cycle"]["stopped_by"], "max_cycles");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Far starts (|u| up to 1e6, v from 1e-300 to 1e30, |θ| up to 1e3) on the earthquake scene,
+/// default options, for the stiff methods that reach the cycle from all of them (0.15–0.45 s
+/// each). Heavier: `cargo test --release --test cycle_accuracy -- --ignored`.
+///
+/// Not yet arkode-dirk and arkode-imex (issue #28, open; their integrator settings are outside
+/// the cycle analysis): arkode-dirk reaches the cycle from 4 of the 5 first starts but fails
+/// from (1e6, 1e-300, 1e3) with repeated nonlinear convergence failures at local t = 53.6
+/// after the deep stick; arkode-imex fails with repeated error-test failures (h ~ 1e-22) in the
+/// slip from (−1e6, 1e30, −1e3), (0, 1e-300, −1e3), (1e6, 1e30, 1e3), and does not finish in
+/// 120 s from (1e6, 1e-300, 1e3) and (−1e6, 1e-300, 0).
+#[test]
+#[ignore]
+fn far_starts_reach_the_cycle_with_every_stiff_method() {
+    let starts = [
+        r#""u": 1e6, "v": 1e-300, "theta": 1e3"#,
+        r#""u": -1e6, "v": 1e30, "theta": -1e3"#,
+        r#""u": 0, "v": 1e-300, "theta": -1e3"#,
+        r#""u": 1e6, "v": 1e30, "theta": 1e3"#,
+        r#""u": -1e6, "v": 1e-300, "theta": 0"#,
+        r#""u": 0, "v": 1e30, "theta": 0"#,
+    ];
+    for method in ["cvode-bdf", "radau5", "rodas5p", "extrapolation"] {
+        for initial in starts {
+            let c = run(&earthquake(method, initial)).cycle.unwrap();
+            assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
+            let p = c.values.unwrap().period;
+            assert!(
+                (p - EARTHQUAKE_PERIOD).abs() <= 1e-6 * EARTHQUAKE_PERIOD,
+                "{method} from {initial}: period {p}"
+            );
+        }
+    }
+}
