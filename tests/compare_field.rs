@@ -290,9 +290,9 @@ fn a_bad_reference_method_is_named() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A scene shipped at a loose rtol (1e-6) and CVODE BDF as the reference, whose t0 error is
-/// far above its rtol here (1.2e-8 at rtol 1e-10): at tolerance/100 it is not accurate enough
-/// for 1e-6, so the reference is tightened until its check says it is. The slip half-width
+/// A scene shipped at a loose rtol (1e-6) and CVODE BDF as the reference, whose error is far
+/// above its rtol here: at tolerance/100 it is not accurate enough for 1e-8, so the reference
+/// is tightened until its check says it is. The slip half-width
 /// (2e-7 wide) it does not resolve to 1e-7 even at rtol 1e-13: no verdict, naming it, where
 /// the scene's Radau5 gives one.
 #[test]
@@ -311,11 +311,14 @@ fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
     };
     let three =
         format!(r#""period": {:e}, "t0": {:e}, "ln_v_max": {:e}"#, v.period, v.t0, v.ln_v_max);
-    let c = compare::against_report(&s, &read(&three), 1e-6, Some(Method::CvodeBdf)).unwrap();
+    // At 1e-8 the reference starts at tolerance/100 = 1e-10, where CVODE's check finds it too
+    // inaccurate, and is tightened (to 1e-12). (At 1e-6 it no longer needs to be: since CVODE
+    // weighs ln v absolutely, rtol 1e-8 resolves 1e-7.)
+    let c = compare::against_report(&s, &read(&three), 1e-8, Some(Method::CvodeBdf)).unwrap();
     println!("{c:?}");
     assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
-    assert!(c.reference.rtol < 1e-8, "tightened from tolerance/100: {c:?}");
-    assert!(c.rows.iter().all(|r| r.reference_accuracy <= 1e-7), "{c:?}");
+    assert!(c.reference.rtol < 1e-10, "tightened from tolerance/100: {c:?}");
+    assert!(c.rows.iter().all(|r| r.reference_accuracy <= 1e-9), "{c:?}");
     let four = format!(r#"{three}, "slip_half_width": {:e}"#, v.slip_half_width.unwrap());
     let e = compare::against_report(&s, &read(&four), 1e-6, Some(Method::CvodeBdf)).unwrap_err();
     println!("{e}");
