@@ -502,6 +502,10 @@ impl<S> Solver<S> {
             return Err(self.underflow_error(underflows, flag));
         }
         let event = match flag {
+            // The output time is the stop time: SUNDIALS 7 returns it as the stop time (and
+            // disables it), 6 as the output time; the contract says the output time comes
+            // first.
+            1 if task == Task::Normal && t == tout => StepEvent::Reached,
             1 => StepEvent::StopTime,
             2 => {
                 let mut info = vec![0 as c_int; self.shared().root_count];
