@@ -44,6 +44,13 @@ debootstrap --variant=minbase "$codename" "$root" "$mirror" > "$root.debootstrap
     || { tail -20 "$root.debootstrap.log" >&2; exit 1; }
 mv "$root.debootstrap.log" "$root/debootstrap.log"
 cp /etc/resolv.conf "$root/etc/resolv.conf"
+# The host's network setup comes along: its resolver above and the local CA certificates it
+# trusts (a TLS-inspecting proxy's, where there is one), which ca-certificates adds to the
+# chroot's bundle; pip inside is pointed at that bundle (PIP_CERT below).
+if compgen -G "/usr/local/share/ca-certificates/*.crt" >/dev/null; then
+    mkdir -p "$root/usr/local/share/ca-certificates"
+    cp /usr/local/share/ca-certificates/*.crt "$root/usr/local/share/ca-certificates/"
+fi
 
 stamp "cloning HEAD of $repo"
 git clone --quiet --no-hardlinks "$repo" "$root/src/stickslip"
@@ -70,6 +77,7 @@ mkdir -p "$root/check"
 inside() {
     chroot "$root" /usr/bin/env -i HOME=/root PATH=/opt/cargo/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
         CARGO_HOME=/opt/cargo RUSTUP_HOME=/opt/rustup CARGO_TARGET_DIR=/root/target LANG=C.UTF-8 STICKSLIP_INSTRUCTION_GUARD=0 \
+        PIP_CERT=/etc/ssl/certs/ca-certificates.crt \
         /bin/bash -c "cd /src/stickslip && $1"
 }
 
@@ -77,6 +85,10 @@ stamp "bash tools/run.sh (installs the Debian packages, builds, runs the earthqu
 status=0
 inside "bash tools/run.sh" > "$root/check/run.log" 2> "$root/check/run.err" || status=$?
 stamp "bash tools/test.sh"
+if [ $status -eq 0 ]; then
+    # ca-certificates (installed by tools/run.sh) bundles the copied local certificates.
+    inside "update-ca-certificates" > "$root/check/ca.log" 2>&1 || status=$?
+fi
 if [ $status -eq 0 ]; then
     inside "bash tools/test.sh" > "$root/check/test.log" 2>&1 || status=$?
 fi
