@@ -99,10 +99,9 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // 47 251 since solver::dirk_settings); 5000 u also fails there (20 M steps). Physical
     // grid's arkode-dirk cells: 936 of 936.
     // CVODE BDF (`EngineSettings::absolute_ln_v`): ln v's error is measured absolutely, at a
-    // tenth of rtol. An absolute error in
-    // w = ln v is v's relative error, and the size of w (up to 21 at the earthquake's peak,
-    // down to −690 for v = 1e-300) says nothing about the accuracy wanted; weighed relative to
-    // it, the slip's v was held to 20·rtol. BDF's global error on this problem is also some
+    // tenth of rtol. An absolute error in w = ln v is v's relative error, and the size of w
+    // (up to 21 at the earthquake's peak, down to −690 for v = 1e-300) says nothing about the
+    // accuracy wanted; weighed relative to it, the slip's v was held to 20·rtol. BDF's global error on this problem is also some
     // tens of times its local tolerance, hence the tenth. Measured on the earthquake scene
     // (rtol 1e-10; reference 56.4124686977): period error −3.4e-8 weighed relative to |w|,
     // −3.5e-9 absolute at rtol, −4.8e-10 absolute at rtol/10 (1.8× the steps); u's and θ's
