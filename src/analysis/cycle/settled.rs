@@ -83,7 +83,6 @@ fn quantity(closed: &[f64], start: usize, floor: impl Fn(f64) -> f64) -> (f64, f
     let mean = window.iter().sum::<f64>() / window.len() as f64;
     let noise = 0.5 * (hi - lo) + floor(mean);
     let clean = CLEAN * noise;
-    // Differences d_k = x_k − x_{k−1}, k = 2..len (cycle 0 excluded).
     // Differences d_k = x_k − x_{k−1}, k ≥ 1: cycle 0 (the first complete one, with the
     // largest transient) takes part in the estimate of the decay, never in the mean.
     let d = |k: usize| closed[k] - closed[k - 1];
