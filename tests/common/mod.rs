@@ -1,6 +1,8 @@
 //! Test problems and helpers shared by the integrator tests (tests/radau5.rs, tests/rodas5p.rs,
-//! tests/extrapolation.rs, tests/wrappers.rs).
+//! tests/extrapolation.rs, tests/wrappers.rs) and the reference tables' check ([`reference`]).
 #![allow(dead_code)]
+
+pub mod reference;
 
 use stickslip::integrate::{Integrator, JacobianMatrix, OdeSystem, Task};
 
