@@ -686,16 +686,10 @@ struct DenseWalk {
 const THETAS: [f64; 7] = [0.1, 0.25, 0.3, 0.5, 0.7, 0.75, 0.9];
 
 /// Steps `integ` (on van der Pol, ε = 1) to t = 3 one at a time and measures its dense output
-/// at [`THETAS`] and `nodes`; `scale` is the error weight's tol(|y|).
+/// at the step ends, at [`THETAS`] and at `nodes`; `scale` is the error weight's tol(|y|).
 fn walk_dense(integ: &mut dyn Integrator, nodes: &[f64], scale: &dyn Fn(f64) -> f64) -> DenseWalk {
-    let vdp = VanDerPol(1.0);
     let mut walk = DenseWalk::default();
     let (mut prev, mut previous_end) = (0.0, integ.state().to_vec());
-    let defect = |t: f64, y: &[f64], d: &[f64]| {
-        let mut f = [0.0; 2];
-        vdp.rhs(t, y, &mut f);
-        (0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max)
-    };
     while integ.t() < 3.0 {
         let step = integ.advance(3.0, Task::OneStep).unwrap();
         let end = integ.state().to_vec();
@@ -707,31 +701,50 @@ fn walk_dense(integ: &mut dyn Integrator, nodes: &[f64], scale: &dyn Fn(f64) -> 
         let start = integ.dense(prev, 0).unwrap().to_vec();
         walk.start_gap = walk.start_gap.max(relative_gap(&start, &previous_end));
         let d = integ.dense(step.t, 1).unwrap().to_vec();
-        walk.end_slope = walk.end_slope.max(defect(step.t, &end, &d));
-        let h = step.t - prev;
-        for (j, &theta) in THETAS.iter().chain(nodes).enumerate() {
-            let t = prev + theta * h;
-            let y = integ.dense(t, 0).unwrap().to_vec();
-            let d = integ.dense(t, 1).unwrap().to_vec();
-            let r = defect(t, &y, &d);
-            if j < THETAS.len() {
-                walk.defect = walk.defect.max(r);
-            } else {
-                walk.node_defect = walk.node_defect.max(r);
-            }
-            if theta + 1e-5 < 1.0 {
-                let mismatch = fd_mismatch(integ, t, 1e-5 * h);
-                walk.fd.resize(mismatch.len(), 0.0);
-                for (w, m) in walk.fd.iter_mut().zip(mismatch) {
-                    *w = w.max(m);
-                }
-                walk.samples.push((t, y, false));
-            }
-        }
+        walk.end_slope = walk.end_slope.max(vdp_defect(step.t, &end, &d, scale));
+        sample_inside(integ, (prev, step.t), nodes, scale, &mut walk);
         walk.samples.push((step.t, end.clone(), true));
         (prev, previous_end) = (step.t, end);
     }
     walk
+}
+
+/// |y' − f(t, y)|/tol for van der Pol (ε = 1), the largest component.
+fn vdp_defect(t: f64, y: &[f64], d: &[f64], scale: &dyn Fn(f64) -> f64) -> f64 {
+    let mut f = [0.0; 2];
+    VanDerPol(1.0).rhs(t, y, &mut f);
+    (0..2).map(|i| (d[i] - f[i]).abs() / scale(f[i])).fold(0.0, f64::max)
+}
+
+/// Samples the dense output of the step over `span` at [`THETAS`] and `nodes` into `walk`:
+/// the defect, the finite-difference mismatch of the derivatives and the values (at θ < 1).
+fn sample_inside(
+    integ: &mut dyn Integrator,
+    span: (f64, f64),
+    nodes: &[f64],
+    scale: &dyn Fn(f64) -> f64,
+    walk: &mut DenseWalk,
+) {
+    let h = span.1 - span.0;
+    for (j, &theta) in THETAS.iter().chain(nodes).enumerate() {
+        let t = span.0 + theta * h;
+        let y = integ.dense(t, 0).unwrap().to_vec();
+        let d = integ.dense(t, 1).unwrap().to_vec();
+        let r = vdp_defect(t, &y, &d, scale);
+        if j < THETAS.len() {
+            walk.defect = walk.defect.max(r);
+        } else {
+            walk.node_defect = walk.node_defect.max(r);
+        }
+        if theta + 1e-5 < 1.0 {
+            let mismatch = fd_mismatch(integ, t, 1e-5 * h);
+            walk.fd.resize(mismatch.len(), 0.0);
+            for (w, m) in walk.fd.iter_mut().zip(mismatch) {
+                *w = w.max(m);
+            }
+            walk.samples.push((t, y, false));
+        }
+    }
 }
 
 /// The largest |a − b|/(1 + |b|), componentwise.
