@@ -1,8 +1,9 @@
 //! The `Integrator` contract, written once and run over every method through the one
 //! constructor (`solver::build`): output times, the stop time, restarts, typed errors.
 //! Method-specific behaviour (orders, fixed steps, Jacobian counts, the highest derivative of
-//! the dense output, failures that need a method's own knobs) stays in each method's own tests
-//! (tests/radau5.rs, rodas5p.rs, extrapolation.rs, wrappers.rs).
+//! the dense output, failures that need a method's own knobs) is in tests/methods.rs (one
+//! table over the methods) and each method's own tests (tests/radau5.rs, rodas5p.rs,
+//! extrapolation.rs, wrappers.rs).
 
 use std::cell::Cell;
 use stickslip::integrate::{

@@ -21,6 +21,9 @@
 
 use stickslip::{engine, scene};
 
+mod common;
+use common::reference::{self, Quantity, Run, Table};
+
 /// Bound on the relative deviation of the period and ln v_max, in units of rtol.
 const PERIOD_FACTOR: f64 = 1e3;
 /// Bound on the relative deviation of t0, in units of rtol.
@@ -56,72 +59,16 @@ fn cvode_bdf_matches_the_far_table_at_rtol_1e_8() {
     check_against_table("cvode-bdf", 1e-8);
 }
 
-/// Runs `method` at `rtol` on every agreeing row; collects every failure (typed error, no cycle,
-/// deviation beyond the bound) and fails once with all of them.
+/// Runs `method` at `rtol` (atol the scene default) on every agreeing row: 42 rows, the two
+/// reference integrators within 1e-9 on the period.
 fn check_against_table(method: &str, rtol: f64) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/reference/drr_cycles_far.json");
-    let table: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
-    let rows = table["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 42);
-    let keys = ["period", "ln_v_max", "t0"];
-    let bounds = [PERIOD_FACTOR * rtol, PERIOD_FACTOR * rtol, T0_FACTOR * rtol];
-    let mut worst = [0.0f64; 3];
-    let mut failures = Vec::new();
-    let mut checked = 0;
-    for row in rows {
-        if row["agrees"] != true {
-            continue;
-        }
-        checked += 1;
-        let (gamma, xi, epsilon) = (
-            row["gamma"].as_f64().unwrap(),
-            row["xi"].as_f64().unwrap(),
-            row["epsilon"].as_f64().unwrap(),
-        );
-        let agreement = row["relative_agreement"]["period"].as_f64().unwrap();
-        assert!(
-            agreement <= 1e-9,
-            "γ = {gamma}: the two reference integrators disagree by {agreement}"
-        );
-        let point = format!("ξ={xi} ε={epsilon} γ={gamma:e}");
-        let text = format!(
-            r#"{{"name": "far", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
-                "solver": {{"method": "{method}", "rtol": {rtol:e}}}, "analyses": ["cycle"]}}"#
-        );
-        let s = scene::parse(&text, "reference_far").unwrap();
-        let report = match engine::run(&s, serde_json::Value::Null) {
-            Ok(r) => r,
-            Err(e) => {
-                failures.push(format!("{point}: {e} [{:?}]", e.kind));
-                continue;
-            }
-        };
-        let c = report.cycle.unwrap();
-        let Some(v) = c.values else {
-            failures.push(format!("{point}: {:?} after {} cycles", c.status, c.cycles_computed));
-            continue;
-        };
-        let ours = [v.period, v.ln_v_max, v.t0];
-        for k in 0..3 {
-            let reference = row["reference"][keys[k]].as_f64().unwrap();
-            let rel = (ours[k] - reference).abs() / reference.abs();
-            worst[k] = worst[k].max(rel);
-            if rel.is_nan() || rel >= bounds[k] {
-                failures.push(format!(
-                    "{point}: {} = {} vs reference {reference} ({rel:.1e} > {:.0e})",
-                    keys[k], ours[k], bounds[k]
-                ));
-            }
-        }
-    }
-    eprintln!("{method} rtol {rtol:e}: {checked} rows; worst relative deviations (period, ln v_max, t0): {:.1e}, {:.1e}, {:.1e}", worst[0], worst[1], worst[2]);
-    assert!(
-        failures.is_empty(),
-        "{method} at rtol {rtol:e}: {} failures of {checked} rows:\n{}",
-        failures.len(),
-        failures.join("\n")
-    );
+    let table = Table { file: "drr_cycles_far.json", rows: 42, state_law: None, agreement: 1e-9 };
+    let bounds = [
+        (Quantity::Period, PERIOD_FACTOR * rtol),
+        (Quantity::LnVMax, PERIOD_FACTOR * rtol),
+        (Quantity::T0, T0_FACTOR * rtol),
+    ];
+    reference::check_against_table(&table, &bounds, &Run { method, rtol, atol: None });
 }
 
 /// Radau5 at rtol 1e-4 from v = 1e30 (γ = 1e8, ξ = 2, ε = 5; a cell of `stickslip stress

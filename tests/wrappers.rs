@@ -11,25 +11,7 @@ use stickslip::sundials::{
 };
 
 mod common;
-use common::{Oscillator, ProtheroRobinson};
-
-/// y' = −k y, exact solution y0·e^{−kt}.
-struct Decay(f64);
-
-impl OdeSystem for Decay {
-    fn dim(&self) -> usize {
-        1
-    }
-    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
-        dydt[0] = -self.0 * y[0];
-    }
-    fn has_jacobian(&self) -> bool {
-        true
-    }
-    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        jac.set(0, 0, -self.0);
-    }
-}
+use common::{Decay, Oscillator, ProtheroRobinson};
 
 /// Prothero–Robinson split: the stiff relaxation is the implicit part, the forcing −sin t the
 /// explicit part.

@@ -1,8 +1,11 @@
-//! Test problems and helpers shared by the integrator tests (tests/radau5.rs, tests/rodas5p.rs,
-//! tests/extrapolation.rs, tests/wrappers.rs).
+//! Test problems and helpers shared by the integrator tests (tests/methods.rs, tests/radau5.rs,
+//! tests/rodas5p.rs, tests/extrapolation.rs, tests/wrappers.rs) and the reference tables'
+//! check ([`reference`]).
 #![allow(dead_code)]
 
-use stickslip::integrate::{Integrator, JacobianMatrix, OdeSystem, Task};
+pub mod reference;
+
+use stickslip::integrate::{ImexSystem, Integrator, JacobianMatrix, OdeSystem, Task};
 
 /// y' = 1 + y², y(0) = 0: y = tan t (nonlinear, non-stiff; finite-difference Jacobian).
 pub struct Tan;
@@ -81,7 +84,8 @@ impl OdeSystem for NanAfter {
     }
 }
 
-/// Prothero–Robinson y' = −λ (y − cos t) − sin t, exact y = cos t from y(0) = 1.
+/// Prothero–Robinson y' = −λ (y − cos t) − sin t, exact y = cos t from y(0) = 1 (analytic
+/// Jacobian).
 pub struct ProtheroRobinson(pub f64);
 
 impl OdeSystem for ProtheroRobinson {
@@ -90,6 +94,86 @@ impl OdeSystem for ProtheroRobinson {
     }
     fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
         dydt[0] = -self.0 * (y[0] - t.cos()) - t.sin();
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 0, -self.0);
+    }
+}
+
+/// y' = −k y, exact solution y0·e^{−kt} (analytic Jacobian); as an IMEX system all of it is
+/// implicit.
+pub struct Decay(pub f64);
+
+impl OdeSystem for Decay {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = -self.0 * y[0];
+    }
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        jac.set(0, 0, -self.0);
+    }
+}
+
+impl ImexSystem for Decay {
+    fn rhs_explicit(&self, _t: f64, _y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = 0.0;
+    }
+    fn rhs_implicit(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.rhs(t, y, dydt);
+    }
+}
+
+/// A nonlinear system with every elementary differential of order ≤ 5 independent:
+/// y = φ(z) with z' = M z (rotation in (z1, z2), decay of z3) and φ(z) = (z1, z2 + z1²,
+/// z3 + z1 z2), so f(y) = Dφ(φ⁻¹(y)) M φ⁻¹(y) (finite-difference Jacobian).
+pub struct Warped;
+
+impl Warped {
+    fn z(y: &[f64]) -> [f64; 3] {
+        let z1 = y[0];
+        let z2 = y[1] - z1 * z1;
+        [z1, z2, y[2] - z1 * z2]
+    }
+
+    /// The solution at t from z(0) = (0.3, 0.8, 1).
+    pub fn exact(t: f64) -> [f64; 3] {
+        // z1 = 0.3 cos t + 0.8 sin t, z2 = −0.3 sin t + 0.8 cos t.
+        let (s, c) = t.sin_cos();
+        let z = [0.3 * c + 0.8 * s, -0.3 * s + 0.8 * c, (-0.5 * t).exp()];
+        [z[0], z[1] + z[0] * z[0], z[2] + z[0] * z[1]]
+    }
+}
+
+impl OdeSystem for Warped {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        let z = Self::z(y);
+        let dz = [z[1], -z[0], -0.5 * z[2]];
+        dydt[0] = dz[0];
+        dydt[1] = dz[1] + 2.0 * z[0] * dz[0];
+        dydt[2] = dz[2] + dz[0] * z[1] + z[0] * dz[1];
+    }
+}
+
+/// y' = y cos t, y(0) = 1: y = e^{sin t} (non-autonomous: needs ∂f/∂t).
+pub struct Forced;
+
+impl OdeSystem for Forced {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        dydt[0] = y[0] * t.cos();
     }
 }
 
