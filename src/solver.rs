@@ -14,45 +14,56 @@ use crate::sundials::{
 };
 use serde::Serialize;
 
-/// Integration methods a scene can ask for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// CVODE, variable-order BDF (stiff).
-    CvodeBdf,
-    /// CVODE, Adams–Moulton (non-stiff).
-    CvodeAdams,
-    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
-    ArkodeDirk,
-    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
-    ArkodeImex,
-    /// ARKStep, explicit Runge–Kutta (non-stiff).
-    ArkodeErk,
-    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
-    Radau5,
-    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
-    Rodas5p,
-    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
-    /// modified midpoint, the family the paper used; pure Rust).
-    Extrapolation,
+/// Defines [`Method`] and its scene names from one list of `Variant = "name"` rows, so that
+/// [`Method::ALL`] and [`Method::name`] cannot miss a variant: a method is added by adding its
+/// row (and its [`Method::capabilities`] arm, which the compiler asks for).
+macro_rules! methods {
+    ($($(#[$doc:meta])* $variant:ident = $name:literal,)*) => {
+        /// Integration methods a scene can ask for.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum Method {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl Method {
+            /// Every method with its scene name, in the order of the definition.
+            pub const ALL: [(&'static str, Method); [$($name),*].len()] =
+                [$(($name, Method::$variant)),*];
+
+            /// The scene name, e.g. "cvode-bdf".
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Method::$variant => $name,)*
+                }
+            }
+        }
+    };
 }
 
-impl Method {
-    /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 8] = [
-        ("cvode-bdf", Method::CvodeBdf),
-        ("cvode-adams", Method::CvodeAdams),
-        ("arkode-dirk", Method::ArkodeDirk),
-        ("arkode-imex", Method::ArkodeImex),
-        ("arkode-erk", Method::ArkodeErk),
-        ("radau5", Method::Radau5),
-        ("rodas5p", Method::Rodas5p),
-        ("extrapolation", Method::Extrapolation),
-    ];
+methods! {
+    /// CVODE, variable-order BDF (stiff).
+    CvodeBdf = "cvode-bdf",
+    /// CVODE, Adams–Moulton (non-stiff).
+    CvodeAdams = "cvode-adams",
+    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
+    ArkodeDirk = "arkode-dirk",
+    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
+    ArkodeImex = "arkode-imex",
+    /// ARKStep, explicit Runge–Kutta (non-stiff).
+    ArkodeErk = "arkode-erk",
+    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
+    Radau5 = "radau5",
+    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
+    Rodas5p = "rodas5p",
+    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
+    /// modified midpoint, the family the paper used; pure Rust).
+    Extrapolation = "extrapolation",
+}
 
+impl Serialize for Method {
     /// The scene name, e.g. "cvode-bdf".
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
     }
 }
 
