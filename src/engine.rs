@@ -516,7 +516,8 @@ fn time_series_step(
     let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
         .map_err(failed(drr, "time_series"))?;
     if !integrated {
-        (integration.name, integration.tables) = (integ.name().to_string(), tables);
+        let family = scene.solver.method.capabilities().family.to_string();
+        (integration.name, integration.tables) = (family, tables);
     }
     integration.stats.accumulate(&integ.stats());
     Ok(Some(outcome))
