@@ -375,7 +375,7 @@ pub fn run_with_series(
             xi: scene.params.xi,
             epsilon: scene.params.epsilon,
             friction: scene.params.friction.label(),
-            state_law: scene.params.state_law.name(),
+            state_law: scene.params.state_law,
             radiation_damping: scene.params.eta,
             dimensional: scene.dimensional,
             initial: [y[0], y[1].exp(), y[2]],

@@ -10,7 +10,7 @@ use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::time_series::{Event, TimeSeriesReport};
 use crate::integrate::Stats;
-use crate::model::{DrrParams, PhysicalScales};
+use crate::model::{DrrParams, PhysicalScales, StateLaw};
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
 use std::io::Write;
@@ -32,8 +32,8 @@ pub struct ModelSection {
     pub epsilon: f64,
     /// The friction law, e.g. "log" or "power(alpha=0.31)".
     pub friction: String,
-    /// The state law: "slip", "ageing" or "prz".
-    pub state_law: &'static str,
+    /// The state law (JSON: "slip", "ageing" or "prz").
+    pub state_law: StateLaw,
     /// Radiation damping η (dimensionless; 0: none).
     pub radiation_damping: f64,
     /// The dimensional input, when the scene gave one.

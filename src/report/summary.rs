@@ -75,7 +75,7 @@ fn model(name: &str, m: &ModelSection) -> String {
         m.xi,
         m.epsilon,
         m.friction,
-        m.state_law,
+        m.state_law.name(),
         if m.radiation_damping > 0.0 {
             format!(", radiation damping η = {:e}", m.radiation_damping)
         } else {
