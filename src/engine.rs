@@ -375,7 +375,7 @@ pub fn run_with_series(
             xi: scene.params.xi,
             epsilon: scene.params.epsilon,
             friction: scene.params.friction.label(),
-            state_law: scene.params.state_law.name(),
+            state_law: scene.params.state_law,
             radiation_damping: scene.params.eta,
             dimensional: scene.dimensional,
             initial: [y[0], y[1].exp(), y[2]],
@@ -516,7 +516,8 @@ fn time_series_step(
     let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
         .map_err(failed(drr, "time_series"))?;
     if !integrated {
-        (integration.name, integration.tables) = (integ.name().to_string(), tables);
+        let family = scene.solver.method.capabilities().family.to_string();
+        (integration.name, integration.tables) = (family, tables);
     }
     integration.stats.accumulate(&integ.stats());
     Ok(Some(outcome))

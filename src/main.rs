@@ -181,9 +181,9 @@ fn print_stats(run: &ExampleRun) {
     );
 }
 
-fn robertson_command() -> Result<(), String> {
+fn robertson_command() -> Result<(), Failure> {
     println!("SUNDIALS {} (linked at run time)\n", sundials::version());
-    let cvode = robertson::cvode_example().map_err(|e| e.to_string())?;
+    let cvode = robertson::cvode_example().map_err(|e| Failure(1, e.to_string()))?;
     println!(
         "cvRoberts_dns through stickslip's CVODE wrapper (BDF, rtol 1e-4, analytic Jacobian):"
     );
@@ -191,7 +191,7 @@ fn robertson_command() -> Result<(), String> {
         println!("{line}");
     }
     print_stats(&cvode);
-    let arkode = robertson::arkode_example().map_err(|e| e.to_string())?;
+    let arkode = robertson::arkode_example().map_err(|e| Failure(1, e.to_string()))?;
     println!(
         "\nark_robertson_root through stickslip's ARKStep wrapper (DIRK SDIRK_5_3_4, rtol 1e-4):"
     );
@@ -734,7 +734,7 @@ fn main() -> ExitCode {
         Command::Run { scene, json, out, threads, series } => {
             run_command(scene, json, out, threads, series)
         }
-        Command::Robertson => robertson_command().map_err(|m| Failure(1, m)),
+        Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };
             stress_command(grid, &methods, json, threads, table, known)

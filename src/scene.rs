@@ -3,7 +3,7 @@
 //! would be valid). The schema is documented in docs/scenes.md.
 
 use crate::analysis::cycle::CycleOptions;
-use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
+use crate::analysis::noise::options::NoiseOptions;
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::model::{
@@ -12,6 +12,9 @@ use crate::model::{
 };
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
+
+mod analyses;
+pub use analyses::analysis_names;
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -193,22 +196,6 @@ enum RawAnalysis {
     WithOptions(std::collections::BTreeMap<String, serde_json::Value>),
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct RawContinuation {
-    parameter: String,
-    to: f64,
-    points: usize,
-    #[serde(default)]
-    log: Option<bool>,
-}
-
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct RawTrajectory {
-    cycles: usize,
-}
-
 /// The "continuation" analysis: from the scene's value of `parameter` to `to`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ContinuationOptions {
@@ -273,8 +260,6 @@ pub struct Scene {
     /// Requested analyses.
     pub analyses: Analyses,
 }
-
-const ANALYSIS_NAMES: &str = "\"hopf\", \"cycle\", \"paper\", \"shooting\", {\"cycle\": {...}}, {\"trajectory\": {\"cycles\": N}}, {\"shooting\": {...}}, {\"continuation\": {\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \"to\": X, \"points\": N}}, {\"noise\": {\"amplitudes\": [...]}}, {\"time_series\": {\"t_max\": T}}, \"asymptotics\", {\"asymptotics\": {...}}, \"lyapunov\", {\"lyapunov\": {...}}";
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -421,7 +406,7 @@ fn validate_other(
         }
     }
     let dim = if kind == "saddle_node" { 1 } else { 2 };
-    let analyses = analyses(&raw.analyses, (kind, dim, None), err)?;
+    let analyses = analyses::parse(&raw.analyses, (kind, dim, None), err)?;
     if analyses.hopf
         || analyses.cycle.is_some()
         || analyses.paper
@@ -620,7 +605,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         raw.initial.as_ref().map(|r| field_start(r, scales.as_ref(), &params, err)).transpose()?;
     let initial = initial_state(&drr, field_initial.as_ref().or(raw.initial.as_ref()), err)?;
     let solver = solver_spec(raw.solver.as_ref(), err)?;
-    let analyses = analyses(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
+    let analyses = analyses::parse(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
     papers_model_only(&params, &analyses, err)?;
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
@@ -1075,206 +1060,4 @@ fn solver_spec(
         ));
     }
     Ok(SolverSpec { method, rtol, atol, table, explicit_table })
-}
-
-/// `model`: (kind, dimension, γ² for the DRR), for the noise options.
-fn analyses(
-    raw: &[RawAnalysis],
-    model: (&str, usize, Option<f64>),
-    err: &impl Fn(&str, String) -> SceneError,
-) -> Result<Analyses, SceneError> {
-    let mut out = Analyses::default();
-    if raw.is_empty() {
-        return Err(err("analyses", format!("is empty; ask for at least one of {ANALYSIS_NAMES}")));
-    }
-    for (i, entry) in raw.iter().enumerate() {
-        let field = format!("analyses[{i}]");
-        let (name, options) = match entry {
-            RawAnalysis::Name(n) => (n.clone(), None),
-            RawAnalysis::WithOptions(map) if map.len() == 1 => {
-                let (n, v) = map.iter().next().expect("one entry");
-                (n.clone(), Some(v.clone()))
-            }
-            RawAnalysis::WithOptions(_) => {
-                return Err(err(
-                    &field,
-                    format!(
-                        "an object entry must have exactly one key; use one of {ANALYSIS_NAMES}"
-                    ),
-                ));
-            }
-        };
-        let options_of = |what: &str| -> Result<serde_json::Value, SceneError> {
-            Ok(options.clone().unwrap_or(serde_json::Value::Object(Default::default()))).and_then(
-                |v| {
-                    if v.is_object() {
-                        Ok(v)
-                    } else {
-                        Err(err(&format!("{field}.{what}"), "options must be an object".into()))
-                    }
-                },
-            )
-        };
-        match name.as_str() {
-            "hopf" | "paper" if options.is_some() => {
-                return Err(err(&field, format!("\"{name}\" takes no options")))
-            }
-            "hopf" => out.hopf = true,
-            "paper" => out.paper = true,
-            "cycle" => {
-                let o = CycleOptions::from_json(options_of("cycle")?)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.cycle")), e.message))?;
-                out.cycle = Some(o);
-            }
-            "trajectory" => {
-                let Some(v) = options.clone() else {
-                    return Err(err(
-                        &field,
-                        "\"trajectory\" needs a sampling spec: {\"trajectory\": {\"cycles\": N}}"
-                            .into(),
-                    ));
-                };
-                let t: RawTrajectory = serde_json::from_value(v)
-                    .map_err(|e| err(&format!("{field}.trajectory"), e.to_string()))?;
-                if t.cycles == 0 || t.cycles > 10_000 {
-                    return Err(err(
-                        &format!("{field}.trajectory.cycles"),
-                        format!("{} must be between 1 and 10000", t.cycles),
-                    ));
-                }
-                out.trajectory_cycles = Some(t.cycles);
-            }
-            "asymptotics" => {
-                let o = crate::analysis::asymptotics::AsymptoticsOptions::from_json(options_of(
-                    "asymptotics",
-                )?)
-                .map_err(|e| err(&e.path_below(&format!("{field}.asymptotics")), e.message))?;
-                out.asymptotics = Some(o);
-            }
-            "lyapunov" => {
-                let o =
-                    crate::analysis::lyapunov::LyapunovOptions::from_json(options_of("lyapunov")?)
-                        .map_err(|e| err(&e.path_below(&format!("{field}.lyapunov")), e.message))?;
-                out.lyapunov = Some(o);
-            }
-            "shooting" => {
-                let o = ShootingOptions::from_json(options_of("shooting")?)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.shooting")), e.message))?;
-                out.shooting = Some(o);
-            }
-            "continuation" => {
-                use crate::analysis::continuation::Parameter;
-                let Some(v) = options.clone() else {
-                    return Err(err(&field, "\"continuation\" needs {\"parameter\": \"epsilon\", \"to\": 1.2, \"points\": 51}".into()));
-                };
-                let f = format!("{field}.continuation");
-                let c: RawContinuation =
-                    serde_json::from_value(v).map_err(|e| err(&f, e.to_string()))?;
-                let parameter = match c.parameter.as_str() {
-                    "epsilon" => Parameter::Epsilon,
-                    "xi" => Parameter::Xi,
-                    "gamma" => Parameter::Gamma,
-                    "radiation_damping" => Parameter::Eta,
-                    other => return Err(err(&format!("{f}.parameter"), format!("\"{other}\" cannot be continued; use \"epsilon\", \"xi\", \"gamma\" or \"radiation_damping\""))),
-                };
-                let to = finite(&format!("{f}.to"), c.to, err)?;
-                if parameter == Parameter::Eta && to < 0.0 {
-                    return Err(err(
-                        &format!("{f}.to"),
-                        format!("{to} must be ≥ 0 for radiation_damping"),
-                    ));
-                }
-                if !matches!(parameter, Parameter::Epsilon | Parameter::Eta) && to <= 0.0 {
-                    return Err(err(
-                        &format!("{f}.to"),
-                        format!("{to} must be > 0 for {}", parameter.name()),
-                    ));
-                }
-                if parameter == Parameter::Gamma && !(1e-100..=1e100).contains(&to) {
-                    return Err(err(
-                        &format!("{f}.to"),
-                        format!("{to:e} is outside 1e-100 … 1e100"),
-                    ));
-                }
-                if !(2..=100_000).contains(&c.points) {
-                    return Err(err(
-                        &format!("{f}.points"),
-                        format!("{} must be between 2 and 100000", c.points),
-                    ));
-                }
-                let log = c.log.unwrap_or(parameter == Parameter::Gamma);
-                if log && parameter == Parameter::Epsilon {
-                    return Err(err(
-                        &format!("{f}.log"),
-                        "ε can be negative: continue it on a linear grid (\"log\": false)".into(),
-                    ));
-                }
-                if log && parameter == Parameter::Eta {
-                    return Err(err(
-                        &format!("{f}.log"),
-                        "η can be 0: continue it on a linear grid (\"log\": false)".into(),
-                    ));
-                }
-                out.continuation =
-                    Some(ContinuationOptions { parameter, to, points: c.points, log });
-            }
-            "noise" => {
-                let Some(v) = options.clone() else {
-                    return Err(err(&field, "\"noise\" needs its amplitudes: {\"noise\": {\"amplitudes\": [...]}} (docs/noise.md)".into()));
-                };
-                let o: NoiseOptions = serde_path_to_error::deserialize(v).map_err(|e| {
-                    let path = e.path().to_string();
-                    let sub = if path == "." { String::new() } else { format!(".{path}") };
-                    err(&format!("{field}.noise{sub}"), e.into_inner().to_string())
-                })?;
-                let (kind, dim, gamma2) = model;
-                noise_options::validate(&o, dim, kind, gamma2)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.noise")), e.message))?;
-                out.noise = Some(o);
-            }
-            "time_series" => {
-                let Some(v) = options.clone() else {
-                    return Err(err(&field, "\"time_series\" needs its length: {\"time_series\": {\"t_max\": T}} (T in the scene's time unit; docs/scenes.md)".into()));
-                };
-                if !v.is_object() {
-                    return Err(err(
-                        &format!("{field}.time_series"),
-                        "options must be an object, e.g. {\"t_max\": 1000}".into(),
-                    ));
-                }
-                let o = TimeSeriesOptions::from_json(v)
-                    .map_err(|e| err(&e.path_below(&format!("{field}.time_series")), e.message))?;
-                out.time_series = Some(o);
-            }
-            other => {
-                return Err(err(
-                    &field,
-                    format!("unknown analysis \"{other}\"; use one of {ANALYSIS_NAMES}"),
-                ))
-            }
-        }
-    }
-    if out.trajectory_cycles.is_some() && out.cycle.is_none() {
-        return Err(err(
-            "analyses",
-            "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into(),
-        ));
-    }
-    for (asked, name) in
-        [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")]
-    {
-        if asked && out.cycle.is_none() {
-            return Err(err(
-                "analyses",
-                format!("\"{name}\" works on the limit cycle found by \"cycle\"; add \"cycle\""),
-            ));
-        }
-    }
-    if out.paper && (out.cycle.is_none() || !out.hopf) {
-        return Err(err(
-            "analyses",
-            "\"paper\" compares hopf and cycle results; add \"hopf\" and \"cycle\"".into(),
-        ));
-    }
-    Ok(out)
 }

@@ -14,45 +14,56 @@ use crate::sundials::{
 };
 use serde::Serialize;
 
-/// Integration methods a scene can ask for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// CVODE, variable-order BDF (stiff).
-    CvodeBdf,
-    /// CVODE, Adams–Moulton (non-stiff).
-    CvodeAdams,
-    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
-    ArkodeDirk,
-    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
-    ArkodeImex,
-    /// ARKStep, explicit Runge–Kutta (non-stiff).
-    ArkodeErk,
-    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
-    Radau5,
-    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
-    Rodas5p,
-    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
-    /// modified midpoint, the family the paper used; pure Rust).
-    Extrapolation,
+/// Defines [`Method`] and its scene names from one list of `Variant = "name"` rows, so that
+/// [`Method::ALL`] and [`Method::name`] cannot miss a variant: a method is added by adding its
+/// row (and its [`Method::capabilities`] arm, which the compiler asks for).
+macro_rules! methods {
+    ($($(#[$doc:meta])* $variant:ident = $name:literal,)*) => {
+        /// Integration methods a scene can ask for.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        pub enum Method {
+            $($(#[$doc])* $variant,)*
+        }
+
+        impl Method {
+            /// Every method with its scene name, in the order of the definition.
+            pub const ALL: [(&'static str, Method); [$($name),*].len()] =
+                [$(($name, Method::$variant)),*];
+
+            /// The scene name, e.g. "cvode-bdf".
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Method::$variant => $name,)*
+                }
+            }
+        }
+    };
 }
 
-impl Method {
-    /// Every method with its scene name.
-    pub const ALL: [(&'static str, Method); 8] = [
-        ("cvode-bdf", Method::CvodeBdf),
-        ("cvode-adams", Method::CvodeAdams),
-        ("arkode-dirk", Method::ArkodeDirk),
-        ("arkode-imex", Method::ArkodeImex),
-        ("arkode-erk", Method::ArkodeErk),
-        ("radau5", Method::Radau5),
-        ("rodas5p", Method::Rodas5p),
-        ("extrapolation", Method::Extrapolation),
-    ];
+methods! {
+    /// CVODE, variable-order BDF (stiff).
+    CvodeBdf = "cvode-bdf",
+    /// CVODE, Adams–Moulton (non-stiff).
+    CvodeAdams = "cvode-adams",
+    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
+    ArkodeDirk = "arkode-dirk",
+    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
+    ArkodeImex = "arkode-imex",
+    /// ARKStep, explicit Runge–Kutta (non-stiff).
+    ArkodeErk = "arkode-erk",
+    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
+    Radau5 = "radau5",
+    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
+    Rodas5p = "rodas5p",
+    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
+    /// modified midpoint, the family the paper used; pure Rust).
+    Extrapolation = "extrapolation",
+}
 
+impl Serialize for Method {
     /// The scene name, e.g. "cvode-bdf".
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(_, m)| *m == self).map(|(n, _)| *n).unwrap_or("?")
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
     }
 }
 
@@ -77,7 +88,7 @@ impl std::str::FromStr for Method {
     }
 }
 
-/// A method name or Butcher table that solver selection refuses; each message names the
+/// A method name, Butcher table or setting that solver selection refuses; each message names the
 /// field at fault and lists what is accepted.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum MethodError {
@@ -106,6 +117,29 @@ pub enum MethodError {
     /// explicit_table for a method other than arkode-imex.
     #[error("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name())]
     NoExplicitTable {
+        /// The method.
+        method: Method,
+    },
+    /// An optional setting the method does not take ([`Method::capabilities`]).
+    #[error(
+        "{name} is not an option of {method}: leave it unset (None); the methods that take it: \
+         {}",
+        takers.join(", ")
+    )]
+    UnsupportedOption {
+        /// The option, e.g. "max_order".
+        name: &'static str,
+        /// The method.
+        method: Method,
+        /// The scene names of the methods that take it.
+        takers: Vec<&'static str>,
+    },
+    /// deduce_implicit_rhs for a method other than arkode-dirk and arkode-imex.
+    #[error(
+        "deduce_implicit_rhs applies to arkode-dirk and arkode-imex only, not {method}: leave it \
+         false"
+    )]
+    NoDeducedImplicitRhs {
         /// The method.
         method: Method,
     },
@@ -407,7 +441,8 @@ pub fn build<'s, S: ImexSystem + 's>(
     if method != Method::ArkodeImex {
         return build_ode(method, settings, system, t0, y0, options);
     }
-    reject_unsupported(method, settings, options).map_err(|m| invalid(method, t0, y0, m))?;
+    reject_unsupported(method, settings, options)
+        .map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let tables =
         check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let (default_i, default_e) = sundials::default_imex_tables();
@@ -435,7 +470,8 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    reject_unsupported(method, settings, options).map_err(|m| invalid(method, t0, y0, m))?;
+    reject_unsupported(method, settings, options)
+        .map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let tables =
         check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
@@ -496,35 +532,30 @@ fn ark_settings(settings: &MethodSettings) -> ArkSettings {
     ArkSettings { deduce_implicit_rhs: settings.deduce_implicit_rhs, ..ArkSettings::default() }
 }
 
-/// The options and settings `method` does not take ([`Method::capabilities`]), as the message
-/// of an [`ErrorKind::InvalidInput`] error naming the first one set; the Butcher tables are
+/// The options and settings `method` does not take ([`Method::capabilities`]): the first one
+/// set, made an [`ErrorKind::InvalidInput`] error by [`build`]; the Butcher tables are
 /// checked by `check_tables`.
 fn reject_unsupported(
     method: Method,
     settings: &MethodSettings,
     options: &Options,
-) -> Result<(), String> {
+) -> Result<(), MethodError> {
     let accepts = method.capabilities().accepts;
     if let Some((name, _, _)) =
         accepts.options(options).into_iter().find(|(_, set, ok)| *set && !ok)
     {
-        let takers: Vec<&str> = Method::ALL
+        let takers = Method::ALL
             .iter()
             .filter(|(_, m)| {
                 m.capabilities().accepts.options(options).iter().any(|(n, _, ok)| *n == name && *ok)
             })
             .map(|(n, _)| *n)
             .collect();
-        return Err(format!(
-            "{name} is not an option of {method}: leave it unset (None); the methods that take it: {}",
-            takers.join(", ")
-        ));
+        return Err(MethodError::UnsupportedOption { name, method, takers });
     }
     let ark_implicit = matches!(method, Method::ArkodeDirk | Method::ArkodeImex);
     if settings.deduce_implicit_rhs && !ark_implicit {
-        return Err(format!(
-            "deduce_implicit_rhs applies to arkode-dirk and arkode-imex only, not {method}: leave it false"
-        ));
+        return Err(MethodError::NoDeducedImplicitRhs { method });
     }
     Ok(())
 }

@@ -171,6 +171,62 @@ fn unknown_keys_and_wrong_types_name_the_path() {
     assert!(e.message.contains("unknown field"), "{e}");
 }
 
+/// The smallest entry of the analysis `name`: the bare name, or the least options it needs.
+/// A new analysis that needs options fails `every_analysis_parses_from_its_minimal_form`
+/// until it gets a line here.
+fn minimal_entry(name: &str) -> String {
+    match name {
+        "trajectory" => r#"{"trajectory": {"cycles": 1}}"#.into(),
+        "continuation" => r#"{"continuation": {"parameter": "xi", "to": 0.8, "points": 2}}"#.into(),
+        "noise" => r#"{"noise": {"amplitudes": [0, 1e-3, 0]}}"#.into(),
+        "time_series" => r#"{"time_series": {"t_max": 10}}"#.into(),
+        bare => format!("\"{bare}\""),
+    }
+}
+
+/// What the analysis `name` works on, when it needs another's results.
+fn needs(name: &str) -> &'static [&'static str] {
+    match name {
+        "paper" => &["\"hopf\"", "\"cycle\""],
+        "trajectory" | "asymptotics" | "lyapunov" => &["\"cycle\""],
+        _ => &[],
+    }
+}
+
+#[test]
+fn every_analysis_parses_from_its_minimal_form() {
+    let names: Vec<&str> = scene::analysis_names().collect();
+    let distinct: std::collections::BTreeSet<&str> = names.iter().copied().collect();
+    assert_eq!(distinct.len(), names.len(), "a name twice: {names:?}");
+    let parse = |entries: &[String]| {
+        let text = format!(
+            r#"{{"name": "t", "model": {{"gamma": 10, "xi": 0.7, "epsilon": 1}}, "analyses": [{}]}}"#,
+            entries.join(", ")
+        );
+        scene::parse(&text, "test").map(|s| s.analyses)
+    };
+    for name in names {
+        let base: Vec<String> = needs(name).iter().map(|n| n.to_string()).collect();
+        let with: Vec<String> = base.iter().cloned().chain([minimal_entry(name)]).collect();
+        let asked = parse(&with).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let without = if base.is_empty() { Ok(scene::Analyses::default()) } else { parse(&base) };
+        assert_ne!(Ok(asked), without, "{name} changed nothing");
+    }
+}
+
+#[test]
+fn an_unknown_analysis_is_refused_naming_every_analysis() {
+    let e = error_of(
+        &scene_with(r#"{"gamma": 10, "xi": 0.7, "epsilon": 1}"#, "")
+            .replace("\"hopf\"", "\"hopf\", \"fourier\""),
+    );
+    assert_eq!(e.field, "analyses[1]", "{e}");
+    assert!(e.message.starts_with("unknown analysis \"fourier\"; use one of "), "{e}");
+    for name in scene::analysis_names() {
+        assert!(e.message.contains(&format!("\"{name}\"")), "{name} missing: {e}");
+    }
+}
+
 #[test]
 fn dimensional_input_converts_to_gamma_xi_epsilon() {
     let text = scene_with(

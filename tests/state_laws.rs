@@ -48,7 +48,7 @@ fn ageing_earthquake_cycle_agrees_across_independent_integrators() {
     let periods: Vec<f64> = reports.iter().map(period).collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
     let r = &reports[0];
-    assert_eq!((r.model.state_law, r.model.radiation_damping), ("ageing", 0.0));
+    assert_eq!((r.model.state_law, r.model.radiation_damping), (StateLaw::Ageing, 0.0));
     // The rtol 1e-11 reference (data/reference/drr_cycles_ageing.json, radau5 and ARKStep DIRK,
     // from another start): 49.0072514158; the slip law's is 56.41.
     for p in &periods {
@@ -92,7 +92,7 @@ fn prz_orbit_by_integration_and_by_shooting_agree() {
     let cycle = period(&r);
     let shooting = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period;
     assert!((cycle - shooting).abs() < 1e-7 * cycle, "cycle {cycle} vs shooting {shooting}");
-    assert_eq!(r.model.state_law, "prz");
+    assert_eq!(r.model.state_law, StateLaw::Prz);
 }
 
 #[test]

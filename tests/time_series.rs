@@ -214,6 +214,21 @@ fn every_and_points_choose_the_rows() {
     assert_eq!(all.events, points.events, "the rows do not change the events");
 }
 
+/// A time series alone names its integrator as the other analyses do: the method's family
+/// (docs/reports.md: CVODE/ARKStep/…), not the method.
+#[test]
+fn a_time_series_alone_names_the_integrator_family() {
+    for method in [scene::Method::CvodeBdf, scene::Method::Radau5] {
+        let text = field_scene(r#"{"t_max": 10}"#)
+            .replace("radau5", method.name())
+            .replace(r#"{"cycle": {"tolerance": 1e-11}}, "#, "");
+        let scene = scene::parse(&text, "test").unwrap();
+        assert!(scene.analyses.cycle.is_none());
+        let report = engine::run(&scene, serde_json::Value::Null).unwrap();
+        assert_eq!(report.solver.integrator, method.capabilities().family, "{method}");
+    }
+}
+
 #[test]
 fn event_threshold_selects_the_episodes() {
     let run = |ts: &str| {
