@@ -45,7 +45,19 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     y0: &[f64],
     atol: Tolerance,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol, None)
+    integrator_cancellable(system, drr, spec, y0, atol, None)
+}
+
+/// [`integrator_for`], failing once `cancel` is set.
+fn integrator_cancellable<S: ImexSystem + 'static>(
+    system: S,
+    drr: &Drr,
+    spec: &SolverSpec,
+    y0: &[f64],
+    atol: Tolerance,
+    cancel: Option<&Cancel>,
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
 }
 
 /// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
@@ -577,9 +589,8 @@ fn time_series_step(
         w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
     };
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
-    let largest = max_step(&hopf::analyse(drr));
     let (mut integ, tables) =
-        integrator_with_max_step(*drr, largest, &scene.solver, &scene.initial, atol, cancel)
+        integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
             .map_err(failed(drr, "time_series"))?;
     let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
         .map_err(failed(drr, "time_series"))?;
@@ -694,8 +705,7 @@ fn variational_integrator_with_tables(
     } else {
         Variational::new(drr)
     };
-    let atol = Tolerance::PerComponent(atol);
-    integrator_with_max_step(system, max_step(&hopf::analyse(&drr)), spec, &z0, atol, cancel)
+    integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 
 /// Runs a saddle-node or van der Pol scene (the noise analysis alone) on `threads` threads;
