@@ -22,6 +22,9 @@ use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
+mod cancel;
+pub use cancel::{Cancel, RunError};
+
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
 pub fn integrator(
@@ -42,16 +45,29 @@ pub fn integrator_for<S: ImexSystem + 'static>(
     y0: &[f64],
     atol: Tolerance,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol)
+    integrator_cancellable(system, drr, spec, y0, atol, None)
 }
 
-/// [`integrator_for`] with the largest step `max_step`.
+/// [`integrator_for`], failing once `cancel` is set.
+fn integrator_cancellable<S: ImexSystem + 'static>(
+    system: S,
+    drr: &Drr,
+    spec: &SolverSpec,
+    y0: &[f64],
+    atol: Tolerance,
+    cancel: Option<&Cancel>,
+) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
+    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
+}
+
+/// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
     max_step: f64,
     spec: &SolverSpec,
     y0: &[f64],
     atol: Tolerance,
+    cancel: Option<&Cancel>,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
@@ -138,7 +154,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
         ..MethodSettings::of(spec, true)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
-    Ok((built.integrator, built.tables))
+    Ok((cancel::cancellable(built.integrator, cancel), built.tables))
 }
 
 /// The engine's largest step: 1/8 of the linear period 2π/ω_c. Longer steps let BDF damp the
@@ -257,14 +273,32 @@ pub fn cycle_with(
     trajectory_cycles: usize,
     linear: &HopfReport,
 ) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
+    cycle_cancellable(scene, drr, o, trajectory_cycles, linear, None)
+}
+
+/// [`cycle_with`], failing once `cancel` is set.
+fn cycle_cancellable(
+    scene: &Scene,
+    drr: &Drr,
+    o: &CycleOptions,
+    trajectory_cycles: usize,
+    linear: &HopfReport,
+    cancel: Option<&Cancel>,
+) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
     let settings = cycle::CycleSettings {
         trajectory_cycles,
         escape: cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step(linear))),
         ..o.settings(scene.solver.rtol, scene.solver.atol[1])
     };
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
-    let (mut integ, tables) =
-        integrator_with_max_step(*drr, max_step(linear), &scene.solver, &scene.initial, atol)?;
+    let (mut integ, tables) = integrator_with_max_step(
+        *drr,
+        max_step(linear),
+        &scene.solver,
+        &scene.initial,
+        atol,
+        cancel,
+    )?;
     let stable = linear.max_real_part < 0.0;
     let report =
         cycle::analyse(integ.as_mut(), drr, &settings, stable).map_err(|e| diagnose(drr, e))?;
@@ -314,16 +348,52 @@ pub fn run_with_series(
     progress: &(dyn Fn(usize, usize) + Sync),
     series: &mut dyn SeriesSink,
 ) -> Result<Report, EngineError> {
+    run_inner(scene, scene_json, threads, progress, series, None)
+}
+
+/// [`run_with_series`] (with `series` None: [`run_with`]) that the caller can stop from
+/// another thread with `cancel`: every integration fails at its next step once it is set, the
+/// analyses not begun are skipped, and the run returns [`RunError::Cancelled`] (whatever it
+/// computed on the way is dropped, and the rows written to `series` are incomplete). The
+/// "noise" analysis's realisations do not check it: a run cancelled there stops when they
+/// are done.
+pub fn run_cancellable(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    series: Option<&mut dyn SeriesSink>,
+    cancel: &Cancel,
+) -> Result<Report, RunError> {
+    let mut discard = DiscardSink;
+    let series = series.unwrap_or(&mut discard);
+    let report = run_inner(scene, scene_json, threads, progress, series, Some(cancel));
+    if cancel.is_cancelled() {
+        return Err(RunError::Cancelled);
+    }
+    Ok(report?)
+}
+
+/// [`run_with_series`], stopping early once `cancel` is given and set.
+fn run_inner(
+    scene: &Scene,
+    scene_json: serde_json::Value,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    series: &mut dyn SeriesSink,
+    cancel: Option<&Cancel>,
+) -> Result<Report, EngineError> {
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
-    let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref())?;
-    let (shooting, continuation) = shooting_step(scene, &drr, &mut integration, cycle.is_some())?;
+    let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref(), cancel)?;
+    let (shooting, continuation) =
+        shooting_step(scene, &drr, &mut integration, cycle.is_some(), cancel)?;
     let integrated = cycle.is_some() || a.shooting.is_some() || a.continuation.is_some();
-    let series = time_series_step(scene, &drr, &mut integration, integrated, series)?;
-    let asymptotics = asymptotics_step(scene, &drr, cycle.as_ref())?;
-    let lyapunov = lyapunov_step(scene, &drr, cycle.as_ref())?;
+    let series = time_series_step(scene, &drr, &mut integration, integrated, series, cancel)?;
+    let asymptotics = asymptotics_step(scene, &drr, cycle.as_ref(), cancel)?;
+    let lyapunov = lyapunov_step(scene, &drr, cycle.as_ref(), cancel)?;
     // The trajectory recorded only for the analyses above is not reported.
     if a.trajectory_cycles.is_none() {
         if let Some(c) = &mut cycle {
@@ -353,6 +423,8 @@ pub fn run_with_series(
         .filter(|_| a.paper)
         .map(|h| paper::compare(&scene.params, h, values.as_ref()));
     let noise = match &a.noise {
+        // Cancelled: the report is dropped, and the realisations would not stop.
+        Some(_) if cancel::is_set(cancel) => None,
         Some(options) => {
             let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
             let model = NoiseModel::Drr { system: drr, amplitudes };
@@ -419,6 +491,7 @@ fn cycle_step(
     scene: &Scene,
     drr: &Drr,
     linear: Option<&HopfReport>,
+    cancel: Option<&Cancel>,
 ) -> Result<(Option<cycle::CycleReport>, Integration), EngineError> {
     let a = &scene.analyses;
     let (Some(options), Some(linear)) = (&a.cycle, linear) else {
@@ -433,7 +506,8 @@ fn cycle_step(
     let keep = a.trajectory_cycles.unwrap_or(0).max(usize::from(needs_orbit));
     // cycle_with has added the physical cause already (once: not `failed`, which adds it again).
     let (report, name, tables, stats) =
-        cycle_with(scene, drr, options, keep, linear).map_err(|e| EngineError::new("cycle", e))?;
+        cycle_cancellable(scene, drr, options, keep, linear, cancel)
+            .map_err(|e| EngineError::new("cycle", e))?;
     Ok((Some(report), Integration { name, tables, stats }))
 }
 
@@ -444,6 +518,7 @@ fn shooting_step(
     drr: &Drr,
     integration: &mut Integration,
     cycle_ran: bool,
+    cancel: Option<&Cancel>,
 ) -> Result<(Option<shooting::ShootingReport>, Option<ContinuationReport>), EngineError> {
     let a = &scene.analyses;
     if a.shooting.is_none() && a.continuation.is_none() {
@@ -452,7 +527,7 @@ fn shooting_step(
     let settings =
         a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
     let (mut integ, tables) =
-        variational_integrator_with_tables(*drr, &scene.solver, &scene.initial)
+        variational_integrator_with_tables(*drr, &scene.solver, &scene.initial, cancel)
             .map_err(failed(drr, "shooting"))?;
     let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings)
         .map_err(failed(drr, "shooting"))?;
@@ -471,8 +546,9 @@ fn shooting_step(
         };
         match &report.orbit {
             Some(orbit) => {
-                let mut factory =
-                    |drr: Drr, y0: [f64; 3]| variational_integrator(drr, &scene.solver, &y0);
+                let mut factory = |drr: Drr, y0: [f64; 3]| {
+                    Ok(variational_integrator_with_tables(drr, &scene.solver, &y0, cancel)?.0)
+                };
                 continuation::run(&mut factory, &scene.params, orbit.clone(), &cs)
             }
             None => ContinuationReport::not_started(&cs, &scene.params, report.failure.as_ref()),
@@ -489,6 +565,7 @@ fn time_series_step(
     integration: &mut Integration,
     integrated: bool,
     series: &mut dyn SeriesSink,
+    cancel: Option<&Cancel>,
 ) -> Result<Option<TimeSeriesOutcome>, EngineError> {
     let Some(o) = &scene.analyses.time_series else { return Ok(None) };
     let scales = scene.scales;
@@ -511,8 +588,10 @@ fn time_series_step(
         max_steps: o.max_steps.unwrap_or(time_series::options::DEFAULT_MAX_STEPS),
         w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
     };
+    let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
     let (mut integ, tables) =
-        integrator(*drr, &scene.solver, &scene.initial).map_err(failed(drr, "time_series"))?;
+        integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
+            .map_err(failed(drr, "time_series"))?;
     let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
         .map_err(failed(drr, "time_series"))?;
     if !integrated {
@@ -528,16 +607,18 @@ fn asymptotics_step(
     scene: &Scene,
     drr: &Drr,
     cycle: Option<&cycle::CycleReport>,
+    cancel: Option<&Cancel>,
 ) -> Result<Option<asymptotics::AsymptoticsReport>, EngineError> {
     let Some(o) = &scene.analyses.asymptotics else { return Ok(None) };
     let options = scene.analyses.cycle.clone().unwrap_or_default();
     let mut cycle_at = |drr: &Drr, start: [f64; 3]| {
-        Ok(cycle_with(
+        Ok(cycle_cancellable(
             &Scene { initial: start, ..scene.clone() },
             drr,
             &options,
             0,
             &hopf::analyse(drr),
+            cancel,
         )?
         .0)
     };
@@ -551,10 +632,12 @@ fn lyapunov_step(
     scene: &Scene,
     drr: &Drr,
     cycle: Option<&cycle::CycleReport>,
+    cancel: Option<&Cancel>,
 ) -> Result<Option<lyapunov::LyapunovReport>, EngineError> {
     let Some(o) = &scene.analyses.lyapunov else { return Ok(None) };
-    let mut variational =
-        |drr, spec: &SolverSpec, y0: &[f64; 3]| variational_integrator(drr, spec, y0);
+    let mut variational = |drr, spec: &SolverSpec, y0: &[f64; 3]| {
+        Ok(variational_integrator_with_tables(drr, spec, y0, cancel)?.0)
+    };
     lyapunov::analyse(&scene.params, &scene.solver, &mut variational, cycle, o)
         .map(Some)
         .map_err(failed(drr, "lyapunov"))
@@ -601,13 +684,15 @@ pub fn variational_integrator(
     spec: &SolverSpec,
     y0: &[f64; 3],
 ) -> Result<Box<dyn Integrator>, SolverError> {
-    Ok(variational_integrator_with_tables(drr, spec, y0)?.0)
+    Ok(variational_integrator_with_tables(drr, spec, y0, None)?.0)
 }
 
+/// [`variational_integrator`] with its Butcher tables, failing once `cancel` is set.
 fn variational_integrator_with_tables(
     drr: Drr,
     spec: &SolverSpec,
     y0: &[f64; 3],
+    cancel: Option<&Cancel>,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     let mut atol = spec.atol.to_vec();
     atol.extend([spec.rtol; 9]);
@@ -621,7 +706,7 @@ fn variational_integrator_with_tables(
     } else {
         Variational::new(drr)
     };
-    integrator_for(system, &drr, spec, &z0, Tolerance::PerComponent(atol))
+    integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 
 /// Runs a saddle-node or van der Pol scene (the noise analysis alone) on `threads` threads;

@@ -300,8 +300,27 @@ fn unconverged(name: &str, c: &stickslip::analysis::cycle::CycleReport) -> Optio
     ))
 }
 
-/// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix);
-/// the file is removed if the run fails.
+/// Where `--series FILE` streams its rows: a temporary file beside FILE (`.NAME.tmp-PID`, as
+/// [`report::write_atomic`] names it), renamed to FILE when the run succeeds, so that a run
+/// killed part way (Ctrl-C) leaves FILE as it was, never half-written; FILE itself when it
+/// exists and is not a regular file (`/dev/stdout`, a FIFO). A symbolic link is followed.
+fn series_staging(file: &Path) -> (PathBuf, PathBuf) {
+    let file = match std::fs::canonicalize(file) {
+        Ok(target) if file.is_symlink() => target,
+        _ => file.to_path_buf(),
+    };
+    let special = std::fs::metadata(&file).is_ok_and(|m| !m.is_file() && !m.is_dir());
+    let staging = match file.file_name() {
+        Some(name) if !special => {
+            file.with_file_name(format!(".{}.tmp-{}", name.to_string_lossy(), std::process::id()))
+        }
+        _ => file.clone(),
+    };
+    (staging, file)
+}
+
+/// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix)
+/// through a temporary file ([`series_staging`]), removed if the run fails.
 fn run_writing_series(
     scene: &scene::Scene,
     echo: serde_json::Value,
@@ -319,13 +338,22 @@ fn run_writing_series(
             ),
         ));
     }
-    let mut sink = stickslip::series_file::create(file).map_err(|e| {
+    let (staging, target) = series_staging(file);
+    let mut sink = stickslip::series_file::create_as(&staging, file).map_err(|e| {
         Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
     })?;
-    engine::run_with_series(scene, echo, threads, progress, sink.as_mut()).map_err(|e| {
-        drop(std::fs::remove_file(file));
-        failed(&scene.name, e)
-    })
+    let report = engine::run_with_series(scene, echo, threads, progress, sink.as_mut());
+    drop(sink);
+    let renamed = match &report {
+        Ok(_) if staging != target => std::fs::rename(&staging, &target),
+        _ => Ok(()),
+    };
+    if (report.is_err() || renamed.is_err()) && staging != target {
+        drop(std::fs::remove_file(&staging));
+    }
+    renamed
+        .map_err(|e| Failure(1, format!("--series {}: cannot write it: {e}", file.display())))?;
+    report.map_err(|e| failed(&scene.name, e))
 }
 
 /// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and

@@ -159,7 +159,13 @@ impl SeriesSink for NpySink {
 /// The sink for `path`: CSV when it ends in `.csv` (any case), .npy otherwise. The file is
 /// created (or truncated) now, so that a path that cannot be written fails before the run.
 pub fn create(path: &Path) -> io::Result<Box<dyn SeriesSink>> {
-    let file = File::create(path)?;
+    create_as(path, path)
+}
+
+/// [`create`] writing to `file` in the format that `path` names (`file` being, e.g., a
+/// temporary file to be renamed to `path` when the series is complete).
+pub fn create_as(file: &Path, path: &Path) -> io::Result<Box<dyn SeriesSink>> {
+    let file = File::create(file)?;
     if is_csv(path) {
         Ok(Box::new(CsvSink::new(BufWriter::new(file))))
     } else {

@@ -260,6 +260,38 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
     let outcome = scene::parse(&json.to_string(), "sweep point")
         .map_err(|e| e.to_string())
         .and_then(|s| engine::run(&s, serde_json::Value::Null).map_err(|e| e.to_string()));
+    row(index, params, outcome)
+}
+
+/// [`run_point`] that the caller can stop with `cancel` ([`engine::run_cancellable`]): `None`
+/// when it was cancelled.
+pub fn run_point_cancellable(
+    base: &serde_json::Value,
+    index: usize,
+    params: &BTreeMap<String, f64>,
+    cancel: &engine::Cancel,
+) -> Option<Row> {
+    let json = scene_at(base, params);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let outcome = match scene::parse(&json.to_string(), "sweep point") {
+        Err(e) => Err(e.to_string()),
+        Ok(s) => {
+            let null = serde_json::Value::Null;
+            match engine::run_cancellable(&s, null, threads, &|_, _| {}, None, cancel) {
+                Err(engine::RunError::Cancelled) => return None,
+                other => other.map_err(|e| e.to_string()),
+            }
+        }
+    };
+    Some(row(index, params, outcome))
+}
+
+/// The row of point `index`: the requested sections of its report, or its error.
+fn row(
+    index: usize,
+    params: &BTreeMap<String, f64>,
+    outcome: Result<crate::report::Report, String>,
+) -> Row {
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");

@@ -387,3 +387,39 @@ fn absolute_friction_level_adds_shear_stress_and_friction_columns() {
         assert!((tau[i] / (1e7 * mu[i]) - 1.0).abs() < 1e-14);
     }
 }
+
+/// A run killed part way (Ctrl-C, or here SIGKILL) leaves the --series file as it was: the
+/// rows go to a temporary file beside it, renamed to it only when the run succeeds; a finished
+/// run leaves no temporary file.
+#[test]
+fn a_killed_run_leaves_no_half_written_series_file() {
+    let dir = temp_dir("killed");
+    let scene_path = dir.join("scene.json");
+    let long = r#"{"name": "long", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72},
+        "solver": {"method": "cvode-bdf", "rtol": 1e-10, "atol": 1e-12},
+        "analyses": [{"time_series": {"t_max": 1e6, "points": 1000000}}]}"#;
+    std::fs::write(&scene_path, long).unwrap();
+    let series = dir.join("series.csv");
+    std::fs::write(&series, "old\n").unwrap();
+    let mut child = Command::new(EXE)
+        .args(["run", scene_path.to_str().unwrap(), "--series", series.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let staging = dir.join(format!(".series.csv.tmp-{}", child.id()));
+    let started = std::time::Instant::now();
+    while std::fs::metadata(&staging).map_or(true, |m| m.len() == 0) {
+        assert!(started.elapsed().as_secs() < 60, "no rows streamed to {}", staging.display());
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    assert!(!child.wait().unwrap().success());
+    assert_eq!(std::fs::read_to_string(&series).unwrap(), "old\n");
+    std::fs::remove_file(&staging).unwrap();
+    let (code, stderr, _) = run_cli(&dir, &field_scene(r#"{"t_max": 10}"#), Some(&series));
+    assert_eq!(code, 0, "{stderr}");
+    assert!(std::fs::read_to_string(&series).unwrap().starts_with("t,"));
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(left.iter().all(|n| !n.to_string_lossy().contains(".tmp-")), "{left:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -5,10 +5,11 @@
 //! `stickslip.solve_ivp`, see [`solve`]).
 //!
 //! `run` and `sweep` release the GIL: the work runs on a thread of its own while the calling
-//! thread waits in slices of 50 ms and checks for signals, so Ctrl-C raises KeyboardInterrupt
-//! at once. A sweep then starts no new point; a single run cannot be interrupted inside the
-//! library (it has no cancellation point), so it finishes in the background and its report is
-//! dropped.
+//! thread waits in slices of 50 ms and checks for signals. On Ctrl-C it cancels the work
+//! ([`engine::Cancel`]: every integration stops at its next step, a sweep starts no new
+//! point), waits for the thread to end, and raises KeyboardInterrupt. Only the realisations
+//! of a "noise" analysis do not stop: a second Ctrl-C then raises at once and leaves them to
+//! finish in the background.
 
 mod solve;
 mod system;
@@ -18,12 +19,11 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::collections::BTreeMap;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::mpsc;
 use std::time::Duration;
 use stickslip::analysis::time_series::SeriesCollector;
 use stickslip::analysis::AnalysisError;
-use stickslip::engine::{self, EngineError};
+use stickslip::engine::{self, Cancel, EngineError, RunError};
 use stickslip::scene::{self, AnyScene, SceneError};
 use stickslip::{parallel, sweep};
 
@@ -83,11 +83,12 @@ fn run_error(py: Python<'_>, name: &str, e: &EngineError) -> PyErr {
     }
 }
 
-/// Runs `work` on a thread of its own without the GIL, checking for signals every 50 ms;
-/// on a signal's exception `cancel` is set and the exception returned.
+/// Runs `work` on a thread of its own without the GIL, checking for signals every 50 ms. On a
+/// signal's exception (KeyboardInterrupt) `cancel` is set and, once the thread has ended, the
+/// exception returned; a second one while waiting is returned at once.
 fn off_the_gil<T: Send + 'static>(
     py: Python<'_>,
-    cancel: Arc<AtomicBool>,
+    cancel: &Cancel,
     work: impl FnOnce() -> T + Send + 'static,
 ) -> PyResult<T> {
     let (tx, rx) = mpsc::channel();
@@ -99,21 +100,26 @@ fn off_the_gil<T: Send + 'static>(
             let _ = tx.send(work());
         })
         .map_err(|e| PyValueError::new_err(format!("cannot start a thread: {e}")))?;
+    let mut interrupted: Option<PyErr> = None;
     loop {
-        match py.detach(|| {
+        let received = py.detach(|| {
             let rx = rx.lock().unwrap_or_else(|e| e.into_inner());
             rx.recv_timeout(Duration::from_millis(50))
-        }) {
-            Ok(value) => return Ok(value),
-            Err(mpsc::RecvTimeoutError::Timeout) => {
-                if let Err(e) = py.check_signals() {
-                    cancel.store(true, Ordering::Relaxed);
-                    return Err(e);
-                }
-            }
-            Err(mpsc::RecvTimeoutError::Disconnected) => {
+        });
+        match (received, interrupted.take()) {
+            (Ok(_) | Err(mpsc::RecvTimeoutError::Disconnected), Some(e)) => return Err(e),
+            (Ok(value), None) => return Ok(value),
+            (Err(mpsc::RecvTimeoutError::Disconnected), None) => {
                 return Err(PyValueError::new_err("the stickslip worker thread died (a bug)"));
             }
+            (Err(mpsc::RecvTimeoutError::Timeout), first) => match (py.check_signals(), first) {
+                (Err(again), Some(_)) => return Err(again),
+                (Err(e), None) => {
+                    cancel.cancel();
+                    interrupted = Some(e);
+                }
+                (Ok(()), first) => interrupted = first,
+            },
         }
     }
 }
@@ -151,23 +157,29 @@ fn run(
     let scene = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let outcome =
-        off_the_gil(py, Arc::new(AtomicBool::new(false)), move || -> Result<RunOutput, _> {
-            match &scene {
-                AnyScene::Drr(s) => {
-                    let mut series = SeriesCollector::default();
-                    let report = engine::run_with_series(s, echo, threads, &|_, _| {}, &mut series)
+    let cancel = Cancel::new();
+    let stop = cancel.clone();
+    let outcome = off_the_gil(py, &cancel, move || -> Result<RunOutput, _> {
+        match &scene {
+            AnyScene::Drr(s) => {
+                let mut series = SeriesCollector::default();
+                let report =
+                    engine::run_cancellable(s, echo, threads, &|_, _| {}, Some(&mut series), &stop)
                         .map_err(|e| (s.name.clone(), e))?;
-                    let columns =
-                        series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
-                    Ok((report.to_json(), columns))
-                }
-                AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
-                    .map(|r| (r.to_json(), Vec::new()))
-                    .map_err(|e| (s.name.clone(), e)),
+                let columns =
+                    series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
+                Ok((report.to_json(), columns))
             }
-        })?;
-    let (json, columns) = outcome.map_err(|(name, e)| run_error(py, &name, &e))?;
+            AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
+                .map(|r| (r.to_json(), Vec::new()))
+                .map_err(|e| (s.name.clone(), RunError::Failed(e))),
+        }
+    })?;
+    let (json, columns) = outcome.map_err(|(name, e)| match e {
+        RunError::Failed(e) => run_error(py, &name, &e),
+        // Only set on a signal, whose exception off_the_gil has returned instead.
+        RunError::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"),
+    })?;
     let columns = columns.into_iter().map(|(n, c)| (n, numpy::PyArray1::from_vec(py, c))).collect();
     Ok((json, columns))
 }
@@ -209,11 +221,11 @@ fn sweep_scene(
     sweep::check_base(&base, &parsed)
         .map_err(|e| PyValueError::new_err(format!("{source}: {e}")))?;
     let points: Vec<BTreeMap<String, f64>> = sweep::points(&parsed);
-    let cancel = Arc::new(AtomicBool::new(false));
+    let cancel = Cancel::new();
     let stop = cancel.clone();
-    let rows = off_the_gil(py, cancel, move || {
+    let rows = off_the_gil(py, &cancel, move || {
         let rows = parallel::map(points.len(), threads, &|_, _| {}, |i| {
-            (!stop.load(Ordering::Relaxed)).then(|| sweep::run_point(&base, i, &points[i]))
+            sweep::run_point_cancellable(&base, i, &points[i], &stop)
         });
         serde_json::to_string(&rows.into_iter().flatten().collect::<Vec<_>>())
     })?;

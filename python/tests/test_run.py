@@ -98,14 +98,31 @@ def test_run_error_carries_t_state_and_kind():
     assert "at t =" in str(e)
 
 
-def test_ctrl_c_stops_a_long_run():
-    """SIGINT during a 3.5 s scene raises KeyboardInterrupt within a fraction of a second."""
-    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+def interrupted_after(seconds, work):
+    """Runs work(), sending SIGINT after `seconds`; asserts KeyboardInterrupt within a second
+    of the signal, then that the work has stopped: no CPU used by the process over 0.5 s (a
+    run going on in the background would use about 0.5 s of it)."""
+    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
     start = time.monotonic()
     timer.start()
     with pytest.raises(KeyboardInterrupt):
-        stickslip.run(scene_path("fig1b"))
-    assert time.monotonic() - start < 2.0
+        work()
+    assert time.monotonic() - start < seconds + 1.0
+    cpu = time.process_time()
+    time.sleep(0.5)
+    assert time.process_time() - cpu < 0.05
+
+
+def test_ctrl_c_stops_a_long_run():
+    """SIGINT during a 3.5 s scene (shooting, then a continuation of 51 points)."""
+    interrupted_after(0.3, lambda: stickslip.run(scene_path("fig1b")))
+
+
+def test_ctrl_c_stops_a_sweep_inside_its_points():
+    """SIGINT during a sweep whose points take about 3.5 s each, on two threads."""
+    with open(scene_path("fig1b")) as f:
+        scene = json.load(f)
+    interrupted_after(0.3, lambda: stickslip.sweep(scene, {"xi": [0.7, 0.71]}, threads=2))
 
 
 SWEEP_SCENE = {"name": "sweep", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72},

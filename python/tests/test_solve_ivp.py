@@ -77,9 +77,18 @@ def test_spring_slider_done_when(method, slider_reference):
     assert np.abs(res.t_events[0] - ref.t_events[0]).max() <= 1e-6
     assert np.abs(res.y_events[0][:, 1]).max() <= 1e-8  # ln v = 0 at each event
     grid = np.linspace(0.0, 40.0, 1001)
-    # Mixed error (|Δ| / (1 + |y|)): BDF's absolute error reaches 1.0e-6 in u = 0.99 at t = 38.8.
-    mixed = np.abs(res.sol(grid) - ref.sol(grid)) / (1.0 + np.abs(ref.sol(grid)))
-    assert mixed.max() <= 1e-6
+    error = np.abs(res.sol(grid) - ref.sol(grid))
+    # sol(t) within 1e-6 of the reference, as the end state. Not quite for CVODE's BDF: its
+    # global error at its own steps reaches 1.0095e-6 in u = 0.99 at t = 38.81 (scipy's BDF at
+    # the same tolerances: 7.5e-7), and sol there is off by as much (1.0086e-6).
+    bdf = method in ("BDF", "cvode-bdf")
+    assert error.max() <= (1.01e-6 if bdf else 1e-6)
+    assert (error / (1.0 + np.abs(ref.sol(grid)))).max() <= 1e-6  # the Test Set's mixed measure
+    # sol adds no error of its own: it passes through the steps, and between them it is as far
+    # from the reference as the steps are, within 1e-8 (measured: Radau 7.6e-9 on the grid
+    # against 1.6e-9 at the steps, BDF 1.0086e-6 against 1.0095e-6, rodas5p 1.2e-8 both).
+    np.testing.assert_allclose(res.sol(res.t), res.y, rtol=0, atol=1e-12)
+    assert error.max() <= np.abs(res.y - ref.sol(res.t)).max() + 1e-8
 
 
 def test_args_and_vectorized():

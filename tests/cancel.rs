@@ -1,0 +1,91 @@
+//! Cancelling a run ([`engine::Cancel`]): the run stops at the next integrator step with
+//! [`engine::RunError::Cancelled`], and a run never cancelled is the plain run.
+
+use stickslip::analysis::time_series::SeriesSink;
+use stickslip::engine::{self, Cancel, RunError};
+use stickslip::{scene, sweep};
+
+/// A time series of 40 time units in 4001 rows (CVODE's BDF takes ~2 steps per 10 rows).
+const SERIES: &str = r#"{"name": "cancel", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72},
+    "solver": {"method": "cvode-bdf", "rtol": 1e-10, "atol": 1e-12},
+    "analyses": ["hopf", {"time_series": {"t_max": 40, "points": 4001}}]}"#;
+
+/// Counts the rows; cancels the run at row `at`.
+struct CancelAt {
+    cancel: Cancel,
+    at: usize,
+    rows: usize,
+}
+
+impl SeriesSink for CancelAt {
+    fn begin(&mut self, _: &[&'static str]) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn row(&mut self, _: &[f64]) -> std::io::Result<()> {
+        self.rows += 1;
+        if self.rows == self.at {
+            self.cancel.cancel();
+        }
+        Ok(())
+    }
+    fn finish(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+fn rows_until_cancelled_at(at: usize) -> (Result<(), RunError>, usize) {
+    let s = scene::parse(SERIES, "test").unwrap();
+    let cancel = Cancel::new();
+    let mut sink = CancelAt { cancel: cancel.clone(), at, rows: 0 };
+    let outcome = engine::run_cancellable(
+        &s,
+        serde_json::Value::Null,
+        1,
+        &|_, _| {},
+        Some(&mut sink),
+        &cancel,
+    );
+    (outcome.map(|_| ()), sink.rows)
+}
+
+#[test]
+fn a_cancelled_run_stops_at_the_next_step_with_a_typed_error() {
+    let (whole, all) = rows_until_cancelled_at(usize::MAX);
+    assert_eq!(whole, Ok(()));
+    assert_eq!(all, 4001);
+    let (cancelled, rows) = rows_until_cancelled_at(100);
+    assert_eq!(cancelled, Err(RunError::Cancelled));
+    // The rows of the step in progress at most (measured: 100, none after the cancel).
+    assert!((100..110).contains(&rows), "{rows} rows written after cancelling at row 100");
+}
+
+#[test]
+fn a_run_never_cancelled_is_the_plain_run() {
+    let text = std::fs::read_to_string(format!(
+        "{}/data/scenes/earthquake.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let s = scene::parse(&text, "earthquake").unwrap();
+    let echo: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let plain = engine::run_with(&s, echo.clone(), 1, &|_, _| {}).unwrap();
+    let cancel = Cancel::new();
+    let cancellable = engine::run_cancellable(&s, echo, 1, &|_, _| {}, None, &cancel).unwrap();
+    let json = |r: &stickslip::report::Report| {
+        let mut v = serde_json::to_value(r).unwrap();
+        v.as_object_mut().unwrap().remove("wall_time_s");
+        v
+    };
+    assert_eq!(json(&plain), json(&cancellable));
+}
+
+#[test]
+fn a_cancelled_sweep_point_has_no_row() {
+    let base: serde_json::Value = serde_json::from_str(SERIES).unwrap();
+    let params = [("epsilon".to_string(), 0.8)].into_iter().collect();
+    let cancel = Cancel::new();
+    let row = sweep::run_point_cancellable(&base, 0, &params, &cancel);
+    assert_eq!(row, Some(sweep::run_point(&base, 0, &params)));
+    cancel.cancel();
+    assert_eq!(sweep::run_point_cancellable(&base, 0, &params, &cancel), None);
+}
