@@ -9,6 +9,17 @@ pub enum Tolerance {
     PerComponent(Vec<f64>),
 }
 
+impl Tolerance {
+    /// One absolute tolerance per component of a system of dimension `n` (a per-component
+    /// tolerance is assumed to have length `n`, as [`Options::validate`] checks).
+    pub fn to_vec(&self, n: usize) -> Vec<f64> {
+        match self {
+            Tolerance::Scalar(a) => vec![*a; n],
+            Tolerance::PerComponent(v) => v.clone(),
+        }
+    }
+}
+
 /// How one component's local error is weighed: the error test asks each component's error to
 /// stay below rtol·s_i + atol_i, where the scale s_i is the component's size (the usual, and
 /// SUNDIALS' only, rule) or a fixed number.

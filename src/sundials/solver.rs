@@ -271,10 +271,7 @@ impl<S> Solver<S> {
         };
         solver._atol = atol;
         if let Some(scales) = &options.error_scales {
-            let atol = match &options.atol {
-                Tolerance::PerComponent(v) => v.clone(),
-                Tolerance::Scalar(a) => vec![*a; dim],
-            };
+            let atol = options.atol.to_vec(dim);
             let weights = ErrorWeights { rtol: options.rtol, atol, scales: scales.clone() };
             // SAFETY: `shared` is the live leaked Box; no SUNDIALS call is running, so no
             // other reference to it exists.

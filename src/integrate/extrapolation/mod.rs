@@ -100,9 +100,8 @@ mod rounding;
 mod switching;
 mod tableau;
 
-use super::linalg::rms;
-use super::stepper::{self, all_finite, Core, FixedStepError, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
+use super::stepper::{self, all_finite, Core, FixedStepError, Stepper};
+use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
@@ -149,6 +148,11 @@ enum Mode {
 /// rejections by the error test or the rounding test in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
 /// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
 /// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
+///
+/// Statistics: `lin_setups` counts LU decompositions (one per linearly implicit row),
+/// `step_solve_fails` attempts stopped by a row failure (stability check, growing error,
+/// non-finite f, singular matrix), `err_test_fails` rejections by the error test;
+/// `last_order` is the order of the last accepted step.
 pub struct Extrapolation<S: OdeSystem> {
     system: S,
     n: usize,
@@ -232,10 +236,7 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "the Jacobian is reused by the stability-check ratio",
             ),
         ])?;
-        let atol: Vec<f64> = match &options.atol {
-            Tolerance::Scalar(a) => vec![*a; n],
-            Tolerance::PerComponent(v) => v.clone(),
-        };
+        let atol = options.atol.to_vec(n);
         let (km_imp, km_exp) = match options.max_order {
             Some(m) if !(4..=KM_IMPLICIT as i32).contains(&m) => {
                 let message = format!("max_order = {m} must be in 4..={KM_IMPLICIT} (tableau rows of the linearly implicit scheme)");
@@ -365,41 +366,9 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an order-5 error, measured with
     /// the scaled norm of the step-size control.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let d0 = rms(&self.core.y, &self.scal);
-        let d1 = rms(&self.core.f0, &self.scal);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        if !(h0.is_finite() && h0 > 0.0) {
-            // Degenerate weights (atol = 0 on a zero component): SEULEX's default.
-            h0 = 1e-6;
-        }
-        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
-        let mut d2 = None;
-        for _ in 0..12 {
-            let th = self.core.posneg * h0;
-            for i in 0..self.n {
-                self.work.tmp[i] = self.core.y[i] + th * self.core.f0[i];
-            }
-            self.system.rhs(self.core.x + th, &self.work.tmp, &mut self.work.fnew);
-            self.core.stats.rhs_evals += 1;
-            if all_finite(&self.work.fnew) {
-                for i in 0..self.n {
-                    self.work.tmp[i] = self.work.fnew[i] - self.core.f0[i];
-                }
-                d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
-                break;
-            }
-            self.core.stats.nonfinite_rhs += 1;
-            h0 *= 0.1;
-        }
-        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
-        let dm = d1.max(d2);
-        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(1.0 / 6.0) };
-        let h = (100.0 * h0).min(h1).min(bound);
-        if h.is_finite() && h > 0.0 {
-            h
-        } else {
-            h0
-        }
+        let (w, c) = (&mut self.work, &mut self.core);
+        let exponent = 1.0 / 6.0;
+        stepper::initial_step(&self.system, c, &self.scal, &mut w.tmp, &mut w.fnew, bound, exponent)
     }
 
     /// Accepts the step to `xph` in column kc: continuous output (already built for an explicit
@@ -706,28 +675,9 @@ impl<S: OdeSystem> Extrapolation<S> {
         self.enter(self.forced.unwrap_or(self.mode));
         Ok(())
     }
-
-    /// Statistics over the integrator's whole life (restarts included). `lin_setups` counts LU
-    /// decompositions (one per linearly implicit row), `step_solve_fails` attempts stopped by a
-    /// row failure (stability check, growing error, non-finite f, singular matrix),
-    /// `err_test_fails` rejections by the error test; `last_order` is the order of the last
-    /// accepted step.
-    pub fn stats(&self) -> Stats {
-        self.core.stats
-    }
 }
 
-impl<S: OdeSystem> Stepper for Extrapolation<S> {
-    const MAX_DENSE_ORDER: u32 = 3;
-    fn core(&self) -> &Core {
-        &self.core
-    }
-    fn core_mut(&mut self) -> &mut Core {
-        &mut self.core
-    }
-    fn ensure_f0(&mut self) -> bool {
-        self.core.ensure_f0(&self.system)
-    }
+stepper::integrator_via_stepper!(Extrapolation, dense_order = 3, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed.map(|(h, _)| h)
     }
@@ -740,15 +690,7 @@ impl<S: OdeSystem> Stepper for Extrapolation<S> {
         }
         Ok(())
     }
-    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        Extrapolation::estimate_initial_step(self, bound)
-    }
-    fn step(&mut self) -> Result<bool, SolverError> {
-        Extrapolation::step(self)
-    }
     fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
         Extrapolation::interpolate(self, t, k, out);
     }
-}
-
-stepper::integrator_via_stepper!(Extrapolation);
+});
