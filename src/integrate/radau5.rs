@@ -36,7 +36,9 @@
 
 use super::linalg::{lu_real, rms, solve_real};
 use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 
 const NAME: &str = "radau5";
 /// Safety factor of the step-size control.
@@ -206,7 +208,8 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (the collocation
 /// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `max_steps` (per call,
+/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `error_scales` (an
+/// absolute scale c weighs rtol'·c with the transformed rtol'), `max_steps` (per call,
 /// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
 /// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
@@ -219,9 +222,8 @@ pub struct Radau5<S: OdeSystem> {
     system: S,
     n: usize,
     c: Coeffs,
-    // Tolerances (RADAU5-transformed).
-    rtol: f64,
-    atol: Vec<f64>,
+    /// Error weights (RADAU5-transformed tolerances).
+    weights: ErrorWeights,
     // Options.
     nit: u32,
     fnewt: f64,
@@ -398,10 +400,11 @@ impl<S: OdeSystem> Radau5<S> {
             options.max_order.is_some(),
             "the order is fixed at 5",
         )])?;
-        // RADAU5's tolerance transformation.
+        // RADAU5's tolerance transformation (an absolute error scale c weighs rtol'·c).
         let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
-        let atol: Vec<f64> =
-            options.atol.to_vec(n).iter().map(|a| rtol * a / options.rtol).collect();
+        let mut weights = ErrorWeights::new(options, n);
+        weights.atol.iter_mut().for_each(|a| *a = rtol * *a / options.rtol);
+        weights.rtol = rtol;
         let fnewt = options
             .nonlin_conv_coef
             .unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
@@ -410,8 +413,7 @@ impl<S: OdeSystem> Radau5<S> {
             system,
             n,
             c: Coeffs::new(),
-            rtol,
-            atol,
+            weights,
             nit: positive(options.max_nonlin_iters, DEFAULT_NIT),
             fnewt,
             max_conv_fails: positive(options.max_conv_fails, DEFAULT_MAX_CONV_FAILS),
@@ -447,10 +449,7 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     fn update_scal(&mut self) {
-        for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
-            self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
-        }
+        self.weights.fill(&self.core.y, &mut self.scal);
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁴ (the embedded

@@ -51,7 +51,9 @@
 
 use super::linalg::{lu_real, rms, solve_real, solve_refined, with_small_n};
 use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 
 const NAME: &str = "rodas5p";
 /// Safety factor of the step-size control.
@@ -176,7 +178,8 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous
 /// output is a quartic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `max_steps` (per call,
+/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `error_scales`,
+/// `max_steps` (per call,
 /// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_err_test_fails` (consecutive rejections,
 /// default 50), `fail_on_step_underflow`. `max_order` (the order is 5), `max_nonlin_iters`,
@@ -190,8 +193,7 @@ impl Work {
 pub struct Rodas5p<S: OdeSystem> {
     system: S,
     n: usize,
-    rtol: f64,
-    atol: Vec<f64>,
+    weights: ErrorWeights,
     // Options.
     max_err_test_fails: u32,
     fixed_h: Option<f64>,
@@ -256,13 +258,11 @@ impl<S: OdeSystem> Rodas5p<S> {
             ("max_conv_fails", options.max_conv_fails.is_some(), no_newton),
             ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
         ])?;
-        let atol = options.atol.to_vec(n);
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
         Ok(Self {
             system,
             n,
-            rtol: options.rtol,
-            atol,
+            weights: ErrorWeights::new(options, n),
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             fixed_h: None,
             autonomous: false,
@@ -295,11 +295,10 @@ impl<S: OdeSystem> Rodas5p<S> {
         &self.system
     }
 
-    /// Error weights atol + rtol·max(|y|, |other|) into `work.scal`.
-    fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, y: &[f64], other: &[f64]) {
+    /// Error weights atol + rtol·max(|y|, |other|) (or their absolute scales) into `scal`.
+    fn set_scal(scal: &mut [f64], weights: &ErrorWeights, y: &[f64], other: &[f64]) {
         for i in 0..scal.len() {
-            let s = atol[i] + rtol * y[i].abs().max(other[i].abs());
-            scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+            scal[i] = weights.positive_scale(i, y[i].abs().max(other[i].abs()));
         }
     }
 
@@ -307,7 +306,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// estimate's order), measured with the weights atol + rtol·|y0|.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
         let (w, c) = (&mut self.work, &mut self.core);
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &c.y, &c.y);
+        Self::set_scal(&mut w.scal, &self.weights, &c.y, &c.y);
         stepper::initial_step(&self.system, c, &w.scal, &mut w.tmp, &mut w.fnew, bound, EXPONENT)
     }
 
@@ -433,7 +432,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn estimate_error(&mut self) -> f64 {
         let n = self.n;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &w.ynew);
+        Self::set_scal(&mut w.scal, &self.weights, &self.core.y, &w.ynew);
         let err = rms(&w.k[(STAGES - 1) * n..], &w.scal);
         if err.is_finite() {
             err
@@ -543,7 +542,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn stage_failure(&mut self, nonfinite: &mut u32) -> Result<(), SolverError> {
         self.core.nonfinite_failure(nonfinite, self.fixed_h.is_some())?;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &self.core.y);
+        Self::set_scal(&mut w.scal, &self.weights, &self.core.y, &self.core.y);
         // Max norms: f may be far beyond 1e154, where a sum of squares overflows.
         let norm = |v: &[f64]| v.iter().zip(&w.scal).fold(0.0f64, |m, (x, s)| m.max((x / s).abs()));
         let local = 0.01 * norm(&self.core.y) / norm(&self.core.f0);

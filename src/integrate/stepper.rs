@@ -9,8 +9,8 @@
 
 use super::linalg::rms;
 use super::{
-    panic_message, ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step,
-    StepEvent, Task, DEFAULT_MAX_STEPS,
+    panic_message, ErrorKind, ErrorScale, JacobianMatrix, OdeSystem, Options, SolverError, Stats,
+    Step, StepEvent, Task, DEFAULT_MAX_STEPS,
 };
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -21,6 +21,67 @@ pub(super) const UROUND: f64 = 1e-16;
 const MAX_NONFINITE: u32 = 10;
 /// The return code of an [`ErrorKind::CallbackPanic`] error.
 const PANIC_FLAG: i32 = -8;
+
+/// An absolute error scale never asks for less than this many units of round-off of the
+/// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
+/// v = 1e30) a fixed tolerance would lie below the spacing of the doubles there, and the error
+/// test could not be met (SUNDIALS stops with "too much accuracy requested").
+const ABSOLUTE_FLOOR_ULPS: f64 = 100.0 * f64::EPSILON;
+
+/// The error weights of an integration, the one definition that the homemade methods and
+/// SUNDIALS' user error-weight function use: component i's local error is measured against
+/// atol_i + rtol·|y_i| ([`ErrorScale::Relative`], and every component when `scales` is
+/// `None`) or atol_i + max(rtol·c, 100·ε·|y_i|) ([`ErrorScale::Absolute`]`(c)`).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ErrorWeights {
+    /// The relative tolerance (a method's own: RADAU5 transforms it).
+    pub rtol: f64,
+    /// One absolute tolerance per component.
+    pub atol: Vec<f64>,
+    /// One scale per component; `None` weighs every component relative to its size.
+    pub scales: Option<Vec<ErrorScale>>,
+}
+
+impl ErrorWeights {
+    /// The weights that `options` give a system of dimension `n` (options validated).
+    pub fn new(options: &Options, n: usize) -> Self {
+        Self {
+            rtol: options.rtol,
+            atol: options.atol.to_vec(n),
+            scales: options.error_scales.clone(),
+        }
+    }
+
+    /// The tolerance of component i whose size is `y_abs` (|y_i|, or a method's larger of
+    /// |y_i| at the two ends of a step).
+    #[inline]
+    pub fn scale(&self, i: usize, y_abs: f64) -> f64 {
+        let relative = match self.scales.as_ref().map(|s| s[i]) {
+            None | Some(ErrorScale::Relative) => self.rtol * y_abs,
+            Some(ErrorScale::Absolute(c)) => (self.rtol * c).max(ABSOLUTE_FLOOR_ULPS * y_abs),
+        };
+        self.atol[i] + relative
+    }
+
+    /// [`scale`](Self::scale), or the smallest positive double where that is not positive (a
+    /// zero tolerance for a zero component), as the homemade methods divide by it.
+    #[inline]
+    pub fn positive_scale(&self, i: usize, y_abs: f64) -> f64 {
+        let s = self.scale(i, y_abs);
+        if s > 0.0 {
+            s
+        } else {
+            f64::MIN_POSITIVE
+        }
+    }
+
+    /// The positive scales at `y` into `scal`.
+    pub fn fill(&self, y: &[f64], scal: &mut [f64]) {
+        for (i, (s, y)) in scal.iter_mut().zip(y).enumerate() {
+            *s = self.positive_scale(i, y.abs());
+        }
+    }
+}
 
 /// State and options every homemade integrator shares.
 pub(super) struct Core {
@@ -105,12 +166,6 @@ impl Core {
             return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
         }
         options.validate(n).map_err(|e| invalid(e.to_string()))?;
-        if options.error_scales.is_some() {
-            return Err(invalid(format!(
-                "error_scales is not an option of {name} (its error test weighs every component \
-                 relative to its size): leave it unset (None)"
-            )));
-        }
         Ok(Self {
             name,
             max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,

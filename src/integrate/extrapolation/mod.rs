@@ -101,7 +101,9 @@ mod switching;
 mod tableau;
 
 use super::stepper::{self, all_finite, Core, FixedStepError, Stepper};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
@@ -141,7 +143,8 @@ enum Mode {
 /// continuous output of degree k_c after an implicit step, ODEX's of degree 2k_c + 1 after an
 /// explicit one), `reinit` restarts with the scheme in use and fresh step-size history and
 /// keeps the statistics and the switch count. Options: `rtol`/`atol` (used as given, as in
-/// SEULEX/ODEX), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
+/// SEULEX/ODEX), `error_scales` (in the error weights; the rounding test's bound, atol plus
+/// the round-off of the step, does not involve rtol and stays as it is), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
 /// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
 /// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
 /// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
@@ -156,8 +159,8 @@ enum Mode {
 pub struct Extrapolation<S: OdeSystem> {
     system: S,
     n: usize,
-    rtol: f64,
-    atol: Vec<f64>,
+    /// Error weights (tolerances used as given).
+    weights: ErrorWeights,
     // Options.
     max_err_test_fails: u32,
     max_row_fails: u32,
@@ -236,7 +239,6 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "the Jacobian is reused by the stability-check ratio",
             ),
         ])?;
-        let atol = options.atol.to_vec(n);
         let (km_imp, km_exp) = match options.max_order {
             Some(m) if !(4..=KM_IMPLICIT as i32).contains(&m) => {
                 let message = format!("max_order = {m} must be in 4..={KM_IMPLICIT} (tableau rows of the linearly implicit scheme)");
@@ -264,8 +266,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let mut solver = Self {
             system,
             n,
-            rtol: options.rtol,
-            atol,
+            weights: ErrorWeights::new(options, n),
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             max_row_fails: positive(options.max_conv_fails, DEFAULT_MAX_ROW_FAILS),
             fixed: None,
@@ -332,7 +333,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     pub fn implicit_sequence(mut self, first: usize) -> Self {
         let first = first.max(1);
         let km = self.imp.nj.len() - 1;
-        self.imp = Control::seulex(km, first, self.rtol);
+        self.imp = Control::seulex(km, first, self.weights.rtol);
         let need = self.imp.off[km + 1];
         let n = self.n;
         self.work.incr.resize_with(need, || vec![0.0; n]);
@@ -357,10 +358,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     }
 
     fn update_scal(&mut self) {
-        for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
-            self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
-        }
+        self.weights.fill(&self.core.y, &mut self.scal);
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an order-5 error, measured with
