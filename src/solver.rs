@@ -161,20 +161,20 @@ impl Method {
     /// per-method facts. One `match` without a wildcard arm, so that a new method does not
     /// compile until its row is written.
     pub fn capabilities(self) -> Capabilities {
-        // The options of a Newton iteration (CVODE, ARKStep's implicit methods, Radau5).
+        // The options of a Newton iteration (CVODE, ARKStep's implicit methods, Radau5), and
+        // the error scales every method takes (SUNDIALS through a user error-weight function).
         let newton = Accepts {
             max_order: false,
             max_nonlin_iters: true,
             max_conv_fails: true,
             nonlin_conv_coef: true,
             jacobian_max_age: true,
-            error_scales: false,
+            error_scales: true,
             table: false,
             explicit_table: false,
         };
-        // SUNDIALS takes user error weights; the homemade methods weigh by size only.
-        let cvode = Accepts { max_order: true, error_scales: true, ..newton };
-        let dirk = Accepts { table: true, error_scales: true, ..newton };
+        let cvode = Accepts { max_order: true, ..newton };
+        let dirk = Accepts { table: true, ..newton };
         let plain = EngineSettings {
             jacobian_max_age: None,
             deduce_implicit_rhs: false,
@@ -315,7 +315,7 @@ pub struct Accepts {
     pub nonlin_conv_coef: bool,
     /// [`Options::jacobian_max_age`].
     pub jacobian_max_age: bool,
-    /// [`Options::error_scales`] (SUNDIALS' user error weights).
+    /// [`Options::error_scales`] (SUNDIALS' user error weights, the homemade methods' own).
     pub error_scales: bool,
     /// [`MethodSettings::table`].
     pub table: bool,

@@ -30,6 +30,7 @@ pub(crate) use problem::{implicit_jacobian_hint, jacobian_hint};
 pub use radau5::Radau5;
 pub use rodas5p::Rodas5p;
 pub use stats::Stats;
+pub(crate) use stepper::ErrorWeights;
 
 /// How far one call to a solver's `advance` goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

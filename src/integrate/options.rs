@@ -9,6 +9,17 @@ pub enum Tolerance {
     PerComponent(Vec<f64>),
 }
 
+impl Tolerance {
+    /// One absolute tolerance per component of a system of dimension `n` (a per-component
+    /// tolerance is assumed to have length `n`, as [`Options::validate`] checks).
+    pub fn to_vec(&self, n: usize) -> Vec<f64> {
+        match self {
+            Tolerance::Scalar(a) => vec![*a; n],
+            Tolerance::PerComponent(v) => v.clone(),
+        }
+    }
+}
+
 /// How one component's local error is weighed: the error test asks each component's error to
 /// stay below rtol·s_i + atol_i, where the scale s_i is the component's size (the usual, and
 /// SUNDIALS' only, rule) or a fixed number.
@@ -79,7 +90,11 @@ pub struct Options {
     pub fail_on_step_underflow: bool,
     /// One [`ErrorScale`] per component; `None` weighs every component relative to its size.
     /// CVODE and ARKStep take it through a user error-weight function (`*WFtolerances`); the
-    /// homemade integrators reject it with [`crate::integrate::ErrorKind::InvalidInput`].
+    /// homemade integrators use it wherever they form error weights (Radau5 with its
+    /// transformed rtol' = 0.1·rtol^(2/3): an absolute scale c weighs rtol'·c; Rodas5P and
+    /// Extrapolation's explicit scheme, which weigh by the larger of |y| at the step's two
+    /// ends, weigh rtol·c instead). Every scale [`ErrorScale::Relative`] is the same
+    /// integration, bit for bit, as `None`.
     pub error_scales: Option<Vec<ErrorScale>>,
 }
 

@@ -35,8 +35,10 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_real};
-use super::stepper::{self, all_finite, Core, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
+use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 
 const NAME: &str = "radau5";
 /// Safety factor of the step-size control.
@@ -206,21 +208,22 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (the collocation
 /// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `max_steps` (per call,
+/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `error_scales` (an
+/// absolute scale c weighs rtol'·c with the transformed rtol'), `max_steps` (per call,
 /// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
 /// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
 /// step, default 10), `max_err_test_fails` (consecutive rejections, default 50),
 /// `jacobian_max_age` (a new Jacobian after that many accepted steps even when the Newton
 /// contraction allows reuse), `fail_on_step_underflow`. `max_order` is an InvalidInput error
-/// (the order is 5).
+/// (the order is 5). Statistics: `lin_setups` counts one per pair of real and complex
+/// factorisations.
 pub struct Radau5<S: OdeSystem> {
     system: S,
     n: usize,
     c: Coeffs,
-    // Tolerances (RADAU5-transformed).
-    rtol: f64,
-    atol: Vec<f64>,
+    /// Error weights (RADAU5-transformed tolerances).
+    weights: ErrorWeights,
     // Options.
     nit: u32,
     fnewt: f64,
@@ -231,10 +234,8 @@ pub struct Radau5<S: OdeSystem> {
     scal: Vec<f64>,
     faccon: f64,
     theta: f64,
-    /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
-    naccpt: u64,
-    hacc: f64,
-    erracc: f64,
+    /// The step-size control with Gustafsson's memory.
+    control: StepControl,
     /// The Jacobian was computed at the current point (no step accepted since).
     caljac: bool,
     /// Steps accepted since the Jacobian in use was computed, and the most allowed
@@ -399,12 +400,11 @@ impl<S: OdeSystem> Radau5<S> {
             options.max_order.is_some(),
             "the order is fixed at 5",
         )])?;
-        // RADAU5's tolerance transformation.
+        // RADAU5's tolerance transformation (an absolute error scale c weighs rtol'·c).
         let rtol = 0.1 * options.rtol.powf(2.0 / 3.0);
-        let atol: Vec<f64> = match &options.atol {
-            Tolerance::Scalar(a) => vec![rtol * a / options.rtol; n],
-            Tolerance::PerComponent(v) => v.iter().map(|a| rtol * a / options.rtol).collect(),
-        };
+        let mut weights = ErrorWeights::new(options, n);
+        weights.atol.iter_mut().for_each(|a| *a = rtol * *a / options.rtol);
+        weights.rtol = rtol;
         let fnewt = options
             .nonlin_conv_coef
             .unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
@@ -413,8 +413,7 @@ impl<S: OdeSystem> Radau5<S> {
             system,
             n,
             c: Coeffs::new(),
-            rtol,
-            atol,
+            weights,
             nit: positive(options.max_nonlin_iters, DEFAULT_NIT),
             fnewt,
             max_conv_fails: positive(options.max_conv_fails, DEFAULT_MAX_CONV_FAILS),
@@ -423,9 +422,7 @@ impl<S: OdeSystem> Radau5<S> {
             scal: vec![1.0; n],
             faccon: 1.0,
             theta: THET,
-            naccpt: 0,
-            hacc: 0.0,
-            erracc: 0.0,
+            control: StepControl::new(0.25, SAFE, FACR, FACL),
             caljac: false,
             jacobian_age: 0,
             jacobian_max_age: options.jacobian_max_age.map_or(u64::MAX, |a| a as u64),
@@ -452,41 +449,14 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     fn update_scal(&mut self) {
-        for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
-            self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
-        }
+        self.weights.fill(&self.core.y, &mut self.scal);
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁴ (the embedded
     /// estimate's order), measured with the scaled norm of the step-size control.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let d0 = rms(&self.core.y, &self.scal);
-        let d1 = rms(&self.core.f0, &self.scal);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
-        let mut d2 = None;
-        for _ in 0..12 {
-            let th = self.core.posneg * h0;
-            for i in 0..self.n {
-                self.work.tmp[i] = self.core.y[i] + th * self.core.f0[i];
-            }
-            self.system.rhs(self.core.x + th, &self.work.tmp, &mut self.work.fnew);
-            self.core.stats.rhs_evals += 1;
-            if all_finite(&self.work.fnew) {
-                for i in 0..self.n {
-                    self.work.tmp[i] = self.work.fnew[i] - self.core.f0[i];
-                }
-                d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
-                break;
-            }
-            self.core.stats.nonfinite_rhs += 1;
-            h0 *= 0.1;
-        }
-        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
-        let dm = d1.max(d2);
-        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(0.25) };
-        (100.0 * h0).min(h1).min(bound)
+        let (w, c) = (&mut self.work, &mut self.core);
+        stepper::initial_step(&self.system, c, &self.scal, &mut w.tmp, &mut w.fnew, bound, 0.25)
     }
 
     /// Jacobian at (x, y) into `work.jac`: analytic, or forward differences (RADAU5's
@@ -781,7 +751,7 @@ impl<S: OdeSystem> Radau5<S> {
             };
             // The new step size.
             let fac = SAFE.min(SAFE * (1 + 2 * self.nit) as f64 / (newt + 2 * self.nit) as f64);
-            let mut quot = (err.powf(0.25) / fac).clamp(FACR, FACL);
+            let mut quot = self.control.quotient(err, fac);
             let mut hnew = self.core.h / quot;
             if err < 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
@@ -804,18 +774,7 @@ impl<S: OdeSystem> Radau5<S> {
                 self.accept(xph, err, &mut quot, &mut hnew);
                 let h = self.core.h;
                 // The next step size (RADAU5 after label 30's acceptance branch).
-                hnew = self.core.posneg * hnew.abs().min(self.core.hmax).max(self.core.hmin);
-                if self.core.reject {
-                    hnew = self.core.posneg * hnew.abs().min(h.abs());
-                }
-                self.core.reject = false;
-                if last {
-                    self.core.stop_time = None;
-                    hnew = planned;
-                }
-                if let Some(hf) = self.fixed_h {
-                    hnew = self.core.posneg * hf;
-                }
+                hnew = self.core.next_step(hnew, last, planned, self.fixed_h);
                 let qt = hnew / h;
                 let fresh = self.theta <= THET && self.jacobian_age < self.jacobian_max_age;
                 if fresh && (QUOT1..=QUOT2).contains(&qt) {
@@ -828,15 +787,7 @@ impl<S: OdeSystem> Radau5<S> {
                 return Ok(last);
             }
             // Rejected by the error test.
-            self.core.stats.err_test_fails += 1;
-            rejections += 1;
-            if rejections >= self.max_err_test_fails {
-                let message = format!(
-                    "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
-                    self.core.h
-                );
-                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
-            }
+            self.core.rejected(&mut rejections, self.max_err_test_fails, err)?;
             let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
             self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
         }
@@ -853,15 +804,7 @@ impl<S: OdeSystem> Radau5<S> {
     /// state (RADAU5's acceptance branch).
     fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
         let h = self.core.h;
-        self.naccpt += 1;
-        if self.naccpt > 1 {
-            let facgus =
-                ((self.hacc / h) * (err * err / self.erracc).powf(0.25) / SAFE).clamp(FACR, FACL);
-            *quot = quot.max(facgus);
-            *hnew = h / *quot;
-        }
-        self.hacc = h;
-        self.erracc = err.max(1e-2);
+        self.control.accepted(h, err, quot, hnew);
         self.core.xold = self.core.x;
         self.core.hold = h;
         self.core.x = xph;
@@ -891,70 +834,35 @@ impl<S: OdeSystem> Radau5<S> {
         self.update_scal();
         self.faccon = 1.0;
         self.theta = THET;
-        self.naccpt = 0;
+        self.control.restart();
         self.caljac = false;
         self.action = Action::Jacobian;
         self.lu_h = f64::NAN;
         Ok(())
     }
-
-    /// Statistics over the integrator's whole life (restarts included). `lin_setups` counts
-    /// one per pair of real and complex factorisations.
-    pub fn stats(&self) -> Stats {
-        self.core.stats
-    }
 }
 
-impl<S: OdeSystem> Stepper for Radau5<S> {
-    const MAX_DENSE_ORDER: u32 = 3;
-    fn core(&self) -> &Core {
-        &self.core
-    }
-    fn core_mut(&mut self) -> &mut Core {
-        &mut self.core
-    }
-    fn ensure_f0(&mut self) -> bool {
-        self.core.ensure_f0(&self.system)
-    }
+stepper::integrator_via_stepper!(Radau5, dense_order = 3, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed_h
-    }
-    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        Radau5::estimate_initial_step(self, bound)
-    }
-    fn step(&mut self) -> Result<bool, SolverError> {
-        Radau5::step(self)
     }
     fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
         interpolate(&self.c, &self.work, &self.core.y, self.core.x, self.core.hold, t, k, out);
     }
-}
-
-stepper::integrator_via_stepper!(Radau5);
+});
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// The complex LU solve (the real one is tested in linalg.rs).
     #[test]
-    fn real_and_complex_lu_solve() {
+    fn complex_lu_solve() {
         let n = 3;
         // Column-major, needs pivoting (zero leading entry).
         let a = [0.0, 2.0, 1.0, 1.0, 1.0, 3.0, 2.0, -1.0, 1.0];
         let x = [1.0, -2.0, 0.5];
-        let mut b = [0.0; 3];
-        for j in 0..n {
-            for i in 0..n {
-                b[i] += a[j * n + i] * x[j];
-            }
-        }
-        let (mut lu, mut ip) = (a, [0; 3]);
-        assert!(lu_real(&mut lu, &mut ip, n));
-        solve_real(&lu, &ip, n, &mut b);
-        for i in 0..n {
-            assert!((b[i] - x[i]).abs() < 1e-14, "{b:?}");
-        }
-        // Complex: (A + i·D) (xr + i·xi) = b.
+        // (A + i·D) (xr + i·xi) = b.
         let ai = [0.5, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 2.0];
         let xi = [0.3, 0.0, -1.0];
         let (mut br, mut bi) = ([0.0; 3], [0.0; 3]);
@@ -971,8 +879,8 @@ mod tests {
         for i in 0..n {
             assert!((br[i] - x[i]).abs() < 1e-14 && (bi[i] - xi[i]).abs() < 1e-14, "{br:?} {bi:?}");
         }
-        let mut singular = [1.0, 2.0, 2.0, 4.0];
-        assert!(!lu_real(&mut singular, &mut [0; 2], 2));
+        let (mut sr, mut si) = ([1.0, 2.0, 2.0, 4.0], [0.0; 4]);
+        assert!(!lu_complex(&mut sr, &mut si, &mut [0; 2], 2));
     }
 
     #[test]

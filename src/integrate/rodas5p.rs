@@ -50,8 +50,10 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, rms, solve_real, solve_refined, with_small_n};
-use super::stepper::{self, all_finite, Core, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
+use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 
 const NAME: &str = "rodas5p";
 /// Safety factor of the step-size control.
@@ -176,7 +178,8 @@ impl Work {
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous
 /// output is a quartic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `max_steps` (per call,
+/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `error_scales`,
+/// `max_steps` (per call,
 /// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
 /// disabled once reached, as in SUNDIALS), `max_err_test_fails` (consecutive rejections,
 /// default 50), `fail_on_step_underflow`. `max_order` (the order is 5), `max_nonlin_iters`,
@@ -184,20 +187,20 @@ impl Work {
 /// errors.
 ///
 /// Non-autonomous systems: ∂f/∂t is a forward difference (see the module documentation).
+///
+/// Statistics: `rhs_evals_jacobian` includes the finite-difference ∂f/∂t calls;
+/// `nonlin_iters` stays 0.
 pub struct Rodas5p<S: OdeSystem> {
     system: S,
     n: usize,
-    rtol: f64,
-    atol: Vec<f64>,
+    weights: ErrorWeights,
     // Options.
     max_err_test_fails: u32,
     fixed_h: Option<f64>,
     autonomous: bool,
     // Integration state.
-    /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
-    naccpt: u64,
-    hacc: f64,
-    erracc: f64,
+    /// The step-size control with Gustafsson's memory.
+    control: StepControl,
     /// The Jacobian (and ∂f/∂t) are those of the current point.
     jac_current: bool,
     /// Step size the LU factors were computed for (NaN: none valid).
@@ -255,22 +258,15 @@ impl<S: OdeSystem> Rodas5p<S> {
             ("max_conv_fails", options.max_conv_fails.is_some(), no_newton),
             ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
         ])?;
-        let atol: Vec<f64> = match &options.atol {
-            Tolerance::Scalar(a) => vec![*a; n],
-            Tolerance::PerComponent(v) => v.clone(),
-        };
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
         Ok(Self {
             system,
             n,
-            rtol: options.rtol,
-            atol,
+            weights: ErrorWeights::new(options, n),
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             fixed_h: None,
             autonomous: false,
-            naccpt: 0,
-            hacc: 0.0,
-            erracc: 0.0,
+            control: StepControl::new(EXPONENT, SAFE, FAC2, FAC1),
             jac_current: false,
             lu_h: f64::NAN,
             core,
@@ -299,45 +295,19 @@ impl<S: OdeSystem> Rodas5p<S> {
         &self.system
     }
 
-    /// Error weights atol + rtol·max(|y|, |other|) into `work.scal`.
-    fn set_scal(scal: &mut [f64], atol: &[f64], rtol: f64, y: &[f64], other: &[f64]) {
+    /// Error weights atol + rtol·max(|y|, |other|) (or their absolute scales) into `scal`.
+    fn set_scal(scal: &mut [f64], weights: &ErrorWeights, y: &[f64], other: &[f64]) {
         for i in 0..scal.len() {
-            let s = atol[i] + rtol * y[i].abs().max(other[i].abs());
-            scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+            scal[i] = weights.positive_scale(i, y[i].abs().max(other[i].abs()));
         }
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an error ~ h⁵ (the embedded
     /// estimate's order), measured with the weights atol + rtol·|y0|.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &self.core.y);
-        let d0 = rms(&self.core.y, &w.scal);
-        let d1 = rms(&self.core.f0, &w.scal);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
-        let mut d2 = None;
-        for _ in 0..12 {
-            let th = self.core.posneg * h0;
-            for i in 0..self.n {
-                w.tmp[i] = self.core.y[i] + th * self.core.f0[i];
-            }
-            self.system.rhs(self.core.x + th, &w.tmp, &mut w.fnew);
-            self.core.stats.rhs_evals += 1;
-            if all_finite(&w.fnew) {
-                for i in 0..self.n {
-                    w.tmp[i] = w.fnew[i] - self.core.f0[i];
-                }
-                d2 = Some(rms(&w.tmp, &w.scal) / h0);
-                break;
-            }
-            self.core.stats.nonfinite_rhs += 1;
-            h0 *= 0.1;
-        }
-        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
-        let dm = d1.max(d2);
-        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(EXPONENT) };
-        (100.0 * h0).min(h1).min(bound)
+        let (w, c) = (&mut self.work, &mut self.core);
+        Self::set_scal(&mut w.scal, &self.weights, &c.y, &c.y);
+        stepper::initial_step(&self.system, c, &w.scal, &mut w.tmp, &mut w.fnew, bound, EXPONENT)
     }
 
     /// Jacobian at (x, y) into `work.jac` (analytic, or forward differences with RADAU5's
@@ -462,7 +432,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn estimate_error(&mut self) -> f64 {
         let n = self.n;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &w.ynew);
+        Self::set_scal(&mut w.scal, &self.weights, &self.core.y, &w.ynew);
         let err = rms(&w.k[(STAGES - 1) * n..], &w.scal);
         if err.is_finite() {
             err
@@ -523,7 +493,7 @@ impl<S: OdeSystem> Rodas5p<S> {
             }
             let err = self.estimate_error();
             // The new step size.
-            let mut quot = (err.powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
+            let mut quot = self.control.quotient(err, SAFE);
             let mut hnew = self.core.h / quot;
             if err <= 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
@@ -541,34 +511,13 @@ impl<S: OdeSystem> Rodas5p<S> {
                     continue;
                 }
                 self.accept(xph, err, &mut quot, &mut hnew);
-                let h = self.core.h;
                 // The next step size (RODAS's acceptance branch).
-                hnew = self.core.posneg * hnew.abs().min(self.core.hmax).max(self.core.hmin);
-                if self.core.reject {
-                    hnew = self.core.posneg * hnew.abs().min(h.abs());
-                }
-                self.core.reject = false;
-                if last {
-                    self.core.stop_time = None;
-                    hnew = planned;
-                }
-                if let Some(hf) = self.fixed_h {
-                    hnew = self.core.posneg * hf;
-                }
-                self.core.h = hnew;
+                self.core.h = self.core.next_step(hnew, last, planned, self.fixed_h);
                 self.core.stats.current_step = self.core.h;
                 return Ok(last);
             }
             // Rejected by the error test.
-            self.core.stats.err_test_fails += 1;
-            rejections += 1;
-            if rejections >= self.max_err_test_fails {
-                let message = format!(
-                    "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
-                    self.core.h
-                );
-                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
-            }
+            self.core.rejected(&mut rejections, self.max_err_test_fails, err)?;
             // From the second rejection in a row, the error is evidently not falling like h⁵ (a
             // transient the step does not resolve yet): cut h by the largest factor, 1/FAC1,
             // as CVODE does after two error-test failures (its ETAMXF = 0.2).
@@ -593,7 +542,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn stage_failure(&mut self, nonfinite: &mut u32) -> Result<(), SolverError> {
         self.core.nonfinite_failure(nonfinite, self.fixed_h.is_some())?;
         let w = &mut self.work;
-        Self::set_scal(&mut w.scal, &self.atol, self.rtol, &self.core.y, &self.core.y);
+        Self::set_scal(&mut w.scal, &self.weights, &self.core.y, &self.core.y);
         // Max norms: f may be far beyond 1e154, where a sum of squares overflows.
         let norm = |v: &[f64]| v.iter().zip(&w.scal).fold(0.0f64, |m, (x, s)| m.max((x / s).abs()));
         let local = 0.01 * norm(&self.core.y) / norm(&self.core.f0);
@@ -609,15 +558,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
         let h = self.core.h;
         let n = self.n;
-        self.naccpt += 1;
-        if self.naccpt > 1 {
-            let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(EXPONENT) / SAFE)
-                .clamp(FAC2, FAC1);
-            *quot = quot.max(facgus);
-            *hnew = h / *quot;
-        }
-        self.hacc = h;
-        self.erracc = err.max(1e-2);
+        self.control.accepted(h, err, quot, hnew);
         self.core.xold = self.core.x;
         self.core.hold = h;
         self.core.x = xph;
@@ -646,45 +587,21 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// options and statistics are kept.
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         self.core.restart(t0, y0)?;
-        self.naccpt = 0;
+        self.control.restart();
         self.jac_current = false;
         self.lu_h = f64::NAN;
         Ok(())
     }
-
-    /// Statistics over the integrator's whole life (restarts included). `rhs_evals_jacobian`
-    /// includes the finite-difference ∂f/∂t calls; `nonlin_iters` stays 0.
-    pub fn stats(&self) -> Stats {
-        self.core.stats
-    }
 }
 
-impl<S: OdeSystem> Stepper for Rodas5p<S> {
-    const MAX_DENSE_ORDER: u32 = 4;
-    fn core(&self) -> &Core {
-        &self.core
-    }
-    fn core_mut(&mut self) -> &mut Core {
-        &mut self.core
-    }
-    fn ensure_f0(&mut self) -> bool {
-        self.core.ensure_f0(&self.system)
-    }
+stepper::integrator_via_stepper!(Rodas5p, dense_order = 4, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed_h
-    }
-    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        Rodas5p::estimate_initial_step(self, bound)
-    }
-    fn step(&mut self) -> Result<bool, SolverError> {
-        Rodas5p::step(self)
     }
     fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
         interpolate(&self.work, &self.core.y, self.core.x, self.core.hold, t, k, out);
     }
-}
-
-stepper::integrator_via_stepper!(Rodas5p);
+});
 
 #[cfg(test)]
 mod tests {

@@ -7,9 +7,10 @@
 //!
 //! [`Integrator::advance`]: super::Integrator::advance
 
+use super::linalg::rms;
 use super::{
-    panic_message, ErrorKind, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Step,
-    StepEvent, Task, DEFAULT_MAX_STEPS,
+    panic_message, ErrorKind, ErrorScale, JacobianMatrix, OdeSystem, Options, SolverError, Stats,
+    Step, StepEvent, Task, DEFAULT_MAX_STEPS,
 };
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -20,6 +21,67 @@ pub(super) const UROUND: f64 = 1e-16;
 const MAX_NONFINITE: u32 = 10;
 /// The return code of an [`ErrorKind::CallbackPanic`] error.
 const PANIC_FLAG: i32 = -8;
+
+/// An absolute error scale never asks for less than this many units of round-off of the
+/// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
+/// v = 1e30) a fixed tolerance would lie below the spacing of the doubles there, and the error
+/// test could not be met (SUNDIALS stops with "too much accuracy requested").
+const ABSOLUTE_FLOOR_ULPS: f64 = 100.0 * f64::EPSILON;
+
+/// The error weights of an integration, the one definition that the homemade methods and
+/// SUNDIALS' user error-weight function use: component i's local error is measured against
+/// atol_i + rtol·|y_i| ([`ErrorScale::Relative`], and every component when `scales` is
+/// `None`) or atol_i + max(rtol·c, 100·ε·|y_i|) ([`ErrorScale::Absolute`]`(c)`).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ErrorWeights {
+    /// The relative tolerance (a method's own: RADAU5 transforms it).
+    pub rtol: f64,
+    /// One absolute tolerance per component.
+    pub atol: Vec<f64>,
+    /// One scale per component; `None` weighs every component relative to its size.
+    pub scales: Option<Vec<ErrorScale>>,
+}
+
+impl ErrorWeights {
+    /// The weights that `options` give a system of dimension `n` (options validated).
+    pub fn new(options: &Options, n: usize) -> Self {
+        Self {
+            rtol: options.rtol,
+            atol: options.atol.to_vec(n),
+            scales: options.error_scales.clone(),
+        }
+    }
+
+    /// The tolerance of component i whose size is `y_abs` (|y_i|, or a method's larger of
+    /// |y_i| at the two ends of a step).
+    #[inline]
+    pub fn scale(&self, i: usize, y_abs: f64) -> f64 {
+        let relative = match self.scales.as_ref().map(|s| s[i]) {
+            None | Some(ErrorScale::Relative) => self.rtol * y_abs,
+            Some(ErrorScale::Absolute(c)) => (self.rtol * c).max(ABSOLUTE_FLOOR_ULPS * y_abs),
+        };
+        self.atol[i] + relative
+    }
+
+    /// [`scale`](Self::scale), or the smallest positive double where that is not positive (a
+    /// zero tolerance for a zero component), as the homemade methods divide by it.
+    #[inline]
+    pub fn positive_scale(&self, i: usize, y_abs: f64) -> f64 {
+        let s = self.scale(i, y_abs);
+        if s > 0.0 {
+            s
+        } else {
+            f64::MIN_POSITIVE
+        }
+    }
+
+    /// The positive scales at `y` into `scal`.
+    pub fn fill(&self, y: &[f64], scal: &mut [f64]) {
+        for (i, (s, y)) in scal.iter_mut().zip(y).enumerate() {
+            *s = self.positive_scale(i, y.abs());
+        }
+    }
+}
 
 /// State and options every homemade integrator shares.
 pub(super) struct Core {
@@ -104,12 +166,6 @@ impl Core {
             return Err(invalid(format!("y0[{i}] = {} must be finite", y0[i])));
         }
         options.validate(n).map_err(|e| invalid(e.to_string()))?;
-        if options.error_scales.is_some() {
-            return Err(invalid(format!(
-                "error_scales is not an option of {name} (its error test weighs every component \
-                 relative to its size): leave it unset (None)"
-            )));
-        }
         Ok(Self {
             name,
             max_steps: options.max_steps.unwrap_or(DEFAULT_MAX_STEPS).max(1) as u64,
@@ -221,6 +277,26 @@ impl Core {
         Ok(())
     }
 
+    /// A step rejected by the error test with the error `err`: counted (`rejections` in this
+    /// step), an error once they reach `max`.
+    pub fn rejected(
+        &mut self,
+        rejections: &mut u32,
+        max: u32,
+        err: f64,
+    ) -> Result<(), SolverError> {
+        self.stats.err_test_fails += 1;
+        *rejections += 1;
+        if *rejections >= max {
+            let message = format!(
+                "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
+                self.h
+            );
+            return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+        }
+        Ok(())
+    }
+
     /// Sets a reduced step size after a failure; an error of `kind` if h is already at
     /// `min_step`.
     pub fn reduce(
@@ -292,6 +368,131 @@ impl Core {
         self.xold -= shift;
         self.t_out = 0.0;
         self.stop_time = self.stop_time.map(|t| t - shift);
+    }
+}
+
+impl Core {
+    /// The step size to try after an accepted step (RADAU5's and RODAS's acceptance branch):
+    /// the proposed `hnew` within [min_step, max_step], no longer than the step just taken
+    /// right after a rejection, the `planned` step again after a `last` step clipped to the
+    /// stop time (which is then disabled), and the fixed step of a testing aid if any.
+    pub fn next_step(&mut self, hnew: f64, last: bool, planned: f64, fixed: Option<f64>) -> f64 {
+        let mut hnew = self.posneg * hnew.abs().min(self.hmax).max(self.hmin);
+        if self.reject {
+            hnew = self.posneg * hnew.abs().min(self.h.abs());
+        }
+        self.reject = false;
+        if last {
+            self.stop_time = None;
+            hnew = planned;
+        }
+        if let Some(hf) = fixed {
+            hnew = self.posneg * hf;
+        }
+        hnew
+    }
+}
+
+/// The step-size control of RADAU5 and RODAS: h_new = h/q with q = err^e/fac clamped to
+/// [`quot_min`, `quot_max`] (e the error exponent, fac a safety factor), and on accepted steps
+/// Gustafsson's predictive controller (Hairer–Wanner, Solving ODEs II, IV.8, (8.21)), which
+/// remembers the last accepted step and its error.
+///
+/// [`quot_min`]: StepControl::new
+/// [`quot_max`]: StepControl::new
+#[derive(Debug, Clone)]
+pub(super) struct StepControl {
+    exponent: f64,
+    safe: f64,
+    quot_min: f64,
+    quot_max: f64,
+    /// Accepted steps since the last (re)start, the last one and its error (at least 1e-2).
+    naccpt: u64,
+    hacc: f64,
+    erracc: f64,
+}
+
+impl StepControl {
+    /// The control of a method whose error estimate is O(h^(1/`exponent`)), with the safety
+    /// factor `safe` and the step ratio h/h_new kept within [`quot_min`, `quot_max`].
+    pub const fn new(exponent: f64, safe: f64, quot_min: f64, quot_max: f64) -> Self {
+        Self { exponent, safe, quot_min, quot_max, naccpt: 0, hacc: 0.0, erracc: 0.0 }
+    }
+
+    /// The ratio h/h_new the error `err` asks for with the safety factor `fac`, clamped.
+    pub fn quotient(&self, err: f64, fac: f64) -> f64 {
+        (err.powf(self.exponent) / fac).clamp(self.quot_min, self.quot_max)
+    }
+
+    /// An accepted step `h` with error `err`: from the second accepted step on, Gustafsson's
+    /// ratio raises `quot` (and so shortens `hnew` = h/quot) when the error grows.
+    pub fn accepted(&mut self, h: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
+        self.naccpt += 1;
+        if self.naccpt > 1 {
+            let ratio = (self.hacc / h) * (err * err / self.erracc).powf(self.exponent);
+            let facgus = (ratio / self.safe).clamp(self.quot_min, self.quot_max);
+            *quot = quot.max(facgus);
+            *hnew = h / *quot;
+        }
+        self.hacc = h;
+        self.erracc = err.max(1e-2);
+    }
+
+    /// Forgets the accepted steps (after a restart).
+    pub fn restart(&mut self) {
+        self.naccpt = 0;
+    }
+}
+
+/// Hairer–Wanner's initial step (Solving ODEs I, II.4) at the point of `c` (with `c.f0`
+/// valid), at most `bound`, for a method whose error estimate is O(h^(1/`exponent`)), measured
+/// in the RMS norm with the weights `scal`: h0 = 0.01·‖y‖/‖f‖ (1e-6 when either is below 1e-5
+/// or the ratio is not a positive number), an explicit Euler step of h0 (cut by 10 while f is
+/// not finite there) for ‖f'‖, and h = min(100·h0, (0.01/max(‖f‖, ‖f'‖))^exponent, bound),
+/// h0 if that is not a positive number. `tmp` and `fnew` are scratch of length n.
+pub(super) fn initial_step<S: OdeSystem>(
+    system: &S,
+    c: &mut Core,
+    scal: &[f64],
+    tmp: &mut [f64],
+    fnew: &mut [f64],
+    bound: f64,
+    exponent: f64,
+) -> f64 {
+    let d0 = rms(&c.y, scal);
+    let d1 = rms(&c.f0, scal);
+    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+    if !(h0.is_finite() && h0 > 0.0) {
+        // Degenerate weights (atol = 0 on a zero component): SEULEX's default.
+        h0 = 1e-6;
+    }
+    h0 = h0.min(bound).max(100.0 * UROUND * c.x.abs()).max(f64::MIN_POSITIVE);
+    let mut d2 = None;
+    for _ in 0..12 {
+        let th = c.posneg * h0;
+        for ((t, y), f) in tmp.iter_mut().zip(&c.y).zip(&c.f0) {
+            *t = y + th * f;
+        }
+        system.rhs(c.x + th, tmp, fnew);
+        c.stats.rhs_evals += 1;
+        if all_finite(fnew) {
+            for ((t, fnew), f) in tmp.iter_mut().zip(&*fnew).zip(&c.f0) {
+                *t = fnew - f;
+            }
+            d2 = Some(rms(tmp, scal) / h0);
+            break;
+        }
+        c.stats.nonfinite_rhs += 1;
+        h0 *= 0.1;
+    }
+    let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
+    let dm = d1.max(d2);
+    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(exponent) };
+    let h = (100.0 * h0).min(h1).min(bound);
+    if h.is_finite() && h > 0.0 {
+        h
+    } else {
+        h0
     }
 }
 
@@ -592,9 +793,32 @@ pub(super) fn jacobian<S: OdeSystem>(
     all_finite(jac)
 }
 
-/// `impl Integrator` for a method implementing [`Stepper`] (with an inherent `reinit`).
+/// `impl Stepper` and `impl Integrator` for a method `$T<S>` with the fields `core: Core` and
+/// `system: S` and the inherent `estimate_initial_step`, `step` and `reinit`; the [`Stepper`]
+/// items that differ between methods (`fixed_h`, `interpolate`, and `check_fixed` where the
+/// default does not fit) are given in braces.
 macro_rules! integrator_via_stepper {
-    ($T:ident) => {
+    ($T:ident, dense_order = $order:expr, { $($items:tt)* }) => {
+        impl<S: OdeSystem> stepper::Stepper for $T<S> {
+            const MAX_DENSE_ORDER: u32 = $order;
+            fn core(&self) -> &stepper::Core {
+                &self.core
+            }
+            fn core_mut(&mut self) -> &mut stepper::Core {
+                &mut self.core
+            }
+            fn ensure_f0(&mut self) -> bool {
+                self.core.ensure_f0(&self.system)
+            }
+            fn estimate_initial_step(&mut self, bound: f64) -> f64 {
+                $T::estimate_initial_step(self, bound)
+            }
+            fn step(&mut self) -> Result<bool, SolverError> {
+                $T::step(self)
+            }
+            $($items)*
+        }
+
         impl<S: OdeSystem> $T<S> {
             /// See [`Integrator::advance`]. On an error, `t()` and `state()` are the last
             /// accepted step's end.
@@ -634,6 +858,12 @@ macro_rules! integrator_via_stepper {
                 c.hmax = max_step.unwrap_or(f64::INFINITY);
                 c.h = c.h.signum() * c.h.abs().min(c.hmax);
                 Ok(())
+            }
+
+            /// Statistics over the integrator's whole life (restarts included); the type's
+            /// documentation says what some counts mean for this method.
+            pub fn stats(&self) -> Stats {
+                self.core.stats
             }
 
             /// The state at `t()`.

@@ -8,7 +8,7 @@
 use super::ffi;
 use super::vector::{slice, slice_mut};
 use crate::integrate::{
-    panic_message, ErrorScale, ImexSystem, JacobianMatrix, OdeSystem, RootFunction,
+    panic_message, ErrorWeights, ImexSystem, JacobianMatrix, OdeSystem, RootFunction,
 };
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -136,39 +136,18 @@ pub(crate) struct Shared<S> {
     pub weights: Option<ErrorWeights>,
 }
 
-/// The tolerances of a user error-weight function: rtol, one atol and one [`ErrorScale`] per
-/// component.
-#[derive(Debug, Clone)]
-pub(crate) struct ErrorWeights {
-    pub rtol: f64,
-    pub atol: Vec<f64>,
-    pub scales: Vec<ErrorScale>,
-}
-
-/// An absolute error scale never asks for less than this many units of round-off of the
-/// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
-/// v = 1e30) a fixed tolerance would lie below the spacing of the doubles there, and SUNDIALS
-/// would stop with "too much accuracy requested".
-const ABSOLUTE_FLOOR_ULPS: f64 = 100.0 * f64::EPSILON;
-
-impl ErrorWeights {
-    /// ewt_i = 1/(rtol·s_i + atol_i), with s_i = |y_i| or the component's fixed scale (at
-    /// least [`ABSOLUTE_FLOOR_ULPS`]·|y_i|/rtol). False if
-    /// a weight is not finite and positive (a zero tolerance for a zero component), which
-    /// SUNDIALS must be told.
-    fn fill(&self, y: &[f64], ewt: &mut [f64]) -> bool {
-        for (i, w) in ewt.iter_mut().enumerate() {
-            let tolerance = match self.scales[i] {
-                ErrorScale::Relative => self.rtol * y[i].abs(),
-                ErrorScale::Absolute(c) => (self.rtol * c).max(ABSOLUTE_FLOOR_ULPS * y[i].abs()),
-            } + self.atol[i];
-            if !(tolerance > 0.0 && tolerance.is_finite()) {
-                return false;
-            }
-            *w = 1.0 / tolerance;
+/// ewt_i = 1/tolerance_i with the tolerances of [`ErrorWeights::scale`]. False if a weight is
+/// not finite and positive (a zero tolerance for a zero component), which SUNDIALS must be
+/// told.
+fn fill_weights(weights: &ErrorWeights, y: &[f64], ewt: &mut [f64]) -> bool {
+    for (i, w) in ewt.iter_mut().enumerate() {
+        let tolerance = weights.scale(i, y[i].abs());
+        if !(tolerance > 0.0 && tolerance.is_finite()) {
+            return false;
         }
-        true
+        *w = 1.0 / tolerance;
     }
+    true
 }
 
 /// The error-weight function (CVEwtFn / ARKEwtFn) for [`crate::integrate::Options::error_scales`].
@@ -183,7 +162,7 @@ pub(crate) unsafe extern "C" fn error_weights<S>(
     let Some(weights) = shared.weights.as_ref() else { return -1 };
     // SAFETY: `y` and `ewt` are distinct serial vectors of length `dim`, valid for this call.
     let (y, ewt) = unsafe { (slice(y, shared.dim), slice_mut(ewt, shared.dim)) };
-    if weights.fill(y, ewt) {
+    if fill_weights(weights, y, ewt) {
         0
     } else {
         -1

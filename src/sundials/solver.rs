@@ -1,14 +1,14 @@
 //! One safe solver type over CVODE and ARKStep: both expose the same C interface shape, so a
 //! table of their functions ([`Api`]) lets a single implementation drive either.
 
-use super::callbacks::{self, Diagnostics, ErrorWeights, Shared, StepEnds};
+use super::callbacks::{self, Diagnostics, Shared, StepEnds};
 use super::context::Context;
 use super::dense::DenseLinearSolver;
 use super::ffi;
 use super::vector::SerialVector;
 use crate::integrate::{
-    panic_message, ErrorKind, Integrator, Options, Roots, SolverError, Stats, Step, StepEvent,
-    Task, Tolerance,
+    panic_message, ErrorKind, ErrorWeights, Integrator, Options, Roots, SolverError, Stats, Step,
+    StepEvent, Task, Tolerance,
 };
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr::NonNull;
@@ -270,12 +270,8 @@ impl<S> Solver<S> {
             }
         };
         solver._atol = atol;
-        if let Some(scales) = &options.error_scales {
-            let atol = match &options.atol {
-                Tolerance::PerComponent(v) => v.clone(),
-                Tolerance::Scalar(a) => vec![*a; dim],
-            };
-            let weights = ErrorWeights { rtol: options.rtol, atol, scales: scales.clone() };
+        if options.error_scales.is_some() {
+            let weights = ErrorWeights::new(options, dim);
             // SAFETY: `shared` is the live leaked Box; no SUNDIALS call is running, so no
             // other reference to it exists.
             unsafe { (*solver.shared.as_ptr()).weights = Some(weights) };

@@ -100,9 +100,10 @@ mod rounding;
 mod switching;
 mod tableau;
 
-use super::linalg::rms;
-use super::stepper::{self, all_finite, Core, FixedStepError, Stepper, UROUND};
-use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
+use super::stepper::{self, all_finite, Core, FixedStepError, Stepper};
+use super::{
+    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
@@ -142,18 +143,24 @@ enum Mode {
 /// continuous output of degree k_c after an implicit step, ODEX's of degree 2k_c + 1 after an
 /// explicit one), `reinit` restarts with the scheme in use and fresh step-size history and
 /// keeps the statistics and the switch count. Options: `rtol`/`atol` (used as given, as in
-/// SEULEX/ODEX), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
+/// SEULEX/ODEX), `error_scales` (in the error weights; the rounding test's bound, atol plus
+/// the round-off of the step, does not involve rtol and stays as it is), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
 /// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
 /// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
 /// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
 /// rejections by the error test or the rounding test in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
 /// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
 /// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
+///
+/// Statistics: `lin_setups` counts LU decompositions (one per linearly implicit row),
+/// `step_solve_fails` attempts stopped by a row failure (stability check, growing error,
+/// non-finite f, singular matrix), `err_test_fails` rejections by the error test;
+/// `last_order` is the order of the last accepted step.
 pub struct Extrapolation<S: OdeSystem> {
     system: S,
     n: usize,
-    rtol: f64,
-    atol: Vec<f64>,
+    /// Error weights (tolerances used as given).
+    weights: ErrorWeights,
     // Options.
     max_err_test_fails: u32,
     max_row_fails: u32,
@@ -232,10 +239,6 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "the Jacobian is reused by the stability-check ratio",
             ),
         ])?;
-        let atol: Vec<f64> = match &options.atol {
-            Tolerance::Scalar(a) => vec![*a; n],
-            Tolerance::PerComponent(v) => v.clone(),
-        };
         let (km_imp, km_exp) = match options.max_order {
             Some(m) if !(4..=KM_IMPLICIT as i32).contains(&m) => {
                 let message = format!("max_order = {m} must be in 4..={KM_IMPLICIT} (tableau rows of the linearly implicit scheme)");
@@ -263,8 +266,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let mut solver = Self {
             system,
             n,
-            rtol: options.rtol,
-            atol,
+            weights: ErrorWeights::new(options, n),
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             max_row_fails: positive(options.max_conv_fails, DEFAULT_MAX_ROW_FAILS),
             fixed: None,
@@ -331,7 +333,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     pub fn implicit_sequence(mut self, first: usize) -> Self {
         let first = first.max(1);
         let km = self.imp.nj.len() - 1;
-        self.imp = Control::seulex(km, first, self.rtol);
+        self.imp = Control::seulex(km, first, self.weights.rtol);
         let need = self.imp.off[km + 1];
         let n = self.n;
         self.work.incr.resize_with(need, || vec![0.0; n]);
@@ -356,50 +358,15 @@ impl<S: OdeSystem> Extrapolation<S> {
     }
 
     fn update_scal(&mut self) {
-        for i in 0..self.n {
-            let s = self.atol[i] + self.rtol * self.core.y[i].abs();
-            self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
-        }
+        self.weights.fill(&self.core.y, &mut self.scal);
     }
 
     /// Hairer–Wanner's initial step (Solving ODEs I, II.4) for an order-5 error, measured with
     /// the scaled norm of the step-size control.
     fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        let d0 = rms(&self.core.y, &self.scal);
-        let d1 = rms(&self.core.f0, &self.scal);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
-        if !(h0.is_finite() && h0 > 0.0) {
-            // Degenerate weights (atol = 0 on a zero component): SEULEX's default.
-            h0 = 1e-6;
-        }
-        h0 = h0.min(bound).max(100.0 * UROUND * self.core.x.abs()).max(f64::MIN_POSITIVE);
-        let mut d2 = None;
-        for _ in 0..12 {
-            let th = self.core.posneg * h0;
-            for i in 0..self.n {
-                self.work.tmp[i] = self.core.y[i] + th * self.core.f0[i];
-            }
-            self.system.rhs(self.core.x + th, &self.work.tmp, &mut self.work.fnew);
-            self.core.stats.rhs_evals += 1;
-            if all_finite(&self.work.fnew) {
-                for i in 0..self.n {
-                    self.work.tmp[i] = self.work.fnew[i] - self.core.f0[i];
-                }
-                d2 = Some(rms(&self.work.tmp, &self.scal) / h0);
-                break;
-            }
-            self.core.stats.nonfinite_rhs += 1;
-            h0 *= 0.1;
-        }
-        let Some(d2) = d2.filter(|d| d.is_finite()) else { return h0 };
-        let dm = d1.max(d2);
-        let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(1.0 / 6.0) };
-        let h = (100.0 * h0).min(h1).min(bound);
-        if h.is_finite() && h > 0.0 {
-            h
-        } else {
-            h0
-        }
+        let (w, c) = (&mut self.work, &mut self.core);
+        let exponent = 1.0 / 6.0;
+        stepper::initial_step(&self.system, c, &self.scal, &mut w.tmp, &mut w.fnew, bound, exponent)
     }
 
     /// Accepts the step to `xph` in column kc: continuous output (already built for an explicit
@@ -706,28 +673,9 @@ impl<S: OdeSystem> Extrapolation<S> {
         self.enter(self.forced.unwrap_or(self.mode));
         Ok(())
     }
-
-    /// Statistics over the integrator's whole life (restarts included). `lin_setups` counts LU
-    /// decompositions (one per linearly implicit row), `step_solve_fails` attempts stopped by a
-    /// row failure (stability check, growing error, non-finite f, singular matrix),
-    /// `err_test_fails` rejections by the error test; `last_order` is the order of the last
-    /// accepted step.
-    pub fn stats(&self) -> Stats {
-        self.core.stats
-    }
 }
 
-impl<S: OdeSystem> Stepper for Extrapolation<S> {
-    const MAX_DENSE_ORDER: u32 = 3;
-    fn core(&self) -> &Core {
-        &self.core
-    }
-    fn core_mut(&mut self) -> &mut Core {
-        &mut self.core
-    }
-    fn ensure_f0(&mut self) -> bool {
-        self.core.ensure_f0(&self.system)
-    }
+stepper::integrator_via_stepper!(Extrapolation, dense_order = 3, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed.map(|(h, _)| h)
     }
@@ -740,15 +688,7 @@ impl<S: OdeSystem> Stepper for Extrapolation<S> {
         }
         Ok(())
     }
-    fn estimate_initial_step(&mut self, bound: f64) -> f64 {
-        Extrapolation::estimate_initial_step(self, bound)
-    }
-    fn step(&mut self) -> Result<bool, SolverError> {
-        Extrapolation::step(self)
-    }
     fn interpolate(&self, t: f64, k: u32, out: &mut [f64]) {
         Extrapolation::interpolate(self, t, k, out);
     }
-}
-
-stepper::integrator_via_stepper!(Extrapolation);
+});

@@ -56,7 +56,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         for i in 0..self.n {
             let noise: f64 = (1..=kc).map(|j| weights[j] * w.noise[j][i]).sum();
             let increment = w.t[1][i];
-            let bound = self.atol[i]
+            let bound = self.weights.atol[i]
                 + UROUND * (2.0 * lambda * increment.abs() + (self.core.y[i] + increment).abs());
             if bound > 0.0 {
                 ratio = ratio.max(noise / bound);

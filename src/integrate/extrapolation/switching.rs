@@ -42,8 +42,8 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// SEULEX's and ODEX's starting column for the tolerance.
     pub(super) fn initial_k(&self, mode: Mode) -> usize {
         let tol = match mode {
-            Mode::Explicit => self.rtol,
-            Mode::Implicit => self.rtol + self.atol[0],
+            Mode::Explicit => self.weights.rtol,
+            Mode::Implicit => self.weights.rtol + self.weights.atol[0],
         };
         let guess = (-tol.log10() * 0.6 + 1.5).floor().max(0.0) as usize;
         match mode {

@@ -253,9 +253,9 @@ impl<S: OdeSystem> Extrapolation<S> {
         for i in 0..n {
             let d = (w.t[1][i] - w.t[2][i]).abs();
             if explicit {
-                // ODEX's weights: atol + rtol·max(|y0|, |y1|).
-                let s = self.atol[i] + self.rtol * self.core.y[i].abs().max(w.t[1][i].abs());
-                self.scal[i] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+                // ODEX's weights: atol + rtol·max(|y0|, |y1|) (or the absolute scale).
+                let y_abs = self.core.y[i].abs().max(w.t[1][i].abs());
+                self.scal[i] = self.weights.positive_scale(i, y_abs);
                 sum += (d / self.scal[i]).powi(2);
             } else {
                 sum += (d / self.scal[i]).min(1e15).powi(2);
