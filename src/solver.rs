@@ -180,6 +180,7 @@ impl Method {
             deduce_implicit_rhs: false,
             dirk_newton: false,
             absolute_ln_v: None,
+            max_conv_fails: None,
         };
         // A fresh Jacobian at every step, see `engine`.
         let fresh = EngineSettings { jacobian_max_age: Some(1), ..plain };
@@ -190,7 +191,11 @@ impl Method {
                 dense_order: 5,
                 family: "CVODE",
                 accepts: cvode,
-                engine: EngineSettings { absolute_ln_v: Some(0.1), ..fresh },
+                engine: EngineSettings {
+                    absolute_ln_v: Some(0.1),
+                    max_conv_fails: Some(20),
+                    ..fresh
+                },
                 physical_region: true,
             },
             Method::CvodeAdams => Capabilities {
@@ -241,7 +246,7 @@ impl Method {
                 dense_order: 3,
                 family: "Radau5",
                 accepts: newton,
-                engine: fresh,
+                engine: EngineSettings { absolute_ln_v: Some(0.1), ..fresh },
                 physical_region: true,
             },
             Method::Rodas5p => Capabilities {
@@ -255,7 +260,7 @@ impl Method {
                     nonlin_conv_coef: false,
                     ..newton
                 },
-                engine: plain,
+                engine: EngineSettings { absolute_ln_v: Some(0.1), ..plain },
                 physical_region: true,
             },
             Method::Extrapolation => Capabilities {
@@ -270,7 +275,7 @@ impl Method {
                     jacobian_max_age: false,
                     ..newton
                 },
-                engine: plain,
+                engine: EngineSettings { absolute_ln_v: Some(0.1), ..plain },
                 physical_region: true,
             },
         }
@@ -350,9 +355,12 @@ pub struct EngineSettings {
     /// ARKStep DIRK's tighter Newton iteration: `nonlin_conv_coef` = 1000 u / rtol within
     /// [1e-3, 0.1] and `max_nonlin_iters` = 5.
     pub dirk_newton: bool,
-    /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]),
-    /// with 20 convergence failures per step ([`Options::max_conv_fails`]); see `engine`.
+    /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]);
+    /// see `engine`.
     pub absolute_ln_v: Option<f64>,
+    /// [`Options::max_conv_fails`] per step, where the method's default stops a run (CVODE
+    /// with ln v weighed absolutely); see `engine`.
+    pub max_conv_fails: Option<i32>,
 }
 
 /// Validated solver settings of a scene.

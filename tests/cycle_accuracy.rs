@@ -17,14 +17,13 @@ fn run(text: &str) -> stickslip::report::Report {
 
 /// The 12 quasi-dynamic cases (slip and ageing law × k/k_c = 0.9, 0.5, 0.2 × η = 5e-8, 1e-3;
 /// ξ = 0.5 k/k_c, ε = 0.5, from v = 0.5, θ = 0), radau5 at rtol 1e-10 with the default cycle
-/// analysis: the period within 1e-9 of the reference, and both the period's and v_max's error
-/// estimates bound their actual deviation.
+/// analysis: the period and v_max within 1e-9 of the reference, and both error estimates bound
+/// their actual deviation.
 ///
-/// v_max itself is not within 1e-9 in every case: at rtol 1e-10 the integration's own
-/// (global) error in v_max reaches 1.2e-8 relative (ageing, k/k_c = 0.9, η = 1e-3: every cycle
-/// of radau5 at 1e-10 agrees with the next to 1e-9 and sits 1.2e-8 below the reference; at
-/// rtol 1e-11 the gap is 1e-9). The analysis cannot remove that; its estimate covers it
-/// (the integration floor, src/analysis/cycle/settled.rs), and 2e-8 is asserted here.
+/// v_max needs ln v weighed absolutely (`EngineSettings::absolute_ln_v`): weighed relative to
+/// |ln v| ≈ 19 at the peak, radau5's global error in v_max at rtol 1e-10 reached 1.2e-8
+/// relative (ageing, k/k_c = 0.9, η = 1e-3); absolute at rtol/10 the worst of the 12 is
+/// 3.4e-10.
 #[test]
 fn quasi_dynamic_cycles_are_within_their_error_estimates() {
     let table: serde_json::Value =
@@ -50,7 +49,7 @@ fn quasi_dynamic_cycles_are_within_their_error_estimates() {
         assert!(dp <= 1e-9 * period, "{case}: period {} vs {period}", v.period);
         assert!(dp <= e.period, "{case}: period off by {dp:e}, estimate {:e}", e.period);
         assert!(dv <= e.v_max, "{case}: v_max off by {dv:e}, estimate {:e}", e.v_max);
-        assert!(dv <= 2e-8 * v_max, "{case}: v_max {} vs {v_max}", v.v_max);
+        assert!(dv <= 1e-9 * v_max, "{case}: v_max {} vs {v_max}", v.v_max);
         // The estimate states the error, it does not hide the value: within 1e-6.
         assert!(e.period < 1e-8 * period && e.v_max < 1e-6 * v_max, "{case}: {e:?}");
     }

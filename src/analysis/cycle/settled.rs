@@ -21,9 +21,11 @@
 //! floor proportional to the tolerance is added: [`TIME_FLOOR`]·rtol·|x| for times and the
 //! slip, [`LN_V_FLOOR`]·(rtol·|ln v| + atol) on ln v (relative on v). Measured on the 12
 //! quasi-dynamic cases of issue #28 (data/reference/quasi_dynamic_cycles.json) with radau5 at
-//! rtol 1e-10: the period's error is up to 1.6·rtol·|period| and ln v_max's up to
-//! 19·(rtol·|ln v_max|) (v_max off by 1.2e-8 relative, a global error of the integration: it
-//! falls to 1e-9 at rtol 1e-11), so the factors leave margins of 6 and 2.6. They hold for the one-step
+//! rtol 1e-10 and ln v weighed relative to its size: the period's error is up to
+//! 1.6·rtol·|period| and ln v_max's up to 19·(rtol·|ln v_max|) (v_max off by 1.2e-8 relative,
+//! a global error of the integration), so the factors leave margins of 6 and 2.6. The engine
+//! now weighs ln v absolutely at rtol/10 (v_max within 3.4e-10); the floor is kept for
+//! integrations weighed by size. They hold for the one-step
 //! methods; CVODE BDF's error at rtol 1e-10 is larger (the period up to ~200·rtol, issue #28):
 //! compare two methods (`stickslip compare`) when that matters.
 //!
