@@ -522,10 +522,15 @@ impl<S: OdeSystem> Rodas5p<S> {
                 continue;
             }
             let err = self.estimate_error();
-            // The new step size.
-            let mut quot = (err.powf(EXPONENT) / SAFE).clamp(FAC2, FAC1);
+            let accepted = err <= 1.0 || self.fixed_h.is_some();
+            // The new step size. An accepted step that ends at the stop time goes on with the
+            // planned step instead, so the controller (two powf) is skipped there: the same
+            // steps, and every step of a noise realisation ends at a node (issue #30).
+            let control = !(accepted && last);
+            let mut quot =
+                if control { (err.powf(EXPONENT) / SAFE).clamp(FAC2, FAC1) } else { 1.0 };
             let mut hnew = self.core.h / quot;
-            if err <= 1.0 || self.fixed_h.is_some() {
+            if accepted {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
                 let xph = if last {
                     self.core.stop_time.unwrap_or(self.core.x + self.core.h)
@@ -540,7 +545,7 @@ impl<S: OdeSystem> Rodas5p<S> {
                     self.core.nonfinite_failure(&mut nonfinite, self.fixed_h.is_some())?;
                     continue;
                 }
-                self.accept(xph, err, &mut quot, &mut hnew);
+                self.accept(xph, err, control, &mut quot, &mut hnew);
                 let h = self.core.h;
                 // The next step size (RODAS's acceptance branch).
                 hnew = self.core.posneg * hnew.abs().min(self.core.hmax).max(self.core.hmin);
@@ -604,13 +609,14 @@ impl<S: OdeSystem> Rodas5p<S> {
         Ok(())
     }
 
-    /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new state
-    /// (RODAS's acceptance branch).
-    fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
+    /// Accepts the step to `xph`: Gustafsson's controller (unless `control` is false: the next
+    /// step size is not the controller's), the continuous output, the new state (RODAS's
+    /// acceptance branch).
+    fn accept(&mut self, xph: f64, err: f64, control: bool, quot: &mut f64, hnew: &mut f64) {
         let h = self.core.h;
         let n = self.n;
         self.naccpt += 1;
-        if self.naccpt > 1 {
+        if self.naccpt > 1 && control {
             let facgus = ((self.hacc / h) * (err * err / self.erracc).powf(EXPONENT) / SAFE)
                 .clamp(FAC2, FAC1);
             *quot = quot.max(facgus);
