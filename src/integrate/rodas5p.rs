@@ -49,7 +49,7 @@
 // The published coefficients are kept with all their digits.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real, solve_refined, with_small_n};
+use super::linalg::{inverse3, lu_real, multiply3, rms, solve_real, solve_refined, with_small_n};
 use super::stepper::{self, all_finite, Core, Stepper, UROUND};
 use super::{ErrorKind, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task, Tolerance};
 
@@ -139,7 +139,8 @@ struct Work {
     dfdt: Vec<f64>,
     /// Jacobian, column-major.
     jac: Vec<f64>,
-    /// LU factors of W = I/(hγ) − J and pivots.
+    /// LU factors of W = I/(hγ) − J and pivots (or, with [`Rodas5p::explicit_inverse`],
+    /// W⁻¹ itself in `e`).
     e: Vec<f64>,
     ip: Vec<usize>,
     /// Start of the last step and its dense-output coefficients K1, K2, K3 (stage-major).
@@ -193,6 +194,8 @@ pub struct Rodas5p<S: OdeSystem> {
     max_err_test_fails: u32,
     fixed_h: Option<f64>,
     autonomous: bool,
+    /// Stage solves by W⁻¹ (n = 3, [`OdeSystem::allows_explicit_inverse`]).
+    explicit_inverse: bool,
     // Integration state.
     /// Accepted steps since the last (re)start, and the Gustafsson controller's memory.
     naccpt: u64,
@@ -260,6 +263,8 @@ impl<S: OdeSystem> Rodas5p<S> {
             Tolerance::PerComponent(v) => v.clone(),
         };
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
+        let explicit_inverse =
+            n == 3 && system.allows_explicit_inverse() && !system.has_linear_invariants();
         Ok(Self {
             system,
             n,
@@ -268,6 +273,7 @@ impl<S: OdeSystem> Rodas5p<S> {
             max_err_test_fails: positive(options.max_err_test_fails, DEFAULT_MAX_ERR_TEST_FAILS),
             fixed_h: None,
             autonomous: false,
+            explicit_inverse,
             naccpt: 0,
             hacc: 0.0,
             erracc: 0.0,
@@ -377,7 +383,7 @@ impl<S: OdeSystem> Rodas5p<S> {
         false
     }
 
-    /// LU factors of I/(hγ) − J. False if singular.
+    /// LU factors of I/(hγ) − J, or its inverse (`explicit_inverse`). False if singular.
     fn decompose(&mut self) -> bool {
         let n = self.n;
         let fac = 1.0 / (self.core.h * GAMMA);
@@ -389,7 +395,12 @@ impl<S: OdeSystem> Rodas5p<S> {
             w.e[j * n + j] += fac;
         }
         self.core.stats.lin_setups += 1;
-        let ok = lu_real(&mut w.e, &mut w.ip, n);
+        let ok = if self.explicit_inverse {
+            let matrix: [f64; 9] = std::array::from_fn(|k| w.e[k]);
+            inverse3(&matrix, &mut w.e)
+        } else {
+            lu_real(&mut w.e, &mut w.ip, n)
+        };
         self.lu_h = if ok { self.core.h } else { f64::NAN };
         ok
     }
@@ -444,7 +455,9 @@ impl<S: OdeSystem> Rodas5p<S> {
             }
             // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
             // `solve_refined`.
-            if self.system.has_linear_invariants() {
+            if self.explicit_inverse {
+                multiply3(&w.e, ks);
+            } else if self.system.has_linear_invariants() {
                 w.tmp.copy_from_slice(ks);
                 solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
             } else {
