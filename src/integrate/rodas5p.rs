@@ -415,58 +415,78 @@ impl<S: OdeSystem> Rodas5p<S> {
         with_small_n!(n, self.stages_n(n))
     }
 
-    /// [`Rodas5p::stages`]'s body for dimension `n`.
+    /// [`Rodas5p::stages`]'s body for dimension `n`: the eight stages with the stage index a
+    /// compile-time constant too ([`Rodas5p::stage`]), so that the sums over the earlier
+    /// stages unroll (the same arithmetic in the same order as a loop over them).
     #[inline(always)]
     fn stages_n(&mut self, n: usize) -> bool {
+        let all = self.stage::<0>(n)
+            && self.stage::<1>(n)
+            && self.stage::<2>(n)
+            && self.stage::<3>(n)
+            && self.stage::<4>(n)
+            && self.stage::<5>(n)
+            && self.stage::<6>(n)
+            && self.stage::<7>(n);
+        if !all {
+            return false;
+        }
+        let w = &mut self.work;
+        let last = &w.k[(STAGES - 1) * n..STAGES * n];
+        for ((ynew, u), k) in w.ynew[..n].iter_mut().zip(&w.u[..n]).zip(last) {
+            *ynew = u + k;
+        }
+        true
+    }
+
+    /// Stage `ST` (0-based): k_ST from the stage point y + Σ_{j<ST} a_ij k_j. False if the
+    /// right-hand side there is not finite.
+    #[inline(always)]
+    fn stage<const ST: usize>(&mut self, n: usize) -> bool {
         let (x, h) = (self.core.x, self.core.h);
         let w = &mut self.work;
-        for s in 0..STAGES {
-            let (done, rest) = w.k.split_at_mut(s * n);
-            let ks = &mut rest[..n];
-            if s == 0 {
-                ks.copy_from_slice(&self.core.f0);
-            } else {
-                for i in 0..n {
-                    let mut v = self.core.y[i];
-                    for j in 0..s {
-                        v += A[s][j] * done[j * n + i];
-                    }
-                    w.u[i] = v;
+        let (done, rest) = w.k.split_at_mut(ST * n);
+        let ks = &mut rest[..n];
+        if ST == 0 {
+            ks.copy_from_slice(&self.core.f0[..n]);
+        } else {
+            let (y, u) = (&self.core.y[..n], &mut w.u[..n]);
+            for i in 0..n {
+                let mut v = y[i];
+                for j in 0..ST {
+                    v += A[ST][j] * done[j * n + i];
                 }
-                self.system.rhs(x + NODES[s] * h, &w.u, ks);
-                self.core.stats.rhs_evals += 1;
-                if !all_finite(ks) {
-                    self.core.stats.nonfinite_rhs += 1;
-                    return false;
-                }
-                for i in 0..n {
-                    let mut v = 0.0;
-                    for j in 0..s {
-                        v += C[s][j] * done[j * n + i];
-                    }
-                    ks[i] += v / h;
-                }
+                u[i] = v;
             }
-            if !self.autonomous && D[s] != 0.0 {
-                let hd = h * D[s];
-                for (k, ft) in ks.iter_mut().zip(&w.dfdt) {
-                    *k += hd * ft;
-                }
+            self.system.rhs(x + NODES[ST] * h, u, ks);
+            self.core.stats.rhs_evals += 1;
+            if !all_finite(ks) {
+                self.core.stats.nonfinite_rhs += 1;
+                return false;
             }
-            // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
-            // `solve_refined`.
-            if self.explicit_inverse {
-                multiply3(&w.e, ks);
-            } else if self.system.has_linear_invariants() {
-                w.tmp.copy_from_slice(ks);
-                solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
-            } else {
-                solve_real(&w.e, &w.ip, n, ks);
+            for i in 0..n {
+                let mut v = 0.0;
+                for j in 0..ST {
+                    v += C[ST][j] * done[j * n + i];
+                }
+                ks[i] += v / h;
             }
         }
-        let last = &w.k[(STAGES - 1) * n..];
-        for ((ynew, u), k) in w.ynew.iter_mut().zip(&w.u).zip(last) {
-            *ynew = u + k;
+        if !self.autonomous && D[ST] != 0.0 {
+            let hd = h * D[ST];
+            for (k, ft) in ks.iter_mut().zip(&w.dfdt[..n]) {
+                *k += hd * ft;
+            }
+        }
+        // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
+        // `solve_refined`.
+        if self.explicit_inverse {
+            multiply3(&w.e, ks);
+        } else if self.system.has_linear_invariants() {
+            w.tmp.copy_from_slice(ks);
+            solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
+        } else {
+            solve_real(&w.e, &w.ip, n, ks);
         }
         true
     }
