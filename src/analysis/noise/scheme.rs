@@ -96,8 +96,7 @@ impl OdeSystem for Forced<'_> {
     }
 
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        self.model.jacobian(t, y, jac);
-        self.model.add_forcing_jacobian(y, &self.eta(t), jac);
+        self.model.forced_jacobian(t, y, &self.eta(t), jac);
     }
 
     /// ∂f/∂t = B(x) dη/dt exactly (the drift F does not depend on t for the periodic
