@@ -171,7 +171,8 @@ impl Work {
 /// The Rosenbrock method Rodas5P (Steinebach, BIT 2023; order 5(4), 8 stages, stiffly accurate,
 /// L-stable, continuous output of order 4) with RODAS's step-size control, on the system `S`.
 /// One Jacobian (and, unless [`Rodas5p::autonomous`], one finite-difference ∂f/∂t) per step,
-/// one LU factorisation of I/(hγ) − J per step attempt, seven right-hand-side calls per step
+/// one LU factorisation of I/(hγ) − J per step attempt (its explicit inverse instead for a
+/// 3-component system that [allows it](OdeSystem::allows_explicit_inverse)), seven right-hand-side calls per step
 /// attempt (the stages) and one at each accepted point (f there, which the next step starts
 /// from), no Newton iteration.
 ///
