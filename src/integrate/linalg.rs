@@ -75,6 +75,42 @@ fn lu_real_n(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     true
 }
 
+/// The inverse of the column-major 3×3 matrix `a` into `inv` (column-major): the adjugate
+/// (transposed cofactors) times the reciprocal of the determinant, expanded along the first
+/// row. False if the determinant is zero or not finite.
+pub(super) fn inverse3(a: &[f64], inv: &mut [f64]) -> bool {
+    let m = |i: usize, j: usize| a[j * 3 + i];
+    // The cofactors C_ij in row-major order: (a⁻¹)_ji = C_ij / det sits at inv[i·3 + j].
+    let c = [
+        m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1),
+        m(1, 2) * m(2, 0) - m(1, 0) * m(2, 2),
+        m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0),
+        m(0, 2) * m(2, 1) - m(0, 1) * m(2, 2),
+        m(0, 0) * m(2, 2) - m(0, 2) * m(2, 0),
+        m(0, 1) * m(2, 0) - m(0, 0) * m(2, 1),
+        m(0, 1) * m(1, 2) - m(0, 2) * m(1, 1),
+        m(0, 2) * m(1, 0) - m(0, 0) * m(1, 2),
+        m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0),
+    ];
+    let det = m(0, 0) * c[0] + m(0, 1) * c[1] + m(0, 2) * c[2];
+    if det == 0.0 || !det.is_finite() {
+        return false;
+    }
+    let r = 1.0 / det;
+    for (x, ci) in inv[..9].iter_mut().zip(c) {
+        *x = ci * r;
+    }
+    true
+}
+
+/// b ← M b for the column-major 3×3 matrix `m` (e.g. an [`inverse3`]).
+pub(super) fn multiply3(m: &[f64], b: &mut [f64]) {
+    let (m, x) = (&m[..9], [b[0], b[1], b[2]]);
+    for (i, bi) in b[..3].iter_mut().enumerate() {
+        *bi = m[i] * x[0] + m[3 + i] * x[1] + m[6 + i] * x[2];
+    }
+}
+
 /// Solves with the factors of [`lu_real`], in place.
 pub(super) fn solve_real(a: &[f64], ip: &[usize], n: usize, b: &mut [f64]) {
     with_small_n!(n, solve_real_n(a, ip, n, b))
@@ -216,6 +252,29 @@ mod tests {
         let mut nan = [f64::NAN, 0.0, 0.0, 1.0];
         assert!(!lu_real(&mut nan, &mut [0; 2], 2));
         assert!((rms(&[3.0, 4.0], &[1.0, 2.0]) - 6.5f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn inverse3_inverts_and_detects_singularity() {
+        // Column-major; a stiff diagonal beside O(1) couplings, as in I/(hγ) − J.
+        let a = [2.0e7, 3.0, -1.0, 0.5, 4.0, 2.0, 1.0, -3.0, 7.0];
+        let mut inv = [0.0; 9];
+        assert!(inverse3(&a, &mut inv));
+        for col in 0..3 {
+            let mut e = [0.0; 3];
+            e[col] = 1.0;
+            // a · (inv e_col) = e_col.
+            let mut x = e;
+            multiply3(&inv, &mut x);
+            for i in 0..3 {
+                let ax: f64 = (0..3).map(|j| a[j * 3 + i] * x[j]).sum();
+                assert!((ax - e[i]).abs() < 1e-14, "column {col}, row {i}: {ax}");
+            }
+        }
+        let singular = [1.0, 2.0, 3.0, 2.0, 4.0, 6.0, 0.0, 1.0, 5.0];
+        assert!(!inverse3(&singular, &mut inv));
+        let nan = [f64::NAN, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        assert!(!inverse3(&nan, &mut inv));
     }
 
     #[test]

@@ -49,7 +49,7 @@
 // The published coefficients are kept with all their digits.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real, solve_refined, with_small_n};
+use super::linalg::{inverse3, lu_real, multiply3, rms, solve_real, solve_refined, with_small_n};
 use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
 use super::{
     ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
@@ -141,7 +141,8 @@ struct Work {
     dfdt: Vec<f64>,
     /// Jacobian, column-major.
     jac: Vec<f64>,
-    /// LU factors of W = I/(hγ) − J and pivots.
+    /// LU factors of W = I/(hγ) − J and pivots (or, with [`Rodas5p::explicit_inverse`],
+    /// W⁻¹ itself in `e`).
     e: Vec<f64>,
     ip: Vec<usize>,
     /// Start of the last step and its dense-output coefficients K1, K2, K3 (stage-major).
@@ -172,7 +173,8 @@ impl Work {
 /// The Rosenbrock method Rodas5P (Steinebach, BIT 2023; order 5(4), 8 stages, stiffly accurate,
 /// L-stable, continuous output of order 4) with RODAS's step-size control, on the system `S`.
 /// One Jacobian (and, unless [`Rodas5p::autonomous`], one finite-difference ∂f/∂t) per step,
-/// one LU factorisation of I/(hγ) − J per step attempt, seven right-hand-side calls per step
+/// one LU factorisation of I/(hγ) − J per step attempt (its explicit inverse instead for a
+/// 3-component system that [allows it](OdeSystem::allows_explicit_inverse)), seven right-hand-side calls per step
 /// attempt (the stages) and one at each accepted point (f there, which the next step starts
 /// from), no Newton iteration.
 ///
@@ -198,6 +200,8 @@ pub struct Rodas5p<S: OdeSystem> {
     max_err_test_fails: u32,
     fixed_h: Option<f64>,
     autonomous: bool,
+    /// Stage solves by W⁻¹ (n = 3, [`OdeSystem::allows_explicit_inverse`]).
+    explicit_inverse: bool,
     // Integration state.
     /// The step-size control with Gustafsson's memory.
     control: StepControl,
@@ -259,6 +263,8 @@ impl<S: OdeSystem> Rodas5p<S> {
             ("nonlin_conv_coef", options.nonlin_conv_coef.is_some(), no_newton),
         ])?;
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
+        let explicit_inverse =
+            n == 3 && system.allows_explicit_inverse() && !system.has_linear_invariants();
         Ok(Self {
             system,
             n,
@@ -267,6 +273,7 @@ impl<S: OdeSystem> Rodas5p<S> {
             fixed_h: None,
             autonomous: false,
             control: StepControl::new(EXPONENT, SAFE, FAC2, FAC1),
+            explicit_inverse,
             jac_current: false,
             lu_h: f64::NAN,
             core,
@@ -347,7 +354,7 @@ impl<S: OdeSystem> Rodas5p<S> {
         false
     }
 
-    /// LU factors of I/(hγ) − J. False if singular.
+    /// LU factors of I/(hγ) − J, or its inverse (`explicit_inverse`). False if singular.
     fn decompose(&mut self) -> bool {
         let n = self.n;
         let fac = 1.0 / (self.core.h * GAMMA);
@@ -359,7 +366,12 @@ impl<S: OdeSystem> Rodas5p<S> {
             w.e[j * n + j] += fac;
         }
         self.core.stats.lin_setups += 1;
-        let ok = lu_real(&mut w.e, &mut w.ip, n);
+        let ok = if self.explicit_inverse {
+            let matrix: [f64; 9] = std::array::from_fn(|k| w.e[k]);
+            inverse3(&matrix, &mut w.e)
+        } else {
+            lu_real(&mut w.e, &mut w.ip, n)
+        };
         self.lu_h = if ok { self.core.h } else { f64::NAN };
         ok
     }
@@ -374,56 +386,78 @@ impl<S: OdeSystem> Rodas5p<S> {
         with_small_n!(n, self.stages_n(n))
     }
 
-    /// [`Rodas5p::stages`]'s body for dimension `n`.
+    /// [`Rodas5p::stages`]'s body for dimension `n`: the eight stages with the stage index a
+    /// compile-time constant too ([`Rodas5p::stage`]), so that the sums over the earlier
+    /// stages unroll (the same arithmetic in the same order as a loop over them).
     #[inline(always)]
     fn stages_n(&mut self, n: usize) -> bool {
+        let all = self.stage::<0>(n)
+            && self.stage::<1>(n)
+            && self.stage::<2>(n)
+            && self.stage::<3>(n)
+            && self.stage::<4>(n)
+            && self.stage::<5>(n)
+            && self.stage::<6>(n)
+            && self.stage::<7>(n);
+        if !all {
+            return false;
+        }
+        let w = &mut self.work;
+        let last = &w.k[(STAGES - 1) * n..STAGES * n];
+        for ((ynew, u), k) in w.ynew[..n].iter_mut().zip(&w.u[..n]).zip(last) {
+            *ynew = u + k;
+        }
+        true
+    }
+
+    /// Stage `ST` (0-based): k_ST from the stage point y + Σ_{j<ST} a_ij k_j. False if the
+    /// right-hand side there is not finite.
+    #[inline(always)]
+    fn stage<const ST: usize>(&mut self, n: usize) -> bool {
         let (x, h) = (self.core.x, self.core.h);
         let w = &mut self.work;
-        for s in 0..STAGES {
-            let (done, rest) = w.k.split_at_mut(s * n);
-            let ks = &mut rest[..n];
-            if s == 0 {
-                ks.copy_from_slice(&self.core.f0);
-            } else {
-                for i in 0..n {
-                    let mut v = self.core.y[i];
-                    for j in 0..s {
-                        v += A[s][j] * done[j * n + i];
-                    }
-                    w.u[i] = v;
+        let (done, rest) = w.k.split_at_mut(ST * n);
+        let ks = &mut rest[..n];
+        if ST == 0 {
+            ks.copy_from_slice(&self.core.f0[..n]);
+        } else {
+            let (y, u) = (&self.core.y[..n], &mut w.u[..n]);
+            for i in 0..n {
+                let mut v = y[i];
+                for j in 0..ST {
+                    v += A[ST][j] * done[j * n + i];
                 }
-                self.system.rhs(x + NODES[s] * h, &w.u, ks);
-                self.core.stats.rhs_evals += 1;
-                if !all_finite(ks) {
-                    self.core.stats.nonfinite_rhs += 1;
-                    return false;
-                }
-                for i in 0..n {
-                    let mut v = 0.0;
-                    for j in 0..s {
-                        v += C[s][j] * done[j * n + i];
-                    }
-                    ks[i] += v / h;
-                }
+                u[i] = v;
             }
-            if !self.autonomous && D[s] != 0.0 {
-                let hd = h * D[s];
-                for (k, ft) in ks.iter_mut().zip(&w.dfdt) {
-                    *k += hd * ft;
-                }
+            self.system.rhs(x + NODES[ST] * h, u, ks);
+            self.core.stats.rhs_evals += 1;
+            if !all_finite(ks) {
+                self.core.stats.nonfinite_rhs += 1;
+                return false;
             }
-            // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
-            // `solve_refined`.
-            if self.system.has_linear_invariants() {
-                w.tmp.copy_from_slice(ks);
-                solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
-            } else {
-                solve_real(&w.e, &w.ip, n, ks);
+            for i in 0..n {
+                let mut v = 0.0;
+                for j in 0..ST {
+                    v += C[ST][j] * done[j * n + i];
+                }
+                ks[i] += v / h;
             }
         }
-        let last = &w.k[(STAGES - 1) * n..];
-        for ((ynew, u), k) in w.ynew.iter_mut().zip(&w.u).zip(last) {
-            *ynew = u + k;
+        if !self.autonomous && D[ST] != 0.0 {
+            let hd = h * D[ST];
+            for (k, ft) in ks.iter_mut().zip(&w.dfdt[..n]) {
+                *k += hd * ft;
+            }
+        }
+        // Solve (I/(hγ) − J) k_s = b_s, refined if f may have linear invariants: see
+        // `solve_refined`.
+        if self.explicit_inverse {
+            multiply3(&w.e, ks);
+        } else if self.system.has_linear_invariants() {
+            w.tmp.copy_from_slice(ks);
+            solve_refined(&w.e, &w.ip, &w.jac, 1.0 / (h * GAMMA), &w.tmp, ks, &mut w.fnew);
+        } else {
+            solve_real(&w.e, &w.ip, n, ks);
         }
         true
     }
@@ -492,10 +526,14 @@ impl<S: OdeSystem> Rodas5p<S> {
                 continue;
             }
             let err = self.estimate_error();
-            // The new step size.
-            let mut quot = self.control.quotient(err, SAFE);
+            let accepted = err <= 1.0 || self.fixed_h.is_some();
+            // The new step size. An accepted step that ends at the stop time goes on with the
+            // planned step instead, so the controller (two powf) is skipped there: the same
+            // steps, and every step of a noise realisation ends at a node (issue #30).
+            let control = !(accepted && last);
+            let mut quot = if control { self.control.quotient(err, SAFE) } else { 1.0 };
             let mut hnew = self.core.h / quot;
-            if err <= 1.0 || self.fixed_h.is_some() {
+            if accepted {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
                 let xph = if last {
                     self.core.stop_time.unwrap_or(self.core.x + self.core.h)
@@ -510,7 +548,7 @@ impl<S: OdeSystem> Rodas5p<S> {
                     self.core.nonfinite_failure(&mut nonfinite, self.fixed_h.is_some())?;
                     continue;
                 }
-                self.accept(xph, err, &mut quot, &mut hnew);
+                self.accept(xph, err, control, &mut quot, &mut hnew);
                 // The next step size (RODAS's acceptance branch).
                 self.core.h = self.core.next_step(hnew, last, planned, self.fixed_h);
                 self.core.stats.current_step = self.core.h;
@@ -553,12 +591,17 @@ impl<S: OdeSystem> Rodas5p<S> {
         Ok(())
     }
 
-    /// Accepts the step to `xph`: Gustafsson's controller, the continuous output, the new state
-    /// (RODAS's acceptance branch).
-    fn accept(&mut self, xph: f64, err: f64, quot: &mut f64, hnew: &mut f64) {
+    /// Accepts the step to `xph`: Gustafsson's controller (unless `control` is false: the next
+    /// step size is not the controller's), the continuous output, the new state (RODAS's
+    /// acceptance branch).
+    fn accept(&mut self, xph: f64, err: f64, control: bool, quot: &mut f64, hnew: &mut f64) {
         let h = self.core.h;
         let n = self.n;
-        self.control.accepted(h, err, quot, hnew);
+        if control {
+            self.control.accepted(h, err, quot, hnew);
+        } else {
+            self.control.accepted_uncontrolled(h, err);
+        }
         self.core.xold = self.core.x;
         self.core.hold = h;
         self.core.x = xph;

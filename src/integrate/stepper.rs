@@ -438,6 +438,15 @@ impl StepControl {
         self.erracc = err.max(1e-2);
     }
 
+    /// An accepted step `h` with error `err` whose successor's size does not come from the
+    /// controller (it ends at the stop time and the planned step follows): only counted and
+    /// remembered for the next Gustafsson ratio.
+    pub fn accepted_uncontrolled(&mut self, h: f64, err: f64) {
+        self.naccpt += 1;
+        self.hacc = h;
+        self.erracc = err.max(1e-2);
+    }
+
     /// Forgets the accepted steps (after a restart).
     pub fn restart(&mut self) {
         self.naccpt = 0;

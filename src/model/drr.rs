@@ -245,6 +245,64 @@ impl Drr {
         }
     }
 
+    /// [`Drr::arrest_rate`] with e^(−w) given (as 1/v by the noise analysis's forced
+    /// right-hand side and Jacobian).
+    fn arrest_rate_given(&self, w: f64, inverse_speed: f64) -> (f64, bool) {
+        if w > ARREST_RATE_HELD_BELOW || self.params.friction != Friction::Log {
+            (self.gamma2 * inverse_speed, true)
+        } else {
+            self.arrest_rate(w)
+        }
+    }
+
+    /// ∂f/∂y of [`Drr::rhs_with_velocity_force`]: [`OdeSystem::jacobian`]'s formulas plus
+    /// the force's −`amplitude`·e^(−w)·`force` in ∂(dw/dt)/∂w, with one exponential (v = e^w,
+    /// e^(−w) = 1/v, as there) where the model's Jacobian and the force's take three: a
+    /// noise realisation's every step (issue #30).
+    pub fn jacobian_with_velocity_force(
+        &self,
+        y: &[f64],
+        amplitude: f64,
+        force: f64,
+        jac: &mut JacobianMatrix<'_>,
+    ) {
+        let w = y[W];
+        let v = w.exp();
+        let inverse_speed = 1.0 / v;
+        self.jacobian_at(y, v, || self.arrest_rate_given(w, inverse_speed), jac);
+        jac.set(W, W, jac.get(W, W) - (amplitude * inverse_speed) * force);
+    }
+
+    /// The Jacobian at y given v = e^w and the arrest rate (asked for only with inertia).
+    fn jacobian_at(
+        &self,
+        y: &[f64],
+        v: f64,
+        arrest_rate: impl FnOnce() -> (f64, bool),
+        jac: &mut JacobianMatrix<'_>,
+    ) {
+        let p = &self.params;
+        let w = y[W];
+        let law = self.state_rate(y, v);
+        jac.set(U, W, v);
+        if p.inertia {
+            let r = self.resistance(w);
+            let g = self.offset(y, r.value);
+            let (a, varies) = arrest_rate();
+            let da = if varies { a } else { 0.0 };
+            jac.set(W, U, -a);
+            jac.set(W, W, da * g - a * r.slope / p.xi);
+            jac.set(W, THETA, -a / p.xi);
+        } else {
+            let (_, grad, _) = self.force_balance_rate(y);
+            for k in [U, W, THETA] {
+                jac.set(W, k, grad[k]);
+            }
+        }
+        jac.set(THETA, W, law.w());
+        jac.set(THETA, THETA, law.theta());
+    }
+
     /// The quasi-dynamic dw/dt = −(ξ(v − 1) + R + κ_G ξG)/S with its gradient and Hessian in
     /// (u, w, θ) ([`quasi_dynamic`]).
     fn force_balance_rate(&self, y: &[f64]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
@@ -334,11 +392,7 @@ impl Drr {
         let v = w.exp();
         let inverse_speed = 1.0 / v;
         let (f, _) = p.friction.eval(w);
-        let arrest = if w > ARREST_RATE_HELD_BELOW || p.friction != Friction::Log {
-            self.gamma2 * inverse_speed
-        } else {
-            self.arrest_rate(w).0
-        };
+        let arrest = self.arrest_rate_given(w, inverse_speed).0;
         let dw = -arrest * self.offset(y, self.resistance_value(f, v));
         dydt[U] = v - 1.0;
         dydt[W] = dw + (amplitude * inverse_speed) * force;
@@ -418,27 +472,8 @@ impl OdeSystem for Drr {
     }
 
     fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
-        let p = &self.params;
         let w = y[W];
-        let v = w.exp();
-        let law = self.state_rate(y, v);
-        jac.set(U, W, v);
-        if p.inertia {
-            let r = self.resistance(w);
-            let g = self.offset(y, r.value);
-            let (a, varies) = self.arrest_rate(w);
-            let da = if varies { a } else { 0.0 };
-            jac.set(W, U, -a);
-            jac.set(W, W, da * g - a * r.slope / p.xi);
-            jac.set(W, THETA, -a / p.xi);
-        } else {
-            let (_, grad, _) = self.force_balance_rate(y);
-            for k in [U, W, THETA] {
-                jac.set(W, k, grad[k]);
-            }
-        }
-        jac.set(THETA, W, law.w());
-        jac.set(THETA, THETA, law.theta());
+        self.jacobian_at(y, w.exp(), || self.arrest_rate(w), jac);
     }
 
     fn has_jacobian_derivative(&self) -> bool {

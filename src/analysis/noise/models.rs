@@ -238,12 +238,15 @@ impl NoiseModel {
         !matches!(self, NoiseModel::SaddleNode { .. })
     }
 
-    /// Adds ∂(B(x)η)/∂x to `jac` (only the DRR's w entry depends on x: −η_v e^{−w} η_w).
-    pub fn add_forcing_jacobian(&self, x: &[f64], eta: &[f64], jac: &mut JacobianMatrix<'_>) {
-        if let NoiseModel::Drr { amplitudes, .. } = self {
-            let d = -amplitudes[1] * (-x[W]).exp() * eta[W];
-            jac.set(W, W, jac.get(W, W) + d);
+    /// ∂/∂x of [`NoiseModel::forced_rhs`] into `jac` (which arrives zeroed): the model's
+    /// Jacobian plus ∂(B(x)η)/∂x, of which only the DRR's w entry depends on x
+    /// (−η_v e^{−w} η_w; with one exponential, [`Drr::jacobian_with_velocity_force`]).
+    pub fn forced_jacobian(&self, t: f64, x: &[f64], eta: &[f64], jac: &mut JacobianMatrix<'_>) {
+        if let NoiseModel::Drr { system, amplitudes } = self {
+            system.jacobian_with_velocity_force(x, amplitudes[1], eta[W], jac);
+            return;
         }
+        self.jacobian(t, x, jac);
     }
 }
 
@@ -354,7 +357,7 @@ mod tests {
     }
 
     #[test]
-    fn forcing_jacobian_matches_differences() {
+    fn forced_jacobian_matches_differences() {
         let m = NoiseModel::Drr {
             system: Drr::new(DrrParams::new(10.0, 0.7, 0.72, Friction::Log)),
             amplitudes: [0.1, 3.0, 0.2],
@@ -362,14 +365,14 @@ mod tests {
         let (x, eta) = ([0.3, -0.4, 0.2], [0.5, -1.2, 0.7]);
         let mut storage = [0.0; 9];
         let mut jac = JacobianMatrix::new(&mut storage, 3);
-        m.add_forcing_jacobian(&x, &eta, &mut jac);
+        m.forced_jacobian(0.0, &x, &eta, &mut jac);
         for col in 0..3 {
             let (mut xp, mut xm) = (x, x);
             xp[col] += 1e-6;
             xm[col] -= 1e-6;
             let (mut fp, mut fm) = ([0.0; 3], [0.0; 3]);
-            m.add_forcing(&xp, &eta, &mut fp);
-            m.add_forcing(&xm, &eta, &mut fm);
+            m.forced_rhs(0.0, &xp, &eta, &mut fp);
+            m.forced_rhs(0.0, &xm, &eta, &mut fm);
             for row in 0..3 {
                 let fd = (fp[row] - fm[row]) / 2e-6;
                 assert!((fd - jac.get(row, col)).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
