@@ -361,9 +361,8 @@ pub fn run_with_series(
 /// [`run_with_series`] (with `series` None: [`run_with`]) that the caller can stop from
 /// another thread with `cancel`: every integration fails at its next step once it is set, the
 /// analyses not begun are skipped, and the run returns [`RunError::Cancelled`] (whatever it
-/// computed on the way is dropped, and the rows written to `series` are incomplete). The
-/// "noise" analysis's realisations do not check it: a run cancelled there stops when they
-/// are done.
+/// computed on the way is dropped, and the rows written to `series` are incomplete). A "noise"
+/// analysis checks it before each realisation.
 pub fn run_cancellable(
     scene: &Scene,
     scene_json: serde_json::Value,
@@ -430,13 +429,14 @@ fn run_inner(
         .filter(|_| a.paper)
         .map(|h| paper::compare(&scene.params, h, values.as_ref()));
     let noise = match &a.noise {
-        // Cancelled: the report is dropped, and the realisations would not stop.
+        // Cancelled: the report is dropped.
         Some(_) if cancel::is_set(cancel) => None,
         Some(options) => {
             let amplitudes = [options.amplitudes[0], options.amplitudes[1], options.amplitudes[2]];
             let model = NoiseModel::Drr { system: drr, amplitudes };
+            let stop = || cancel::is_set(cancel);
             Some(
-                noise::run(&model, &scene.initial, options, threads, progress)
+                noise::run_stoppable(&model, &scene.initial, options, threads, progress, &stop)
                     .map_err(failed(&drr, "noise"))?,
             )
         }

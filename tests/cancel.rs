@@ -89,3 +89,36 @@ fn a_cancelled_sweep_point_has_no_row() {
     cancel.cancel();
     assert_eq!(sweep::run_point_cancellable(&base, 0, &params, &cancel), None);
 }
+
+/// A noise analysis stops between realisations: cancelled once 5 of 200 are done (from the
+/// progress callback, on one thread), the run ends with `Cancelled` after at most the one
+/// realisation that finds the flag set.
+#[test]
+fn a_cancelled_noise_analysis_stops_between_realisations() {
+    let text = std::fs::read_to_string(format!(
+        "{}/data/scenes/noise-drr.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let mut echo: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let noise = echo["analyses"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find_map(|a| a.get_mut("noise"))
+        .expect("noise-drr.json has a noise analysis");
+    noise["realisations"] = serde_json::json!(200);
+    let s = scene::parse(&echo.to_string(), "noise").unwrap();
+    let cancel = Cancel::new();
+    let calls = std::sync::atomic::AtomicUsize::new(0);
+    let progress = |done: usize, _: usize| {
+        calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if done == 5 {
+            cancel.cancel();
+        }
+    };
+    let outcome = engine::run_cancellable(&s, echo, 1, &progress, None, &cancel);
+    assert_eq!(outcome.err(), Some(RunError::Cancelled));
+    let calls = calls.into_inner();
+    assert!((5..=6).contains(&calls), "{calls} realisations reported after cancelling at 5");
+}

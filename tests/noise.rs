@@ -79,9 +79,13 @@ fn ensemble_moments(
         seed: 7,
     };
     let s = [t];
-    let data =
-        ensemble::run(&spec, &Sampling { s: &s, fixed_reference: Some(0.0) }, count, 2, &|_, _| {})
-            .unwrap();
+    let data = ensemble::run(
+        &spec,
+        &Sampling { s: &s, fixed_reference: Some(0.0) },
+        count,
+        ensemble::Workers { threads: 2, progress: &|_, _| {}, stop: &|| false },
+    )
+    .unwrap();
     let n = count as f64;
     let mean = data.samples.iter().sum::<f64>() / n;
     let var = data.samples.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);

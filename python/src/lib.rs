@@ -7,9 +7,8 @@
 //! `run` and `sweep` release the GIL: the work runs on a thread of its own while the calling
 //! thread waits in slices of 50 ms and checks for signals. On Ctrl-C it cancels the work
 //! ([`engine::Cancel`]: every integration stops at its next step, a sweep starts no new
-//! point), waits for the thread to end, and raises KeyboardInterrupt. Only the realisations
-//! of a "noise" analysis do not stop: a second Ctrl-C then raises at once and leaves them to
-//! finish in the background.
+//! point, a "noise" analysis starts no new realisation), waits for the thread to end, and
+//! raises KeyboardInterrupt. A second Ctrl-C raises at once.
 
 mod solve;
 mod system;

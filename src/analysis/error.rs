@@ -92,6 +92,10 @@ pub enum AnalysisError {
         /// "cycle.max_steps", where the limit is an option).
         message: String,
     },
+    /// The caller asked the analysis to stop (its `stop` function returned true) before it
+    /// finished.
+    #[error("stopped at the caller's request")]
+    Stopped,
     /// A result contains a NaN or an infinity; it is not reported.
     #[error("a non-finite number at {path}; refusing to report it")]
     NonFinite {
@@ -161,6 +165,7 @@ impl AnalysisError {
             Self::Failed { .. } => "Failed".into(),
             Self::Budget { .. } => "TooMuchWork".into(),
             Self::NonFinite { .. } => "NonFinite".into(),
+            Self::Stopped => "Stopped".into(),
         }
     }
 

@@ -91,18 +91,33 @@ fn sample(
     Ok(())
 }
 
-/// Runs `count` realisations on `threads` threads; `progress(done, total)` after each. On
-/// failures, the error of the lowest failing index (the same whatever the scheduling), with the
-/// index in its message.
+/// How the realisations are run: on `threads` threads, `progress(done, total)` after each, and
+/// a realisation not yet begun when `stop()` returns true fails with
+/// [`AnalysisError::Stopped`] (a realisation takes milliseconds).
+#[derive(Clone, Copy)]
+pub struct Workers<'a> {
+    /// Worker threads.
+    pub threads: usize,
+    /// Called with (done, total) after each realisation.
+    pub progress: &'a (dyn Fn(usize, usize) + Sync),
+    /// True once the caller wants the ensemble stopped.
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+}
+
+/// Runs `count` realisations with `workers`. On failures, the error of the lowest failing
+/// index (the same whatever the scheduling), with the index in its message.
 pub fn run(
     spec: &EnsembleSpec<'_>,
     sampling: &Sampling<'_>,
     count: usize,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    workers: Workers<'_>,
 ) -> Result<EnsembleData, AnalysisError> {
+    let Workers { threads, progress, stop } = workers;
     let per = spec.model.observables().len() * sampling.s.len();
     let realisation = |i: usize| -> Result<Realisation, AnalysisError> {
+        if stop() {
+            return Err(AnalysisError::Stopped);
+        }
         let mut path = Path::default();
         let mut rng = Rng::for_realisation(spec.seed, i as u64);
         let outcome = scheme::realisation(

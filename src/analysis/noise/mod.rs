@@ -399,6 +399,20 @@ pub fn run(
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<NoiseReport, AnalysisError> {
+    run_stoppable(model, initial, options, threads, progress, &|| false)
+}
+
+/// [`run`], failing with [`AnalysisError::Stopped`] once `stop()` returns true (checked before
+/// each realisation, which takes milliseconds).
+pub fn run_stoppable(
+    model: &NoiseModel,
+    initial: &[f64],
+    options: &NoiseOptions,
+    threads: usize,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<NoiseReport, AnalysisError> {
+    let workers = ensemble::Workers { threads, progress, stop };
     let det_atol = vec![1e-12; model.dim()];
     let orbit = deterministic_orbit(model, initial, options, &det_atol)?;
     let plan = plan(model, options, &orbit)?;
@@ -416,8 +430,7 @@ pub fn run(
     } else {
         None
     };
-    let realisations =
-        realisations(model, options, &orbit, &plan, linear.as_ref(), threads, progress)?;
+    let realisations = realisations(model, options, &orbit, &plan, linear.as_ref(), workers)?;
     summary::statistics(model, &orbit, plan, realisations, linear, &det_atol)
 }
 
@@ -634,8 +647,7 @@ fn realisations(
     orbit: &SettledOrbit,
     plan: &Plan,
     linear: Option<&linear_response::LinearResponse>,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    workers: ensemble::Workers<'_>,
 ) -> Result<Realisations, AnalysisError> {
     let n = model.dim();
     let start = &orbit.start;
@@ -688,7 +700,7 @@ fn realisations(
     let fixed_reference = (plan.alignment == Alignment::Deterministic).then_some(orbit.t_event);
     let sampling = ensemble::Sampling { s: &plan.s, fixed_reference };
     let started = std::time::Instant::now();
-    let data = ensemble::run(&spec, &sampling, plan.realisations, threads, progress)?;
+    let data = ensemble::run(&spec, &sampling, plan.realisations, workers)?;
     Ok(Realisations {
         data,
         atol,
