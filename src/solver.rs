@@ -174,7 +174,12 @@ impl Method {
                 dense_order: 5,
                 family: "ARKStep",
                 accepts: dirk,
-                engine: EngineSettings { deduce_implicit_rhs: true, dirk_newton: true, ..fresh },
+                engine: EngineSettings {
+                    deduce_implicit_rhs: true,
+                    dirk_newton: true,
+                    absolute_ln_v: Some(1.0),
+                    ..fresh
+                },
                 physical_region: true,
             },
             Method::ArkodeImex => Capabilities {
@@ -317,7 +322,8 @@ pub struct EngineSettings {
     /// [1e-3, 0.1] and `max_nonlin_iters` = 5.
     pub dirk_newton: bool,
     /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]),
-    /// with 20 convergence failures per step ([`Options::max_conv_fails`]); see `engine`.
+    /// with 20 convergence failures per step ([`Options::max_conv_fails`]): CVODE BDF at a
+    /// tenth of rtol, ARKStep DIRK at rtol; see `engine`.
     pub absolute_ln_v: Option<f64>,
 }
 
