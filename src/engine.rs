@@ -134,6 +134,20 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // 2.3e-9 (extrapolation); absolute at rtol/10: 3.4e-10, 1.6e-10, 1.2e-10, periods within
     // 3e-11, for 1.5–2× the steps (absolute at rtol: radau5 still 3.6e-9). The earthquake
     // period with radau5 goes from 6.0e-10 to 9e-13 off (2.1× the steps).
+    // ARKStep DIRK weighs ln v absolutely too, at rtol: its Newton test (above) must stay
+    // above the round-off of the stage solution, and on the slow manifold w is fixed by
+    // G = u + (θ + w)/ξ only to ξ·ulp(u) + ulp(θ), whatever |w|. Weighed relative to |w|, the
+    // weight near v = 1 is atol alone (1e-12 in the far-start scenes), 5 of those ulps after
+    // the start (1e6, 1e-300, 1e3), where the slip comes at u ≈ −1241, θ ≈ 993, so the
+    // round-off alone is ~100 times the Newton test (2e-13 against 2.2e-3 · 1e-12): 10
+    // convergence failures down to h = 3e-12 at v ≈ 0.96 (also from a fresh start at
+    // (−1241, 0.5, 993), no deep stick; a looser test, 0.03, passes with 4.6× the steps of
+    // the weight below and 145 224 error-test failures). Absolute at rtol the weight is
+    // 1e-10: every far start reaches the cycle (tests/cycle_accuracy.rs), and the earthquake
+    // scene's period error goes from −1.7e-11 to −6.3e-12 (relative) at 1.4× the steps
+    // (41 930 → 58 668 in 8 cycles). A tenth of rtol fails at the stick's exit, where
+    // ln v = −50 is also weighed at 1e-11. It also allows 20 convergence failures per step
+    // (`EngineSettings::max_conv_fails`), which changed none of those runs.
     let error_scales = engine.absolute_ln_v.map(|c| {
         (0..system.dim())
             .map(|i| if i == W { ErrorScale::Absolute(c) } else { ErrorScale::Relative })

@@ -213,7 +213,13 @@ impl Method {
                 dense_order: 5,
                 family: "ARKStep",
                 accepts: dirk,
-                engine: EngineSettings { deduce_implicit_rhs: true, dirk_newton: true, ..fresh },
+                engine: EngineSettings {
+                    deduce_implicit_rhs: true,
+                    dirk_newton: true,
+                    absolute_ln_v: Some(1.0),
+                    max_conv_fails: Some(20),
+                    ..fresh
+                },
                 physical_region: true,
             },
             Method::ArkodeImex => Capabilities {
@@ -355,11 +361,12 @@ pub struct EngineSettings {
     /// ARKStep DIRK's tighter Newton iteration: `nonlin_conv_coef` = 1000 u / rtol within
     /// [1e-3, 0.1] and `max_nonlin_iters` = 5.
     pub dirk_newton: bool,
-    /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]);
-    /// see `engine`.
+    /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]):
+    /// a tenth of rtol for CVODE BDF, Radau5, Rodas5P and Extrapolation, rtol for ARKStep
+    /// DIRK; see `engine`.
     pub absolute_ln_v: Option<f64>,
     /// [`Options::max_conv_fails`] per step, where the method's default stops a run (CVODE
-    /// with ln v weighed absolutely); see `engine`.
+    /// and ARKStep DIRK with ln v weighed absolutely); see `engine`.
     pub max_conv_fails: Option<i32>,
 }
 
