@@ -690,3 +690,38 @@ fn a_panic_in_dense_output_is_an_error() {
         assert_eq!(integ.dense(0.0, 1).unwrap(), &[-1.0], "{method}");
     }
 }
+
+/// The check blames a Jacobian only where differences resolve its entries: at the state where
+/// arkode-imex stops from v = 1e30 (u = 8.7e19, ln v = 69), the step of ln v's column,
+/// 1e-6 of the state's largest component (8.7e13), leaves e^(ln v) far behind, and the
+/// differences (7e241) said the right Jacobian (8.7e5) was wrong. Differences at h and h/8
+/// that disagree are not judged; near the same state with u of usual size, a wrong entry is
+/// still found.
+#[test]
+fn the_jacobian_check_judges_only_entries_that_differences_resolve() {
+    use stickslip::integrate::{check_jacobian, JacobianMatrix};
+    use stickslip::model::{Drr, DrrParams, Friction};
+    let drr = Drr::new(DrrParams::new(1e8, 0.8, 1.0, Friction::Log));
+    let far = [8.665426747370406e19, 69.07751524360145, -138.1550306805274];
+    assert_eq!(check_jacobian(&drr, 8.7e-11, &far), Ok(()));
+    /// The DRR with ∂f_v/∂ln v doubled.
+    struct Wrong(Drr);
+    impl OdeSystem for Wrong {
+        fn dim(&self) -> usize {
+            3
+        }
+        fn rhs(&self, t: f64, y: &[f64], f: &mut [f64]) {
+            self.0.rhs(t, y, f)
+        }
+        fn has_jacobian(&self) -> bool {
+            true
+        }
+        fn jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+            self.0.jacobian(t, y, jac);
+            jac.set(1, 1, 2.0 * jac.get(1, 1));
+        }
+    }
+    let near = [1.0, 2.0, -3.0];
+    let mismatch = check_jacobian(&Wrong(drr), 0.0, &near).unwrap_err();
+    assert_eq!((mismatch.row, mismatch.col), (1, 1), "{mismatch}");
+}

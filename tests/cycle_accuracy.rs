@@ -112,8 +112,8 @@ fn an_unconverged_run_exits_4_naming_the_limit() {
 
 /// Far starts (|u| up to 1e6, v from 1e-300 to 1e30, |θ| up to 1e3) on the earthquake scene,
 /// default options, for the stiff methods that reach the cycle from all of them (0.15–0.45 s
-/// each; arkode-dirk 1.2–2.5 s; the whole test 32 s wall, 5.7 s user CPU, on the shared
-/// 2-core machine). Heavier: `cargo test --release --test cycle_accuracy -- --ignored`.
+/// each; arkode-dirk 1.2–2.5 s; the whole test 6–32 s wall, 5.7–6.8 s user CPU, on the
+/// shared 2-core machine, so the test command runs it).
 ///
 /// arkode-dirk failed from (1e6, 1e-300, 1e3) until it weighed ln v absolutely
 /// (src/engine.rs): there the slip comes at u ≈ −1241, θ ≈ 993, where the slow manifold
@@ -122,7 +122,6 @@ fn an_unconverged_run_exits_4_naming_the_limit() {
 ///
 /// Not arkode-imex: see [`arkode_imex_stops_loudly_from_a_start_at_v_1e30`].
 #[test]
-#[ignore]
 fn far_starts_reach_the_cycle_with_every_stiff_method() {
     let starts = [
         r#""u": 1e6, "v": 1e-300, "theta": 1e3"#,
