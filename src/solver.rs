@@ -281,7 +281,7 @@ impl Method {
                     jacobian_max_age: false,
                     ..newton
                 },
-                engine: EngineSettings { absolute_ln_v: Some(0.1), ..plain },
+                engine: EngineSettings { absolute_ln_v: Some(1.0), ..plain },
                 physical_region: true,
             },
         }
@@ -362,7 +362,7 @@ pub struct EngineSettings {
     /// [1e-3, 0.1] and `max_nonlin_iters` = 5.
     pub dirk_newton: bool,
     /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]):
-    /// a tenth of rtol for CVODE BDF, Radau5, Rodas5P and Extrapolation, rtol for ARKStep
+    /// a tenth of rtol for CVODE BDF, Radau5 and Rodas5P, rtol for Extrapolation and ARKStep
     /// DIRK; see `engine`.
     pub absolute_ln_v: Option<f64>,
     /// [`Options::max_conv_fails`] per step, where the method's default stops a run (CVODE
