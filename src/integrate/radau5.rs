@@ -636,8 +636,7 @@ impl<S: OdeSystem> Radau5<S> {
         Some(if err.is_finite() { err } else { 1e20 })
     }
 
-    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
-    /// `min_step`.
+    /// [`Core::reduce`], then a new Jacobian or LU decomposition before the retry.
     fn reduce(
         &mut self,
         hnew: f64,

@@ -27,6 +27,7 @@
 //! e.g. (0, v, 0) for v = e^w).
 
 use super::models::{EventKind, NoiseModel};
+use super::scheme::deterministic_options;
 use crate::analysis::AnalysisError;
 use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, Tolerance};
 use crate::solver::{self, Method};
@@ -56,12 +57,7 @@ impl HermiteOrbit {
         rtol: f64,
         atol: &[f64],
     ) -> Result<Self, SolverError> {
-        let options = Options {
-            max_steps: Some(10_000_000),
-            max_err_test_fails: Some(20),
-            stop_time: Some(t1),
-            ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
-        };
+        let options = Options { stop_time: Some(t1), ..deterministic_options(rtol, atol) };
         let n = model.dim();
         let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
         let mut f0 = vec![0.0; n];

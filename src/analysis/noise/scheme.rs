@@ -532,6 +532,15 @@ pub fn deterministic_states(
     Ok(out)
 }
 
+/// The options of a deterministic Rodas5P run at the given tolerances.
+pub(super) fn deterministic_options(rtol: f64, atol: &[f64]) -> Options {
+    Options {
+        max_steps: Some(10_000_000),
+        max_err_test_fails: Some(20),
+        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
+    }
+}
+
 /// The deterministic state at time t1 from (t0, x0) (Rodas5P at the given tolerances).
 pub fn deterministic_state(
     model: &NoiseModel,
@@ -541,11 +550,7 @@ pub fn deterministic_state(
     rtol: f64,
     atol: &[f64],
 ) -> Result<Vec<f64>, SolverError> {
-    let options = Options {
-        max_steps: Some(10_000_000),
-        max_err_test_fails: Some(20),
-        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
-    };
+    let options = deterministic_options(rtol, atol);
     let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
     if t1 > t0 {
         integ.advance(t1, Task::Normal)?;
