@@ -3,7 +3,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{Api, Attached, Creation, Solver};
+use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -254,12 +254,8 @@ fn explain(flag: c_int) -> Option<&'static str> {
 /// solver's last error.
 unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     let mut s = Stats::default();
-    let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
-        let mut v: c_long = 0;
-        // SAFETY: `m` is live ARKStep memory (caller's guarantee); the getter writes one long.
-        unsafe { get(m, &mut v) };
-        v.max(0) as u64
-    };
+    // SAFETY: `m` is live ARKStep memory (caller's guarantee), and every getter is ARKStep's.
+    let count = |get: Getter| unsafe { counter(m, get) };
     s.steps = count(ark::GetNumSteps);
     s.step_attempts = count(ark::GetNumStepAttempts);
     s.lin_setups = count(ark::GetNumLinSolvSetups);

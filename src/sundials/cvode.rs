@@ -2,7 +2,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{Api, Attached, Creation, Solver};
+use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -59,12 +59,8 @@ fn classify(flag: c_int) -> ErrorKind {
 /// leave their counter at zero.
 unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     let mut s = Stats::default();
-    let count = |get: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int| {
-        let mut v: c_long = 0;
-        // SAFETY: `m` is live CVODE memory (caller's guarantee); the getter writes one long.
-        unsafe { get(m, &mut v) };
-        v.max(0) as u64
-    };
+    // SAFETY: `m` is live CVODE memory (caller's guarantee), and every getter is CVODE's.
+    let count = |get: Getter| unsafe { counter(m, get) };
     s.steps = count(ffi::CVodeGetNumSteps);
     s.rhs_evals = count(ffi::CVodeGetNumRhsEvals);
     s.lin_setups = count(ffi::CVodeGetNumLinSolvSetups);

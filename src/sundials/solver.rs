@@ -67,6 +67,20 @@ pub(crate) struct Api {
     pub dense_order_is_last_order: bool,
 }
 
+/// A SUNDIALS getter of one counter.
+pub(crate) type Getter = unsafe extern "C" fn(Mem, *mut c_long) -> c_int;
+
+/// The counter `get` reads from the solver memory `m` (a negative count reads as 0).
+///
+/// # Safety
+/// `m` is live memory of the solver `get` belongs to.
+pub(crate) unsafe fn counter(m: Mem, get: Getter) -> u64 {
+    let mut v: c_long = 0;
+    // SAFETY: `m` is live solver memory (caller's guarantee); the getter writes one long.
+    unsafe { get(m, &mut v) };
+    v.max(0) as u64
+}
+
 /// What is attached to the solver memory, so that [`Api::read_stats`] asks only the getters
 /// that apply.
 #[derive(Debug, Clone, Copy)]
