@@ -59,6 +59,24 @@ struct Compound<'a> {
     key: Option<String>,
 }
 
+/// Serializer methods for values that hold no number: each does nothing.
+macro_rules! ignored {
+    ($($method:ident($($arg:ty),*)),*) => {$(
+        fn $method(self, $(_: $arg),*) -> Result<(), Never> {
+            Ok(())
+        }
+    )*};
+}
+
+/// Serializer methods that open a compound value: each starts a fresh [`Compound`].
+macro_rules! compound {
+    ($($method:ident($($arg:ty),*)),*) => {$(
+        fn $method(self, $(_: $arg),*) -> Result<Compound<'a>, Never> {
+            Ok(Compound { walker: self, index: 0, key: None })
+        }
+    )*};
+}
+
 impl<'a> ser::Serializer for &'a mut Walker {
     type Ok = ();
     type Error = Never;
@@ -70,33 +88,24 @@ impl<'a> ser::Serializer for &'a mut Walker {
     type SerializeStruct = Compound<'a>;
     type SerializeStructVariant = Compound<'a>;
 
-    fn serialize_bool(self, _: bool) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_i8(self, _: i8) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_i16(self, _: i16) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_i32(self, _: i32) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_i64(self, _: i64) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_u8(self, _: u8) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_u16(self, _: u16) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_u32(self, _: u32) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_u64(self, _: u64) -> Result<(), Never> {
-        Ok(())
-    }
+    ignored!(
+        serialize_bool(bool),
+        serialize_i8(i8),
+        serialize_i16(i16),
+        serialize_i32(i32),
+        serialize_i64(i64),
+        serialize_u8(u8),
+        serialize_u16(u16),
+        serialize_u32(u32),
+        serialize_u64(u64),
+        serialize_char(char),
+        serialize_str(&str),
+        serialize_bytes(&[u8]),
+        serialize_none(),
+        serialize_unit(),
+        serialize_unit_struct(&'static str),
+        serialize_unit_variant(&'static str, u32, &'static str)
+    );
     fn serialize_f32(self, v: f32) -> Result<(), Never> {
         self.number(v as f64);
         Ok(())
@@ -105,29 +114,8 @@ impl<'a> ser::Serializer for &'a mut Walker {
         self.number(v);
         Ok(())
     }
-    fn serialize_char(self, _: char) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_str(self, _: &str) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_bytes(self, _: &[u8]) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_none(self) -> Result<(), Never> {
-        Ok(())
-    }
     fn serialize_some<T: Serialize + ?Sized>(self, value: &T) -> Result<(), Never> {
         value.serialize(self)
-    }
-    fn serialize_unit(self) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_unit_struct(self, _: &'static str) -> Result<(), Never> {
-        Ok(())
-    }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> Result<(), Never> {
-        Ok(())
     }
     fn serialize_newtype_struct<T: Serialize + ?Sized>(
         self,
@@ -146,39 +134,15 @@ impl<'a> ser::Serializer for &'a mut Walker {
         self.child(format!(".{variant}"), value);
         Ok(())
     }
-    fn serialize_seq(self, _: Option<usize>) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_tuple(self, _: usize) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_tuple_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_map(self, _: Option<usize>) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_struct(self, _: &'static str, _: usize) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
-    fn serialize_struct_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> Result<Compound<'a>, Never> {
-        Ok(Compound { walker: self, index: 0, key: None })
-    }
+    compound!(
+        serialize_seq(Option<usize>),
+        serialize_tuple(usize),
+        serialize_tuple_struct(&'static str, usize),
+        serialize_tuple_variant(&'static str, u32, &'static str, usize),
+        serialize_map(Option<usize>),
+        serialize_struct(&'static str, usize),
+        serialize_struct_variant(&'static str, u32, &'static str, usize)
+    );
 }
 
 impl Compound<'_> {
