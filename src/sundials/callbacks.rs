@@ -236,6 +236,27 @@ fn rhs_code(diag: &mut Diagnostics, t: f64, dydt: &mut [f64], f: impl FnOnce(&mu
     }
 }
 
+/// Evaluates `f` of the registered system at (t, y) into `ydot` and maps the outcome to a
+/// return code.
+///
+/// # Safety
+/// `data` must be the registered `Shared<S>`, alive for the solver's life; `y` and `ydot`
+/// distinct serial vectors of length `dim` owned by SUNDIALS for the duration of the call.
+unsafe fn rhs_with<S>(
+    t: f64,
+    y: ffi::N_Vector,
+    ydot: ffi::N_Vector,
+    data: *mut c_void,
+    f: impl FnOnce(&S, f64, &[f64], &mut [f64]),
+) -> c_int {
+    // SAFETY: `data` is the `Shared<S>` registered as user data (caller's guarantee).
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
+    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
+    let system = &shared.system;
+    rhs_code(&mut shared.diag, t, dy, |dy| f(system, t, y, dy))
+}
+
 /// f(t, y) for CVODE, and for ARKStep's fully implicit or fully explicit forms.
 pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
     t: f64,
@@ -243,14 +264,8 @@ pub(crate) unsafe extern "C" fn rhs<S: OdeSystem>(
     ydot: ffi::N_Vector,
     data: *mut c_void,
 ) -> c_int {
-    // SAFETY: `data` is the `Shared<S>` registered as user data, alive for the solver's life;
-    // `y` and `ydot` are distinct serial vectors of length `dim` owned by SUNDIALS for the
-    // duration of this call.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
-    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
-    let system = &shared.system;
-    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs(t, y, dy))
+    // SAFETY: SUNDIALS calls this with the user data and vectors `rhs_with` requires.
+    unsafe { rhs_with(t, y, ydot, data, S::rhs) }
 }
 
 /// f_E(t, y) for ARKStep IMEX.
@@ -261,11 +276,7 @@ pub(crate) unsafe extern "C" fn rhs_explicit<S: ImexSystem>(
     data: *mut c_void,
 ) -> c_int {
     // SAFETY: as in `rhs`.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
-    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
-    let system = &shared.system;
-    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_explicit(t, y, dy))
+    unsafe { rhs_with(t, y, ydot, data, S::rhs_explicit) }
 }
 
 /// f_I(t, y) for ARKStep IMEX.
@@ -276,11 +287,7 @@ pub(crate) unsafe extern "C" fn rhs_implicit<S: ImexSystem>(
     data: *mut c_void,
 ) -> c_int {
     // SAFETY: as in `rhs`.
-    let shared = unsafe { &mut *(data as *mut Shared<S>) };
-    // SAFETY: `y` and `ydot` are distinct serial vectors of length `dim`, valid for this call.
-    let (y, dy) = unsafe { (slice(y, shared.dim), slice_mut(ydot, shared.dim)) };
-    let system = &shared.system;
-    rhs_code(&mut shared.diag, t, dy, |dy| system.rhs_implicit(t, y, dy))
+    unsafe { rhs_with(t, y, ydot, data, S::rhs_implicit) }
 }
 
 /// Fills a dense Jacobian through `fill` and maps the outcome to a return code.
