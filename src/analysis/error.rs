@@ -22,6 +22,22 @@ impl InvalidOption {
         Self { field: field.into(), message: message.into() }
     }
 
+    /// The options object `T` read from `value`; a parse error names the whole object.
+    pub fn parse<T: serde::de::DeserializeOwned>(value: serde_json::Value) -> Result<T, Self> {
+        serde_json::from_value(value).map_err(|e| Self::new("", e.to_string()))
+    }
+
+    /// Checks that the field `tolerance`, if given, lies in (0, 0.1]; `example` is a valid
+    /// value the message suggests.
+    pub fn check_tolerance(tolerance: Option<f64>, example: &str) -> Result<(), Self> {
+        match tolerance {
+            Some(t) if !(t > 0.0 && t <= 0.1) => {
+                Err(Self::new("tolerance", format!("{t} must be in (0, 0.1], e.g. {example}")))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// The field's full path below `base` (e.g. `analyses[2].noise`), as a scene names it.
     pub fn path_below(&self, base: &str) -> String {
         if self.field.is_empty() {

@@ -83,8 +83,7 @@ impl AsymptoticsOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object) and what would be valid.
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let raw: RawOptions =
-            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
+        let raw: RawOptions = InvalidOption::parse(value)?;
         let d = Self::default();
         let o = Self {
             gammas: raw.gammas.unwrap_or(d.gammas),

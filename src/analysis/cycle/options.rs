@@ -25,16 +25,8 @@ impl CycleOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object).
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let o: Self =
-            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
-        if let Some(t) = o.tolerance {
-            if !(t > 0.0 && t <= 0.1) {
-                return Err(InvalidOption::new(
-                    "tolerance",
-                    format!("{t} must be in (0, 0.1], e.g. 1e-7"),
-                ));
-            }
-        }
+        let o: Self = InvalidOption::parse(value)?;
+        InvalidOption::check_tolerance(o.tolerance, "1e-7")?;
         if let Some(t) = o.max_time {
             if !(t.is_finite() && t >= 1.0) {
                 return Err(InvalidOption::new(

@@ -49,8 +49,7 @@ impl LyapunovOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object).
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let raw: RawOptions =
-            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
+        let raw: RawOptions = InvalidOption::parse(value)?;
         let d = Self::default();
         let o = Self {
             ftle_periods: raw.ftle_periods.unwrap_or(d.ftle_periods),

@@ -19,16 +19,8 @@ impl ShootingOptions {
     /// Parses and validates the options object; the error names the field (empty: the
     /// object).
     pub fn from_json(value: serde_json::Value) -> Result<Self, InvalidOption> {
-        let o: Self =
-            serde_json::from_value(value).map_err(|e| InvalidOption::new("", e.to_string()))?;
-        if let Some(t) = o.tolerance {
-            if !(t > 0.0 && t <= 0.1) {
-                return Err(InvalidOption::new(
-                    "tolerance",
-                    format!("{t} must be in (0, 0.1], e.g. 1e-8"),
-                ));
-            }
-        }
+        let o: Self = InvalidOption::parse(value)?;
+        InvalidOption::check_tolerance(o.tolerance, "1e-8")?;
         if let Some(n) = o.max_iterations {
             if n == 0 || n > 1000 {
                 return Err(InvalidOption::new(
