@@ -252,11 +252,7 @@ pub struct Radau5<S: OdeSystem> {
 
 impl<S: OdeSystem> std::fmt::Debug for Radau5<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Radau5")
-            .field("n", &self.n)
-            .field("t", &self.core.t_out)
-            .field("t_internal", &self.core.x)
-            .finish()
+        self.core.debug_struct(f, "Radau5", self.n).finish()
     }
 }
 
@@ -441,11 +437,6 @@ impl<S: OdeSystem> Radau5<S> {
     pub fn fixed_step(mut self, h: f64) -> Self {
         self.fixed_h = Some(h);
         self
-    }
-
-    /// The system being integrated.
-    pub fn system(&self) -> &S {
-        &self.system
     }
 
     fn update_scal(&mut self) {
@@ -663,15 +654,7 @@ impl<S: OdeSystem> Radau5<S> {
                     format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
                 return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
             }
-            if let Some(h) = self.fixed_h {
-                if self.core.h.abs() != h {
-                    self.core.h = self.core.posneg * h;
-                }
-            }
-            // Do not step past the stop time.
-            let planned = self.core.h;
-            let last = self.core.clip_to_stop_time();
-            self.core.check_step_underflow()?;
+            let (planned, last) = self.core.prepare_attempt(self.fixed_h)?;
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {
                 if !self.compute_jacobian() {
@@ -754,11 +737,7 @@ impl<S: OdeSystem> Radau5<S> {
             let mut hnew = self.core.h / quot;
             if err < 1.0 || self.fixed_h.is_some() {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last {
-                    self.core.stop_time.unwrap_or(self.core.x + self.core.h)
-                } else {
-                    self.core.x + self.core.h
-                };
+                let xph = self.core.step_end(last);
                 let w = &mut self.work;
                 for i in 0..self.n {
                     w.ynew[i] = self.core.y[i] + w.z3[i];

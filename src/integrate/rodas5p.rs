@@ -216,11 +216,7 @@ pub struct Rodas5p<S: OdeSystem> {
 
 impl<S: OdeSystem> std::fmt::Debug for Rodas5p<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Rodas5p")
-            .field("n", &self.n)
-            .field("t", &self.core.t_out)
-            .field("t_internal", &self.core.x)
-            .finish()
+        self.core.debug_struct(f, "Rodas5p", self.n).finish()
     }
 }
 
@@ -295,11 +291,6 @@ impl<S: OdeSystem> Rodas5p<S> {
     pub fn fixed_step(mut self, h: f64) -> Self {
         self.fixed_h = Some(h);
         self
-    }
-
-    /// The system being integrated.
-    pub fn system(&self) -> &S {
-        &self.system
     }
 
     /// Error weights atol + rtol·max(|y|, |other|) (or their absolute scales) into `scal`.
@@ -482,15 +473,7 @@ impl<S: OdeSystem> Rodas5p<S> {
         self.core.layer_step = false;
         self.core.drop_passed_stop_time();
         loop {
-            if let Some(h) = self.fixed_h {
-                if self.core.h.abs() != h {
-                    self.core.h = self.core.posneg * h;
-                }
-            }
-            // Do not step past the stop time.
-            let planned = self.core.h;
-            let last = self.core.clip_to_stop_time();
-            self.core.check_step_underflow()?;
+            let (planned, last) = self.core.prepare_attempt(self.fixed_h)?;
             // Jacobian (once per point) and LU factors (once per step size).
             if !self.jac_current {
                 if !self.compute_jacobian() {
@@ -535,11 +518,7 @@ impl<S: OdeSystem> Rodas5p<S> {
             let mut hnew = self.core.h / quot;
             if accepted {
                 // f at the new point (needed next anyway): a non-finite one fails the step.
-                let xph = if last {
-                    self.core.stop_time.unwrap_or(self.core.x + self.core.h)
-                } else {
-                    self.core.x + self.core.h
-                };
+                let xph = self.core.step_end(last);
                 let w = &mut self.work;
                 self.system.rhs(xph, &w.ynew, &mut w.fnew);
                 self.core.stats.rhs_evals += 1;

@@ -263,6 +263,45 @@ impl Core {
         false
     }
 
+    /// Readies an attempt: the fixed step `fixed_h` (testing aid) in the direction of
+    /// integration, then h clipped at the stop time and the step-underflow test. Returns the
+    /// step planned before clipping and whether the attempt ends at the stop time.
+    pub fn prepare_attempt(&mut self, fixed_h: Option<f64>) -> Result<(f64, bool), SolverError> {
+        if let Some(h) = fixed_h {
+            if self.h.abs() != h {
+                self.h = self.posneg * h;
+            }
+        }
+        // Do not step past the stop time.
+        let planned = self.h;
+        let last = self.clip_to_stop_time();
+        self.check_step_underflow()?;
+        Ok((planned, last))
+    }
+
+    /// The end of the step being attempted: the stop time if the step was clipped to it
+    /// (`last`), otherwise x + h.
+    pub fn step_end(&self, last: bool) -> f64 {
+        if last {
+            self.stop_time.unwrap_or(self.x + self.h)
+        } else {
+            self.x + self.h
+        }
+    }
+
+    /// The start of a method's `Debug` output: its name, `n` and the returned and internal
+    /// times.
+    pub fn debug_struct<'a, 'b>(
+        &self,
+        f: &'a mut std::fmt::Formatter<'b>,
+        name: &str,
+        n: usize,
+    ) -> std::fmt::DebugStruct<'a, 'b> {
+        let mut d = f.debug_struct(name);
+        d.field("n", &n).field("t", &self.t_out).field("t_internal", &self.x);
+        d
+    }
+
     /// Step underflow (RADAU5's test: 0.1·|h| ≤ u·|x|): an error if t + h = t or
     /// `fail_on_step_underflow`, otherwise a counted warning.
     pub fn check_step_underflow(&mut self) -> Result<(), SolverError> {
@@ -873,6 +912,11 @@ macro_rules! integrator_via_stepper {
             /// documentation says what some counts mean for this method.
             pub fn stats(&self) -> Stats {
                 self.core.stats
+            }
+
+            /// The system being integrated.
+            pub fn system(&self) -> &S {
+                &self.system
             }
 
             /// The state at `t()`.

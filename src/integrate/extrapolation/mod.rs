@@ -212,10 +212,8 @@ pub struct Extrapolation<S: OdeSystem> {
 
 impl<S: OdeSystem> std::fmt::Debug for Extrapolation<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Extrapolation")
-            .field("n", &self.n)
-            .field("t", &self.core.t_out)
-            .field("t_internal", &self.core.x)
+        self.core
+            .debug_struct(f, "Extrapolation", self.n)
             .field("stiff", &(self.mode == Mode::Implicit))
             .field("switches", &self.switches)
             .finish()
@@ -342,11 +340,6 @@ impl<S: OdeSystem> Extrapolation<S> {
         self
     }
 
-    /// The system being integrated.
-    pub fn system(&self) -> &S {
-        &self.system
-    }
-
     /// Number of switches between the schemes so far (over the integrator's whole life).
     pub fn switches(&self) -> u64 {
         self.switches
@@ -421,11 +414,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             let h_used = self.core.h;
             match self.attempt(first) {
                 Ok(Some(kc)) => {
-                    let xph = if last {
-                        self.core.stop_time.unwrap_or(self.core.x + self.core.h)
-                    } else {
-                        self.core.x + self.core.h
-                    };
+                    let xph = self.core.step_end(last);
                     if self.mode == Mode::Explicit
                         && !self.explicit_end_holds(xph, kc, h_used, &mut failures)?
                     {
