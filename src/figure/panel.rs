@@ -289,6 +289,22 @@ impl Panel {
         self
     }
 
+    /// Checks the point `index` (x, y) of the series or band labelled `label`: finite, and
+    /// positive on a logarithmic axis.
+    fn check_point(&self, label: &str, index: usize, x: f64, y: f64) -> Result<(), FigureError> {
+        let (panel, series) = (|| text::plain(&self.title), || text::plain(label));
+        if !x.is_finite() || !y.is_finite() {
+            return Err(FigureError::NonFinite { panel: panel(), series: series(), index, x, y });
+        }
+        for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
+            if a.kind == ScaleKind::Log10 && value <= 0.0 {
+                let (panel, series) = (panel(), series());
+                return Err(FigureError::NonPositiveOnLog { panel, series, axis, index, value });
+            }
+        }
+        Ok(())
+    }
+
     /// Checks the data: see [`FigureError`].
     pub fn validate(&self) -> Result<(), FigureError> {
         let panel = || text::plain(&self.title);
@@ -320,26 +336,7 @@ impl Panel {
             }
             for (index, ((&x, &lo), &hi)) in b.x.iter().zip(&b.lo).zip(&b.hi).enumerate() {
                 for y in [lo, hi] {
-                    if !x.is_finite() || !y.is_finite() {
-                        return Err(FigureError::NonFinite {
-                            panel: panel(),
-                            series: series(),
-                            index,
-                            x,
-                            y,
-                        });
-                    }
-                    for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
-                        if a.kind == ScaleKind::Log10 && value <= 0.0 {
-                            return Err(FigureError::NonPositiveOnLog {
-                                panel: panel(),
-                                series: series(),
-                                axis,
-                                index,
-                                value,
-                            });
-                        }
-                    }
+                    self.check_point(&b.label, index, x, y)?;
                 }
             }
         }
@@ -357,26 +354,7 @@ impl Panel {
                 });
             }
             for (index, (&x, &y)) in s.x.iter().zip(&s.y).enumerate() {
-                if !x.is_finite() || !y.is_finite() {
-                    return Err(FigureError::NonFinite {
-                        panel: panel(),
-                        series: series(),
-                        index,
-                        x,
-                        y,
-                    });
-                }
-                for (axis, a, value) in [("x", &self.x, x), ("y", &self.y, y)] {
-                    if a.kind == ScaleKind::Log10 && value <= 0.0 {
-                        return Err(FigureError::NonPositiveOnLog {
-                            panel: panel(),
-                            series: series(),
-                            axis,
-                            index,
-                            value,
-                        });
-                    }
-                }
+                self.check_point(&s.label, index, x, y)?;
             }
         }
         for l in &self.lines {
