@@ -1,7 +1,16 @@
 //! Locating events inside the last step from the integrator's dense output, and between
 //! stored step ends by cubic Hermite interpolation.
 
-use crate::integrate::{Integrator, SolverError};
+use crate::integrate::{Clock, Integrator, SolverError};
+
+/// The state (its first three components) at the end of the step the clock just took to local
+/// time `t`, and its time derivative from the integrator's dense output.
+pub fn step_end(clock: &mut Clock<'_>, t: f64) -> Result<([f64; 3], [f64; 3]), SolverError> {
+    let y = clock.state();
+    let y = [y[0], y[1], y[2]];
+    let d = clock.integrator().dense(t, 1)?;
+    Ok((y, [d[0], d[1], d[2]]))
+}
 
 /// Finds t in [a, b] (inside the integrator's last step) where component `index` of the k-th
 /// derivative of the interpolant equals `level`, given that it changes sign across [a, b].

@@ -366,10 +366,8 @@ impl Run<'_, '_> {
                 self.prev.t = step.start;
             }
             self.steps += 1;
-            let y = self.clock.state();
-            let y = [y[0], y[1], y[2]];
-            let d = self.clock.integrator().dense(step.t, 1)?;
-            let next = Sample { t: step.t, y, d: [d[0], d[1], d[2]] };
+            let (y, d) = events::step_end(&mut self.clock, step.t)?;
+            let next = Sample { t: step.t, y, d };
             if y.iter().chain(&next.d).any(|v| !v.is_finite()) {
                 return Err(self.failed(format!(
                     "{} accepted a step to a non-finite state or derivative (dy/dt = {:?})",
