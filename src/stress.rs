@@ -270,22 +270,7 @@ fn quick_law_cells() -> Vec<Cell> {
     let mut cells = Vec::new();
     for (state_law, eta) in OTHER_LAWS {
         for gamma in [1e4, 1e8] {
-            for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
-                for start in [None, Some([0.0, 1e30, 0.0])] {
-                    for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
-                        cells.push(Cell {
-                            gamma,
-                            xi,
-                            epsilon,
-                            rtol: 1e-6,
-                            start,
-                            method,
-                            state_law,
-                            eta,
-                        });
-                    }
-                }
-            }
+            cells.extend(far_above_threshold(state_law, eta, gamma, 1e30));
         }
     }
     cells
@@ -299,20 +284,20 @@ fn quick_law_cells() -> Vec<Cell> {
 fn quick_quasi_dynamic_cells() -> Vec<Cell> {
     let mut cells = Vec::new();
     for state_law in [StateLaw::Slip, StateLaw::Ageing, StateLaw::Prz] {
-        for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
-            for start in [None, Some([0.0, 1e-30, 0.0])] {
-                for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
-                    cells.push(Cell {
-                        gamma: f64::INFINITY,
-                        xi,
-                        epsilon,
-                        rtol: 1e-6,
-                        start,
-                        method,
-                        state_law,
-                        eta: 0.1,
-                    });
-                }
+        cells.extend(far_above_threshold(state_law, 0.1, f64::INFINITY, 1e-30));
+    }
+    cells
+}
+
+/// The quick grid's cells of one law and γ: two points far above threshold, from the slow
+/// manifold and from v = `v_start`, with cvode-bdf, radau5 and rodas5p at rtol 1e-6.
+fn far_above_threshold(state_law: StateLaw, eta: f64, gamma: f64, v_start: f64) -> Vec<Cell> {
+    let mut cells = Vec::new();
+    for (xi, epsilon) in [(0.2, 3.0), (2.0, 5.0)] {
+        for start in [None, Some([0.0, v_start, 0.0])] {
+            for method in [Method::CvodeBdf, Method::Radau5, Method::Rodas5p] {
+                let rtol = 1e-6;
+                cells.push(Cell { gamma, xi, epsilon, rtol, start, method, state_law, eta });
             }
         }
     }
