@@ -1,6 +1,8 @@
 //! Cross-checking a scene across methods and a user's trajectory or report against the
 //! reference.
 
+mod common;
+
 use stickslip::compare::{self, UserData};
 use stickslip::scene::{self, Method};
 
@@ -30,7 +32,6 @@ fn a_failing_method_is_reported_not_averaged() {
     assert_eq!(period.spread, None, "one value has no spread");
 }
 
-const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
 const FIG1: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/fig1.json");
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -40,16 +41,7 @@ fn temp_dir(name: &str) -> std::path::PathBuf {
 }
 
 fn compare_cli(file: &std::path::Path, extra: &[&str]) -> (Option<i32>, String, String) {
-    let out = std::process::Command::new(EXE)
-        .args(["compare", FIG1, "--against", file.to_str().unwrap()])
-        .args(extra)
-        .output()
-        .unwrap();
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    common::compare_cli(std::path::Path::new(FIG1), file, extra)
 }
 
 /// A start on the fig1 limit cycle, between two slips.

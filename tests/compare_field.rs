@@ -3,6 +3,8 @@
 //! where a pointwise comparison can give no verdict. A trajectory written by an independent
 //! integrator (Rodas5P, every step) is compared event by event, then between events in phase.
 
+mod common;
+
 use stickslip::compare::{self, reference::reference_steps};
 use stickslip::scene::{self, Method};
 
@@ -48,16 +50,7 @@ fn compare_cli_with(
 ) -> (Option<i32>, String, String) {
     let scene = dir.join("field.json");
     std::fs::write(&scene, scene_text).unwrap();
-    let out = std::process::Command::new(EXE)
-        .args(["compare", scene.to_str().unwrap(), "--against", file.to_str().unwrap()])
-        .args(extra)
-        .output()
-        .unwrap();
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    common::compare_cli(&scene, file, extra)
 }
 
 /// 26 periods of the field scene from its initial state at t = 0 (the transient included):

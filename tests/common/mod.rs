@@ -1,9 +1,27 @@
 //! Test problems and helpers shared by the integrator tests (tests/methods.rs, tests/radau5.rs,
-//! tests/rodas5p.rs, tests/extrapolation.rs, tests/wrappers.rs) and the reference tables'
-//! check ([`reference`]).
+//! tests/rodas5p.rs, tests/extrapolation.rs, tests/wrappers.rs), the reference tables'
+//! check ([`reference`]) and the compare tests' CLI call ([`compare_cli`]).
 #![allow(dead_code)]
 
 pub mod reference;
+
+/// `stickslip compare SCENE --against FILE` with `extra` options: (exit code, stdout, stderr).
+pub fn compare_cli(
+    scene: &std::path::Path,
+    file: &std::path::Path,
+    extra: &[&str],
+) -> (Option<i32>, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["compare", scene.to_str().unwrap(), "--against", file.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
 
 use stickslip::integrate::{ImexSystem, Integrator, JacobianMatrix, OdeSystem, Task};
 
