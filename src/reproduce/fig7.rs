@@ -4,8 +4,8 @@
 //! Γ(t, t − t') in t' (the paper's definition), ensembles (markers) and linear response
 //! (lines), each realisation aligned on its own event (docs/noise.md).
 
-use super::noise_cases::{self, curve, describe, falls_towards_the_event, peaks_inside};
-use super::{Context, Output, ReproduceError, Row};
+use super::noise_cases::{self, curve, describe, falls_towards_the_event, peaks_inside, tau_claim};
+use super::{Context, Output, ReproduceError};
 use crate::analysis::noise::CorrelationPoint;
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Style};
 
@@ -84,22 +84,20 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     for run in [&sn, &drr, &vdp] {
         out.files.push(ctx.write_json(&format!("{}.json", run.name), &run.report)?);
     }
-    let (xs, ys) = curve(&sn.noise.correlation_time, true);
-    out.claims.push(Row::qualitative(
+    out.claims.push(tau_claim(
         "Fig. 7a",
         "saddle-node: the correlation time grows, is largest shortly before the escape, then drops (slowing-down)",
         "peaks before the event",
-        describe(&xs, &ys),
-        peaks_inside(&ys),
+        &sn.noise.correlation_time,
+        peaks_inside,
         "linear response (the ensemble agrees within its sampling error)".into(),
     ));
-    let (xd, yd) = curve(&drr.noise.correlation_time, true);
-    out.claims.push(Row::qualitative(
+    out.claims.push(tau_claim(
         "Fig. 7b",
         "stick-slip: the correlation time decreases until the slip (speed-up)",
         "decreases",
-        describe(&xd, &yd),
-        falls_towards_the_event(&yd),
+        &drr.noise.correlation_time,
+        falls_towards_the_event,
         "linear response, window t_c − 3 … t_c − 30/γ; undefined where Γ_u does not fall to half"
             .into(),
     ));

@@ -2,8 +2,8 @@
 //! (data/scenes/noise-power-law.json: α = 0.15, γ = 1e3, ε = 0.78, ξ = 0.7).
 
 use super::fig1::UNITS;
-use super::noise_cases::{self, curve, describe, falls_towards_the_event};
-use super::{Context, Output, ReproduceError, Row};
+use super::noise_cases::{self, curve, falls_towards_the_event, tau_claim};
+use super::{Context, Output, ReproduceError};
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Style};
 
 /// Makes Fig. 9.
@@ -19,12 +19,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         Axis::log10("τ").unit("D_{c}/v_{0}"),
     )
     .series(Series::new("ensemble", xe, ye, Style::markers(0, Marker::Circle)))
-    .series(Series::new(
-        "linear response",
-        xl.clone(),
-        yl.clone(),
-        Style::line(1).dash(Dash::Dashed),
-    ))
+    .series(Series::new("linear response", xl, yl, Style::line(1).dash(Dash::Dashed)))
     .legend(LegendPlace::Auto);
     let t0 = run.noise.deterministic.t0.map_or("-".to_string(), |t| format!("{t:.3}"));
     let fig = Figure::new("Fig. 9: correlation time before the slip, power-law friction (α = 0.15, γ = 10^{3}, ε = 0.78, ξ = 0.7)")
@@ -37,12 +32,12 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         .caption(UNITS);
     out.files.push(ctx.write_figure("fig9.svg", &fig)?);
     out.files.push(ctx.write_json(&format!("{}.json", run.name), &run.report)?);
-    out.claims.push(Row::qualitative(
+    out.claims.push(tau_claim(
         "Fig. 9",
         "power-law friction: the correlation time decreases during an interval of a few t0 before t_c (speed-up)",
         "decreases",
-        describe(&xl, &yl),
-        falls_towards_the_event(&yl),
+        points,
+        falls_towards_the_event,
         format!("linear response; t0 = {t0}"),
     ));
     Ok(out)

@@ -1,7 +1,7 @@
 //! The noise scenes behind Figs. 6, 7 and 9 (data/scenes/noise-*.json, docs/noise.md): run as
 //! `stickslip run` would, with fewer realisations in the reduced (test) version.
 
-use super::{Context, ReproduceError};
+use super::{Context, ReproduceError, Row};
 use crate::analysis::noise::{CorrelationPoint, NoiseReport};
 use crate::scene::{self, AnyScene};
 use serde_json::Value;
@@ -100,6 +100,20 @@ pub fn describe(x: &[f64], y: &[f64]) -> String {
         ),
         _ => "no correlation time defined in the window".into(),
     }
+}
+
+/// A qualitative claim on the linear response's correlation time `points`: `holds` judges the
+/// curve (ordered from the window's start towards the event), which the row describes.
+pub fn tau_claim(
+    figure: &str,
+    claim: &str,
+    paper: &str,
+    points: &[CorrelationPoint],
+    holds: fn(&[f64]) -> bool,
+    note: String,
+) -> Row {
+    let (x, y) = curve(points, true);
+    Row::qualitative(figure, claim, paper, describe(&x, &y), holds(&y), note)
 }
 
 /// Whether a curve (ordered from the window's start towards the event) has its largest value
