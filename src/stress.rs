@@ -89,6 +89,18 @@ impl Cell {
 }
 
 impl Cell {
+    /// A cell of the paper's model: the slip law without radiation damping.
+    fn paper(
+        gamma: f64,
+        xi: f64,
+        epsilon: f64,
+        rtol: f64,
+        start: Option<[f64; 3]>,
+        method: Method,
+    ) -> Self {
+        Cell { gamma, xi, epsilon, rtol, start, method, state_law: StateLaw::Slip, eta: 0.0 }
+    }
+
     /// Whether the cell runs the quasi-dynamic model (γ = +∞).
     pub fn is_quasi_dynamic(&self) -> bool {
         self.gamma == f64::INFINITY
@@ -240,16 +252,7 @@ pub fn grid(kind: Grid) -> Vec<Cell> {
                 for &rtol in &rtols {
                     for start in &starts {
                         for (_, method) in Method::ALL {
-                            cells.push(Cell {
-                                gamma,
-                                xi,
-                                epsilon,
-                                rtol,
-                                start: *start,
-                                method,
-                                state_law: StateLaw::Slip,
-                                eta: 0.0,
-                            });
+                            cells.push(Cell::paper(gamma, xi, epsilon, rtol, *start, method));
                         }
                     }
                 }
@@ -352,16 +355,7 @@ fn physical_grid() -> Vec<Cell> {
                 }
                 for rtol in [1e-6, 1e-8, 1e-10] {
                     for method in physical_methods() {
-                        cells.push(Cell {
-                            gamma,
-                            xi,
-                            epsilon,
-                            rtol,
-                            start: None,
-                            method,
-                            state_law: StateLaw::Slip,
-                            eta: 0.0,
-                        });
+                        cells.push(Cell::paper(gamma, xi, epsilon, rtol, None, method));
                     }
                 }
             }
@@ -489,16 +483,13 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
     let mut s = Summary { cells: cells.len(), ..Summary::default() };
     let mut periods: BTreeMap<String, Vec<(Method, f64)>> = BTreeMap::new();
     for (cell, outcome) in cells.iter().zip(outcomes) {
+        let failure = |what: &str| format!("{what}: {}: {}", cell.key(), describe(outcome));
         match cell.expectation() {
             Expectation::Cycle => {
                 s.physical += 1;
                 if is_failure(cell, outcome) {
                     s.physical_failures += 1;
-                    s.failures.push(format!(
-                        "physical cell without a cycle: {}: {}",
-                        cell.key(),
-                        describe(outcome)
-                    ));
+                    s.failures.push(failure("physical cell without a cycle"));
                 } else {
                     s.physical_ok += 1;
                 }
@@ -506,11 +497,7 @@ fn summarise(cells: &[Cell], outcomes: &[Outcome]) -> Summary {
             Expectation::Decay => {
                 if is_failure(cell, outcome) {
                     s.decay_failures += 1;
-                    s.failures.push(format!(
-                        "below threshold, no decay: {}: {}",
-                        cell.key(),
-                        describe(outcome)
-                    ));
+                    s.failures.push(failure("below threshold, no decay"));
                 }
             }
             Expectation::Limit(reason) => {
