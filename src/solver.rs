@@ -175,6 +175,9 @@ impl Method {
         };
         let cvode = Accepts { max_order: true, ..newton };
         let dirk = Accepts { table: true, ..newton };
+        // Rodas5P and extrapolation solve linear systems only: no Newton iteration to limit.
+        let linearly_implicit =
+            Accepts { max_nonlin_iters: false, nonlin_conv_coef: false, ..newton };
         let plain = EngineSettings {
             jacobian_max_age: None,
             deduce_implicit_rhs: false,
@@ -246,44 +249,24 @@ impl Method {
                 engine: plain,
                 physical_region: false,
             },
-            Method::Radau5 => Capabilities {
-                stiff: true,
-                needs_imex: false,
-                dense_order: 3,
-                family: "Radau5",
-                accepts: newton,
-                engine: EngineSettings { absolute_ln_v: Some(0.1), ..fresh },
-                physical_region: true,
-            },
-            Method::Rodas5p => Capabilities {
-                stiff: true,
-                needs_imex: false,
-                dense_order: 4,
-                family: "Rodas5P",
-                accepts: Accepts {
-                    max_nonlin_iters: false,
-                    max_conv_fails: false,
-                    nonlin_conv_coef: false,
-                    ..newton
-                },
-                engine: EngineSettings { absolute_ln_v: Some(0.1), ..plain },
-                physical_region: true,
-            },
-            Method::Extrapolation => Capabilities {
-                stiff: true,
-                needs_imex: false,
-                dense_order: 3,
-                family: "Extrapolation",
-                accepts: Accepts {
-                    max_order: true,
-                    max_nonlin_iters: false,
-                    nonlin_conv_coef: false,
-                    jacobian_max_age: false,
-                    ..newton
-                },
-                engine: EngineSettings { absolute_ln_v: Some(1.0), ..plain },
-                physical_region: true,
-            },
+            Method::Radau5 => Capabilities::own_stiff(
+                "Radau5",
+                3,
+                newton,
+                EngineSettings { absolute_ln_v: Some(0.1), ..fresh },
+            ),
+            Method::Rodas5p => Capabilities::own_stiff(
+                "Rodas5P",
+                4,
+                Accepts { max_conv_fails: false, ..linearly_implicit },
+                EngineSettings { absolute_ln_v: Some(0.1), ..plain },
+            ),
+            Method::Extrapolation => Capabilities::own_stiff(
+                "Extrapolation",
+                3,
+                Accepts { max_order: true, jacobian_max_age: false, ..linearly_implicit },
+                EngineSettings { absolute_ln_v: Some(1.0), ..plain },
+            ),
         }
     }
 }
@@ -310,6 +293,27 @@ pub struct Capabilities {
     /// #13): the stiff methods, except arkode-imex, whose explicit plate drive is not part of
     /// it.
     pub physical_region: bool,
+}
+
+impl Capabilities {
+    /// The row of one of stickslip's own stiff methods (pure Rust, no IMEX split, inside the
+    /// physical-region guarantee): its `family`, `dense_order`, `accepts` and `engine`.
+    fn own_stiff(
+        family: &'static str,
+        dense_order: u32,
+        accepts: Accepts,
+        engine: EngineSettings,
+    ) -> Self {
+        Capabilities {
+            stiff: true,
+            needs_imex: false,
+            dense_order,
+            family,
+            accepts,
+            engine,
+            physical_region: true,
+        }
+    }
 }
 
 /// Which optional settings a method takes: a set one it does not take is an
