@@ -171,7 +171,7 @@ impl CyclePhysical {
         units: Option<&Units>,
     ) -> Self {
         let phi_at = |u: f64| (!params.inertia).then(|| -params.xi * u - params.eta);
-        let (phi_before, phi_after) = (phi_at(v.u_min), phi_at(v.u_max));
+        let (phi_before, phi_after) = (phi_at(v.extremes.u_min), phi_at(v.extremes.u_max));
         let stress = |phi: Option<f64>| {
             phi.map(|phi| s.shear_stress(phi).unwrap_or_else(|| s.shear_stress_change(phi)))
         };
@@ -189,7 +189,7 @@ impl CyclePhysical {
             v_max: s.velocity(v.v_max),
             v_min: s.velocity(v.v_min),
             slip: s.slip(v.slip),
-            stress_drop: s.stress_drop(v.u_min, v.u_max),
+            stress_drop: s.stress_drop(v.extremes.u_min, v.extremes.u_max),
             shear_stress_before: stress(phi_before),
             shear_stress_after: stress(phi_after),
             shear_stress_reference: phi_before.map(|_| {

@@ -48,8 +48,8 @@ fn the_qdyn_scene_is_its_dimensionless_twin() {
         ("v_max", field.v_max, twin.v_max),
         ("slip", field.slip, twin.slip),
         ("slip_duration", field.slip_duration, twin.slip_duration),
-        ("u_min", field.u_min, twin.u_min),
-        ("u_max", field.u_max, twin.u_max),
+        ("u_min", field.extremes.u_min, twin.extremes.u_min),
+        ("u_max", field.extremes.u_max, twin.extremes.u_max),
     ];
     for (name, a, b) in pairs {
         assert!((a - b).abs() <= 1e-12 * b.abs(), "{name}: {a} vs {b}");
@@ -76,7 +76,7 @@ fn cycle_physical_is_the_cycle_in_si_units() {
     // (du/dt = v − 1), an independent value (slip is the cycle analysis's ∫v dt), so to the
     // run's accuracy (4e-8 measured at rtol 1e-10).
     assert!(ph.stress_drop > 0.0);
-    close("stress_drop", ph.stress_drop, 2.5e8 * 1e-4 * (v.u_max - v.u_min));
+    close("stress_drop", ph.stress_drop, 2.5e8 * 1e-4 * (v.extremes.u_max - v.extremes.u_min));
     let from_slip = 2.5e8 * 1e-4 * (v.slip - v.slip_duration);
     assert!(
         (ph.stress_drop - from_slip).abs() < 1e-6 * from_slip,
@@ -97,7 +97,7 @@ fn cycle_physical_is_the_cycle_in_si_units() {
     let mu_ref = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();
     close("friction_steady", ph.friction_steady.unwrap(), mu_ref);
     // At the start (v = 1, u = u_min) the force balance gives θ + ln v = −ξu − η.
-    close("before", before, 1e7 * mu_ref + 1e5 * (-0.25 * v.u_min - 5e-8));
+    close("before", before, 1e7 * mu_ref + 1e5 * (-0.25 * v.extremes.u_min - 5e-8));
     assert_eq!(ph.shear_stress_reference, Some("absolute (σμ)"));
     assert!(ph.in_time_unit.is_none());
     let json = serde_json::to_value(&report.warnings).unwrap();

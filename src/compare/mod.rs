@@ -51,8 +51,8 @@ fn quantity(report: &Report, key: &str) -> Option<f64> {
         "slip_half_width" => v.slip_half_width,
         "ln_v_max" => Some(v.ln_v_max),
         "ln_v_min" => Some(v.ln_v_min),
-        "u_at_v_max" => Some(v.u_at_v_max),
-        "theta_at_v_max" => Some(v.theta_at_v_max),
+        "u_at_v_max" => Some(v.extremes.u_at_v_max),
+        "theta_at_v_max" => Some(v.extremes.theta_at_v_max),
         "slip" => Some(v.slip),
         _ => None,
     }

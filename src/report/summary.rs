@@ -149,8 +149,8 @@ fn periodic(c: &CycleSection, v: &CycleValues, m: &ModelSection) -> String {
         v.ln_v_max,
         v.v_min,
         pm(e.map(|e| e.v_min)),
-        v.u_at_v_max,
-        v.theta_at_v_max,
+        v.extremes.u_at_v_max,
+        v.extremes.theta_at_v_max,
         v.slip,
         pm(e.map(|e| e.slip))
     );

@@ -155,7 +155,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     .line(RefLine::horizontal(1.0, "", Style::line(3).dash(Dash::Dotted).width(1.0)))
     .note(
         Note::new(
-            values.u_at_v_max,
+            values.extremes.u_at_v_max,
             values.v_max,
             format!("v_{{max}} = {:.1}", values.v_max),
             Anchor::Middle,

@@ -22,7 +22,7 @@ fn alphas(reduced: bool) -> Vec<f64> {
 
 /// The amplitude compared in (d): the range of u over the cycle (units of D_c).
 fn amplitude(v: &CycleValues) -> f64 {
-    v.u_max - v.u_min
+    v.extremes.u_max - v.extremes.u_min
 }
 
 /// Makes Fig. 8.

@@ -7,7 +7,7 @@
 //! as a row with its status and is left out of the fits.
 
 use super::CycleAt;
-use crate::analysis::cycle::{CycleStatus, CycleValues};
+use crate::analysis::cycle::{CycleStatus, CycleValues, Extremes};
 use crate::model::{Drr, DrrParams};
 use serde::{Serialize, Serializer};
 
@@ -22,18 +22,9 @@ pub struct ScanValues {
     pub half_width_times_gamma: Option<f64>,
     /// ln v_max.
     pub ln_v_max: f64,
-    /// u at the v maximum.
-    pub u_at_v_max: f64,
-    /// θ at the v maximum.
-    pub theta_at_v_max: f64,
-    /// Minimum of u.
-    pub u_min: f64,
-    /// Maximum of u.
-    pub u_max: f64,
-    /// Minimum of θ.
-    pub theta_min: f64,
-    /// Maximum of θ.
-    pub theta_max: f64,
+    /// u and θ at the v maximum and their ranges.
+    #[serde(flatten)]
+    pub extremes: Extremes,
 }
 
 impl ScanValues {
@@ -43,12 +34,7 @@ impl ScanValues {
             t0: c.t0,
             half_width_times_gamma: c.slip_half_width.map(|w| w * gamma),
             ln_v_max: c.ln_v_max,
-            u_at_v_max: c.u_at_v_max,
-            theta_at_v_max: c.theta_at_v_max,
-            u_min: c.u_min,
-            u_max: c.u_max,
-            theta_min: c.theta_min,
-            theta_max: c.theta_max,
+            extremes: c.extremes,
         }
     }
 }

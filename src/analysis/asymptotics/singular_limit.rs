@@ -130,8 +130,8 @@ pub fn analyse(
         half_width_predicted_limit: 2.0 * std::f64::consts::PI / 3.0,
         invariants: vec![
             invariant("t0", |v| v.t0),
-            invariant("u_min", |v| v.u_min),
-            invariant("theta_max", |v| v.theta_max),
+            invariant("u_min", |v| v.extremes.u_min),
+            invariant("theta_max", |v| v.extremes.theta_max),
         ],
     }
 }

@@ -139,6 +139,20 @@ pub struct CycleValues {
     pub v_min: f64,
     /// ln v_min.
     pub ln_v_min: f64,
+    /// u and θ at the v maximum and their ranges.
+    #[serde(flatten)]
+    pub extremes: Extremes,
+    /// Slip per event: block displacement ∫v dt while v > 1, = Δu + duration (units of D_c).
+    pub slip: f64,
+    /// Time with v > 1 (from the upward to the downward crossing of v = 1).
+    pub slip_duration: f64,
+    /// Integrator steps spent on the cycle.
+    pub steps: u64,
+}
+
+/// u and θ at a cycle's v maximum, and their ranges over the cycle (dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Extremes {
     /// u at the v maximum.
     pub u_at_v_max: f64,
     /// θ at the v maximum.
@@ -151,12 +165,6 @@ pub struct CycleValues {
     pub theta_min: f64,
     /// Maximum of θ over the cycle.
     pub theta_max: f64,
-    /// Slip per event: block displacement ∫v dt while v > 1, = Δu + duration (units of D_c).
-    pub slip: f64,
-    /// Time with v > 1 (from the upward to the downward crossing of v = 1).
-    pub slip_duration: f64,
-    /// Integrator steps spent on the cycle.
-    pub steps: u64,
 }
 
 /// What the integration settled to.
@@ -513,12 +521,14 @@ impl<'a> Tracker<'a> {
             ln_v_max: c.w_max,
             v_min: c.w_min.exp(),
             ln_v_min: c.w_min,
-            u_at_v_max: y_peak[U],
-            theta_at_v_max: y_peak[THETA],
-            u_min: c.u_range.0,
-            u_max: c.u_range.1,
-            theta_min: c.theta_range.0,
-            theta_max: c.theta_range.1,
+            extremes: Extremes {
+                u_at_v_max: y_peak[U],
+                theta_at_v_max: y_peak[THETA],
+                u_min: c.u_range.0,
+                u_max: c.u_range.1,
+                theta_min: c.theta_range.0,
+                theta_max: c.theta_range.1,
+            },
             slip: (u_down - c.u_start) + t_down,
             slip_duration: t_down,
             steps: self.steps - c.steps_at_start,
@@ -762,12 +772,14 @@ fn combine(cycles: &[CycleValues], f: impl Fn(&[f64]) -> f64) -> CycleValues {
         ln_v_max: field(&|c| c.ln_v_max),
         v_min: field(&|c| c.v_min),
         ln_v_min: field(&|c| c.ln_v_min),
-        u_at_v_max: field(&|c| c.u_at_v_max),
-        theta_at_v_max: field(&|c| c.theta_at_v_max),
-        u_min: field(&|c| c.u_min),
-        u_max: field(&|c| c.u_max),
-        theta_min: field(&|c| c.theta_min),
-        theta_max: field(&|c| c.theta_max),
+        extremes: Extremes {
+            u_at_v_max: field(&|c| c.extremes.u_at_v_max),
+            theta_at_v_max: field(&|c| c.extremes.theta_at_v_max),
+            u_min: field(&|c| c.extremes.u_min),
+            u_max: field(&|c| c.extremes.u_max),
+            theta_min: field(&|c| c.extremes.theta_min),
+            theta_max: field(&|c| c.extremes.theta_max),
+        },
         slip: field(&|c| c.slip),
         slip_duration: field(&|c| c.slip_duration),
         steps: f(&steps).round() as u64,
@@ -971,12 +983,14 @@ mod tests {
             ln_v_max,
             v_min: ln_v_min.exp(),
             ln_v_min,
-            u_at_v_max: 0.0,
-            theta_at_v_max: 0.0,
-            u_min: -1.0,
-            u_max: 1.0,
-            theta_min: -1.0,
-            theta_max: 1.0,
+            extremes: Extremes {
+                u_at_v_max: 0.0,
+                theta_at_v_max: 0.0,
+                u_min: -1.0,
+                u_max: 1.0,
+                theta_min: -1.0,
+                theta_max: 1.0,
+            },
             slip: 2.0,
             slip_duration: 1.0,
             steps: 100,
