@@ -27,7 +27,7 @@
 //! e.g. (0, v, 0) for v = e^w).
 
 use super::models::{EventKind, NoiseModel};
-use super::scheme::deterministic_options;
+use super::scheme::DeterministicRun;
 use crate::analysis::AnalysisError;
 use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Task, Tolerance};
 use crate::solver::{self, Method};
@@ -47,21 +47,18 @@ pub struct HermiteOrbit {
 }
 
 impl HermiteOrbit {
-    /// The orbit from (t0, x0) to t1 (Rodas5P at rtol, atol); derivatives from the integrator's
-    /// interpolant (never from the right-hand side, which is noisy on a stiff slow manifold).
+    /// The orbit of `det` from (t0, x0) to t1; derivatives from the integrator's interpolant
+    /// (never from the right-hand side, which is noisy on a stiff slow manifold).
     pub fn compute(
-        model: &NoiseModel,
+        det: &DeterministicRun,
         t0: f64,
         x0: &[f64],
         t1: f64,
-        rtol: f64,
-        atol: &[f64],
     ) -> Result<Self, SolverError> {
-        let options = Options { stop_time: Some(t1), ..deterministic_options(rtol, atol) };
-        let n = model.dim();
-        let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
+        let n = det.model.dim();
+        let mut integ = det.integrator(t0, x0, Some(t1))?;
         let mut f0 = vec![0.0; n];
-        model.rhs(t0, x0, &mut f0);
+        det.model.rhs(t0, x0, &mut f0);
         let mut orbit = Self { n, t: vec![t0], x: x0.to_vec(), f: f0 };
         while integ.t() < t1 {
             let step = integ.advance(t1, Task::OneStep)?;
@@ -358,7 +355,8 @@ pub fn compute(
         ));
     }
     let tc = *times.last().ok_or_else(|| failure(t_start, "an empty grid".into()))?;
-    let path = HermiteOrbit::compute(model, t_start, x_start, tc, 1e-10, atol_x)?;
+    let det = DeterministicRun { model, rtol: 1e-10, atol: atol_x };
+    let path = HermiteOrbit::compute(&det, t_start, x_start, tc)?;
     let mut steps = path.steps() as u64;
     let orbit: Vec<Vec<f64>> = times
         .iter()

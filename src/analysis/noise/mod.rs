@@ -31,7 +31,7 @@ use crate::analysis::{AnalysisError, InvalidOption};
 use crate::integrate::OdeSystem;
 use models::{EventKind, NoiseModel};
 use options::{Alignment, NoiseOptions};
-use scheme::{SchemeSettings, Start};
+use scheme::{DeterministicRun, SchemeSettings, Start};
 use serde::Serialize;
 
 /// How the scheme works, in one paragraph (echoed in reports).
@@ -312,8 +312,9 @@ fn limit_cycle(
     let mut periods: Vec<f64> = Vec::new();
     let mut states: Vec<Vec<f64>> = Vec::new();
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-8 * a.abs().max(b.abs()).max(1.0);
+    let det = DeterministicRun { model, rtol: DET_RTOL, atol };
     for events in 1..=2000 {
-        let (t, xe, _) = scheme::deterministic_event(model, 0.0, &x, event, 1e7, DET_RTOL, atol)?;
+        let (t, xe, _) = det.event(0.0, &x, event, 1e7)?;
         x = xe;
         if events > 1 {
             periods.push(t);
@@ -465,6 +466,7 @@ fn deterministic_orbit(
             ));
         }
     }
+    let det = DeterministicRun { model, rtol: DET_RTOL, atol: det_atol };
     let (period, burn_in_events, before, start, t_event_det, x_event_det) = if periodic {
         let (period, x_event, events) = limit_cycle(model, initial, event_for_burn_in, det_atol)?;
         let before = options.start_before_event.unwrap_or(match model {
@@ -477,17 +479,8 @@ fn deterministic_orbit(
                 format!("{before} must be shorter than the period {period}"),
             ));
         }
-        let x_start =
-            scheme::deterministic_state(model, 0.0, &x_event, period - before, DET_RTOL, det_atol)?;
-        let (tc, xc, _) = scheme::deterministic_event(
-            model,
-            0.0,
-            &x_start,
-            event_for_burn_in,
-            2.0 * period,
-            DET_RTOL,
-            det_atol,
-        )?;
+        let x_start = det.state(0.0, &x_event, period - before)?;
+        let (tc, xc, _) = det.event(0.0, &x_start, event_for_burn_in, 2.0 * period)?;
         // The event search arms only after the component has been below its arming level: a
         // start already past it (inside a broad damped slip, v > 1) would find the next event,
         // a period later, while the realisations find this one.
@@ -499,15 +492,7 @@ fn deterministic_orbit(
         }
         (Some(period), events, before, Start { t: 0.0, x: x_start }, tc, xc)
     } else {
-        let (tc, xc, _) = scheme::deterministic_event(
-            model,
-            0.0,
-            initial,
-            event_for_burn_in,
-            1e7,
-            DET_RTOL,
-            det_atol,
-        )?;
+        let (tc, xc, _) = det.event(0.0, initial, event_for_burn_in, 1e7)?;
         let before = options.start_before_event.unwrap_or(tc);
         if before > tc {
             return Err(invalid(
@@ -515,24 +500,13 @@ fn deterministic_orbit(
                 format!("{before} exceeds the time {tc} from t = 0 to the escape"),
             ));
         }
-        let x_start =
-            scheme::deterministic_state(model, 0.0, initial, tc - before, DET_RTOL, det_atol)?;
+        let x_start = det.state(0.0, initial, tc - before)?;
         (None, 0, before, Start { t: tc - before, x: x_start }, tc, xc)
     };
     let t0 = match model {
         NoiseModel::Drr { .. } => {
             let up = EventKind::CrossUp { component: 1, level: 0.0, arm: 0.0 };
-            scheme::deterministic_event(
-                model,
-                start.t,
-                &start.x,
-                up,
-                t_event_det,
-                DET_RTOL,
-                det_atol,
-            )
-            .ok()
-            .map(|(t, _, _)| t_event_det - t)
+            det.event(start.t, &start.x, up, t_event_det).ok().map(|(t, _, _)| t_event_det - t)
         }
         _ => None,
     };

@@ -31,7 +31,9 @@ use super::models::{EventKind, NoiseModel, MAX_DIM};
 use super::ou::{self, OuStep};
 use super::rng::Rng;
 use crate::analysis::AnalysisError;
-use crate::integrate::{JacobianMatrix, OdeSystem, Options, SolverError, Stats, Task, Tolerance};
+use crate::integrate::{
+    Integrator, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Task, Tolerance,
+};
 use crate::solver::{self, Method};
 use std::cell::Cell;
 
@@ -409,83 +411,132 @@ pub fn realisation(
     Ok(())
 }
 
-/// The deterministic event after (t0, x0) with Rodas5P at the given tolerances: its time and
-/// the state there, and the solver statistics. For a maximum, the first local maximum of the
-/// component after it exceeds the arming level; for a crossing, the first downward one.
-pub fn deterministic_event(
-    model: &NoiseModel,
-    t0: f64,
-    x0: &[f64],
-    event: EventKind,
-    t_max: f64,
-    rtol: f64,
-    atol: &[f64],
-) -> Result<(f64, Vec<f64>, Stats), AnalysisError> {
-    let options = Options {
-        max_steps: Some(10_000_000),
-        max_err_test_fails: Some(20),
-        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
-    };
-    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
-    let mut prev_x = x0.to_vec();
-    // The sign of d x_c/dt is read on the integrator's interpolant (never on the right-hand
-    // side, which on the DRR's slow manifold is solver noise times γ²).
-    let mut prev_end_slope = f64::NAN;
-    let mut armed = initially_armed(event, x0);
-    let mut below_arm = match event {
-        EventKind::Maximum { component, arm, .. } => x0[component] <= arm,
-        _ => false,
-    };
-    loop {
-        let t_prev = integ.t();
-        let step = integ.advance(t_max, Task::OneStep)?;
-        let t = step.t;
-        let x = integ.state().to_vec();
-        let found = match event {
-            EventKind::Maximum { component: c, arm, .. } => {
-                below_arm |= x[c] <= arm;
-                armed |= below_arm && x[c] > arm;
-                let start_slope = integ.dense(t_prev, 1)?[c];
-                let end_slope = integ.dense(t, 1)?[c];
-                let found = if armed && prev_end_slope > 0.0 && start_slope <= 0.0 {
-                    Some(t_prev)
-                } else if armed && start_slope > 0.0 && end_slope <= 0.0 {
-                    Some(bisect(t_prev, t, |s| {
-                        integ.dense(s, 1).map(|d| d[c] > 0.0).unwrap_or(false)
-                    }))
-                } else {
-                    None
-                };
-                prev_end_slope = end_slope;
-                found
-            }
-            EventKind::CrossDown { component: c, level, arm } => {
-                let found = (armed && prev_x[c] >= level && x[c] < level).then(|| {
-                    bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] >= level).unwrap_or(false))
-                });
-                armed |= prev_x[c] > arm || x[c] > arm;
-                found
-            }
-            EventKind::CrossUp { component: c, level, arm } => {
-                let found = (armed && prev_x[c] <= level && x[c] > level).then(|| {
-                    bisect(t_prev, t, |s| integ.dense(s, 0).map(|d| d[c] <= level).unwrap_or(false))
-                });
-                armed |= prev_x[c] < arm || x[c] < arm;
-                found
-            }
+/// The noise-free integration of a noise model, Rodas5P at fixed tolerances: the burn-in, the
+/// start, the orbit the realisations are compared with and the one the linear response follows.
+#[derive(Debug, Clone, Copy)]
+pub struct DeterministicRun<'a> {
+    /// The model.
+    pub model: &'a NoiseModel,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per component.
+    pub atol: &'a [f64],
+}
+
+impl DeterministicRun<'_> {
+    /// The integrator from (t0, x0), stopping exactly at `stop_time` if one is given.
+    pub(super) fn integrator(
+        &self,
+        t0: f64,
+        x0: &[f64],
+        stop_time: Option<f64>,
+    ) -> Result<Box<dyn Integrator>, SolverError> {
+        let options = Options {
+            max_steps: Some(10_000_000),
+            max_err_test_fails: Some(20),
+            stop_time,
+            ..Options::new(self.rtol, Tolerance::PerComponent(self.atol.to_vec()))
         };
-        if let Some(tc) = found {
-            let xc = integ.dense(tc, 0)?.to_vec();
-            return Ok((tc, xc, integ.stats()));
+        solver::build_default(Method::Rodas5p, *self.model, t0, x0, &options)
+    }
+
+    /// The event after (t0, x0): its time and the state there, and the solver statistics.
+    /// For a maximum, the first local maximum of the component after it exceeds the arming
+    /// level; for a crossing, the first downward one.
+    pub fn event(
+        &self,
+        t0: f64,
+        x0: &[f64],
+        event: EventKind,
+        t_max: f64,
+    ) -> Result<(f64, Vec<f64>, Stats), AnalysisError> {
+        let mut integ = self.integrator(t0, x0, None)?;
+        let mut prev_x = x0.to_vec();
+        // The sign of d x_c/dt is read on the integrator's interpolant (never on the right-hand
+        // side, which on the DRR's slow manifold is solver noise times γ²).
+        let mut prev_end_slope = f64::NAN;
+        let mut armed = initially_armed(event, x0);
+        let mut below_arm = match event {
+            EventKind::Maximum { component, arm, .. } => x0[component] <= arm,
+            _ => false,
+        };
+        loop {
+            let t_prev = integ.t();
+            let step = integ.advance(t_max, Task::OneStep)?;
+            let t = step.t;
+            let x = integ.state().to_vec();
+            let found = match event {
+                EventKind::Maximum { component: c, arm, .. } => {
+                    below_arm |= x[c] <= arm;
+                    armed |= below_arm && x[c] > arm;
+                    let start_slope = integ.dense(t_prev, 1)?[c];
+                    let end_slope = integ.dense(t, 1)?[c];
+                    let found = if armed && prev_end_slope > 0.0 && start_slope <= 0.0 {
+                        Some(t_prev)
+                    } else if armed && start_slope > 0.0 && end_slope <= 0.0 {
+                        Some(bisect(t_prev, t, |s| {
+                            integ.dense(s, 1).map(|d| d[c] > 0.0).unwrap_or(false)
+                        }))
+                    } else {
+                        None
+                    };
+                    prev_end_slope = end_slope;
+                    found
+                }
+                EventKind::CrossDown { component: c, level, arm } => {
+                    let found = (armed && prev_x[c] >= level && x[c] < level).then(|| {
+                        bisect(t_prev, t, |s| {
+                            integ.dense(s, 0).map(|d| d[c] >= level).unwrap_or(false)
+                        })
+                    });
+                    armed |= prev_x[c] > arm || x[c] > arm;
+                    found
+                }
+                EventKind::CrossUp { component: c, level, arm } => {
+                    let found = (armed && prev_x[c] <= level && x[c] > level).then(|| {
+                        bisect(t_prev, t, |s| {
+                            integ.dense(s, 0).map(|d| d[c] <= level).unwrap_or(false)
+                        })
+                    });
+                    armed |= prev_x[c] < arm || x[c] < arm;
+                    found
+                }
+            };
+            if let Some(tc) = found {
+                let xc = integ.dense(tc, 0)?.to_vec();
+                return Ok((tc, xc, integ.stats()));
+            }
+            if t >= t_max {
+                return Err(no_event(
+                    t,
+                    &x,
+                    format!("the deterministic orbit has no event before t = {t_max:e}"),
+                ));
+            }
+            prev_x = x;
         }
-        if t >= t_max {
-            return Err(no_event(
-                t,
-                &x,
-                format!("the deterministic orbit has no event before t = {t_max:e}"),
-            ));
+    }
+
+    /// The states at the ascending `times` (all ≥ t0) from (t0, x0).
+    pub fn states(&self, t0: f64, x0: &[f64], times: &[f64]) -> Result<Vec<Vec<f64>>, SolverError> {
+        let mut integ = self.integrator(t0, x0, None)?;
+        let mut out = Vec::with_capacity(times.len());
+        for &t in times {
+            if t > integ.t() {
+                integ.advance(t, Task::Normal)?;
+            }
+            out.push(integ.state().to_vec());
         }
-        prev_x = x;
+        Ok(out)
+    }
+
+    /// The state at time t1 from (t0, x0).
+    pub fn state(&self, t0: f64, x0: &[f64], t1: f64) -> Result<Vec<f64>, SolverError> {
+        let mut integ = self.integrator(t0, x0, None)?;
+        if t1 > t0 {
+            integ.advance(t1, Task::Normal)?;
+        }
+        Ok(integ.state().to_vec())
     }
 }
 
@@ -504,56 +555,4 @@ fn bisect(mut a: f64, mut b: f64, mut before: impl FnMut(f64) -> bool) -> f64 {
         }
     }
     0.5 * (a + b)
-}
-
-/// The deterministic states at the ascending `times` (all ≥ t0) from (t0, x0), Rodas5P at
-/// the given tolerances.
-pub fn deterministic_states(
-    model: &NoiseModel,
-    t0: f64,
-    x0: &[f64],
-    times: &[f64],
-    rtol: f64,
-    atol: &[f64],
-) -> Result<Vec<Vec<f64>>, SolverError> {
-    let options = Options {
-        max_steps: Some(10_000_000),
-        max_err_test_fails: Some(20),
-        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
-    };
-    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
-    let mut out = Vec::with_capacity(times.len());
-    for &t in times {
-        if t > integ.t() {
-            integ.advance(t, Task::Normal)?;
-        }
-        out.push(integ.state().to_vec());
-    }
-    Ok(out)
-}
-
-/// The options of a deterministic Rodas5P run at the given tolerances.
-pub(super) fn deterministic_options(rtol: f64, atol: &[f64]) -> Options {
-    Options {
-        max_steps: Some(10_000_000),
-        max_err_test_fails: Some(20),
-        ..Options::new(rtol, Tolerance::PerComponent(atol.to_vec()))
-    }
-}
-
-/// The deterministic state at time t1 from (t0, x0) (Rodas5P at the given tolerances).
-pub fn deterministic_state(
-    model: &NoiseModel,
-    t0: f64,
-    x0: &[f64],
-    t1: f64,
-    rtol: f64,
-    atol: &[f64],
-) -> Result<Vec<f64>, SolverError> {
-    let options = deterministic_options(rtol, atol);
-    let mut integ = solver::build_default(Method::Rodas5p, *model, t0, x0, &options)?;
-    if t1 > t0 {
-        integ.advance(t1, Task::Normal)?;
-    }
-    Ok(integ.state().to_vec())
 }

@@ -8,7 +8,7 @@ use super::ensemble::EnsembleData;
 use super::linear_response::LinearResponse;
 use super::models::{NoiseModel, Observable};
 use super::options::Alignment;
-use super::scheme;
+use super::scheme::DeterministicRun;
 use super::statistics::{self, Moments, Width};
 use super::{
     Agreement, CorrelationCurve, CorrelationPoint, Deterministic, EventLinearity, Events, Growth,
@@ -28,14 +28,8 @@ pub(super) fn statistics(
     linear: Option<LinearResponse>,
     det_atol: &[f64],
 ) -> Result<NoiseReport, AnalysisError> {
-    let path_orbit = scheme::deterministic_states(
-        model,
-        orbit.start.t,
-        &orbit.start.x,
-        &plan.times,
-        DET_RTOL,
-        det_atol,
-    )?;
+    let det = DeterministicRun { model, rtol: DET_RTOL, atol: det_atol };
+    let path_orbit = det.states(orbit.start.t, &orbit.start.x, &plan.times)?;
     let rows = Rows::of(&plan);
     let observables = model.observables();
     let mut linear_steps = linear.as_ref().map_or(0, |l| l.steps);
