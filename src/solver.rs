@@ -460,10 +460,8 @@ pub fn build<'s, S: ImexSystem + 's>(
     if method != Method::ArkodeImex {
         return build_ode(method, settings, system, t0, y0, options);
     }
-    reject_unsupported(method, settings, options)
+    let tables = checked_tables(method, settings, options)
         .map_err(|e| invalid(method, t0, y0, e.to_string()))?;
-    let tables =
-        check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let (default_i, default_e) = sundials::default_imex_tables();
     let (implicit, explicit) =
         (tables.implicit.unwrap_or(default_i), tables.explicit.unwrap_or(default_e));
@@ -489,10 +487,8 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    reject_unsupported(method, settings, options)
+    let tables = checked_tables(method, settings, options)
         .map_err(|e| invalid(method, t0, y0, e.to_string()))?;
-    let tables =
-        check_tables(method, settings).map_err(|e| invalid(method, t0, y0, e.to_string()))?;
     let cvode = |method| CvodeSettings { method, stability_limit_detection: false };
     let (dirk, erk) = (tables.implicit.unwrap_or_default(), tables.explicit.unwrap_or_default());
     let integrator: Box<dyn Integrator + 's> = match method {
@@ -623,6 +619,17 @@ fn invalid(method: Method, t0: f64, y0: &[f64], message: String) -> SolverError 
         flag: 0,
         message,
     }
+}
+
+/// The Butcher tables `settings` name for `method`, once the method is known to take every
+/// option and setting given ([`reject_unsupported`], [`check_tables`]).
+fn checked_tables(
+    method: Method,
+    settings: &MethodSettings,
+    options: &Options,
+) -> Result<Tables, MethodError> {
+    reject_unsupported(method, settings, options)?;
+    check_tables(method, settings)
 }
 
 /// The Butcher tables a method asked for by name (None: its default).
