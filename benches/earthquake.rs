@@ -189,13 +189,13 @@ fn compare(binary: &Path, s: &Setup) -> (u64, Vec<u64>) {
         let steps: u64 = c["steps"].parse().expect("steps");
         assert_eq!(rust.steps, steps, "cycle {k}: Rust {} steps, C {steps}", rust.steps);
         c_steps.push(steps);
-        let half_width = rust.slip_half_width.unwrap_or(f64::NAN);
+        let half_width = rust.main.slip_half_width.unwrap_or(f64::NAN);
         let values = [
-            ("period", rust.period),
-            ("t0", rust.t0),
-            ("ln_v_max", rust.ln_v_max),
-            ("ln_v_min", rust.ln_v_min),
-            ("slip", rust.slip),
+            ("period", rust.main.period),
+            ("t0", rust.main.t0),
+            ("ln_v_max", rust.main.ln_v_max),
+            ("ln_v_min", rust.main.ln_v_min),
+            ("slip", rust.main.slip),
             ("slip_half_width", half_width),
         ];
         for (name, rust_value) in values {

@@ -59,13 +59,13 @@ fn try_cycle(
         format!("not periodic: {:?} after {} cycles", c.status, c.cycles_computed)
     })?;
     Ok(json!({
-        "period": v.period,
-        "t0": v.t0,
-        "slip_half_width_times_gamma": v.slip_half_width.map(|w| w * gamma),
-        "ln_v_max": v.ln_v_max,
-        "ln_v_min": v.ln_v_min,
+        "period": v.main.period,
+        "t0": v.main.t0,
+        "slip_half_width_times_gamma": v.main.slip_half_width.map(|w| w * gamma),
+        "ln_v_max": v.main.ln_v_max,
+        "ln_v_min": v.main.ln_v_min,
         "cycles_computed": c.cycles_computed,
-        "spread_period": c.spread.map(|s| s.period),
+        "spread_period": c.spread.map(|s| s.main.period),
         "steps": report.solver.stats.steps,
         "steps_per_cycle": c.steps_per_cycle,
         "wall_time_s": report.wall_time_s,
@@ -361,7 +361,7 @@ fn quasi() {
                     let v = c.values.unwrap_or_else(|| {
                         panic!("{law} {k_over_kc} {eta} {method}: {:?}", c.status)
                     });
-                    (v.period, v.v_max, c.cycles_computed)
+                    (v.main.period, v.main.v_max, c.cycles_computed)
                 };
                 let (a, b) = (run("rodas5p"), run("radau5"));
                 let rel = |x: f64, y: f64| (x - y).abs() / x.abs().max(y.abs());

@@ -437,10 +437,10 @@ fn run_inner(
     let physical = scene.units.as_ref().zip(values).map(|(u, v)| Physical {
         time_unit: u.time_unit.clone(),
         time_scale: u.time_scale,
-        period: v.period * u.time_scale,
-        t0: v.t0 * u.time_scale,
-        slip_half_width: v.slip_half_width.map(|w| w * u.time_scale),
-        slip_duration: v.slip_duration * u.time_scale,
+        period: v.main.period * u.time_scale,
+        t0: v.main.t0 * u.time_scale,
+        slip_half_width: v.main.slip_half_width.map(|w| w * u.time_scale),
+        slip_duration: v.main.slip_duration * u.time_scale,
     });
     let paper = linear
         .as_ref()

@@ -177,18 +177,18 @@ impl CyclePhysical {
         };
         let absolute = s.reference_friction().is_some();
         Self {
-            period: s.time(v.period),
-            t0: s.time(v.t0),
-            slip_duration: s.time(v.slip_duration),
+            period: s.time(v.main.period),
+            t0: s.time(v.main.t0),
+            slip_duration: s.time(v.main.slip_duration),
             in_time_unit: units.map(|u| Durations {
                 time_unit: u.time_unit.clone(),
-                period: v.period * u.time_scale,
-                t0: v.t0 * u.time_scale,
-                slip_duration: v.slip_duration * u.time_scale,
+                period: v.main.period * u.time_scale,
+                t0: v.main.t0 * u.time_scale,
+                slip_duration: v.main.slip_duration * u.time_scale,
             }),
-            v_max: s.velocity(v.v_max),
-            v_min: s.velocity(v.v_min),
-            slip: s.slip(v.slip),
+            v_max: s.velocity(v.main.v_max),
+            v_min: s.velocity(v.main.v_min),
+            slip: s.slip(v.main.slip),
             stress_drop: s.stress_drop(v.extremes.u_min, v.extremes.u_max),
             shear_stress_before: stress(phi_before),
             shear_stress_after: stress(phi_after),

@@ -414,7 +414,7 @@ pub fn run_cell(cell: &Cell) -> Outcome {
     match outcome {
         Ok(Ok(report)) => {
             let c = report.cycle.expect("the stress scene asks for the cycle");
-            Outcome::Ok { status: c.status, period: c.values.map(|v| v.period) }
+            Outcome::Ok { status: c.status, period: c.values.map(|v| v.main.period) }
         }
         Ok(Err((kind, message))) => Outcome::Error { kind, message },
         Err(payload) => Outcome::Panic {

@@ -84,7 +84,7 @@ fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_t
     // Its period error: the recurrence of its last events against the cycle analysis's
     // period by Radau5 at rtol 1e-12.
     let report = stickslip::engine::run(&field(), serde_json::Value::Null).unwrap();
-    let period = report.cycle.unwrap().values.unwrap().period;
+    let period = report.cycle.unwrap().values.unwrap().main.period;
     let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
     let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
     let origin: Vec<String> = (0..times.len()).map(|i| format!("step {i}")).collect();
@@ -183,8 +183,8 @@ fn cycle_value(s: &scene::Scene, method: Method, rtol: f64, key: &str) -> f64 {
     let r = stickslip::engine::run(&s, serde_json::Value::Null).unwrap();
     let v = r.cycle.unwrap().values.unwrap();
     match key {
-        "t0" => v.t0,
-        "period" => v.period,
+        "t0" => v.main.t0,
+        "period" => v.main.period,
         _ => unreachable!(),
     }
 }
@@ -302,8 +302,10 @@ fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
         };
         user
     };
-    let three =
-        format!(r#""period": {:e}, "t0": {:e}, "ln_v_max": {:e}"#, v.period, v.t0, v.ln_v_max);
+    let three = format!(
+        r#""period": {:e}, "t0": {:e}, "ln_v_max": {:e}"#,
+        v.main.period, v.main.t0, v.main.ln_v_max
+    );
     // At 1e-8 the reference starts at tolerance/100 = 1e-10, where CVODE's check finds it too
     // inaccurate, and is tightened (to 1e-12). (At 1e-6 it no longer needs to be: since CVODE
     // weighs ln v absolutely, rtol 1e-8 resolves 1e-7.)
@@ -312,7 +314,7 @@ fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
     assert_eq!(c.verdict, compare::Verdict::Agrees, "{c:?}");
     assert!(c.reference.rtol < 1e-10, "tightened from tolerance/100: {c:?}");
     assert!(c.rows.iter().all(|r| r.reference_accuracy <= 1e-9), "{c:?}");
-    let four = format!(r#"{three}, "slip_half_width": {:e}"#, v.slip_half_width.unwrap());
+    let four = format!(r#"{three}, "slip_half_width": {:e}"#, v.main.slip_half_width.unwrap());
     let e = compare::against_report(&s, &read(&four), 1e-6, Some(Method::CvodeBdf)).unwrap_err();
     println!("{e}");
     let compare::CompareError::InaccurateReference { quantities, .. } = &e else { panic!("{e}") };

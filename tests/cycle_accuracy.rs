@@ -44,12 +44,12 @@ fn quasi_dynamic_cycles_are_within_their_error_estimates() {
         assert_eq!(c.status, CycleStatus::Periodic, "{case}");
         let (v, e) = (c.values.unwrap(), c.error_estimate.unwrap());
         let (period, v_max) = (f("period"), f("v_max"));
-        let dp = (v.period - period).abs();
-        let dv = (v.v_max - v_max).abs();
-        assert!(dp <= 1e-9 * period, "{case}: period {} vs {period}", v.period);
+        let dp = (v.main.period - period).abs();
+        let dv = (v.main.v_max - v_max).abs();
+        assert!(dp <= 1e-9 * period, "{case}: period {} vs {period}", v.main.period);
         assert!(dp <= e.period, "{case}: period off by {dp:e}, estimate {:e}", e.period);
         assert!(dv <= e.v_max, "{case}: v_max off by {dv:e}, estimate {:e}", e.v_max);
-        assert!(dv <= 1e-9 * v_max, "{case}: v_max {} vs {v_max}", v.v_max);
+        assert!(dv <= 1e-9 * v_max, "{case}: v_max {} vs {v_max}", v.main.v_max);
         // The estimate states the error, it does not hide the value: within 1e-6.
         assert!(e.period < 1e-8 * period && e.v_max < 1e-6 * v_max, "{case}: {e:?}");
     }
@@ -76,7 +76,7 @@ fn far_starts_reach_the_earthquake_cycle_with_default_options() {
         for initial in [r#""u": 0, "v": 1e30, "theta": 0"#, r#""u": -1e6, "v": 1, "theta": 0"#] {
             let c = run(&earthquake(method, initial)).cycle.unwrap();
             assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
-            let p = c.values.unwrap().period;
+            let p = c.values.unwrap().main.period;
             assert!(
                 (p - EARTHQUAKE_PERIOD).abs() <= 1e-7 * EARTHQUAKE_PERIOD,
                 "{method} from {initial}: period {p}"
@@ -135,7 +135,7 @@ fn far_starts_reach_the_cycle_with_every_stiff_method() {
         for initial in starts {
             let c = run(&earthquake(method, initial)).cycle.unwrap();
             assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
-            let p = c.values.unwrap().period;
+            let p = c.values.unwrap().main.period;
             assert!(
                 (p - EARTHQUAKE_PERIOD).abs() <= 1e-6 * EARTHQUAKE_PERIOD,
                 "{method} from {initial}: period {p}"

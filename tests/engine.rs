@@ -30,8 +30,11 @@ fn the_papers_scenes_run_to_a_periodic_cycle() {
         let c = report.cycle.as_ref().unwrap();
         assert_eq!(c.status, CycleStatus::Periodic, "{name}");
         let v = c.values.unwrap();
-        assert!(v.period > 0.0 && v.t0 > 0.0 && v.v_max > 1.0 && v.v_min < 1.0, "{name}: {v:?}");
-        assert!(c.spread.unwrap().period < 1e-7, "{name}: spread {:?}", c.spread);
+        assert!(
+            v.main.period > 0.0 && v.main.t0 > 0.0 && v.main.v_max > 1.0 && v.main.v_min < 1.0,
+            "{name}: {v:?}"
+        );
+        assert!(c.spread.unwrap().main.period < 1e-7, "{name}: spread {:?}", c.spread);
         assert_eq!(report.sundials_version, stickslip::sundials::version());
         assert!(report.solver.stats.steps > 0 && report.wall_time_s > 0.0);
         assert_eq!(
@@ -62,10 +65,10 @@ fn earthquake_report_compares_with_the_paper_in_years() {
     let physical = report.physical.unwrap();
     assert_eq!(physical.time_unit, "years");
     let v = report.cycle.unwrap().values.unwrap();
-    assert!((physical.period - 2.7 * v.period).abs() < 1e-9 * physical.period);
+    assert!((physical.period - 2.7 * v.main.period).abs() < 1e-9 * physical.period);
     let claims = report.paper.unwrap();
     let earthquake = claims.iter().find(|c| c.claim.contains("τ = 28")).expect("earthquake claim");
-    assert_eq!(earthquake.ours, v.period);
+    assert_eq!(earthquake.ours, v.main.period);
     assert_eq!(earthquake.verdict, "disagrees", "ours is about twice the paper's 28");
 }
 
@@ -75,7 +78,7 @@ fn cvode_arkode_and_radau5_agree_on_the_period_for_large_gamma() {
     for gamma in [1e3, 1e5, 1e8] {
         let period = |method: &str| {
             let r = run(&cycle_scene(gamma, 0.8, 1.0, &tight.replace("METHOD", method)));
-            r.cycle.unwrap().values.unwrap().period
+            r.cycle.unwrap().values.unwrap().main.period
         };
         let bdf = period("cvode-bdf");
         for name in ["arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"] {
@@ -94,7 +97,7 @@ fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
         let r = run(&cycle_scene(1e8, 0.8, 1.0, &solver));
         let c = r.cycle.unwrap();
         assert_eq!(c.status, CycleStatus::Periodic, "{method}");
-        let p = c.values.unwrap().period;
+        let p = c.values.unwrap().main.period;
         assert!((p - 56.4124662).abs() < 1e-5 * p, "{method}: period {p} at default rtol 1e-8");
     }
 }
@@ -105,7 +108,7 @@ fn beyond_1e8_gamma_1e12_runs() {
     let c = r.cycle.unwrap();
     assert_eq!(c.status, CycleStatus::Periodic);
     let v = c.values.unwrap();
-    assert!(v.period > 56.5 && v.slip_half_width.unwrap() * 1e12 > 2.0, "{v:?}");
+    assert!(v.main.period > 56.5 && v.main.slip_half_width.unwrap() * 1e12 > 2.0, "{v:?}");
     assert_eq!(r.solver.stats.step_underflow_warnings, 0);
 }
 
@@ -129,7 +132,7 @@ fn half_width_matches_the_recorded_trajectory() {
     assert!(traj.t.len() > 100 && traj.t.windows(2).all(|w| w[1] >= w[0]));
     // Full width at half maximum from the recorded samples, by linear interpolation.
     let vmax = traj.v.iter().cloned().fold(0.0, f64::max);
-    assert!((vmax - v.v_max).abs() < 1e-6 * v.v_max, "the peak is a recorded event");
+    assert!((vmax - v.main.v_max).abs() < 1e-6 * v.main.v_max, "the peak is a recorded event");
     let half = 0.5 * vmax;
     let crossings: Vec<f64> = traj
         .t
@@ -140,7 +143,7 @@ fn half_width_matches_the_recorded_trajectory() {
         .collect();
     assert_eq!(crossings.len(), 2, "{crossings:?}");
     let width = crossings[1] - crossings[0];
-    let ours = v.slip_half_width.unwrap();
+    let ours = v.main.slip_half_width.unwrap();
     assert!((width - ours).abs() < 1e-3 * ours, "sampled {width} vs located {ours}");
 }
 
@@ -213,6 +216,7 @@ fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
             .unwrap()
             .values
             .unwrap_or_else(|| panic!("{method}: no periodic cycle"))
+            .main
             .period;
         assert!((period - 31.8375089404).abs() < 1e-7 * period, "{method}: {period}");
     }
@@ -241,7 +245,7 @@ fn far_off_starts_reach_the_cycle_far_from_threshold() {
                     "{method} ξ = {xi}, ε = {epsilon} from (u, v, θ) = ({u:e}, {v:e}, {theta:e})"
                 );
                 let period =
-                    cycle.values.unwrap_or_else(|| panic!("{what}: no periodic cycle")).period;
+                    cycle.values.unwrap_or_else(|| panic!("{what}: no periodic cycle")).main.period;
                 assert!(
                     (period - reference).abs() < 1e-5 * reference,
                     "{what}: period {period}, reference {reference}"
@@ -279,6 +283,7 @@ fn a_start_that_lands_on_the_unstable_fixed_point_leaves_it() {
             let period = cycle
                 .values
                 .unwrap_or_else(|| panic!("{method} rtol {rtol:e}: no cycle ({:?})", cycle.status))
+                .main
                 .period;
             let reference = 68.04034164421667; // data/reference/drr_cycles_far.json
             assert!(
@@ -302,7 +307,8 @@ fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
         r#"{"name": "spiral", "model": {"gamma": 1e4, "xi": 0.7, "epsilon": 0.72}, "initial": {"u": 0, "v": 1e-30, "theta": 0},
             "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#,
     );
-    let period = report.cycle.unwrap().values.expect("converges to the relaxation cycle").period;
+    let period =
+        report.cycle.unwrap().values.expect("converges to the relaxation cycle").main.period;
     assert!((period - 23.151329844).abs() < 1e-7 * period, "{period}");
 }
 
@@ -314,7 +320,7 @@ fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
 fn the_earthquake_scene_meets_1e9_with_the_default_method() {
     let report = run_file("earthquake.json");
     assert_eq!(report.solver.method, stickslip::solver::Method::CvodeBdf);
-    let p = report.cycle.as_ref().unwrap().values.unwrap().period;
+    let p = report.cycle.as_ref().unwrap().values.unwrap().main.period;
     let reference = 56.412_468_697_640_86;
     let error = (p - reference).abs() / reference;
     assert!(error < 1e-9, "period {p}: {error:.2e} from the reference {reference}");

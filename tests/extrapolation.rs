@@ -366,7 +366,7 @@ fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
     let report =
         stickslip::engine::run(&scene, serde_json::Value::Null).unwrap_or_else(|e| panic!("{e}"));
     let cycle = report.cycle.expect("the scene asks for the cycle");
-    cycle.values.expect("a converged cycle").period
+    cycle.values.expect("a converged cycle").main.period
 }
 
 /// The arrest floor ln v = −(ξu + θ) at −318 (γ = 1e10) and −340 (γ = 1e11), rates γ²/(ξv) of

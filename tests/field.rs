@@ -43,11 +43,11 @@ fn the_qdyn_scene_is_its_dimensionless_twin() {
     let field = run(&qdyn_text()).cycle.unwrap().values.unwrap();
     let twin = run(DIMENSIONLESS_TWIN).cycle.unwrap().values.unwrap();
     let pairs = [
-        ("period", field.period, twin.period),
-        ("t0", field.t0, twin.t0),
-        ("v_max", field.v_max, twin.v_max),
-        ("slip", field.slip, twin.slip),
-        ("slip_duration", field.slip_duration, twin.slip_duration),
+        ("period", field.main.period, twin.main.period),
+        ("t0", field.main.t0, twin.main.t0),
+        ("v_max", field.main.v_max, twin.main.v_max),
+        ("slip", field.main.slip, twin.main.slip),
+        ("slip_duration", field.main.slip_duration, twin.main.slip_duration),
         ("u_min", field.extremes.u_min, twin.extremes.u_min),
         ("u_max", field.extremes.u_max, twin.extremes.u_max),
     ];
@@ -66,18 +66,18 @@ fn cycle_physical_is_the_cycle_in_si_units() {
         assert!((x - y).abs() <= 1e-13 * y.abs(), "{name}: {x} vs {y}");
     };
     // Time D_c/V_pl = 1e5 s, velocity V_pl = 1e-9 m/s, slip D_c = 1e-4 m.
-    close("period", ph.period, 1e5 * v.period);
-    close("t0", ph.t0, 1e5 * v.t0);
-    close("slip_duration", ph.slip_duration, 1e5 * v.slip_duration);
-    close("v_max", ph.v_max, 1e-9 * v.v_max);
-    close("v_min", ph.v_min, 1e-9 * v.v_min);
-    close("slip", ph.slip, 1e-4 * v.slip);
+    close("period", ph.period, 1e5 * v.main.period);
+    close("t0", ph.t0, 1e5 * v.main.t0);
+    close("slip_duration", ph.slip_duration, 1e5 * v.main.slip_duration);
+    close("v_max", ph.v_max, 1e-9 * v.main.v_max);
+    close("v_min", ph.v_min, 1e-9 * v.main.v_min);
+    close("slip", ph.slip, 1e-4 * v.main.slip);
     // Stress drop: k·D_c·Δu over the event, u_max − u_min; against Δu = slip − duration
     // (du/dt = v − 1), an independent value (slip is the cycle analysis's ∫v dt), so to the
     // run's accuracy (4e-8 measured at rtol 1e-10).
     assert!(ph.stress_drop > 0.0);
     close("stress_drop", ph.stress_drop, 2.5e8 * 1e-4 * (v.extremes.u_max - v.extremes.u_min));
-    let from_slip = 2.5e8 * 1e-4 * (v.slip - v.slip_duration);
+    let from_slip = 2.5e8 * 1e-4 * (v.main.slip - v.main.slip_duration);
     assert!(
         (ph.stress_drop - from_slip).abs() < 1e-6 * from_slip,
         "{} vs {from_slip}",

@@ -30,7 +30,7 @@ fn cycle(report: &Report) -> (f64, f64, f64) {
     let c = report.cycle.as_ref().unwrap();
     assert_eq!(c.status, CycleStatus::Periodic, "{}: {c:?}", report.solver.method.name());
     let v = c.values.unwrap();
-    (v.period, v.slip, v.v_max)
+    (v.main.period, v.main.slip, v.main.v_max)
 }
 
 #[test]

@@ -93,6 +93,7 @@ fn radau5_from_v_1e30_at_rtol_1e_4_reaches_the_cycle() {
             .unwrap_or_else(|| {
                 panic!("{method}: {:?} after {} cycles", c.status, c.cycles_computed)
             })
+            .main
             .period
     };
     let reference = run("rodas5p", 1e-10, "");

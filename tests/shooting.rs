@@ -193,8 +193,10 @@ fn period_doubling_is_detected_and_the_doubled_orbit_matches_brute_force() {
         "shooting {} vs brute force {brute}",
         doubled.period
     );
-    let (mut a, mut b) =
-        (doubled.return_times.clone(), cycle.orbit.iter().map(|c| c.period).collect::<Vec<_>>());
+    let (mut a, mut b) = (
+        doubled.return_times.clone(),
+        cycle.orbit.iter().map(|c| c.main.period).collect::<Vec<_>>(),
+    );
     a.sort_by(f64::total_cmp);
     b.sort_by(f64::total_cmp);
     for (x, y) in a.iter().zip(&b) {
@@ -224,7 +226,7 @@ fn shooting_crosses_the_ageing_and_prz_sticks_at_gamma_1e8() {
     // from the cycle's, trivial multipliers 1 within 5.0e-3 and 3.1e-2.
     for law in ["ageing", "prz"] {
         let r = run(&earthquake_under(law));
-        let cycle = r.cycle.as_ref().unwrap().values.unwrap().period;
+        let cycle = r.cycle.as_ref().unwrap().values.unwrap().main.period;
         let shooting = r.shooting.as_ref().unwrap();
         let orbit =
             shooting.orbit.as_ref().unwrap_or_else(|| panic!("{law}: {:?}", shooting.failure));

@@ -164,7 +164,7 @@ fn gamma_1e8_absolute_time_keeps_its_digits() {
         "analyses": [{"cycle": {"tolerance": 1e-9}}, {"time_series": {"t_max": 400}}]}"#;
     let scene = scene::parse(text, "test").unwrap();
     let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
-    let period = report.cycle.as_ref().unwrap().values.unwrap().period;
+    let period = report.cycle.as_ref().unwrap().values.unwrap().main.period;
     let events = report.events.as_ref().unwrap();
     assert!(events.len() >= 6, "{}", events.len());
     for e in &events[2..] {

@@ -114,14 +114,14 @@ pub fn settle(gamma: f64) -> Result<Start, String> {
         format!("γ = {gamma:e}: the settling run did not converge ({:?})", report.status)
     })?;
     let tr = report.trajectory.last().ok_or("no trajectory kept")?;
-    let target = (1.0 - LEAD) * values.period;
+    let target = (1.0 - LEAD) * values.main.period;
     let i = tr.t.iter().rposition(|&t| t <= target).ok_or("empty trajectory")?;
     let y0 = [tr.u[i], tr.v[i].ln(), tr.theta[i]];
     // Exactly LEAD·P before the crossing is not needed; a stick-phase point (v < 1) is.
     if y0[W] >= 0.0 {
         return Err(format!("γ = {gamma:e}: the start {y0:?} is not in the stick phase"));
     }
-    Ok(Start { y0, period: values.period })
+    Ok(Start { y0, period: values.main.period })
 }
 
 /// The scene solver settings of one grid cell.
@@ -161,8 +161,11 @@ pub fn run_ours(
     }
     let mean =
         |f: fn(&cycle::CycleValues) -> f64| cycles.iter().map(f).sum::<f64>() / CYCLES as f64;
-    let measured =
-        Measured { period: mean(|c| c.period), t0: mean(|c| c.t0), ln_v_max: mean(|c| c.ln_v_max) };
+    let measured = Measured {
+        period: mean(|c| c.main.period),
+        t0: mean(|c| c.main.t0),
+        ln_v_max: mean(|c| c.main.ln_v_max),
+    };
     if ![measured.period, measured.t0, measured.ln_v_max].iter().all(|v| v.is_finite()) {
         return Err(format!("non-finite cycle values {measured:?}"));
     }

@@ -27,10 +27,10 @@ pub fn compare(params: &DrrParams, hopf: &HopfReport, cycle: Option<&CycleValues
         claims.push(claim(
             "t0 ≅ 1: time from v = 1 to the v maximum",
             1.0,
-            c.t0,
+            c.main.t0,
             "limit cycle, upward crossing of v = 1 to the v maximum".into(),
         ));
-        if let Some(w) = c.slip_half_width {
+        if let Some(w) = c.main.slip_half_width {
             claims.push(claim(
                 "slip lasts about 2.5/γ",
                 2.5,
@@ -46,8 +46,11 @@ pub fn compare(params: &DrrParams, hopf: &HopfReport, cycle: Option<&CycleValues
             claims.push(claim(
                 "earthquake case (γ = 1e8, ξ = 0.8, ε = 1): period τ = 28 (75 years)",
                 28.0,
-                c.period,
-                format!("limit-cycle period; {:.1} years with D_c/v0 = 2.7 years", c.period * 2.7),
+                c.main.period,
+                format!(
+                    "limit-cycle period; {:.1} years with D_c/v0 = 2.7 years",
+                    c.main.period * 2.7
+                ),
             ));
         }
     }

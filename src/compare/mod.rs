@@ -46,14 +46,14 @@ fn scale(key: &str, value: f64) -> f64 {
 fn quantity(report: &Report, key: &str) -> Option<f64> {
     let v = report.cycle.as_ref()?.values?;
     match key {
-        "period" => Some(v.period),
-        "t0" => Some(v.t0),
-        "slip_half_width" => v.slip_half_width,
-        "ln_v_max" => Some(v.ln_v_max),
-        "ln_v_min" => Some(v.ln_v_min),
+        "period" => Some(v.main.period),
+        "t0" => Some(v.main.t0),
+        "slip_half_width" => v.main.slip_half_width,
+        "ln_v_max" => Some(v.main.ln_v_max),
+        "ln_v_min" => Some(v.main.ln_v_min),
         "u_at_v_max" => Some(v.extremes.u_at_v_max),
         "theta_at_v_max" => Some(v.extremes.theta_at_v_max),
-        "slip" => Some(v.slip),
+        "slip" => Some(v.main.slip),
         _ => None,
     }
 }

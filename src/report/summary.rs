@@ -128,13 +128,13 @@ fn periodic(c: &CycleSection, v: &CycleValues, m: &ModelSection) -> String {
     let pm = |x: Option<f64>| x.map_or(String::new(), |x| format!(" ± {x:.1e}"));
     s += &format!(
         "  period          {:.10}{}\n  t0              {:.10}{}\n",
-        v.period,
+        v.main.period,
         pm(e.map(|e| e.period)),
-        v.t0,
+        v.main.t0,
         pm(e.map(|e| e.t0))
     );
     let hw = pm(e.and_then(|e| e.slip_half_width));
-    match v.slip_half_width {
+    match v.main.slip_half_width {
         Some(w) if m.inertia => {
             s += &format!("  slip half-width {:.6e}{hw} (× γ = {:.6})\n", w, w * m.gamma)
         }
@@ -144,14 +144,14 @@ fn periodic(c: &CycleSection, v: &CycleValues, m: &ModelSection) -> String {
     s += &format!(
         "  v_max           {:.10e}{} (ln {:.9})\n  v_min           {:.6e}{}\n  u, θ at v_max   \
          {:.9}, {:.9}\n  slip            {:.9}{}\n",
-        v.v_max,
+        v.main.v_max,
         pm(e.map(|e| e.v_max)),
-        v.ln_v_max,
-        v.v_min,
+        v.main.ln_v_max,
+        v.main.v_min,
         pm(e.map(|e| e.v_min)),
         v.extremes.u_at_v_max,
         v.extremes.theta_at_v_max,
-        v.slip,
+        v.main.slip,
         pm(e.map(|e| e.slip))
     );
     s
@@ -165,7 +165,12 @@ fn period_n(c: &CycleSection) -> String {
         c.orbit_period.unwrap_or(0.0)
     );
     for (i, o) in c.orbit.iter().enumerate() {
-        s += &format!("  cycle {}: period {:.10}, ln v_max {:.9}\n", i + 1, o.period, o.ln_v_max);
+        s += &format!(
+            "  cycle {}: period {:.10}, ln v_max {:.9}\n",
+            i + 1,
+            o.main.period,
+            o.main.ln_v_max
+        );
     }
     s
 }

@@ -173,13 +173,13 @@ fn outcome(report: &Report) -> PointOutcome {
         return PointOutcome::Failed { error: "no cycle section".into() };
     };
     match (c.status, &c.values) {
-        (CycleStatus::Periodic, Some(v)) => PointOutcome::Periodic { period: v.period },
+        (CycleStatus::Periodic, Some(v)) => PointOutcome::Periodic { period: v.main.period },
         (CycleStatus::PeriodN, _) => {
-            PointOutcome::PeriodN { periods: c.orbit.iter().map(|o| o.period).collect() }
+            PointOutcome::PeriodN { periods: c.orbit.iter().map(|o| o.main.period).collect() }
         }
         (CycleStatus::FixedPoint, _) => PointOutcome::FixedPoint,
         _ => PointOutcome::NotConverged {
-            last_periods: c.last_cycles.iter().map(|o| o.period).collect(),
+            last_periods: c.last_cycles.iter().map(|o| o.main.period).collect(),
         },
     }
 }

@@ -156,8 +156,8 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     .note(
         Note::new(
             values.extremes.u_at_v_max,
-            values.v_max,
-            format!("v_{{max}} = {:.1}", values.v_max),
+            values.main.v_max,
+            format!("v_{{max}} = {:.1}", values.main.v_max),
             Anchor::Middle,
         )
         .offset(0.0, 22.0),
@@ -191,9 +191,9 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         .caption(format!(
             "(a) The converged limit cycle for γ = 10^{{3}}, ξ = 0.7, ε = 0.72 (two periods; t = 0 at an upward crossing of v = 1): period {:.4}, t_{{0}} = {:.4}, v_{{max}} = {:.1}. \
              (b, c) Period of the periodic orbit by shooting and continuation (Radau5; beyond γ = 10^{{8}} the brute-force cycle analysis, {}), {} and {} points at rtol {:e}.",
-            values.period,
-            values.t0,
-            values.v_max,
+            values.main.period,
+            values.main.t0,
+            values.main.v_max,
             report.solver.method.name(),
             eps.len(),
             gam.len(),

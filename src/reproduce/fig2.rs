@@ -77,7 +77,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         u = u.series(Series::new(label.clone(), big_t.clone(), uu, style.clone()));
         th = th.series(Series::new(label, big_t, tt, style));
         let values = report.cycle.as_ref().and_then(|c| c.values);
-        if let Some(w) = values.and_then(|v| v.slip_half_width) {
+        if let Some(w) = values.and_then(|v| v.main.slip_half_width) {
             out.claims.push(Row::numeric(
                 "Fig. 2",
                 &format!(

@@ -105,9 +105,9 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
             Ok(report) => match periodic(&report) {
                 Some(v) => ratio_points.push((
                     alpha,
-                    v.period / log_values.period,
+                    v.main.period / log_values.main.period,
                     amplitude(&v) / amplitude(&log_values),
-                    v.period,
+                    v.main.period,
                 )),
                 None => out.notes.push(format!(
                     "Fig. 8d: α = {alpha:.3}: no period-1 limit cycle found (not drawn)"
@@ -146,7 +146,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         .caption(format!(
             "(a, b) Two periods of each limit cycle (t = 0 at an upward crossing of v = 1): ln v, period {:.4}; g_{{α}} with α = 0.31, period {:.4}. \
              (d) Period and amplitude (range of u over the cycle) of the power-law cycle divided by those of the ln v cycle.",
-            log_values.period, pow_values.period
+            log_values.main.period, pow_values.main.period
         ))
         .caption(UNITS);
     out.files.push(ctx.write_figure("fig8.svg", &fig)?);
@@ -155,7 +155,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     out.files.push(ctx.write_json(
         "fig8d-ratios.json",
         &serde_json::json!({
-            "log_period": log_values.period,
+            "log_period": log_values.main.period,
             "log_amplitude": amplitude(&log_values),
             "points": ratio_points.iter().map(|p| serde_json::json!({"alpha": p.0, "period": p.3, "period_ratio": p.1, "amplitude_ratio": p.2})).collect::<Vec<_>>(),
         }),

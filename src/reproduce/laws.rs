@@ -96,7 +96,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
         let mut curve = Vec::new();
         for &(&(_, gamma), report) in &mine {
             match report.cycle.as_ref().and_then(|c| c.values) {
-                Some(v) => curve.push((gamma, v.period)),
+                Some(v) => curve.push((gamma, v.main.period)),
                 None => out.notes.push(format!(
                     "{} law, γ = {gamma:e}: no period-1 limit cycle found (not drawn)",
                     law.name()

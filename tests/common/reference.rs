@@ -31,10 +31,10 @@ impl Quantity {
     /// Its value in a cycle at stiffness `gamma`.
     fn of(self, v: &CycleValues, gamma: f64) -> f64 {
         match self {
-            Quantity::Period => v.period,
-            Quantity::T0 => v.t0,
-            Quantity::HalfWidthTimesGamma => v.slip_half_width.unwrap() * gamma,
-            Quantity::LnVMax => v.ln_v_max,
+            Quantity::Period => v.main.period,
+            Quantity::T0 => v.main.t0,
+            Quantity::HalfWidthTimesGamma => v.main.slip_half_width.unwrap() * gamma,
+            Quantity::LnVMax => v.main.ln_v_max,
         }
     }
 }

@@ -198,10 +198,10 @@ pub fn analyse(
     let all = scan::usable(&scan, 0.0);
     let fit = scan::usable(&scan, options.fit_min_gamma);
     let half_width_3d =
-        cycle.and_then(|c| c.values).and_then(|v| v.slip_half_width).map(|w| w * params.gamma);
+        cycle.and_then(|c| c.values).and_then(|v| v.main.slip_half_width).map(|w| w * params.gamma);
     let spread = cycle
         .and_then(|c| c.spread)
-        .map_or([0.0; 2], |s| [s.v_max, s.slip_half_width.unwrap_or(0.0)]);
+        .map_or([0.0; 2], |s| [s.main.v_max, s.main.slip_half_width.unwrap_or(0.0)]);
     let slip =
         slip_scaling::analyse(&fit, orbit.as_ref().ok(), params, options, half_width_3d, spread)?;
     let singular = singular_limit::analyse(&all, &fit, params);

@@ -30,10 +30,10 @@ pub struct ScanValues {
 impl ScanValues {
     fn of(c: &CycleValues, gamma: f64) -> Self {
         ScanValues {
-            period: c.period,
-            t0: c.t0,
-            half_width_times_gamma: c.slip_half_width.map(|w| w * gamma),
-            ln_v_max: c.ln_v_max,
+            period: c.main.period,
+            t0: c.main.t0,
+            half_width_times_gamma: c.main.slip_half_width.map(|w| w * gamma),
+            ln_v_max: c.main.ln_v_max,
             extremes: c.extremes,
         }
     }

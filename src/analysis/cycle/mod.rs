@@ -34,7 +34,6 @@ mod options;
 mod settled;
 
 pub use options::CycleOptions;
-pub use settled::ErrorEstimate;
 
 use super::events::{self, Knot};
 use super::AnalysisError;
@@ -125,6 +124,21 @@ impl CycleSettings {
 /// Quantities of one cycle (dimensionless; times in units of D_c/v0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CycleValues {
+    /// The values the report gives with an error estimate.
+    #[serde(flatten)]
+    pub main: MainValues,
+    /// u and θ at the v maximum and their ranges.
+    #[serde(flatten)]
+    pub extremes: Extremes,
+    /// Integrator steps spent on the cycle.
+    pub steps: u64,
+}
+
+/// A cycle's main values, those the report gives with an error estimate: the same keys serve
+/// the values ([`CycleValues::main`]) and their estimated absolute errors
+/// ([`CycleReport::error_estimate`], where a null half-width's error is null too).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MainValues {
     /// Time between successive upward crossings of v = 1.
     pub period: f64,
     /// Time from the upward crossing of v = 1 to the v maximum t_c.
@@ -139,15 +153,10 @@ pub struct CycleValues {
     pub v_min: f64,
     /// ln v_min.
     pub ln_v_min: f64,
-    /// u and θ at the v maximum and their ranges.
-    #[serde(flatten)]
-    pub extremes: Extremes,
     /// Slip per event: block displacement ∫v dt while v > 1, = Δu + duration (units of D_c).
     pub slip: f64,
     /// Time with v > 1 (from the upward to the downward crossing of v = 1).
     pub slip_duration: f64,
-    /// Integrator steps spent on the cycle.
-    pub steps: u64,
 }
 
 /// u and θ at a cycle's v maximum, and their ranges over the cycle (dimensionless).
@@ -197,7 +206,7 @@ pub struct CycleReport {
     /// Estimated absolute error of each value (same keys): the transient left in the cycles
     /// used plus their cycle-to-cycle noise (see the `settled` module); null when not
     /// periodic.
-    pub error_estimate: Option<ErrorEstimate>,
+    pub error_estimate: Option<MainValues>,
     /// Relative spread (max − min)/|mean| of each quantity over the cycles used.
     pub spread: Option<CycleValues>,
     /// The distinct cycles of the orbit: one for period 1, n for period n.
@@ -514,13 +523,17 @@ impl<'a> Tracker<'a> {
         };
         let (t_down, u_down) = c.down.unwrap_or((period, c.u_range.1));
         let values = CycleValues {
-            period,
-            t0: t_peak,
-            slip_half_width: c.half_rise.zip(c.half_fall).map(|(r, f)| f - r),
-            v_max: c.w_max.exp(),
-            ln_v_max: c.w_max,
-            v_min: c.w_min.exp(),
-            ln_v_min: c.w_min,
+            main: MainValues {
+                period,
+                t0: t_peak,
+                slip_half_width: c.half_rise.zip(c.half_fall).map(|(r, f)| f - r),
+                v_max: c.w_max.exp(),
+                ln_v_max: c.w_max,
+                v_min: c.w_min.exp(),
+                ln_v_min: c.w_min,
+                slip: (u_down - c.u_start) + t_down,
+                slip_duration: t_down,
+            },
             extremes: Extremes {
                 u_at_v_max: y_peak[U],
                 theta_at_v_max: y_peak[THETA],
@@ -529,8 +542,6 @@ impl<'a> Tracker<'a> {
                 theta_min: c.theta_range.0,
                 theta_max: c.theta_range.1,
             },
-            slip: (u_down - c.u_start) + t_down,
-            slip_duration: t_down,
             steps: self.steps - c.steps_at_start,
         };
         if let Some(tr) = c.trajectory {
@@ -686,10 +697,10 @@ pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rat
 /// (w'' ~ γ²), fixed only to ~√(error/γ²), e.g. 1e-7 at γ = 10 while the period is fixed to
 /// 1e-11.
 fn agree(a: &CycleValues, b: &CycleValues, tolerance: f64) -> bool {
-    let range = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
-    (a.period - b.period).abs() <= tolerance * a.period.abs()
+    let range = |c: &CycleValues| c.main.ln_v_max - c.main.ln_v_min;
+    (a.main.period - b.main.period).abs() <= tolerance * a.main.period.abs()
         // v_max relative to itself (ln v_max ≈ 19 would make a test on ln v_max 19× looser).
-        && (a.v_max - b.v_max).abs() <= tolerance * a.v_max
+        && (a.main.v_max - b.main.v_max).abs() <= tolerance * a.main.v_max
         // The ln v range relative to itself: a small oscillation growing slowly away from an
         // unstable fixed point keeps its period and an ln v_max near 0 (found: γ = 1e4,
         // ε = 0.72 from v = 1e-30 settled on "period 7.51, ln v_max 4.5e-8", growing ~8 % per
@@ -711,7 +722,7 @@ fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize
     // An "orbit" whose ln v range is within the integration noise is not one (found by the
     // stress grid: L-stable methods at rtol 1e-4 settle on such a wiggle at an unstable
     // fixed point, while the true orbit is a relaxation cycle).
-    if closed.last().is_none_or(|c| c.ln_v_max - c.ln_v_min < noise_floor(settings)) {
+    if closed.last().is_none_or(|c| c.main.ln_v_max - c.main.ln_v_min < noise_floor(settings)) {
         return None;
     }
     let lagged = |n: usize, tol: f64| {
@@ -742,7 +753,7 @@ fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: b
     if !linearly_stable {
         return false;
     }
-    let amplitude = |c: &CycleValues| c.ln_v_max - c.ln_v_min;
+    let amplitude = |c: &CycleValues| c.main.ln_v_max - c.main.ln_v_min;
     if closed.last().is_some_and(|c| amplitude(c) < noise_floor(settings)) {
         return true;
     }
@@ -762,16 +773,20 @@ fn settled_window(settings: &CycleSettings) -> usize {
 /// Applies `f` to every real-valued field of a set of cycles, building one CycleValues.
 fn combine(cycles: &[CycleValues], f: impl Fn(&[f64]) -> f64) -> CycleValues {
     let field = |get: &dyn Fn(&CycleValues) -> f64| f(&cycles.iter().map(get).collect::<Vec<_>>());
-    let half: Option<Vec<f64>> = cycles.iter().map(|c| c.slip_half_width).collect();
+    let half: Option<Vec<f64>> = cycles.iter().map(|c| c.main.slip_half_width).collect();
     let steps: Vec<f64> = cycles.iter().map(|c| c.steps as f64).collect();
     CycleValues {
-        period: field(&|c| c.period),
-        t0: field(&|c| c.t0),
-        slip_half_width: half.map(|h| f(&h)),
-        v_max: field(&|c| c.v_max),
-        ln_v_max: field(&|c| c.ln_v_max),
-        v_min: field(&|c| c.v_min),
-        ln_v_min: field(&|c| c.ln_v_min),
+        main: MainValues {
+            period: field(&|c| c.main.period),
+            t0: field(&|c| c.main.t0),
+            slip_half_width: half.map(|h| f(&h)),
+            v_max: field(&|c| c.main.v_max),
+            ln_v_max: field(&|c| c.main.ln_v_max),
+            v_min: field(&|c| c.main.v_min),
+            ln_v_min: field(&|c| c.main.ln_v_min),
+            slip: field(&|c| c.main.slip),
+            slip_duration: field(&|c| c.main.slip_duration),
+        },
         extremes: Extremes {
             u_at_v_max: field(&|c| c.extremes.u_at_v_max),
             theta_at_v_max: field(&|c| c.extremes.theta_at_v_max),
@@ -780,8 +795,6 @@ fn combine(cycles: &[CycleValues], f: impl Fn(&[f64]) -> f64) -> CycleValues {
             theta_min: field(&|c| c.extremes.theta_min),
             theta_max: field(&|c| c.extremes.theta_max),
         },
-        slip: field(&|c| c.slip),
-        slip_duration: field(&|c| c.slip_duration),
         steps: f(&steps).round() as u64,
     }
 }
@@ -930,7 +943,8 @@ pub fn analyse(
     };
     let error_estimate =
         values.map(|_| settled::estimate(&closed, closed.len() - used, settings.w_tolerance));
-    let orbit_period = (!orbit.is_empty()).then(|| orbit.iter().map(|c| c.period).sum::<f64>());
+    let orbit_period =
+        (!orbit.is_empty()).then(|| orbit.iter().map(|c| c.main.period).sum::<f64>());
     let last_cycles = if values.is_none() && orbit.is_empty() {
         closed[closed.len().saturating_sub(10)..].to_vec()
     } else {
@@ -976,13 +990,17 @@ mod tests {
 
     fn cycle(period: f64, ln_v_max: f64, ln_v_min: f64) -> CycleValues {
         CycleValues {
-            period,
-            t0: 1.0,
-            slip_half_width: Some(0.1),
-            v_max: ln_v_max.exp(),
-            ln_v_max,
-            v_min: ln_v_min.exp(),
-            ln_v_min,
+            main: MainValues {
+                period,
+                t0: 1.0,
+                slip_half_width: Some(0.1),
+                v_max: ln_v_max.exp(),
+                ln_v_max,
+                v_min: ln_v_min.exp(),
+                ln_v_min,
+                slip: 2.0,
+                slip_duration: 1.0,
+            },
             extremes: Extremes {
                 u_at_v_max: 0.0,
                 theta_at_v_max: 0.0,
@@ -991,8 +1009,6 @@ mod tests {
                 theta_min: -1.0,
                 theta_max: 1.0,
             },
-            slip: 2.0,
-            slip_duration: 1.0,
             steps: 100,
         }
     }
@@ -1069,9 +1085,9 @@ mod tests {
     fn spread_and_mean_of_cycles() {
         let cycles = [cycle(10.0, 3.0, -1.0), cycle(10.2, 3.0, -1.0)];
         let mean_values = combine(&cycles, mean);
-        assert!((mean_values.period - 10.1).abs() < 1e-12);
+        assert!((mean_values.main.period - 10.1).abs() < 1e-12);
         let spread = combine(&cycles, relative_spread);
-        assert!((spread.period - 0.2 / 10.1).abs() < 1e-12);
-        assert_eq!(spread.ln_v_max, 0.0);
+        assert!((spread.main.period - 0.2 / 10.1).abs() < 1e-12);
+        assert_eq!(spread.main.ln_v_max, 0.0);
     }
 }

@@ -33,8 +33,7 @@
 //! cycle is below [`TRANSIENT_SHARE`] of that noise. The error estimate of each value is the
 //! transient bound plus the noise.
 
-use super::CycleValues;
-use serde::Serialize;
+use super::{CycleValues, MainValues};
 
 /// A difference is "clean" (the transient, not the noise) above this many noise levels.
 const CLEAN: f64 = 3.0;
@@ -49,30 +48,6 @@ const TRANSIENT_SHARE: f64 = 0.3;
 const TIME_FLOOR: f64 = 10.0;
 /// The integration's error floor on ln v, in units of rtol·|ln v| + atol.
 const LN_V_FLOOR: f64 = 50.0;
-
-/// Estimated absolute error of each reported cycle value (same keys and units as the values):
-/// the transient left in the settled window plus the cycle-to-cycle noise.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ErrorEstimate {
-    /// Error of the period.
-    pub period: f64,
-    /// Error of t0.
-    pub t0: f64,
-    /// Error of the slip half-width (null when the half-width is).
-    pub slip_half_width: Option<f64>,
-    /// Error of v_max.
-    pub v_max: f64,
-    /// Error of ln v_max.
-    pub ln_v_max: f64,
-    /// Error of v_min.
-    pub v_min: f64,
-    /// Error of ln v_min.
-    pub ln_v_min: f64,
-    /// Error of the slip.
-    pub slip: f64,
-    /// Error of the slip duration.
-    pub slip_duration: f64,
-}
 
 /// The error of one quantity's mean over the window `closed[start..]`: (transient bound at the
 /// window's first cycle, noise), with `floor(mean)` the integration's error floor.
@@ -147,9 +122,9 @@ fn v_floor(v: f64, tol: (f64, f64)) -> f64 {
     }
 }
 
-const PERIOD: Quantity = Quantity { get: |c| c.period, floor: time_floor };
-const V_MAX: Quantity = Quantity { get: |c| c.v_max, floor: v_floor };
-const SLIP: Quantity = Quantity { get: |c| c.slip, floor: time_floor };
+const PERIOD: Quantity = Quantity { get: |c| c.main.period, floor: time_floor };
+const V_MAX: Quantity = Quantity { get: |c| c.main.v_max, floor: v_floor };
+const SLIP: Quantity = Quantity { get: |c| c.main.slip, floor: time_floor };
 
 /// (transient, noise) of `q` over the window `closed[start..]`.
 fn of(q: &Quantity, closed: &[CycleValues], start: usize, w_tolerance: (f64, f64)) -> (f64, f64) {
@@ -187,24 +162,24 @@ pub(super) fn estimate(
     closed: &[CycleValues],
     start: usize,
     w_tolerance: (f64, f64),
-) -> ErrorEstimate {
+) -> MainValues {
     let start = start.max(1);
     let err = |get: fn(&CycleValues) -> f64, floor: fn(f64, (f64, f64)) -> f64| {
         let (transient, noise) = of(&Quantity { get, floor }, closed, start, w_tolerance);
         transient + noise
     };
-    let has_half_width = closed[start..].iter().all(|c| c.slip_half_width.is_some());
-    ErrorEstimate {
-        period: err(|c| c.period, time_floor),
-        t0: err(|c| c.t0, time_floor),
+    let has_half_width = closed[start..].iter().all(|c| c.main.slip_half_width.is_some());
+    MainValues {
+        period: err(|c| c.main.period, time_floor),
+        t0: err(|c| c.main.t0, time_floor),
         slip_half_width: has_half_width
-            .then(|| err(|c| c.slip_half_width.unwrap_or(0.0), time_floor)),
-        v_max: err(|c| c.v_max, v_floor),
-        ln_v_max: err(|c| c.ln_v_max, ln_v_floor),
-        v_min: err(|c| c.v_min, v_floor),
-        ln_v_min: err(|c| c.ln_v_min, ln_v_floor),
-        slip: err(|c| c.slip, time_floor),
-        slip_duration: err(|c| c.slip_duration, time_floor),
+            .then(|| err(|c| c.main.slip_half_width.unwrap_or(0.0), time_floor)),
+        v_max: err(|c| c.main.v_max, v_floor),
+        ln_v_max: err(|c| c.main.ln_v_max, ln_v_floor),
+        v_min: err(|c| c.main.v_min, v_floor),
+        ln_v_min: err(|c| c.main.ln_v_min, ln_v_floor),
+        slip: err(|c| c.main.slip, time_floor),
+        slip_duration: err(|c| c.main.slip_duration, time_floor),
     }
 }
 
