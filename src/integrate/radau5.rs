@@ -34,7 +34,7 @@
 // RADAU5's coefficients are kept with the digits it publishes.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real};
+use super::linalg::{lu_real, pivot, rms, solve_real};
 use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
 use super::{
     ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
@@ -279,19 +279,10 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
         let ((left_r, right_r), (left_i, right_i)) =
             (ar.split_at_mut((k + 1) * n), ai.split_at_mut((k + 1) * n));
         let (cr, ci) = (&mut left_r[k * n..], &mut left_i[k * n..]);
-        let mut p = k;
-        let mut big = cr[k].abs() + ci[k].abs();
-        for i in k + 1..n {
-            let v = cr[i].abs() + ci[i].abs();
-            if v > big {
-                big = v;
-                p = i;
-            }
-        }
-        ip[k] = p;
-        if big == 0.0 || !big.is_finite() {
+        let Some(p) = pivot(k, n, |i| cr[i].abs() + ci[i].abs()) else {
             return false;
-        }
+        };
+        ip[k] = p;
         if p != k {
             cr.swap(k, p);
             ci.swap(k, p);
