@@ -7,68 +7,67 @@ use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
-/// One name per ARKStep operation. SUNDIALS 7 deprecates the `ARKStep*` spellings of the
-/// operations every ARKODE stepper shares in favour of the generic `ARKode*` ones (same
-/// signatures); 6.x has only the former.
-#[cfg(sundials7)]
-mod ark {
-    pub(super) use super::ffi::{
-        ARKodeEvolve as Evolve, ARKodeFree as Free, ARKodeGetActualInitStep as GetActualInitStep,
-        ARKodeGetCurrentStep as GetCurrentStep, ARKodeGetDky as GetDky,
-        ARKodeGetLastStep as GetLastStep, ARKodeGetNumErrTestFails as GetNumErrTestFails,
-        ARKodeGetNumGEvals as GetNumGEvals, ARKodeGetNumJacEvals as GetNumJacEvals,
-        ARKodeGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKodeGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKodeGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKodeGetNumNonlinSolvIters as GetNumNonlinSolvIters,
-        ARKodeGetNumStepAttempts as GetNumStepAttempts,
-        ARKodeGetNumStepSolveFails as GetNumStepSolveFails, ARKodeGetNumSteps as GetNumSteps,
-        ARKodeGetRootInfo as GetRootInfo, ARKodeReset as Reset, ARKodeRootInit as RootInit,
-        ARKodeSStolerances as SStolerances, ARKodeSVtolerances as SVtolerances,
-        ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKodeSetFixedStepBounds as SetFixedStepBounds, ARKodeSetInitStep as SetInitStep,
-        ARKodeSetInterpolantType as SetInterpolantType,
-        ARKodeSetJacEvalFrequency as SetJacEvalFrequency, ARKodeSetJacFn as SetJacFn,
-        ARKodeSetLSetupFrequency as SetLSetupFrequency, ARKodeSetLinearSolver as SetLinearSolver,
-        ARKodeSetMaxConvFails as SetMaxConvFails, ARKodeSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKodeSetMaxHnilWarns as SetMaxHnilWarns, ARKodeSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKodeSetMaxNumSteps as SetMaxNumSteps, ARKodeSetMaxStep as SetMaxStep,
-        ARKodeSetMinStep as SetMinStep, ARKodeSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKodeSetPredictorMethod as SetPredictorMethod, ARKodeSetRootDirection as SetRootDirection,
-        ARKodeSetStopTime as SetStopTime, ARKodeSetUserData as SetUserData,
-        ARKodeWFtolerances as WFtolerances,
+/// Declares `mod ark` with one name per ARKStep operation, from rows
+/// `Name: SUNDIALS 7 spelling, SUNDIALS 6 spelling;`. SUNDIALS 7 deprecates the `ARKStep*`
+/// spellings of the operations every ARKODE stepper shares in favour of the generic `ARKode*`
+/// ones (same signatures); 6.x has only the former.
+macro_rules! ark_names {
+    ($($name:ident: $v7:ident, $v6:ident;)*) => {
+        #[cfg(sundials7)]
+        mod ark {
+            pub(super) use super::ffi::{$($v7 as $name),*};
+        }
+        #[cfg(not(sundials7))]
+        mod ark {
+            pub(super) use super::ffi::{$($v6 as $name),*};
+        }
     };
 }
-#[cfg(not(sundials7))]
-mod ark {
-    pub(super) use super::ffi::{
-        ARKStepEvolve as Evolve, ARKStepFree as Free,
-        ARKStepGetActualInitStep as GetActualInitStep, ARKStepGetCurrentStep as GetCurrentStep,
-        ARKStepGetDky as GetDky, ARKStepGetLastStep as GetLastStep,
-        ARKStepGetNumErrTestFails as GetNumErrTestFails, ARKStepGetNumGEvals as GetNumGEvals,
-        ARKStepGetNumJacEvals as GetNumJacEvals, ARKStepGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKStepGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKStepGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKStepGetNumNonlinSolvIters as GetNumNonlinSolvIters,
-        ARKStepGetNumStepAttempts as GetNumStepAttempts,
-        ARKStepGetNumStepSolveFails as GetNumStepSolveFails, ARKStepGetNumSteps as GetNumSteps,
-        ARKStepGetRootInfo as GetRootInfo, ARKStepReset as Reset, ARKStepRootInit as RootInit,
-        ARKStepSStolerances as SStolerances, ARKStepSVtolerances as SVtolerances,
-        ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKStepSetFixedStepBounds as SetFixedStepBounds, ARKStepSetInitStep as SetInitStep,
-        ARKStepSetInterpolantType as SetInterpolantType,
-        ARKStepSetJacEvalFrequency as SetJacEvalFrequency, ARKStepSetJacFn as SetJacFn,
-        ARKStepSetLSetupFrequency as SetLSetupFrequency, ARKStepSetLinearSolver as SetLinearSolver,
-        ARKStepSetMaxConvFails as SetMaxConvFails, ARKStepSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKStepSetMaxHnilWarns as SetMaxHnilWarns, ARKStepSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKStepSetMaxNumSteps as SetMaxNumSteps, ARKStepSetMaxStep as SetMaxStep,
-        ARKStepSetMinStep as SetMinStep, ARKStepSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKStepSetPredictorMethod as SetPredictorMethod,
-        ARKStepSetRootDirection as SetRootDirection, ARKStepSetStopTime as SetStopTime,
-        ARKStepSetUserData as SetUserData, ARKStepWFtolerances as WFtolerances,
-    };
+
+ark_names! {
+    Evolve: ARKodeEvolve, ARKStepEvolve;
+    Free: ARKodeFree, ARKStepFree;
+    GetActualInitStep: ARKodeGetActualInitStep, ARKStepGetActualInitStep;
+    GetCurrentStep: ARKodeGetCurrentStep, ARKStepGetCurrentStep;
+    GetDky: ARKodeGetDky, ARKStepGetDky;
+    GetLastStep: ARKodeGetLastStep, ARKStepGetLastStep;
+    GetNumErrTestFails: ARKodeGetNumErrTestFails, ARKStepGetNumErrTestFails;
+    GetNumGEvals: ARKodeGetNumGEvals, ARKStepGetNumGEvals;
+    GetNumJacEvals: ARKodeGetNumJacEvals, ARKStepGetNumJacEvals;
+    GetNumLinRhsEvals: ARKodeGetNumLinRhsEvals, ARKStepGetNumLinRhsEvals;
+    GetNumLinSolvSetups: ARKodeGetNumLinSolvSetups, ARKStepGetNumLinSolvSetups;
+    GetNumNonlinSolvConvFails: ARKodeGetNumNonlinSolvConvFails, ARKStepGetNumNonlinSolvConvFails;
+    GetNumNonlinSolvIters: ARKodeGetNumNonlinSolvIters, ARKStepGetNumNonlinSolvIters;
+    GetNumStepAttempts: ARKodeGetNumStepAttempts, ARKStepGetNumStepAttempts;
+    GetNumStepSolveFails: ARKodeGetNumStepSolveFails, ARKStepGetNumStepSolveFails;
+    GetNumSteps: ARKodeGetNumSteps, ARKStepGetNumSteps;
+    GetRootInfo: ARKodeGetRootInfo, ARKStepGetRootInfo;
+    Reset: ARKodeReset, ARKStepReset;
+    RootInit: ARKodeRootInit, ARKStepRootInit;
+    SStolerances: ARKodeSStolerances, ARKStepSStolerances;
+    SVtolerances: ARKodeSVtolerances, ARKStepSVtolerances;
+    SetDeduceImplicitRhs: ARKodeSetDeduceImplicitRhs, ARKStepSetDeduceImplicitRhs;
+    SetFixedStepBounds: ARKodeSetFixedStepBounds, ARKStepSetFixedStepBounds;
+    SetInitStep: ARKodeSetInitStep, ARKStepSetInitStep;
+    SetInterpolantType: ARKodeSetInterpolantType, ARKStepSetInterpolantType;
+    SetJacEvalFrequency: ARKodeSetJacEvalFrequency, ARKStepSetJacEvalFrequency;
+    SetJacFn: ARKodeSetJacFn, ARKStepSetJacFn;
+    SetLSetupFrequency: ARKodeSetLSetupFrequency, ARKStepSetLSetupFrequency;
+    SetLinearSolver: ARKodeSetLinearSolver, ARKStepSetLinearSolver;
+    SetMaxConvFails: ARKodeSetMaxConvFails, ARKStepSetMaxConvFails;
+    SetMaxErrTestFails: ARKodeSetMaxErrTestFails, ARKStepSetMaxErrTestFails;
+    SetMaxHnilWarns: ARKodeSetMaxHnilWarns, ARKStepSetMaxHnilWarns;
+    SetMaxNonlinIters: ARKodeSetMaxNonlinIters, ARKStepSetMaxNonlinIters;
+    SetMaxNumSteps: ARKodeSetMaxNumSteps, ARKStepSetMaxNumSteps;
+    SetMaxStep: ARKodeSetMaxStep, ARKStepSetMaxStep;
+    SetMinStep: ARKodeSetMinStep, ARKStepSetMinStep;
+    SetNonlinConvCoef: ARKodeSetNonlinConvCoef, ARKStepSetNonlinConvCoef;
+    SetPostprocessStepFn: ARKodeSetPostprocessStepFn, ARKStepSetPostprocessStepFn;
+    SetPredictorMethod: ARKodeSetPredictorMethod, ARKStepSetPredictorMethod;
+    SetRootDirection: ARKodeSetRootDirection, ARKStepSetRootDirection;
+    SetStopTime: ARKodeSetStopTime, ARKStepSetStopTime;
+    SetUserData: ARKodeSetUserData, ARKStepSetUserData;
+    WFtolerances: ARKodeWFtolerances, ARKStepWFtolerances;
 }
 
 /// Implicit (DIRK) Butcher tables of the linked ARKODE, by name without the `ARKODE_` prefix.
