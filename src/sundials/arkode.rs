@@ -3,7 +3,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
+use super::solver::{counter, read_shared_stats, Api, Attached, Creation, Solver, StatGetters};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -246,29 +246,27 @@ fn explain(flag: c_int) -> Option<&'static str> {
         .then_some("ARKStep tries no smaller step when f fails at an explicit stage or after an implicit stage's solve")
 }
 
-/// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
-/// for ERK) are not asked, and leave their counter at zero: ARKODE answers them through the
-/// error handler ("arkode_mem = NULL illegal." for the root count), which cost an ERK run 30 %
-/// of its time when the counters were read after every step, and left that message as the
-/// solver's last error.
+static STAT_GETTERS: StatGetters = StatGetters {
+    steps: ark::GetNumSteps,
+    lin_setups: ark::GetNumLinSolvSetups,
+    err_test_fails: ark::GetNumErrTestFails,
+    step_solve_fails: ark::GetNumStepSolveFails,
+    nonlin_iters: ark::GetNumNonlinSolvIters,
+    nonlin_conv_fails: ark::GetNumNonlinSolvConvFails,
+    jac_evals: ark::GetNumJacEvals,
+    lin_rhs_evals: ark::GetNumLinRhsEvals,
+    root_evals: ark::GetNumGEvals,
+    last_step: ark::GetLastStep,
+    current_step: ark::GetCurrentStep,
+    initial_step: ark::GetActualInitStep,
+};
+
+/// Reads ARKStep's counters ([`read_shared_stats`], and those of ARKStep alone).
 unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
-    let mut s = Stats::default();
     // SAFETY: `m` is live ARKStep memory (caller's guarantee), and every getter is ARKStep's.
-    let count = |get: Getter| unsafe { counter(m, get) };
-    s.steps = count(ark::GetNumSteps);
-    s.step_attempts = count(ark::GetNumStepAttempts);
-    s.lin_setups = count(ark::GetNumLinSolvSetups);
-    s.err_test_fails = count(ark::GetNumErrTestFails);
-    s.step_solve_fails = count(ark::GetNumStepSolveFails);
-    s.nonlin_iters = count(ark::GetNumNonlinSolvIters);
-    s.nonlin_conv_fails = count(ark::GetNumNonlinSolvConvFails);
-    if attached.linear_solver {
-        s.jac_evals = count(ark::GetNumJacEvals);
-        s.rhs_evals_jacobian = count(ark::GetNumLinRhsEvals);
-    }
-    if attached.roots {
-        s.root_evals = count(ark::GetNumGEvals);
-    }
+    let mut s = unsafe { read_shared_stats(m, attached, &STAT_GETTERS) };
+    // SAFETY: as above.
+    s.step_attempts = unsafe { counter(m, ark::GetNumStepAttempts) };
     let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
     let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =
         (std::ptr::null_mut(), std::ptr::null_mut());
@@ -277,9 +275,6 @@ unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     // read here, while the memory is alive.
     unsafe {
         ffi::ARKStepGetNumRhsEvals(m, &mut nfe, &mut nfi);
-        ark::GetLastStep(m, &mut s.last_step);
-        ark::GetCurrentStep(m, &mut s.current_step);
-        ark::GetActualInitStep(m, &mut s.initial_step);
         ffi::ARKStepGetCurrentButcherTables(m, &mut implicit, &mut explicit);
         let table = if implicit.is_null() { explicit } else { implicit };
         if !table.is_null() {

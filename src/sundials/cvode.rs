@@ -2,7 +2,9 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
+use super::solver::{
+    counter, read_shared_stats, Api, Attached, Creation, Getter, Solver, StatGetters,
+};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -55,33 +57,33 @@ fn classify(flag: c_int) -> ErrorKind {
     }
 }
 
-/// Reads CVODE's counters. Getters that do not apply (no root functions, no linear solver)
-/// leave their counter at zero.
+static STAT_GETTERS: StatGetters = StatGetters {
+    steps: ffi::CVodeGetNumSteps,
+    lin_setups: ffi::CVodeGetNumLinSolvSetups,
+    err_test_fails: ffi::CVodeGetNumErrTestFails,
+    step_solve_fails: ffi::CVodeGetNumStepSolveFails,
+    nonlin_iters: ffi::CVodeGetNumNonlinSolvIters,
+    nonlin_conv_fails: ffi::CVodeGetNumNonlinSolvConvFails,
+    jac_evals: ffi::CVodeGetNumJacEvals,
+    lin_rhs_evals: ffi::CVodeGetNumLinRhsEvals,
+    root_evals: ffi::CVodeGetNumGEvals,
+    last_step: ffi::CVodeGetLastStep,
+    current_step: ffi::CVodeGetCurrentStep,
+    initial_step: ffi::CVodeGetActualInitStep,
+};
+
+/// Reads CVODE's counters ([`read_shared_stats`], and those of CVODE alone). CVODE always has
+/// a linear solver attached.
 unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
-    let mut s = Stats::default();
     // SAFETY: `m` is live CVODE memory (caller's guarantee), and every getter is CVODE's.
+    let mut s = unsafe { read_shared_stats(m, attached, &STAT_GETTERS) };
+    // SAFETY: as above.
     let count = |get: Getter| unsafe { counter(m, get) };
-    s.steps = count(ffi::CVodeGetNumSteps);
     s.rhs_evals = count(ffi::CVodeGetNumRhsEvals);
-    s.lin_setups = count(ffi::CVodeGetNumLinSolvSetups);
-    s.err_test_fails = count(ffi::CVodeGetNumErrTestFails);
-    s.step_solve_fails = count(ffi::CVodeGetNumStepSolveFails);
-    s.nonlin_iters = count(ffi::CVodeGetNumNonlinSolvIters);
-    s.nonlin_conv_fails = count(ffi::CVodeGetNumNonlinSolvConvFails);
-    s.jac_evals = count(ffi::CVodeGetNumJacEvals);
-    s.rhs_evals_jacobian = count(ffi::CVodeGetNumLinRhsEvals);
-    if attached.roots {
-        s.root_evals = count(ffi::CVodeGetNumGEvals);
-    }
     s.stab_lim_order_reductions = count(ffi::CVodeGetNumStabLimOrderReds);
     s.step_attempts = s.steps + s.err_test_fails + s.step_solve_fails;
-    // SAFETY: as above; each getter writes one value of the pointed-to type.
-    unsafe {
-        ffi::CVodeGetLastStep(m, &mut s.last_step);
-        ffi::CVodeGetCurrentStep(m, &mut s.current_step);
-        ffi::CVodeGetActualInitStep(m, &mut s.initial_step);
-        ffi::CVodeGetLastOrder(m, &mut s.last_order);
-    }
+    // SAFETY: as above; the getter writes one int.
+    unsafe { ffi::CVodeGetLastOrder(m, &mut s.last_order) };
     s
 }
 
