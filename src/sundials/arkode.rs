@@ -3,7 +3,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{counter, read_shared_stats, Api, Attached, Creation, Solver, StatGetters};
+use super::solver::{check_dimension, counter, Api, Creation, Solver, StatGetters};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -246,26 +246,9 @@ fn explain(flag: c_int) -> Option<&'static str> {
         .then_some("ARKStep tries no smaller step when f fails at an explicit stage or after an implicit stage's solve")
 }
 
-static STAT_GETTERS: StatGetters = StatGetters {
-    steps: ark::GetNumSteps,
-    lin_setups: ark::GetNumLinSolvSetups,
-    err_test_fails: ark::GetNumErrTestFails,
-    step_solve_fails: ark::GetNumStepSolveFails,
-    nonlin_iters: ark::GetNumNonlinSolvIters,
-    nonlin_conv_fails: ark::GetNumNonlinSolvConvFails,
-    jac_evals: ark::GetNumJacEvals,
-    lin_rhs_evals: ark::GetNumLinRhsEvals,
-    root_evals: ark::GetNumGEvals,
-    last_step: ark::GetLastStep,
-    current_step: ark::GetCurrentStep,
-    initial_step: ark::GetActualInitStep,
-};
-
-/// Reads ARKStep's counters ([`read_shared_stats`], and those of ARKStep alone).
-unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
+/// [`Api::read_own_stats`] for ARKStep: attempts, f evaluations and the method's order.
+unsafe fn read_own_stats(m: *mut c_void, s: &mut Stats) {
     // SAFETY: `m` is live ARKStep memory (caller's guarantee), and every getter is ARKStep's.
-    let mut s = unsafe { read_shared_stats(m, attached, &STAT_GETTERS) };
-    // SAFETY: as above.
     s.step_attempts = unsafe { counter(m, ark::GetNumStepAttempts) };
     let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
     let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =
@@ -283,7 +266,6 @@ unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     }
     s.rhs_evals = nfi.max(0) as u64;
     s.rhs_evals_explicit = nfe.max(0) as u64;
-    s
 }
 
 /// [`Api::set_jacobian_max_age`] for ARKStep.
@@ -330,26 +312,25 @@ static ARKSTEP: Api = Api {
     set_jacobian_max_age,
     reinit: ark::Reset,
     reinit_resets_counters: false,
-    get_num_steps: ark::GetNumSteps,
-    read_stats,
+    stats: StatGetters {
+        steps: ark::GetNumSteps,
+        lin_setups: ark::GetNumLinSolvSetups,
+        err_test_fails: ark::GetNumErrTestFails,
+        step_solve_fails: ark::GetNumStepSolveFails,
+        nonlin_iters: ark::GetNumNonlinSolvIters,
+        nonlin_conv_fails: ark::GetNumNonlinSolvConvFails,
+        jac_evals: ark::GetNumJacEvals,
+        lin_rhs_evals: ark::GetNumLinRhsEvals,
+        root_evals: ark::GetNumGEvals,
+        last_step: ark::GetLastStep,
+        current_step: ark::GetCurrentStep,
+        initial_step: ark::GetActualInitStep,
+    },
+    read_own_stats,
     classify,
     explain,
     dense_order_is_last_order: false,
 };
-
-fn dimension_error(name: &'static str, dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-    if y0.len() == dim {
-        return Ok(());
-    }
-    Err(SolverError {
-        solver: name,
-        kind: ErrorKind::InvalidInput,
-        t: t0,
-        state: y0.to_vec(),
-        flag: 0,
-        message: format!("y0 has {} components; the system has {dim}", y0.len()),
-    })
-}
 
 /// An explicit method has no Newton iteration: its options are an error naming the first one
 /// set (SUNDIALS' own answer is a raw "no nonlinear solver" message).
@@ -458,7 +439,7 @@ impl<S: OdeSystem> Solver<S> {
     ) -> Result<Self, SolverError> {
         let implicit = matches!(method, ArkMethod::Dirk(_));
         let name = if implicit { "arkode-dirk" } else { "arkode-erk" };
-        dimension_error(name, system.dim(), t0, y0)?;
+        check_dimension(name, system.dim(), t0, y0)?;
         if !implicit {
             no_newton(name, options, t0, y0)?;
         }
@@ -507,7 +488,7 @@ impl<S: ImexSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        dimension_error("arkode-imex", system.dim(), t0, y0)?;
+        check_dimension("arkode-imex", system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn = if system.has_implicit_jacobian() {
             Some(callbacks::implicit_jacobian::<S>)
         } else {

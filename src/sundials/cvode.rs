@@ -2,9 +2,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{
-    counter, read_shared_stats, Api, Attached, Creation, Getter, Solver, StatGetters,
-};
+use super::solver::{check_dimension, counter, Api, Creation, Getter, Solver, StatGetters};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -57,34 +55,16 @@ fn classify(flag: c_int) -> ErrorKind {
     }
 }
 
-static STAT_GETTERS: StatGetters = StatGetters {
-    steps: ffi::CVodeGetNumSteps,
-    lin_setups: ffi::CVodeGetNumLinSolvSetups,
-    err_test_fails: ffi::CVodeGetNumErrTestFails,
-    step_solve_fails: ffi::CVodeGetNumStepSolveFails,
-    nonlin_iters: ffi::CVodeGetNumNonlinSolvIters,
-    nonlin_conv_fails: ffi::CVodeGetNumNonlinSolvConvFails,
-    jac_evals: ffi::CVodeGetNumJacEvals,
-    lin_rhs_evals: ffi::CVodeGetNumLinRhsEvals,
-    root_evals: ffi::CVodeGetNumGEvals,
-    last_step: ffi::CVodeGetLastStep,
-    current_step: ffi::CVodeGetCurrentStep,
-    initial_step: ffi::CVodeGetActualInitStep,
-};
-
-/// Reads CVODE's counters ([`read_shared_stats`], and those of CVODE alone). CVODE always has
-/// a linear solver attached.
-unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
+/// [`Api::read_own_stats`] for CVODE: f evaluations, stability-limit order reductions and
+/// the order of the last step; the attempts from the steps and failures.
+unsafe fn read_own_stats(m: *mut c_void, s: &mut Stats) {
     // SAFETY: `m` is live CVODE memory (caller's guarantee), and every getter is CVODE's.
-    let mut s = unsafe { read_shared_stats(m, attached, &STAT_GETTERS) };
-    // SAFETY: as above.
     let count = |get: Getter| unsafe { counter(m, get) };
     s.rhs_evals = count(ffi::CVodeGetNumRhsEvals);
     s.stab_lim_order_reductions = count(ffi::CVodeGetNumStabLimOrderReds);
     s.step_attempts = s.steps + s.err_test_fails + s.step_solve_fails;
     // SAFETY: as above; the getter writes one int.
     unsafe { ffi::CVodeGetLastOrder(m, &mut s.last_order) };
-    s
 }
 
 /// [`Api::set_jacobian_max_age`] for CVODE.
@@ -131,8 +111,21 @@ static CVODE: Api = Api {
     set_jacobian_max_age,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
-    get_num_steps: ffi::CVodeGetNumSteps,
-    read_stats,
+    stats: StatGetters {
+        steps: ffi::CVodeGetNumSteps,
+        lin_setups: ffi::CVodeGetNumLinSolvSetups,
+        err_test_fails: ffi::CVodeGetNumErrTestFails,
+        step_solve_fails: ffi::CVodeGetNumStepSolveFails,
+        nonlin_iters: ffi::CVodeGetNumNonlinSolvIters,
+        nonlin_conv_fails: ffi::CVodeGetNumNonlinSolvConvFails,
+        jac_evals: ffi::CVodeGetNumJacEvals,
+        lin_rhs_evals: ffi::CVodeGetNumLinRhsEvals,
+        root_evals: ffi::CVodeGetNumGEvals,
+        last_step: ffi::CVodeGetLastStep,
+        current_step: ffi::CVodeGetCurrentStep,
+        initial_step: ffi::CVodeGetActualInitStep,
+    },
+    read_own_stats,
     classify,
     explain: |_| None,
     dense_order_is_last_order: true,
@@ -152,16 +145,7 @@ impl<S: OdeSystem> Solver<S> {
             CvodeMethod::Bdf => ("cvode-bdf", 5),
             CvodeMethod::Adams => ("cvode-adams", 12),
         };
-        if y0.len() != system.dim() {
-            return Err(SolverError {
-                solver: name,
-                kind: ErrorKind::InvalidInput,
-                t: t0,
-                state: y0.to_vec(),
-                flag: 0,
-                message: format!("y0 has {} components; the system has {}", y0.len(), system.dim()),
-            });
-        }
+        check_dimension(name, system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {
