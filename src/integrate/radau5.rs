@@ -35,7 +35,9 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{lu_real, pivot, rms, solve_real};
-use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
+use super::stepper::{
+    self, all_finite, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR, UROUND,
+};
 use super::{
     ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
 };
@@ -51,14 +53,9 @@ const QUOT2: f64 = 1.2;
 /// 1/FACL ≤ h_new/h ≤ 1/FACR.
 const FACL: f64 = 5.0;
 const FACR: f64 = 0.125;
-/// Consecutive singular iteration matrices before giving up (RADAU5: 5).
-const MAX_SINGULAR: u32 = 5;
 /// Defaults for options RADAU5 does not bound (it relies on the step underflow test).
 const DEFAULT_MAX_CONV_FAILS: u32 = 10;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_NIT: u32 = 7;
-/// Failed attempts of any kind in one step before giving up (a guard; RADAU5 has none).
-const MAX_ATTEMPTS: u32 = 500;
 
 // The transformation T (A⁻¹ = T Λ T⁻¹) and its inverse, from RADAU5. T32 = 1, T33 = 0.
 const T11: f64 = 9.123_239_487_089_294_279_2e-2;
@@ -639,12 +636,7 @@ impl<S: OdeSystem> Radau5<S> {
         let mut attempts = 0u32;
         self.core.drop_passed_stop_time();
         loop {
-            attempts += 1;
-            if attempts > MAX_ATTEMPTS {
-                let message =
-                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
-                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
-            }
+            self.core.count_attempt(&mut attempts)?;
             let (planned, last) = self.core.prepare_attempt(self.fixed_h)?;
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {

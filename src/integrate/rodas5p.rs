@@ -50,7 +50,9 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{inverse3, lu_real, multiply3, rms, solve_real, solve_refined, with_small_n};
-use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
+use super::stepper::{
+    self, all_finite, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR, UROUND,
+};
 use super::{
     ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
 };
@@ -63,9 +65,6 @@ const FAC1: f64 = 5.0;
 const FAC2: f64 = 1.0 / 6.0;
 /// The error estimate is O(h⁵).
 const EXPONENT: f64 = 0.2;
-/// Consecutive singular matrices W within one step before giving up.
-const MAX_SINGULAR: u32 = 5;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 
 /// Number of stages.
 const STAGES: usize = 8;

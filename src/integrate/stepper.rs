@@ -19,6 +19,14 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 pub(super) const UROUND: f64 = 1e-16;
 /// Consecutive non-finite right-hand sides in one step before giving up.
 const MAX_NONFINITE: u32 = 10;
+/// Consecutive singular iteration matrices in one step before giving up (RADAU5: 5).
+pub(super) const MAX_SINGULAR: u32 = 5;
+/// The default of [`Options::max_err_test_fails`] (RADAU5, RODAS and SEULEX do not bound the
+/// error-test failures; they rely on the step underflow test).
+pub(super) const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
+/// Failed attempts of any kind in one step before giving up (a guard; the Fortran codes have
+/// none).
+const MAX_ATTEMPTS: u32 = 500;
 /// The return code of an [`ErrorKind::CallbackPanic`] error.
 const PANIC_FLAG: i32 = -8;
 
@@ -312,6 +320,18 @@ impl Core {
                 return Err(self.error(ErrorKind::StepUnderflow, -3, message));
             }
             self.stats.step_underflow_warnings += 1;
+        }
+        Ok(())
+    }
+
+    /// Counts one more attempt at the current step (`attempts` in this step): an error once
+    /// they exceed MAX_ATTEMPTS, a guard against failures that each stay within their own
+    /// limit.
+    pub fn count_attempt(&self, attempts: &mut u32) -> Result<(), SolverError> {
+        *attempts += 1;
+        if *attempts > MAX_ATTEMPTS {
+            let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.h);
+            return Err(self.error(ErrorKind::ConvergenceFailures, -5, message));
         }
         Ok(())
     }

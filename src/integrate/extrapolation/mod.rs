@@ -100,7 +100,9 @@ mod rounding;
 mod switching;
 mod tableau;
 
-use super::stepper::{self, all_finite, Core, FixedStepError, Stepper};
+use super::stepper::{
+    self, all_finite, Core, FixedStepError, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
+};
 use super::{
     ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
 };
@@ -108,12 +110,7 @@ use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
 const NAME: &str = "extrapolation";
-/// Consecutive singular iteration matrices before giving up.
-const MAX_SINGULAR: u32 = 5;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_MAX_ROW_FAILS: u32 = 50;
-/// Failed attempts of any kind in one step before giving up (a guard).
-const MAX_ATTEMPTS: u32 = 500;
 
 /// Failures counted within one step, each against its own limit.
 #[derive(Debug, Default)]
@@ -403,12 +400,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let mut failures = StepFailures::default();
         self.core.drop_passed_stop_time();
         loop {
-            failures.attempts += 1;
-            if failures.attempts > MAX_ATTEMPTS {
-                let message =
-                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
-                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
-            }
+            self.core.count_attempt(&mut failures.attempts)?;
             let (planned, last) = self.prepare_attempt()?;
             let first = std::mem::replace(&mut self.first, false);
             let h_used = self.core.h;
