@@ -36,11 +36,10 @@
 
 use super::linalg::{lu_real, pivot, rms, solve_real};
 use super::stepper::{
-    self, all_finite, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR, UROUND,
+    self, all_finite, Cause, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
+    UROUND,
 };
-use super::{
-    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
-};
+use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 
 const NAME: &str = "radau5";
 /// Safety factor of the step-size control.
@@ -616,14 +615,8 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     /// [`Core::reduce`], then a new Jacobian or LU decomposition before the retry.
-    fn reduce(
-        &mut self,
-        hnew: f64,
-        kind: ErrorKind,
-        flag: i32,
-        why: &str,
-    ) -> Result<(), SolverError> {
-        self.core.reduce(hnew, kind, flag, why)?;
+    fn reduce(&mut self, hnew: f64, cause: Cause, why: &str) -> Result<(), SolverError> {
+        self.core.reduce(hnew, cause, why)?;
         self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
         Ok(())
     }
@@ -641,11 +634,9 @@ impl<S: OdeSystem> Radau5<S> {
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {
                 if !self.compute_jacobian() {
-                    return Err(self.core.error(
-                        ErrorKind::RhsFailure,
-                        -6,
-                        "the Jacobian is not finite".into(),
-                    ));
+                    return Err(self
+                        .core
+                        .error(Cause::RhsFailure, "the Jacobian is not finite".into()));
                 }
                 self.caljac = true;
                 self.jacobian_age = 0;
@@ -659,12 +650,11 @@ impl<S: OdeSystem> Radau5<S> {
                             "iteration matrix singular {singular} times (h = {:e})",
                             self.core.h
                         );
-                        return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
+                        return Err(self.core.error(Cause::LinearSolver, message));
                     }
                     self.reduce(
                         0.5 * self.core.h,
-                        ErrorKind::LinearSolver,
-                        -4,
+                        Cause::LinearSolver,
                         "singular iteration matrix",
                     )?;
                     continue;
@@ -683,14 +673,9 @@ impl<S: OdeSystem> Radau5<S> {
                             "Newton failed {conv_fails} times in one step (h = {:e})",
                             self.core.h
                         );
-                        return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
+                        return Err(self.core.error(Cause::ConvergenceFailures, message));
                     }
-                    self.reduce(
-                        0.5 * self.core.h,
-                        ErrorKind::ConvergenceFailures,
-                        -5,
-                        "Newton failure",
-                    )?;
+                    self.reduce(0.5 * self.core.h, Cause::ConvergenceFailures, "Newton failure")?;
                     continue;
                 }
                 Newton::Slow(factor) => {
@@ -698,8 +683,7 @@ impl<S: OdeSystem> Radau5<S> {
                     self.core.stats.step_solve_fails += 1;
                     self.reduce(
                         factor * self.core.h,
-                        ErrorKind::ConvergenceFailures,
-                        -5,
+                        Cause::ConvergenceFailures,
                         "slow Newton convergence",
                     )?;
                     continue;
@@ -750,7 +734,7 @@ impl<S: OdeSystem> Radau5<S> {
             // Rejected by the error test.
             self.core.rejected(&mut rejections, self.max_err_test_fails, err)?;
             let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
-            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+            self.reduce(hnew, Cause::ErrorTestFailures, "error-test failure")?;
         }
     }
 

@@ -101,11 +101,10 @@ mod switching;
 mod tableau;
 
 use super::stepper::{
-    self, all_finite, Core, FixedStepError, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
+    self, all_finite, Cause, Core, FixedStepError, Stepper, DEFAULT_MAX_ERR_TEST_FAILS,
+    MAX_SINGULAR,
 };
-use super::{
-    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
-};
+use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
@@ -449,18 +448,15 @@ impl<S: OdeSystem> Extrapolation<S> {
             && !self.ensure_f0()
         {
             return Err(self.core.error(
-                ErrorKind::RhsFailure,
-                -6,
+                Cause::RhsFailure,
                 "the right-hand side at the current point is not finite".into(),
             ));
         }
         if need_jacobian {
             if !self.compute_jacobian() {
-                return Err(self.core.error(
-                    ErrorKind::RhsFailure,
-                    -6,
-                    "the Jacobian is not finite".into(),
-                ));
+                return Err(self
+                    .core
+                    .error(Cause::RhsFailure, "the Jacobian is not finite".into()));
             }
             self.caljac = true;
         }
@@ -500,10 +496,10 @@ impl<S: OdeSystem> Extrapolation<S> {
                     "{} error-test failures in one step (dense output, h = {h_used:e})",
                     failures.rejections
                 );
-                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
+                return Err(self.core.error(Cause::ErrorTestFailures, message));
             }
             let hnew = self.core.posneg * self.hoptde;
-            self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "dense-output error test")?;
+            self.core.reduce(hnew, Cause::ErrorTestFailures, "dense-output error test")?;
             return Ok(false);
         }
         Ok(true)
@@ -551,11 +547,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "{} error-test failures in one step (h = {:e}, err = {:e})",
                 failures.rejections, h_used, self.err
             );
-            return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
+            return Err(self.core.error(Cause::ErrorTestFailures, message));
         }
         let hnew = self.core.h;
         self.core.h = h_used;
-        self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+        self.core.reduce(hnew, Cause::ErrorTestFailures, "error-test failure")?;
         self.stiffness_test(h_used, false);
         Ok(())
     }
@@ -575,12 +571,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                 self.last_row + 1,
                 self.core.h
             );
-            let (kind, flag) = if failure == Failure::Singular {
-                (ErrorKind::LinearSolver, -4)
+            let cause = if failure == Failure::Singular {
+                Cause::LinearSolver
             } else {
-                (ErrorKind::ConvergenceFailures, -5)
+                Cause::ConvergenceFailures
             };
-            return Err(self.core.error(kind, flag, message));
+            return Err(self.core.error(cause, message));
         }
         let factor = self.control().safe3;
         match failure {
@@ -596,12 +592,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                         "iteration matrix singular {} times (h = {:e})",
                         failures.singular, self.core.h
                     );
-                    return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
+                    return Err(self.core.error(Cause::LinearSolver, message));
                 }
                 self.core.reduce(
                     factor * self.core.h,
-                    ErrorKind::LinearSolver,
-                    -4,
+                    Cause::LinearSolver,
                     "singular iteration matrix",
                 )?;
             }
@@ -613,12 +608,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                         "{} rows stopped by the stability checks in one step (h = {:e})",
                         failures.row_fails, self.core.h
                     );
-                    return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
+                    return Err(self.core.error(Cause::ConvergenceFailures, message));
                 }
                 self.core.reduce(
                     factor * self.core.h,
-                    ErrorKind::ConvergenceFailures,
-                    -5,
+                    Cause::ConvergenceFailures,
                     "stability check",
                 )?;
             }
