@@ -366,6 +366,7 @@ impl Core {
     /// Counts one more attempt at the current step (`attempts` in this step): an error once
     /// they exceed MAX_ATTEMPTS, a guard against failures that each stay within their own
     /// limit.
+    #[inline]
     pub fn count_attempt(&self, attempts: &mut u32) -> Result<(), SolverError> {
         *attempts += 1;
         if *attempts > MAX_ATTEMPTS {
