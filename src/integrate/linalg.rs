@@ -37,23 +37,31 @@ pub(super) fn lu_real(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     with_small_n!(n, lu_real_n(&mut a[..n * n], &mut ip[..n], n))
 }
 
+/// The pivot row of column k in partial pivoting: the first row i in k..n of the largest
+/// `magnitude(i)`; `None` if that is zero or not finite (the matrix is singular, or holds a
+/// NaN or an infinity). Shared by the real and the complex LU.
+#[inline(always)]
+pub(super) fn pivot(k: usize, n: usize, magnitude: impl Fn(usize) -> f64) -> Option<usize> {
+    let mut p = k;
+    let mut big = magnitude(k);
+    for i in k + 1..n {
+        let v = magnitude(i);
+        if v > big {
+            big = v;
+            p = i;
+        }
+    }
+    (big != 0.0 && big.is_finite()).then_some(p)
+}
+
 #[inline(always)]
 fn lu_real_n(a: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     for k in 0..n {
         let col = k * n;
-        let mut p = k;
-        let mut big = a[col + k].abs();
-        for i in k + 1..n {
-            let v = a[col + i].abs();
-            if v > big {
-                big = v;
-                p = i;
-            }
-        }
-        ip[k] = p;
-        if big == 0.0 || !big.is_finite() {
+        let Some(p) = pivot(k, n, |i| a[col + i].abs()) else {
             return false;
-        }
+        };
+        ip[k] = p;
         if p != k {
             for j in k..n {
                 a.swap(j * n + k, j * n + p);

@@ -34,11 +34,12 @@
 // RADAU5's coefficients are kept with the digits it publishes.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, rms, solve_real};
-use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
-use super::{
-    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+use super::linalg::{lu_real, pivot, rms, solve_real};
+use super::stepper::{
+    self, all_finite, Cause, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
+    UROUND,
 };
+use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 
 const NAME: &str = "radau5";
 /// Safety factor of the step-size control.
@@ -51,14 +52,9 @@ const QUOT2: f64 = 1.2;
 /// 1/FACL ≤ h_new/h ≤ 1/FACR.
 const FACL: f64 = 5.0;
 const FACR: f64 = 0.125;
-/// Consecutive singular iteration matrices before giving up (RADAU5: 5).
-const MAX_SINGULAR: u32 = 5;
 /// Defaults for options RADAU5 does not bound (it relies on the step underflow test).
 const DEFAULT_MAX_CONV_FAILS: u32 = 10;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_NIT: u32 = 7;
-/// Failed attempts of any kind in one step before giving up (a guard; RADAU5 has none).
-const MAX_ATTEMPTS: u32 = 500;
 
 // The transformation T (A⁻¹ = T Λ T⁻¹) and its inverse, from RADAU5. T32 = 1, T33 = 0.
 const T11: f64 = 9.123_239_487_089_294_279_2e-2;
@@ -279,19 +275,10 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
         let ((left_r, right_r), (left_i, right_i)) =
             (ar.split_at_mut((k + 1) * n), ai.split_at_mut((k + 1) * n));
         let (cr, ci) = (&mut left_r[k * n..], &mut left_i[k * n..]);
-        let mut p = k;
-        let mut big = cr[k].abs() + ci[k].abs();
-        for i in k + 1..n {
-            let v = cr[i].abs() + ci[i].abs();
-            if v > big {
-                big = v;
-                p = i;
-            }
-        }
-        ip[k] = p;
-        if big == 0.0 || !big.is_finite() {
+        let Some(p) = pivot(k, n, |i| cr[i].abs() + ci[i].abs()) else {
             return false;
-        }
+        };
+        ip[k] = p;
         if p != k {
             cr.swap(k, p);
             ci.swap(k, p);
@@ -628,14 +615,8 @@ impl<S: OdeSystem> Radau5<S> {
     }
 
     /// [`Core::reduce`], then a new Jacobian or LU decomposition before the retry.
-    fn reduce(
-        &mut self,
-        hnew: f64,
-        kind: ErrorKind,
-        flag: i32,
-        why: &str,
-    ) -> Result<(), SolverError> {
-        self.core.reduce(hnew, kind, flag, why)?;
+    fn reduce(&mut self, hnew: f64, cause: Cause, why: &str) -> Result<(), SolverError> {
+        self.core.reduce(hnew, cause, why)?;
         self.action = if self.caljac { Action::Decompose } else { Action::Jacobian };
         Ok(())
     }
@@ -648,21 +629,14 @@ impl<S: OdeSystem> Radau5<S> {
         let mut attempts = 0u32;
         self.core.drop_passed_stop_time();
         loop {
-            attempts += 1;
-            if attempts > MAX_ATTEMPTS {
-                let message =
-                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
-                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
-            }
+            self.core.count_attempt(&mut attempts)?;
             let (planned, last) = self.core.prepare_attempt(self.fixed_h)?;
             // Jacobian and LU factors.
             if self.action == Action::Jacobian {
                 if !self.compute_jacobian() {
-                    return Err(self.core.error(
-                        ErrorKind::RhsFailure,
-                        -6,
-                        "the Jacobian is not finite".into(),
-                    ));
+                    return Err(self
+                        .core
+                        .error(Cause::RhsFailure, "the Jacobian is not finite".into()));
                 }
                 self.caljac = true;
                 self.jacobian_age = 0;
@@ -676,12 +650,11 @@ impl<S: OdeSystem> Radau5<S> {
                             "iteration matrix singular {singular} times (h = {:e})",
                             self.core.h
                         );
-                        return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
+                        return Err(self.core.error(Cause::LinearSolver, message));
                     }
                     self.reduce(
                         0.5 * self.core.h,
-                        ErrorKind::LinearSolver,
-                        -4,
+                        Cause::LinearSolver,
                         "singular iteration matrix",
                     )?;
                     continue;
@@ -700,14 +673,9 @@ impl<S: OdeSystem> Radau5<S> {
                             "Newton failed {conv_fails} times in one step (h = {:e})",
                             self.core.h
                         );
-                        return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
+                        return Err(self.core.error(Cause::ConvergenceFailures, message));
                     }
-                    self.reduce(
-                        0.5 * self.core.h,
-                        ErrorKind::ConvergenceFailures,
-                        -5,
-                        "Newton failure",
-                    )?;
+                    self.reduce(0.5 * self.core.h, Cause::ConvergenceFailures, "Newton failure")?;
                     continue;
                 }
                 Newton::Slow(factor) => {
@@ -715,8 +683,7 @@ impl<S: OdeSystem> Radau5<S> {
                     self.core.stats.step_solve_fails += 1;
                     self.reduce(
                         factor * self.core.h,
-                        ErrorKind::ConvergenceFailures,
-                        -5,
+                        Cause::ConvergenceFailures,
                         "slow Newton convergence",
                     )?;
                     continue;
@@ -767,7 +734,7 @@ impl<S: OdeSystem> Radau5<S> {
             // Rejected by the error test.
             self.core.rejected(&mut rejections, self.max_err_test_fails, err)?;
             let hnew = if self.core.have_step { hnew } else { 0.1 * self.core.h };
-            self.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+            self.reduce(hnew, Cause::ErrorTestFailures, "error-test failure")?;
         }
     }
 

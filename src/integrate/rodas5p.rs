@@ -50,10 +50,11 @@
 #![allow(clippy::excessive_precision)]
 
 use super::linalg::{inverse3, lu_real, multiply3, rms, solve_real, solve_refined, with_small_n};
-use super::stepper::{self, all_finite, Core, StepControl, Stepper, UROUND};
-use super::{
-    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+use super::stepper::{
+    self, all_finite, Cause, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
+    UROUND,
 };
+use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 
 const NAME: &str = "rodas5p";
 /// Safety factor of the step-size control.
@@ -63,9 +64,6 @@ const FAC1: f64 = 5.0;
 const FAC2: f64 = 1.0 / 6.0;
 /// The error estimate is O(h⁵).
 const EXPONENT: f64 = 0.2;
-/// Consecutive singular matrices W within one step before giving up.
-const MAX_SINGULAR: u32 = 5;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 
 /// Number of stages.
 const STAGES: usize = 8;
@@ -477,11 +475,9 @@ impl<S: OdeSystem> Rodas5p<S> {
             // Jacobian (once per point) and LU factors (once per step size).
             if !self.jac_current {
                 if !self.compute_jacobian() {
-                    return Err(self.core.error(
-                        ErrorKind::RhsFailure,
-                        -6,
-                        "the Jacobian or ∂f/∂t is not finite".into(),
-                    ));
+                    return Err(self
+                        .core
+                        .error(Cause::RhsFailure, "the Jacobian or ∂f/∂t is not finite".into()));
                 }
                 self.jac_current = true;
                 self.lu_h = f64::NAN;
@@ -493,14 +489,9 @@ impl<S: OdeSystem> Rodas5p<S> {
                         "matrix I/(hγ) − J singular {singular} times (h = {:e})",
                         self.core.h
                     );
-                    return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
+                    return Err(self.core.error(Cause::LinearSolver, message));
                 }
-                self.core.reduce(
-                    0.5 * self.core.h,
-                    ErrorKind::LinearSolver,
-                    -4,
-                    "singular matrix",
-                )?;
+                self.core.reduce(0.5 * self.core.h, Cause::LinearSolver, "singular matrix")?;
                 continue;
             }
             self.core.stats.step_attempts += 1;
@@ -545,7 +536,7 @@ impl<S: OdeSystem> Rodas5p<S> {
             } else {
                 hnew
             };
-            self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+            self.core.reduce(hnew, Cause::ErrorTestFailures, "error-test failure")?;
         }
     }
 

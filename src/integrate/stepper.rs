@@ -19,8 +19,54 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 pub(super) const UROUND: f64 = 1e-16;
 /// Consecutive non-finite right-hand sides in one step before giving up.
 const MAX_NONFINITE: u32 = 10;
-/// The return code of an [`ErrorKind::CallbackPanic`] error.
-const PANIC_FLAG: i32 = -8;
+/// Consecutive singular iteration matrices in one step before giving up (RADAU5: 5).
+pub(super) const MAX_SINGULAR: u32 = 5;
+/// The default of [`Options::max_err_test_fails`] (RADAU5, RODAS and SEULEX do not bound the
+/// error-test failures; they rely on the step underflow test).
+pub(super) const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
+/// Failed attempts of any kind in one step before giving up (a guard; the Fortran codes have
+/// none).
+const MAX_ATTEMPTS: u32 = 500;
+
+/// The errors of the homemade methods, each an [`ErrorKind`] with its flag
+/// ([`SolverError::flag`], RADAU5's IDID where it has one) as discriminant: the one table
+/// behind the error flags the methods document.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Cause {
+    InvalidInput = -1,
+    /// `max_steps` reached.
+    TooMuchWork = -2,
+    StepUnderflow = -3,
+    /// A singular iteration matrix.
+    LinearSolver = -4,
+    /// Newton, or a stability check, failed.
+    ConvergenceFailures = -5,
+    /// A non-finite right-hand side or Jacobian.
+    RhsFailure = -6,
+    ErrorTestFailures = -7,
+    CallbackPanic = -8,
+}
+
+impl Cause {
+    /// The error's kind.
+    fn kind(self) -> ErrorKind {
+        match self {
+            Self::InvalidInput => ErrorKind::InvalidInput,
+            Self::TooMuchWork => ErrorKind::TooMuchWork,
+            Self::StepUnderflow => ErrorKind::StepUnderflow,
+            Self::LinearSolver => ErrorKind::LinearSolver,
+            Self::ConvergenceFailures => ErrorKind::ConvergenceFailures,
+            Self::RhsFailure => ErrorKind::RhsFailure,
+            Self::ErrorTestFailures => ErrorKind::ErrorTestFailures,
+            Self::CallbackPanic => ErrorKind::CallbackPanic,
+        }
+    }
+
+    /// The error's flag.
+    fn flag(self) -> i32 {
+        self as i32
+    }
+}
 
 /// An absolute error scale never asks for less than this many units of round-off of the
 /// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
@@ -150,7 +196,7 @@ impl Core {
             kind: ErrorKind::InvalidInput,
             t: t0,
             state: y0.to_vec(),
-            flag: -1,
+            flag: Cause::InvalidInput.flag(),
             message,
         };
         if n == 0 {
@@ -195,7 +241,8 @@ impl Core {
     }
 
     /// An error at the internal point (the last accepted step's end).
-    pub fn error(&self, kind: ErrorKind, flag: i32, message: String) -> SolverError {
+    pub fn error(&self, cause: Cause, message: String) -> SolverError {
+        let (kind, flag) = (cause.kind(), cause.flag());
         SolverError { solver: self.name, kind, t: self.x, state: self.y.clone(), flag, message }
     }
 
@@ -218,7 +265,7 @@ impl Core {
             kind: ErrorKind::InvalidInput,
             t: self.t_out,
             state: self.y_out.clone(),
-            flag: -1,
+            flag: Cause::InvalidInput.flag(),
             message,
         }
     }
@@ -309,9 +356,22 @@ impl Core {
             let message =
                 format!("step size h = {:e} too small at t = {:e} (t + h = t)", self.h, self.x);
             if self.fail_on_step_underflow || self.x + self.h == self.x {
-                return Err(self.error(ErrorKind::StepUnderflow, -3, message));
+                return Err(self.error(Cause::StepUnderflow, message));
             }
             self.stats.step_underflow_warnings += 1;
+        }
+        Ok(())
+    }
+
+    /// Counts one more attempt at the current step (`attempts` in this step): an error once
+    /// they exceed MAX_ATTEMPTS, a guard against failures that each stay within their own
+    /// limit.
+    #[inline]
+    pub fn count_attempt(&self, attempts: &mut u32) -> Result<(), SolverError> {
+        *attempts += 1;
+        if *attempts > MAX_ATTEMPTS {
+            let message = format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.h);
+            return Err(self.error(Cause::ConvergenceFailures, message));
         }
         Ok(())
     }
@@ -331,25 +391,19 @@ impl Core {
                 "{rejections} error-test failures in one step (h = {:e}, err = {err:e})",
                 self.h
             );
-            return Err(self.error(ErrorKind::ErrorTestFailures, -7, message));
+            return Err(self.error(Cause::ErrorTestFailures, message));
         }
         Ok(())
     }
 
-    /// Sets a reduced step size after a failure; an error of `kind` if h is already at
-    /// `min_step`.
-    pub fn reduce(
-        &mut self,
-        hnew: f64,
-        kind: ErrorKind,
-        flag: i32,
-        why: &str,
-    ) -> Result<(), SolverError> {
+    /// Sets a reduced step size after a failure (`why`); an error of `cause` if h is already
+    /// at `min_step`.
+    pub fn reduce(&mut self, hnew: f64, cause: Cause, why: &str) -> Result<(), SolverError> {
         let mut hnew = hnew;
         if hnew.abs() < self.hmin {
             if self.h.abs() <= self.hmin {
                 let message = format!("{why} with |h| = min_step = {:e}", self.hmin);
-                return Err(self.error(kind, flag, message));
+                return Err(self.error(cause, message));
             }
             hnew = self.posneg * self.hmin;
         }
@@ -365,9 +419,9 @@ impl Core {
         if *count >= MAX_NONFINITE || fixed {
             let message =
                 format!("the right-hand side returned non-finite values {count} times in one step (h = {:e})", self.h);
-            return Err(self.error(ErrorKind::RhsFailure, -6, message));
+            return Err(self.error(Cause::RhsFailure, message));
         }
-        self.reduce(0.5 * self.h, ErrorKind::RhsFailure, -6, "non-finite right-hand side")
+        self.reduce(0.5 * self.h, Cause::RhsFailure, "non-finite right-hand side")
     }
 
     /// The common part of `reinit`: checks (t0, y0) and restarts the point, the returned
@@ -608,8 +662,7 @@ fn start<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<(), SolverError
     if !m.ensure_f0() {
         let c = m.core();
         return Err(c.error(
-            ErrorKind::RhsFailure,
-            -6,
+            Cause::RhsFailure,
             "the right-hand side at the initial point is not finite".into(),
         ));
     }
@@ -691,7 +744,7 @@ fn advance_inner<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<Step, S
         if taken >= c.max_steps {
             let message =
                 format!("{} steps taken before tout = {tout:e} (raise max_steps)", c.max_steps);
-            return Err(c.error(ErrorKind::TooMuchWork, -2, message));
+            return Err(c.error(Cause::TooMuchWork, message));
         }
         stopped = m.step()?;
         taken += 1;
@@ -716,9 +769,7 @@ fn guarded<M: Stepper, T>(
 ) -> Result<T, SolverError> {
     match catch_unwind(AssertUnwindSafe(|| f(m))) {
         Ok(result) => result,
-        Err(payload) => {
-            Err(m.core().error(ErrorKind::CallbackPanic, PANIC_FLAG, panic_message(&*payload)))
-        }
+        Err(payload) => Err(m.core().error(Cause::CallbackPanic, panic_message(&*payload))),
     }
 }
 
@@ -782,11 +833,9 @@ pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], Sol
             c.dense.copy_from_slice(&c.y);
         } else {
             if !guarded(m, |m| Ok(m.ensure_f0()))? {
-                return Err(m.core().error(
-                    ErrorKind::RhsFailure,
-                    -6,
-                    "the right-hand side is not finite".into(),
-                ));
+                return Err(m
+                    .core()
+                    .error(Cause::RhsFailure, "the right-hand side is not finite".into()));
             }
             let c = m.core_mut();
             c.dense.copy_from_slice(&c.f0);

@@ -3,72 +3,71 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
+use super::solver::{check_dimension, counter, Api, Creation, Solver, StatGetters};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
-/// One name per ARKStep operation. SUNDIALS 7 deprecates the `ARKStep*` spellings of the
-/// operations every ARKODE stepper shares in favour of the generic `ARKode*` ones (same
-/// signatures); 6.x has only the former.
-#[cfg(sundials7)]
-mod ark {
-    pub(super) use super::ffi::{
-        ARKodeEvolve as Evolve, ARKodeFree as Free, ARKodeGetActualInitStep as GetActualInitStep,
-        ARKodeGetCurrentStep as GetCurrentStep, ARKodeGetDky as GetDky,
-        ARKodeGetLastStep as GetLastStep, ARKodeGetNumErrTestFails as GetNumErrTestFails,
-        ARKodeGetNumGEvals as GetNumGEvals, ARKodeGetNumJacEvals as GetNumJacEvals,
-        ARKodeGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKodeGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKodeGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKodeGetNumNonlinSolvIters as GetNumNonlinSolvIters,
-        ARKodeGetNumStepAttempts as GetNumStepAttempts,
-        ARKodeGetNumStepSolveFails as GetNumStepSolveFails, ARKodeGetNumSteps as GetNumSteps,
-        ARKodeGetRootInfo as GetRootInfo, ARKodeReset as Reset, ARKodeRootInit as RootInit,
-        ARKodeSStolerances as SStolerances, ARKodeSVtolerances as SVtolerances,
-        ARKodeSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKodeSetFixedStepBounds as SetFixedStepBounds, ARKodeSetInitStep as SetInitStep,
-        ARKodeSetInterpolantType as SetInterpolantType,
-        ARKodeSetJacEvalFrequency as SetJacEvalFrequency, ARKodeSetJacFn as SetJacFn,
-        ARKodeSetLSetupFrequency as SetLSetupFrequency, ARKodeSetLinearSolver as SetLinearSolver,
-        ARKodeSetMaxConvFails as SetMaxConvFails, ARKodeSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKodeSetMaxHnilWarns as SetMaxHnilWarns, ARKodeSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKodeSetMaxNumSteps as SetMaxNumSteps, ARKodeSetMaxStep as SetMaxStep,
-        ARKodeSetMinStep as SetMinStep, ARKodeSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKodeSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKodeSetPredictorMethod as SetPredictorMethod, ARKodeSetRootDirection as SetRootDirection,
-        ARKodeSetStopTime as SetStopTime, ARKodeSetUserData as SetUserData,
-        ARKodeWFtolerances as WFtolerances,
+/// Declares `mod ark` with one name per ARKStep operation, from rows
+/// `Name: SUNDIALS 7 spelling, SUNDIALS 6 spelling;`. SUNDIALS 7 deprecates the `ARKStep*`
+/// spellings of the operations every ARKODE stepper shares in favour of the generic `ARKode*`
+/// ones (same signatures); 6.x has only the former.
+macro_rules! ark_names {
+    ($($name:ident: $v7:ident, $v6:ident;)*) => {
+        #[cfg(sundials7)]
+        mod ark {
+            pub(super) use super::ffi::{$($v7 as $name),*};
+        }
+        #[cfg(not(sundials7))]
+        mod ark {
+            pub(super) use super::ffi::{$($v6 as $name),*};
+        }
     };
 }
-#[cfg(not(sundials7))]
-mod ark {
-    pub(super) use super::ffi::{
-        ARKStepEvolve as Evolve, ARKStepFree as Free,
-        ARKStepGetActualInitStep as GetActualInitStep, ARKStepGetCurrentStep as GetCurrentStep,
-        ARKStepGetDky as GetDky, ARKStepGetLastStep as GetLastStep,
-        ARKStepGetNumErrTestFails as GetNumErrTestFails, ARKStepGetNumGEvals as GetNumGEvals,
-        ARKStepGetNumJacEvals as GetNumJacEvals, ARKStepGetNumLinRhsEvals as GetNumLinRhsEvals,
-        ARKStepGetNumLinSolvSetups as GetNumLinSolvSetups,
-        ARKStepGetNumNonlinSolvConvFails as GetNumNonlinSolvConvFails,
-        ARKStepGetNumNonlinSolvIters as GetNumNonlinSolvIters,
-        ARKStepGetNumStepAttempts as GetNumStepAttempts,
-        ARKStepGetNumStepSolveFails as GetNumStepSolveFails, ARKStepGetNumSteps as GetNumSteps,
-        ARKStepGetRootInfo as GetRootInfo, ARKStepReset as Reset, ARKStepRootInit as RootInit,
-        ARKStepSStolerances as SStolerances, ARKStepSVtolerances as SVtolerances,
-        ARKStepSetDeduceImplicitRhs as SetDeduceImplicitRhs,
-        ARKStepSetFixedStepBounds as SetFixedStepBounds, ARKStepSetInitStep as SetInitStep,
-        ARKStepSetInterpolantType as SetInterpolantType,
-        ARKStepSetJacEvalFrequency as SetJacEvalFrequency, ARKStepSetJacFn as SetJacFn,
-        ARKStepSetLSetupFrequency as SetLSetupFrequency, ARKStepSetLinearSolver as SetLinearSolver,
-        ARKStepSetMaxConvFails as SetMaxConvFails, ARKStepSetMaxErrTestFails as SetMaxErrTestFails,
-        ARKStepSetMaxHnilWarns as SetMaxHnilWarns, ARKStepSetMaxNonlinIters as SetMaxNonlinIters,
-        ARKStepSetMaxNumSteps as SetMaxNumSteps, ARKStepSetMaxStep as SetMaxStep,
-        ARKStepSetMinStep as SetMinStep, ARKStepSetNonlinConvCoef as SetNonlinConvCoef,
-        ARKStepSetPostprocessStepFn as SetPostprocessStepFn,
-        ARKStepSetPredictorMethod as SetPredictorMethod,
-        ARKStepSetRootDirection as SetRootDirection, ARKStepSetStopTime as SetStopTime,
-        ARKStepSetUserData as SetUserData, ARKStepWFtolerances as WFtolerances,
-    };
+
+ark_names! {
+    Evolve: ARKodeEvolve, ARKStepEvolve;
+    Free: ARKodeFree, ARKStepFree;
+    GetActualInitStep: ARKodeGetActualInitStep, ARKStepGetActualInitStep;
+    GetCurrentStep: ARKodeGetCurrentStep, ARKStepGetCurrentStep;
+    GetDky: ARKodeGetDky, ARKStepGetDky;
+    GetLastStep: ARKodeGetLastStep, ARKStepGetLastStep;
+    GetNumErrTestFails: ARKodeGetNumErrTestFails, ARKStepGetNumErrTestFails;
+    GetNumGEvals: ARKodeGetNumGEvals, ARKStepGetNumGEvals;
+    GetNumJacEvals: ARKodeGetNumJacEvals, ARKStepGetNumJacEvals;
+    GetNumLinRhsEvals: ARKodeGetNumLinRhsEvals, ARKStepGetNumLinRhsEvals;
+    GetNumLinSolvSetups: ARKodeGetNumLinSolvSetups, ARKStepGetNumLinSolvSetups;
+    GetNumNonlinSolvConvFails: ARKodeGetNumNonlinSolvConvFails, ARKStepGetNumNonlinSolvConvFails;
+    GetNumNonlinSolvIters: ARKodeGetNumNonlinSolvIters, ARKStepGetNumNonlinSolvIters;
+    GetNumStepAttempts: ARKodeGetNumStepAttempts, ARKStepGetNumStepAttempts;
+    GetNumStepSolveFails: ARKodeGetNumStepSolveFails, ARKStepGetNumStepSolveFails;
+    GetNumSteps: ARKodeGetNumSteps, ARKStepGetNumSteps;
+    GetRootInfo: ARKodeGetRootInfo, ARKStepGetRootInfo;
+    Reset: ARKodeReset, ARKStepReset;
+    RootInit: ARKodeRootInit, ARKStepRootInit;
+    SStolerances: ARKodeSStolerances, ARKStepSStolerances;
+    SVtolerances: ARKodeSVtolerances, ARKStepSVtolerances;
+    SetDeduceImplicitRhs: ARKodeSetDeduceImplicitRhs, ARKStepSetDeduceImplicitRhs;
+    SetFixedStepBounds: ARKodeSetFixedStepBounds, ARKStepSetFixedStepBounds;
+    SetInitStep: ARKodeSetInitStep, ARKStepSetInitStep;
+    SetInterpolantType: ARKodeSetInterpolantType, ARKStepSetInterpolantType;
+    SetJacEvalFrequency: ARKodeSetJacEvalFrequency, ARKStepSetJacEvalFrequency;
+    SetJacFn: ARKodeSetJacFn, ARKStepSetJacFn;
+    SetLSetupFrequency: ARKodeSetLSetupFrequency, ARKStepSetLSetupFrequency;
+    SetLinearSolver: ARKodeSetLinearSolver, ARKStepSetLinearSolver;
+    SetMaxConvFails: ARKodeSetMaxConvFails, ARKStepSetMaxConvFails;
+    SetMaxErrTestFails: ARKodeSetMaxErrTestFails, ARKStepSetMaxErrTestFails;
+    SetMaxHnilWarns: ARKodeSetMaxHnilWarns, ARKStepSetMaxHnilWarns;
+    SetMaxNonlinIters: ARKodeSetMaxNonlinIters, ARKStepSetMaxNonlinIters;
+    SetMaxNumSteps: ARKodeSetMaxNumSteps, ARKStepSetMaxNumSteps;
+    SetMaxStep: ARKodeSetMaxStep, ARKStepSetMaxStep;
+    SetMinStep: ARKodeSetMinStep, ARKStepSetMinStep;
+    SetNonlinConvCoef: ARKodeSetNonlinConvCoef, ARKStepSetNonlinConvCoef;
+    SetPostprocessStepFn: ARKodeSetPostprocessStepFn, ARKStepSetPostprocessStepFn;
+    SetPredictorMethod: ARKodeSetPredictorMethod, ARKStepSetPredictorMethod;
+    SetRootDirection: ARKodeSetRootDirection, ARKStepSetRootDirection;
+    SetStopTime: ARKodeSetStopTime, ARKStepSetStopTime;
+    SetUserData: ARKodeSetUserData, ARKStepSetUserData;
+    WFtolerances: ARKodeWFtolerances, ARKStepWFtolerances;
 }
 
 /// Implicit (DIRK) Butcher tables of the linked ARKODE, by name without the `ARKODE_` prefix.
@@ -247,29 +246,10 @@ fn explain(flag: c_int) -> Option<&'static str> {
         .then_some("ARKStep tries no smaller step when f fails at an explicit stage or after an implicit stage's solve")
 }
 
-/// Reads ARKStep's counters. Getters that do not apply (no root functions, no linear solver
-/// for ERK) are not asked, and leave their counter at zero: ARKODE answers them through the
-/// error handler ("arkode_mem = NULL illegal." for the root count), which cost an ERK run 30 %
-/// of its time when the counters were read after every step, and left that message as the
-/// solver's last error.
-unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
-    let mut s = Stats::default();
+/// [`Api::read_own_stats`] for ARKStep: attempts, f evaluations and the method's order.
+unsafe fn read_own_stats(m: *mut c_void, s: &mut Stats) {
     // SAFETY: `m` is live ARKStep memory (caller's guarantee), and every getter is ARKStep's.
-    let count = |get: Getter| unsafe { counter(m, get) };
-    s.steps = count(ark::GetNumSteps);
-    s.step_attempts = count(ark::GetNumStepAttempts);
-    s.lin_setups = count(ark::GetNumLinSolvSetups);
-    s.err_test_fails = count(ark::GetNumErrTestFails);
-    s.step_solve_fails = count(ark::GetNumStepSolveFails);
-    s.nonlin_iters = count(ark::GetNumNonlinSolvIters);
-    s.nonlin_conv_fails = count(ark::GetNumNonlinSolvConvFails);
-    if attached.linear_solver {
-        s.jac_evals = count(ark::GetNumJacEvals);
-        s.rhs_evals_jacobian = count(ark::GetNumLinRhsEvals);
-    }
-    if attached.roots {
-        s.root_evals = count(ark::GetNumGEvals);
-    }
+    s.step_attempts = unsafe { counter(m, ark::GetNumStepAttempts) };
     let (mut nfe, mut nfi): (c_long, c_long) = (0, 0);
     let (mut implicit, mut explicit): (ffi::ARKodeButcherTable, ffi::ARKodeButcherTable) =
         (std::ptr::null_mut(), std::ptr::null_mut());
@@ -278,9 +258,6 @@ unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     // read here, while the memory is alive.
     unsafe {
         ffi::ARKStepGetNumRhsEvals(m, &mut nfe, &mut nfi);
-        ark::GetLastStep(m, &mut s.last_step);
-        ark::GetCurrentStep(m, &mut s.current_step);
-        ark::GetActualInitStep(m, &mut s.initial_step);
         ffi::ARKStepGetCurrentButcherTables(m, &mut implicit, &mut explicit);
         let table = if implicit.is_null() { explicit } else { implicit };
         if !table.is_null() {
@@ -289,7 +266,6 @@ unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
     }
     s.rhs_evals = nfi.max(0) as u64;
     s.rhs_evals_explicit = nfe.max(0) as u64;
-    s
 }
 
 /// [`Api::set_jacobian_max_age`] for ARKStep.
@@ -336,26 +312,25 @@ static ARKSTEP: Api = Api {
     set_jacobian_max_age,
     reinit: ark::Reset,
     reinit_resets_counters: false,
-    get_num_steps: ark::GetNumSteps,
-    read_stats,
+    stats: StatGetters {
+        steps: ark::GetNumSteps,
+        lin_setups: ark::GetNumLinSolvSetups,
+        err_test_fails: ark::GetNumErrTestFails,
+        step_solve_fails: ark::GetNumStepSolveFails,
+        nonlin_iters: ark::GetNumNonlinSolvIters,
+        nonlin_conv_fails: ark::GetNumNonlinSolvConvFails,
+        jac_evals: ark::GetNumJacEvals,
+        lin_rhs_evals: ark::GetNumLinRhsEvals,
+        root_evals: ark::GetNumGEvals,
+        last_step: ark::GetLastStep,
+        current_step: ark::GetCurrentStep,
+        initial_step: ark::GetActualInitStep,
+    },
+    read_own_stats,
     classify,
     explain,
     dense_order_is_last_order: false,
 };
-
-fn dimension_error(name: &'static str, dim: usize, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-    if y0.len() == dim {
-        return Ok(());
-    }
-    Err(SolverError {
-        solver: name,
-        kind: ErrorKind::InvalidInput,
-        t: t0,
-        state: y0.to_vec(),
-        flag: 0,
-        message: format!("y0 has {} components; the system has {dim}", y0.len()),
-    })
-}
 
 /// An explicit method has no Newton iteration: its options are an error naming the first one
 /// set (SUNDIALS' own answer is a raw "no nonlinear solver" message).
@@ -464,7 +439,7 @@ impl<S: OdeSystem> Solver<S> {
     ) -> Result<Self, SolverError> {
         let implicit = matches!(method, ArkMethod::Dirk(_));
         let name = if implicit { "arkode-dirk" } else { "arkode-erk" };
-        dimension_error(name, system.dim(), t0, y0)?;
+        check_dimension(name, system.dim(), t0, y0)?;
         if !implicit {
             no_newton(name, options, t0, y0)?;
         }
@@ -513,7 +488,7 @@ impl<S: ImexSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        dimension_error("arkode-imex", system.dim(), t0, y0)?;
+        check_dimension("arkode-imex", system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn = if system.has_implicit_jacobian() {
             Some(callbacks::implicit_jacobian::<S>)
         } else {

@@ -321,36 +321,40 @@ unsafe fn jacobian_code<S>(
     }
 }
 
-/// Dense ∂f/∂y (CVLsJacFn / ARKLsJacFn signature).
-pub(crate) unsafe extern "C" fn jacobian<S: OdeSystem>(
-    t: f64,
-    y: ffi::N_Vector,
-    _fy: ffi::N_Vector,
-    jac: ffi::SUNMatrix,
-    data: *mut c_void,
-    _tmp1: ffi::N_Vector,
-    _tmp2: ffi::N_Vector,
-    _tmp3: ffi::N_Vector,
-) -> c_int {
-    // SAFETY: SUNDIALS passes the registered user data, the current state and the dense
-    // matrix attached at construction.
-    unsafe { jacobian_code::<S>(y, jac, data, |s, y, m| s.jacobian(t, y, m)) }
+/// Defines `$name`, a dense-Jacobian trampoline (CVLsJacFn / ARKLsJacFn signature) that fills
+/// the matrix through the system's method `$fill`.
+macro_rules! jacobian_trampoline {
+    ($(#[$doc:meta])* $name:ident, $bound:ident, $fill:ident) => {
+        $(#[$doc])*
+        pub(crate) unsafe extern "C" fn $name<S: $bound>(
+            t: f64,
+            y: ffi::N_Vector,
+            _fy: ffi::N_Vector,
+            jac: ffi::SUNMatrix,
+            data: *mut c_void,
+            _tmp1: ffi::N_Vector,
+            _tmp2: ffi::N_Vector,
+            _tmp3: ffi::N_Vector,
+        ) -> c_int {
+            // SAFETY: SUNDIALS passes the registered user data, the current state and the
+            // dense matrix attached at construction.
+            unsafe { jacobian_code::<S>(y, jac, data, |s, y, m| s.$fill(t, y, m)) }
+        }
+    };
 }
 
-/// Dense ∂f_I/∂y for ARKStep IMEX.
-pub(crate) unsafe extern "C" fn implicit_jacobian<S: ImexSystem>(
-    t: f64,
-    y: ffi::N_Vector,
-    _fy: ffi::N_Vector,
-    jac: ffi::SUNMatrix,
-    data: *mut c_void,
-    _tmp1: ffi::N_Vector,
-    _tmp2: ffi::N_Vector,
-    _tmp3: ffi::N_Vector,
-) -> c_int {
-    // SAFETY: as in `jacobian`.
-    unsafe { jacobian_code::<S>(y, jac, data, |s, y, m| s.implicit_jacobian(t, y, m)) }
-}
+jacobian_trampoline!(
+    /// Dense ∂f/∂y (CVLsJacFn / ARKLsJacFn signature).
+    jacobian,
+    OdeSystem,
+    jacobian
+);
+jacobian_trampoline!(
+    /// Dense ∂f_I/∂y for ARKStep IMEX.
+    implicit_jacobian,
+    ImexSystem,
+    implicit_jacobian
+);
 
 /// Root functions g(t, y) (CVRootFn / ARKRootFn signature).
 pub(crate) unsafe extern "C" fn roots<S>(

@@ -2,7 +2,7 @@
 
 use super::callbacks;
 use super::ffi;
-use super::solver::{counter, Api, Attached, Creation, Getter, Solver};
+use super::solver::{check_dimension, counter, Api, Creation, Getter, Solver, StatGetters};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
 use std::ffi::{c_int, c_long, c_void};
 
@@ -55,34 +55,16 @@ fn classify(flag: c_int) -> ErrorKind {
     }
 }
 
-/// Reads CVODE's counters. Getters that do not apply (no root functions, no linear solver)
-/// leave their counter at zero.
-unsafe fn read_stats(m: *mut c_void, attached: Attached) -> Stats {
-    let mut s = Stats::default();
+/// [`Api::read_own_stats`] for CVODE: f evaluations, stability-limit order reductions and
+/// the order of the last step; the attempts from the steps and failures.
+unsafe fn read_own_stats(m: *mut c_void, s: &mut Stats) {
     // SAFETY: `m` is live CVODE memory (caller's guarantee), and every getter is CVODE's.
     let count = |get: Getter| unsafe { counter(m, get) };
-    s.steps = count(ffi::CVodeGetNumSteps);
     s.rhs_evals = count(ffi::CVodeGetNumRhsEvals);
-    s.lin_setups = count(ffi::CVodeGetNumLinSolvSetups);
-    s.err_test_fails = count(ffi::CVodeGetNumErrTestFails);
-    s.step_solve_fails = count(ffi::CVodeGetNumStepSolveFails);
-    s.nonlin_iters = count(ffi::CVodeGetNumNonlinSolvIters);
-    s.nonlin_conv_fails = count(ffi::CVodeGetNumNonlinSolvConvFails);
-    s.jac_evals = count(ffi::CVodeGetNumJacEvals);
-    s.rhs_evals_jacobian = count(ffi::CVodeGetNumLinRhsEvals);
-    if attached.roots {
-        s.root_evals = count(ffi::CVodeGetNumGEvals);
-    }
     s.stab_lim_order_reductions = count(ffi::CVodeGetNumStabLimOrderReds);
     s.step_attempts = s.steps + s.err_test_fails + s.step_solve_fails;
-    // SAFETY: as above; each getter writes one value of the pointed-to type.
-    unsafe {
-        ffi::CVodeGetLastStep(m, &mut s.last_step);
-        ffi::CVodeGetCurrentStep(m, &mut s.current_step);
-        ffi::CVodeGetActualInitStep(m, &mut s.initial_step);
-        ffi::CVodeGetLastOrder(m, &mut s.last_order);
-    }
-    s
+    // SAFETY: as above; the getter writes one int.
+    unsafe { ffi::CVodeGetLastOrder(m, &mut s.last_order) };
 }
 
 /// [`Api::set_jacobian_max_age`] for CVODE.
@@ -129,8 +111,21 @@ static CVODE: Api = Api {
     set_jacobian_max_age,
     reinit: ffi::CVodeReInit,
     reinit_resets_counters: true,
-    get_num_steps: ffi::CVodeGetNumSteps,
-    read_stats,
+    stats: StatGetters {
+        steps: ffi::CVodeGetNumSteps,
+        lin_setups: ffi::CVodeGetNumLinSolvSetups,
+        err_test_fails: ffi::CVodeGetNumErrTestFails,
+        step_solve_fails: ffi::CVodeGetNumStepSolveFails,
+        nonlin_iters: ffi::CVodeGetNumNonlinSolvIters,
+        nonlin_conv_fails: ffi::CVodeGetNumNonlinSolvConvFails,
+        jac_evals: ffi::CVodeGetNumJacEvals,
+        lin_rhs_evals: ffi::CVodeGetNumLinRhsEvals,
+        root_evals: ffi::CVodeGetNumGEvals,
+        last_step: ffi::CVodeGetLastStep,
+        current_step: ffi::CVodeGetCurrentStep,
+        initial_step: ffi::CVodeGetActualInitStep,
+    },
+    read_own_stats,
     classify,
     explain: |_| None,
     dense_order_is_last_order: true,
@@ -150,16 +145,7 @@ impl<S: OdeSystem> Solver<S> {
             CvodeMethod::Bdf => ("cvode-bdf", 5),
             CvodeMethod::Adams => ("cvode-adams", 12),
         };
-        if y0.len() != system.dim() {
-            return Err(SolverError {
-                solver: name,
-                kind: ErrorKind::InvalidInput,
-                t: t0,
-                state: y0.to_vec(),
-                flag: 0,
-                message: format!("y0 has {} components; the system has {}", y0.len(), system.dim()),
-            });
-        }
+        check_dimension(name, system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {

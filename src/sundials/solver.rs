@@ -51,12 +51,10 @@ pub(crate) struct Api {
     pub reinit: unsafe extern "C" fn(Mem, f64, ffi::N_Vector) -> c_int,
     /// Whether `reinit` zeroes the counters (then the solver keeps a running total).
     pub reinit_resets_counters: bool,
-    /// Reads the step counter alone (without the other getters' error reports).
-    pub get_num_steps: unsafe extern "C" fn(Mem, *mut c_long) -> c_int,
-    /// Reads the raw counters (linear-solver and root counters only when the solver has a
-    /// linear solver and root functions: ARKODE answers the other getters through the error
-    /// handler).
-    pub read_stats: unsafe fn(Mem, Attached) -> Stats,
+    /// The getters of the counters and step sizes both families have ([`read_shared_stats`]).
+    pub stats: StatGetters,
+    /// Reads the counters of this family alone into the result of [`read_shared_stats`].
+    pub read_own_stats: unsafe fn(Mem, &mut Stats),
     /// Maps a negative return code to an error kind.
     pub classify: fn(c_int) -> ErrorKind,
     /// Why the solver stopped, for return codes whose kind and SUNDIALS message leave it out.
@@ -65,6 +63,27 @@ pub(crate) struct Api {
     /// `GetDky` refuses a higher k itself); otherwise the interpolant's degree does
     /// ([`Creation::max_dense_order`], checked by the wrapper: ARKODE answers zero above it).
     pub dense_order_is_last_order: bool,
+}
+
+/// An [`ErrorKind::InvalidInput`] error unless the initial state `y0` of the method `name`
+/// has the system's dimension `dim`.
+pub(crate) fn check_dimension(
+    name: &'static str,
+    dim: usize,
+    t0: f64,
+    y0: &[f64],
+) -> Result<(), SolverError> {
+    if y0.len() == dim {
+        return Ok(());
+    }
+    Err(SolverError {
+        solver: name,
+        kind: ErrorKind::InvalidInput,
+        t: t0,
+        state: y0.to_vec(),
+        flag: 0,
+        message: format!("y0 has {} components; the system has {dim}", y0.len()),
+    })
 }
 
 /// A SUNDIALS getter of one counter.
@@ -81,7 +100,64 @@ pub(crate) unsafe fn counter(m: Mem, get: Getter) -> u64 {
     v.max(0) as u64
 }
 
-/// What is attached to the solver memory, so that [`Api::read_stats`] asks only the getters
+/// A SUNDIALS getter of one step size.
+pub(crate) type StepGetter = unsafe extern "C" fn(Mem, *mut f64) -> c_int;
+
+/// The getters of the counters and step sizes that CVODE and ARKStep both have, each family
+/// its own spelling ([`read_shared_stats`]).
+pub(crate) struct StatGetters {
+    pub steps: Getter,
+    pub lin_setups: Getter,
+    pub err_test_fails: Getter,
+    pub step_solve_fails: Getter,
+    pub nonlin_iters: Getter,
+    pub nonlin_conv_fails: Getter,
+    /// Asked only with a linear solver attached.
+    pub jac_evals: Getter,
+    /// Asked only with a linear solver attached.
+    pub lin_rhs_evals: Getter,
+    /// Asked only with root functions (now or before).
+    pub root_evals: Getter,
+    pub last_step: StepGetter,
+    pub current_step: StepGetter,
+    pub initial_step: StepGetter,
+}
+
+/// Reads the counters and step sizes of `get`; the other fields stay at zero for
+/// [`Api::read_own_stats`] to fill. Getters that do not apply (no root functions, no linear solver) are not asked, and
+/// leave their counter at zero: ARKODE answers them through the error handler ("arkode_mem =
+/// NULL illegal." for the root count), which cost an ERK run 30 % of its time when the
+/// counters were read after every step, and left that message as the solver's last error.
+///
+/// # Safety
+/// `m` is live memory of the solver the getters belong to.
+unsafe fn read_shared_stats(m: Mem, attached: Attached, get: &StatGetters) -> Stats {
+    let mut s = Stats::default();
+    // SAFETY: `m` is live memory of the getters' solver (caller's guarantee).
+    let count = |getter: Getter| unsafe { counter(m, getter) };
+    s.steps = count(get.steps);
+    s.lin_setups = count(get.lin_setups);
+    s.err_test_fails = count(get.err_test_fails);
+    s.step_solve_fails = count(get.step_solve_fails);
+    s.nonlin_iters = count(get.nonlin_iters);
+    s.nonlin_conv_fails = count(get.nonlin_conv_fails);
+    if attached.linear_solver {
+        s.jac_evals = count(get.jac_evals);
+        s.rhs_evals_jacobian = count(get.lin_rhs_evals);
+    }
+    if attached.roots {
+        s.root_evals = count(get.root_evals);
+    }
+    // SAFETY: as above; each getter writes one value of the pointed-to type.
+    unsafe {
+        (get.last_step)(m, &mut s.last_step);
+        (get.current_step)(m, &mut s.current_step);
+        (get.initial_step)(m, &mut s.initial_step);
+    }
+    s
+}
+
+/// What is attached to the solver memory, so that [`read_shared_stats`] asks only the getters
 /// that apply.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Attached {
@@ -538,10 +614,8 @@ impl<S> Solver<S> {
 
     /// The solver's own step counter (since construction; a restart may reset it).
     fn raw_steps(&self) -> u64 {
-        let mut steps: c_long = 0;
-        // SAFETY: live solver memory; the getter writes one long.
-        unsafe { (self.api.get_num_steps)(self.mem.as_ptr(), &mut steps) };
-        steps.max(0) as u64
+        // SAFETY: live solver memory of the getter's family.
+        unsafe { counter(self.mem.as_ptr(), self.api.stats.steps) }
     }
 
     /// Registers the post-step function that keeps the ends of the accepted steps, through
@@ -761,8 +835,13 @@ impl<S> Solver<S> {
 
     fn raw_stats(&self) -> Stats {
         let attached = Attached { linear_solver: self.linear.is_some(), roots: self.had_roots };
-        // SAFETY: live solver memory; the reader only calls getters.
-        unsafe { (self.api.read_stats)(self.mem.as_ptr(), attached) }
+        let m = self.mem.as_ptr();
+        // SAFETY: live solver memory of the API's family; the readers only call its getters.
+        unsafe {
+            let mut stats = read_shared_stats(m, attached, &self.api.stats);
+            (self.api.read_own_stats)(m, &mut stats);
+            stats
+        }
     }
 
     /// Statistics over the solver's whole life, restarts included.

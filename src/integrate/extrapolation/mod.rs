@@ -100,20 +100,16 @@ mod rounding;
 mod switching;
 mod tableau;
 
-use super::stepper::{self, all_finite, Core, FixedStepError, Stepper};
-use super::{
-    ErrorKind, ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task,
+use super::stepper::{
+    self, all_finite, Cause, Core, FixedStepError, Stepper, DEFAULT_MAX_ERR_TEST_FAILS,
+    MAX_SINGULAR,
 };
+use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
 const NAME: &str = "extrapolation";
-/// Consecutive singular iteration matrices before giving up.
-const MAX_SINGULAR: u32 = 5;
-const DEFAULT_MAX_ERR_TEST_FAILS: u32 = 50;
 const DEFAULT_MAX_ROW_FAILS: u32 = 50;
-/// Failed attempts of any kind in one step before giving up (a guard).
-const MAX_ATTEMPTS: u32 = 500;
 
 /// Failures counted within one step, each against its own limit.
 #[derive(Debug, Default)]
@@ -403,12 +399,7 @@ impl<S: OdeSystem> Extrapolation<S> {
         let mut failures = StepFailures::default();
         self.core.drop_passed_stop_time();
         loop {
-            failures.attempts += 1;
-            if failures.attempts > MAX_ATTEMPTS {
-                let message =
-                    format!("{MAX_ATTEMPTS} failed attempts in one step (h = {:e})", self.core.h);
-                return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
-            }
+            self.core.count_attempt(&mut failures.attempts)?;
             let (planned, last) = self.prepare_attempt()?;
             let first = std::mem::replace(&mut self.first, false);
             let h_used = self.core.h;
@@ -457,18 +448,15 @@ impl<S: OdeSystem> Extrapolation<S> {
             && !self.ensure_f0()
         {
             return Err(self.core.error(
-                ErrorKind::RhsFailure,
-                -6,
+                Cause::RhsFailure,
                 "the right-hand side at the current point is not finite".into(),
             ));
         }
         if need_jacobian {
             if !self.compute_jacobian() {
-                return Err(self.core.error(
-                    ErrorKind::RhsFailure,
-                    -6,
-                    "the Jacobian is not finite".into(),
-                ));
+                return Err(self
+                    .core
+                    .error(Cause::RhsFailure, "the Jacobian is not finite".into()));
             }
             self.caljac = true;
         }
@@ -508,10 +496,10 @@ impl<S: OdeSystem> Extrapolation<S> {
                     "{} error-test failures in one step (dense output, h = {h_used:e})",
                     failures.rejections
                 );
-                return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
+                return Err(self.core.error(Cause::ErrorTestFailures, message));
             }
             let hnew = self.core.posneg * self.hoptde;
-            self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "dense-output error test")?;
+            self.core.reduce(hnew, Cause::ErrorTestFailures, "dense-output error test")?;
             return Ok(false);
         }
         Ok(true)
@@ -559,11 +547,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "{} error-test failures in one step (h = {:e}, err = {:e})",
                 failures.rejections, h_used, self.err
             );
-            return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
+            return Err(self.core.error(Cause::ErrorTestFailures, message));
         }
         let hnew = self.core.h;
         self.core.h = h_used;
-        self.core.reduce(hnew, ErrorKind::ErrorTestFailures, -7, "error-test failure")?;
+        self.core.reduce(hnew, Cause::ErrorTestFailures, "error-test failure")?;
         self.stiffness_test(h_used, false);
         Ok(())
     }
@@ -583,12 +571,12 @@ impl<S: OdeSystem> Extrapolation<S> {
                 self.last_row + 1,
                 self.core.h
             );
-            let (kind, flag) = if failure == Failure::Singular {
-                (ErrorKind::LinearSolver, -4)
+            let cause = if failure == Failure::Singular {
+                Cause::LinearSolver
             } else {
-                (ErrorKind::ConvergenceFailures, -5)
+                Cause::ConvergenceFailures
             };
-            return Err(self.core.error(kind, flag, message));
+            return Err(self.core.error(cause, message));
         }
         let factor = self.control().safe3;
         match failure {
@@ -604,12 +592,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                         "iteration matrix singular {} times (h = {:e})",
                         failures.singular, self.core.h
                     );
-                    return Err(self.core.error(ErrorKind::LinearSolver, -4, message));
+                    return Err(self.core.error(Cause::LinearSolver, message));
                 }
                 self.core.reduce(
                     factor * self.core.h,
-                    ErrorKind::LinearSolver,
-                    -4,
+                    Cause::LinearSolver,
                     "singular iteration matrix",
                 )?;
             }
@@ -621,12 +608,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                         "{} rows stopped by the stability checks in one step (h = {:e})",
                         failures.row_fails, self.core.h
                     );
-                    return Err(self.core.error(ErrorKind::ConvergenceFailures, -5, message));
+                    return Err(self.core.error(Cause::ConvergenceFailures, message));
                 }
                 self.core.reduce(
                     factor * self.core.h,
-                    ErrorKind::ConvergenceFailures,
-                    -5,
+                    Cause::ConvergenceFailures,
                     "stability check",
                 )?;
             }

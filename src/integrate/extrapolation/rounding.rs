@@ -25,8 +25,8 @@
 use super::tableau::Work;
 use super::Extrapolation;
 use crate::integrate::linalg::solve_real;
-use crate::integrate::stepper::UROUND;
-use crate::integrate::{ErrorKind, OdeSystem, SolverError};
+use crate::integrate::stepper::{Cause, UROUND};
+use crate::integrate::{OdeSystem, SolverError};
 
 /// Adds the rounding noise of one substep, the solve of u·|f| with the LU factors of the row,
 /// to `noise` (reset first when `first`); `tmp` is scratch.
@@ -94,11 +94,11 @@ impl<S: OdeSystem> Extrapolation<S> {
                 "{rejections} error-test failures in one step: the rounding errors of f, amplified by the extrapolation, \
                  exceed the absolute tolerance {ratio:.1e} times (h = {h_used:e}, column {kc})"
             );
-            return Err(self.core.error(ErrorKind::ErrorTestFailures, -7, message));
+            return Err(self.core.error(Cause::ErrorTestFailures, message));
         }
         let factor = (0.9 * ratio.powf(-0.5)).max(0.1);
         self.core.h = h_used;
-        self.core.reduce(factor * h_used, ErrorKind::ErrorTestFailures, -7, "rounding test")?;
+        self.core.reduce(factor * h_used, Cause::ErrorTestFailures, "rounding test")?;
         self.k = self.k.min(kc);
         Ok(false)
     }
