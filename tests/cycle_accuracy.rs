@@ -162,7 +162,7 @@ fn far_starts_reach_the_cycle_with_every_stiff_method() {
 ///   last 6 accepted steps, while h grew from 4e-14 to 4e-12).
 /// - From (0, 1e-300, −1e3) the block slides to u = 84.08 and its arrest settles on the slow
 ///   manifold at ln v = −26.27, where R = γ²e^(−ln v)/ξ = 3.2e27 (1/(ε R) = 1.4e-12): the
-///   steps grow from 1.7e-28 to 1.6e-8 within 20 steps, then 20 error-test failures take h
+///   steps grow from 1.7e-28 to 1.6e-8 within 27 steps, then 20 error-test failures take h
 ///   from 8.5e-10 to 1.1e-19.
 /// - From (1e6, 1e-300, 1e3) and (−1e6, 1e-300, 0) the run crosses a stick below ln v = −500
 ///   in closed form and resumes at ln v = −50, R = 6.5e37; there its steps stayed at 1e-17
