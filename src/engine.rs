@@ -23,6 +23,7 @@ use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
 mod cancel;
+mod imex_stick;
 pub use cancel::{Cancel, RunError};
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
@@ -57,12 +58,14 @@ fn integrator_cancellable<S: ImexSystem + 'static>(
     atol: Tolerance,
     cancel: Option<&Cancel>,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    integrator_with_max_step(system, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
+    integrator_with_max_step(system, drr, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
 }
 
 /// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
+/// arkode-imex stops when its steps no longer move u ([`imex_stick::stop_when_frozen`]).
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
+    drr: &Drr,
     max_step: f64,
     spec: &SolverSpec,
     y0: &[f64],
@@ -179,7 +182,13 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
         ..MethodSettings::of(spec, true)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
-    Ok((cancel::cancellable(built.integrator, cancel), built.tables))
+    let integrator = cancel::cancellable(built.integrator, cancel);
+    let integrator = if spec.method == Method::ArkodeImex {
+        imex_stick::stop_when_frozen(integrator, drr)
+    } else {
+        integrator
+    };
+    Ok((integrator, built.tables))
 }
 
 /// The engine's largest step: 1/8 of the linear period 2π/ω_c. Longer steps let BDF damp the
@@ -318,6 +327,7 @@ fn cycle_cancellable(
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
     let (mut integ, tables) = integrator_with_max_step(
         *drr,
+        drr,
         max_step(linear),
         &scene.solver,
         &scene.initial,
