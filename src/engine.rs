@@ -23,6 +23,7 @@ use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
 mod cancel;
+mod guard;
 mod imex_stick;
 pub use cancel::{Cancel, RunError};
 
@@ -62,7 +63,7 @@ fn integrator_cancellable<S: ImexSystem + 'static>(
 }
 
 /// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
-/// arkode-imex stops when its steps no longer move u ([`imex_stick::stop_when_frozen`]).
+/// The run's guards ([`guard::guarded`]) wrap it.
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
     drr: &Drr,
@@ -182,13 +183,8 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
         ..MethodSettings::of(spec, true)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
-    let integrator = cancel::cancellable(built.integrator, cancel);
-    let integrator = if spec.method == Method::ArkodeImex {
-        imex_stick::stop_when_frozen(integrator, drr)
-    } else {
-        integrator
-    };
-    Ok((integrator, built.tables))
+    let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0[0]));
+    Ok((guard::guarded(built.integrator, cancel, frozen), built.tables))
 }
 
 /// The engine's largest step: 1/8 of the linear period 2π/ω_c. Longer steps let BDF damp the

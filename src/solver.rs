@@ -184,6 +184,7 @@ impl Method {
             dirk_newton: false,
             absolute_ln_v: None,
             max_conv_fails: None,
+            stop_when_u_freezes: false,
         };
         // A fresh Jacobian at every step, see `engine`.
         let fresh = EngineSettings { jacobian_max_age: Some(1), ..plain };
@@ -231,7 +232,11 @@ impl Method {
                 dense_order: 3,
                 family: "ARKStep",
                 accepts: Accepts { explicit_table: true, ..dirk },
-                engine: EngineSettings { deduce_implicit_rhs: true, ..fresh },
+                engine: EngineSettings {
+                    deduce_implicit_rhs: true,
+                    stop_when_u_freezes: true,
+                    ..fresh
+                },
                 physical_region: false,
             },
             Method::ArkodeErk => Capabilities {
@@ -372,6 +377,10 @@ pub struct EngineSettings {
     /// [`Options::max_conv_fails`] per step, where the method's default stops a run (CVODE
     /// and ARKStep DIRK with ln v weighed absolutely); see `engine`.
     pub max_conv_fails: Option<i32>,
+    /// Stop a run with an error once 10 000 steps of one size in a row leave u unchanged while
+    /// du/dt ≠ 0 (ARKStep IMEX deep on a stick, where the round-off of its explicit first stage
+    /// holds its steps below u's spacing; see `engine`).
+    pub stop_when_u_freezes: bool,
 }
 
 /// Validated solver settings of a scene.

@@ -1,4 +1,5 @@
-//! arkode-imex stops with an error when its steps no longer move u, deep on a stick.
+//! arkode-imex stops with an error when its steps no longer move u, deep on a stick
+//! ([`crate::solver::EngineSettings::stop_when_u_freezes`]).
 //!
 //! Every ARK pair's implicit table has an explicit first stage, whose derivative f_I(y_n)
 //! ARKStep evaluates afresh at each step (SUNDIALS 6.4.1 always; 7.1.1 reuses the last stage's
@@ -26,7 +27,7 @@
 //! arkode-imex cells, which reach the same outcomes as without it except those that ran into
 //! it (issue #28).
 
-use crate::integrate::{ErrorKind, Integrator, SolverError, Stats, Step, Task};
+use crate::integrate::{ErrorKind, Integrator, SolverError};
 use crate::model::drr::{U, W};
 use crate::model::Drr;
 
@@ -36,26 +37,9 @@ use crate::model::Drr;
 /// 10 000 the check costs the two measured runs 0.07 s and 0.2 s.
 const FROZEN_STEPS: u32 = 10_000;
 
-/// `integrator` (arkode-imex on `drr` or a system derived from it), stopped with an error once
-/// [`FROZEN_STEPS`] consecutive steps of one size leave u unchanged while it must move (v ≠ 1;
-/// see the module documentation).
-pub(super) fn stop_when_frozen<'a>(
-    integrator: Box<dyn Integrator + 'a>,
-    drr: &Drr,
-) -> Box<dyn Integrator + 'a> {
-    let p = drr.params();
-    Box::new(Frozen {
-        last_u: integrator.state()[U],
-        inner: integrator,
-        gamma2_over_xi: p.gamma * p.gamma / p.xi,
-        last_h: f64::NAN,
-        repeats: 0,
-    })
-}
-
-/// An integrator stopped when u freezes (see [`stop_when_frozen`]).
-struct Frozen<'a> {
-    inner: Box<dyn Integrator + 'a>,
+/// The count of steps that left u unchanged; an error once [`FROZEN_STEPS`] consecutive steps
+/// of one size did so while u must move (v ≠ 1; see the module documentation).
+pub(super) struct FrozenU {
     /// γ²/ξ of the model.
     gamma2_over_xi: f64,
     /// u after the last step.
@@ -66,27 +50,38 @@ struct Frozen<'a> {
     repeats: u32,
 }
 
-impl Frozen<'_> {
-    /// Counts the step just taken; the error once [`FROZEN_STEPS`] in a row, of one size, left
-    /// u unchanged while its derivative v − 1 is not zero. The step size is read (the
+impl FrozenU {
+    /// A count for arkode-imex on `drr` (or a system derived from it) starting at u = `u0`.
+    pub(super) fn new(drr: &Drr, u0: f64) -> Self {
+        let p = drr.params();
+        Self { gamma2_over_xi: p.gamma * p.gamma / p.xi, last_u: u0, last_h: f64::NAN, repeats: 0 }
+    }
+
+    /// Forgets the steps counted (the integrator restarts).
+    pub(super) fn reset(&mut self) {
+        (self.last_h, self.repeats) = (f64::NAN, 0);
+    }
+
+    /// Counts the step `integrator` just took; the error once [`FROZEN_STEPS`] in a row, of one
+    /// size, left u unchanged while its derivative v − 1 is not zero. The step size is read (the
     /// integrator's statistics) only while u stays unchanged.
-    fn count(&mut self) -> Result<(), SolverError> {
-        if self.inner.state()[U] != self.last_u {
-            self.last_u = self.inner.state()[U];
-            (self.last_h, self.repeats) = (f64::NAN, 0);
+    pub(super) fn count(&mut self, integrator: &dyn Integrator) -> Result<(), SolverError> {
+        if integrator.state()[U] != self.last_u {
+            self.last_u = integrator.state()[U];
+            self.reset();
             return Ok(());
         }
-        let h = self.inner.stats().last_step;
+        let h = integrator.stats().last_step;
         self.repeats = if h == self.last_h { self.repeats + 1 } else { 0 };
         self.last_h = h;
-        let (t, y) = (self.inner.t(), self.inner.state());
+        let (t, y) = (integrator.t(), integrator.state());
         let w = y[W];
         if self.repeats < FROZEN_STEPS || w.exp() - 1.0 == 0.0 {
             return Ok(());
         }
         let rate = self.gamma2_over_xi * (-w).exp();
         Err(SolverError {
-            solver: self.inner.name(),
+            solver: integrator.name(),
             kind: ErrorKind::Other,
             t,
             state: y.to_vec(),
@@ -101,62 +96,5 @@ impl Frozen<'_> {
                 w.exp() - 1.0,
             ),
         })
-    }
-}
-
-impl Integrator for Frozen<'_> {
-    fn advance(&mut self, tout: f64, task: Task) -> Result<Step, SolverError> {
-        let step = self.inner.advance(tout, task)?;
-        self.count()?;
-        Ok(step)
-    }
-
-    fn state(&self) -> &[f64] {
-        self.inner.state()
-    }
-
-    fn t(&self) -> f64 {
-        self.inner.t()
-    }
-
-    fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError> {
-        self.inner.dense(t, k)
-    }
-
-    fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
-        (self.last_h, self.repeats) = (f64::NAN, 0);
-        self.inner.reinit(t0, y0)
-    }
-
-    fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
-        self.inner.set_stop_time(t_stop)
-    }
-
-    fn set_max_step(&mut self, max_step: Option<f64>) -> Result<(), SolverError> {
-        self.inner.set_max_step(max_step)
-    }
-
-    fn rebase(&mut self, first_step: Option<f64>) -> Result<(), SolverError> {
-        self.inner.rebase(first_step)
-    }
-
-    fn rebase_restarts(&self) -> bool {
-        self.inner.rebase_restarts()
-    }
-
-    fn stats(&self) -> Stats {
-        self.inner.stats()
-    }
-
-    fn name(&self) -> &'static str {
-        self.inner.name()
-    }
-
-    fn max_dense_order(&self) -> u32 {
-        self.inner.max_dense_order()
-    }
-
-    fn warnings(&self) -> &[String] {
-        self.inner.warnings()
     }
 }
