@@ -183,7 +183,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
         ..MethodSettings::of(spec, true)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
-    let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0[0]));
+    let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0));
     Ok((guard::guarded(built.integrator, cancel, frozen), built.tables))
 }
 

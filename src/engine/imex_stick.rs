@@ -51,10 +51,12 @@ pub(super) struct FrozenU {
 }
 
 impl FrozenU {
-    /// A count for arkode-imex on `drr` (or a system derived from it) starting at u = `u0`.
-    pub(super) fn new(drr: &Drr, u0: f64) -> Self {
+    /// A count for arkode-imex on `drr` (or a system derived from it, whose state starts with
+    /// the DRR's) starting at `y0`.
+    pub(super) fn new(drr: &Drr, y0: &[f64]) -> Self {
         let p = drr.params();
-        Self { gamma2_over_xi: p.gamma * p.gamma / p.xi, last_u: u0, last_h: f64::NAN, repeats: 0 }
+        let gamma2_over_xi = p.gamma * p.gamma / p.xi;
+        Self { gamma2_over_xi, last_u: y0[U], last_h: f64::NAN, repeats: 0 }
     }
 
     /// Forgets the steps counted (the integrator restarts).
