@@ -256,9 +256,7 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepEr
 /// Runs one point: the scene with its parameters (validated as `stickslip run` would), the
 /// requested report sections kept and the wall time dropped.
 pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<String, f64>) -> Row {
-    let json = scene_at(base, params);
-    let outcome = scene::parse(&json.to_string(), "sweep point")
-        .map_err(|e| e.to_string())
+    let outcome = point_scene(base, params)
         .and_then(|s| engine::run(&s, serde_json::Value::Null).map_err(|e| e.to_string()));
     row(index, params, outcome)
 }
@@ -271,10 +269,9 @@ pub fn run_point_cancellable(
     params: &BTreeMap<String, f64>,
     cancel: &engine::Cancel,
 ) -> Option<Row> {
-    let json = scene_at(base, params);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let outcome = match scene::parse(&json.to_string(), "sweep point") {
-        Err(e) => Err(e.to_string()),
+    let outcome = match point_scene(base, params) {
+        Err(e) => Err(e),
         Ok(s) => {
             let null = serde_json::Value::Null;
             match engine::run_cancellable(&s, null, threads, &|_, _| {}, None, cancel) {
@@ -284,6 +281,14 @@ pub fn run_point_cancellable(
         }
     };
     Some(row(index, params, outcome))
+}
+
+/// The scene of one point, validated as `stickslip run` would.
+fn point_scene(
+    base: &serde_json::Value,
+    params: &BTreeMap<String, f64>,
+) -> Result<crate::scene::Scene, String> {
+    scene::parse(&scene_at(base, params).to_string(), "sweep point").map_err(|e| e.to_string())
 }
 
 /// The row of point `index`: the requested sections of its report, or its error.
