@@ -122,8 +122,9 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // tenth of rtol. An absolute error in w = ln v is v's relative error, and the size of w
     // (up to 21 at the earthquake's peak, down to −690 for v = 1e-300) says nothing about the
     // accuracy wanted; weighed relative to it, the slip's v was held to 20·rtol. BDF's global
-    // error on this problem is also some tens of times its local tolerance, hence the tenth. Measured on the earthquake scene
-    // (rtol 1e-10; reference 56.4124686977): period error −3.4e-8 weighed relative to |w|,
+    // error on this problem is also some tens of times its local tolerance, hence the tenth.
+    // Measured on the earthquake scene (rtol 1e-10; reference 56.4124686977): period error
+    // −3.4e-8 weighed relative to |w|,
     // −3.5e-9 absolute at rtol, −4.8e-10 absolute at rtol/10 (1.8× the steps); u's and θ's
     // weights change it by under 1e-10 (docs/work-precision.md, "CVODE's weight on ln v").
     // With ln v held this tightly, CVODE's own first step overshoots the initial layer of an

@@ -203,17 +203,16 @@ impl Work {
 /// polynomial. Sources: Hairer & Wanner, Solving ODEs II, IV.8, and their code RADAU5.
 ///
 /// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (the collocation
-/// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (transformed as in RADAU5), `error_scales` (an
-/// absolute scale c weighs rtol'·c with the transformed rtol'), `max_steps` (per call,
-/// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
-/// disabled once reached, as in SUNDIALS), `max_nonlin_iters` (RADAU5's NIT, default 7),
-/// `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive Newton failures in one
-/// step, default 10), `max_err_test_fails` (consecutive rejections, default 50),
-/// `jacobian_max_age` (a new Jacobian after that many accepted steps even when the Newton
-/// contraction allows reuse), `fail_on_step_underflow`. `max_order` is an InvalidInput error
-/// (the order is 5). Statistics: `lin_setups` counts one per pair of real and complex
-/// factorisations.
+/// polynomial is cubic), `reinit` restarts with fresh step-size history and accumulated statistics.
+/// Options: `rtol`/`atol` (transformed as in RADAU5), `error_scales` (an absolute scale c weighs
+/// rtol'·c with the transformed rtol'), `max_steps` (per call, default
+/// [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`,
+/// `stop_time` (not stepped past; disabled once reached, as in SUNDIALS), `max_nonlin_iters`
+/// (RADAU5's NIT, default 7), `nonlin_conv_coef` (RADAU5's FNEWT), `max_conv_fails` (consecutive
+/// Newton failures in one step, default 10), `max_err_test_fails` (consecutive rejections, default
+/// 50), `jacobian_max_age` (a new Jacobian after that many accepted steps even when the Newton
+/// contraction allows reuse), `fail_on_step_underflow`. `max_order` is an InvalidInput error (the
+/// order is 5). Statistics: `lin_setups` counts one per pair of real and complex factorisations.
 pub struct Radau5<S: OdeSystem> {
     system: S,
     n: usize,

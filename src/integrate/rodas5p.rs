@@ -169,22 +169,21 @@ impl Work {
 }
 
 /// The Rosenbrock method Rodas5P (Steinebach, BIT 2023; order 5(4), 8 stages, stiffly accurate,
-/// L-stable, continuous output of order 4) with RODAS's step-size control, on the system `S`.
-/// One Jacobian (and, unless [`Rodas5p::autonomous`], one finite-difference ∂f/∂t) per step,
-/// one LU factorisation of I/(hγ) − J per step attempt (its explicit inverse instead for a
-/// 3-component system that [allows it](OdeSystem::allows_explicit_inverse)), seven right-hand-side calls per step
-/// attempt (the stages) and one at each accepted point (f there, which the next step starts
+/// L-stable, continuous output of order 4) with RODAS's step-size control, on the system `S`. One
+/// Jacobian (and, unless [`Rodas5p::autonomous`], one finite-difference ∂f/∂t) per step, one LU
+/// factorisation of I/(hγ) − J per step attempt (its explicit inverse instead for a 3-component
+/// system that [allows it](OdeSystem::allows_explicit_inverse)), seven right-hand-side calls per
+/// step attempt (the stages) and one at each accepted point (f there, which the next step starts
 /// from), no Newton iteration.
 ///
-/// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous
-/// output is a quartic), `reinit` restarts with fresh step-size history and accumulated
-/// statistics. Options: `rtol`/`atol` (used as given, as in RODAS), `error_scales`,
-/// `max_steps` (per call,
-/// default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past;
-/// disabled once reached, as in SUNDIALS), `max_err_test_fails` (consecutive rejections,
-/// default 50), `fail_on_step_underflow`. `max_order` (the order is 5), `max_nonlin_iters`,
-/// `max_conv_fails` and `nonlin_conv_coef` (there is no nonlinear iteration) are InvalidInput
-/// errors.
+/// Implements [`Integrator`]: `dense(t, k)` for k = 0..4 on the last step (the continuous output is
+/// a quartic), `reinit` restarts with fresh step-size history and accumulated statistics. Options:
+/// `rtol`/`atol` (used as given, as in RODAS), `error_scales`, `max_steps` (per call, default
+/// [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `initial_step`, `min_step`, `max_step`,
+/// `stop_time` (not stepped past; disabled once reached, as in SUNDIALS), `max_err_test_fails`
+/// (consecutive rejections, default 50), `fail_on_step_underflow`. `max_order` (the order is 5),
+/// `max_nonlin_iters`, `max_conv_fails` and `nonlin_conv_coef` (there is no nonlinear iteration)
+/// are InvalidInput errors.
 ///
 /// Non-autonomous systems: ∂f/∂t is a forward difference (see the module documentation).
 ///

@@ -124,10 +124,10 @@ pub(crate) struct StatGetters {
 }
 
 /// Reads the counters and step sizes of `get`; the other fields stay at zero for
-/// [`Api::read_own_stats`] to fill. Getters that do not apply (no root functions, no linear solver) are not asked, and
-/// leave their counter at zero: ARKODE answers them through the error handler ("arkode_mem =
-/// NULL illegal." for the root count), which cost an ERK run 30 % of its time when the
-/// counters were read after every step, and left that message as the solver's last error.
+/// [`Api::read_own_stats`] to fill. Getters that do not apply (no root functions, no linear solver)
+/// are not asked, and leave their counter at zero: ARKODE answers them through the error handler
+/// ("arkode_mem = NULL illegal." for the root count), which cost an ERK run 30 % of its time when
+/// the counters were read after every step, and left that message as the solver's last error.
 ///
 /// # Safety
 /// `m` is live memory of the solver the getters belong to.

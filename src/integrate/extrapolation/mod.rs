@@ -135,18 +135,19 @@ enum Mode {
 /// of ODEX (non-stiff), with their order and step-size controls, and a documented switching rule
 /// (see the module documentation) — the pair behind Mathematica's "StiffnessSwitching".
 ///
-/// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (SEULEX's
-/// continuous output of degree k_c after an implicit step, ODEX's of degree 2k_c + 1 after an
-/// explicit one), `reinit` restarts with the scheme in use and fresh step-size history and
-/// keeps the statistics and the switch count. Options: `rtol`/`atol` (used as given, as in
-/// SEULEX/ODEX), `error_scales` (in the error weights; the rounding test's bound, atol plus
-/// the round-off of the step, does not involve rtol and stays as it is), `max_steps` (per call, default [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)),
-/// `max_order` (4 to 12: caps the tableau at max_order rows for the linearly implicit scheme and
-/// max(4, ⌈max_order/2⌉) for the midpoint one), `initial_step`, `min_step`, `max_step`,
-/// `stop_time` (not stepped past; disabled once reached), `max_err_test_fails` (consecutive
-/// rejections by the error test or the rounding test in one step, default 50), `max_conv_fails` (rows stopped by the stability checks in
-/// one step, default 50), `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef`
-/// are InvalidInput errors (no Newton iteration), as is a `max_order` outside 4..=12.
+/// Implements [`Integrator`]: `dense(t, k)` for k = 0..3 on the last step (SEULEX's continuous
+/// output of degree k_c after an implicit step, ODEX's of degree 2k_c + 1 after an explicit one),
+/// `reinit` restarts with the scheme in use and fresh step-size history and keeps the statistics
+/// and the switch count. Options: `rtol`/`atol` (used as given, as in SEULEX/ODEX), `error_scales`
+/// (in the error weights; the rounding test's bound, atol plus the round-off of the step, does not
+/// involve rtol and stays as it is), `max_steps` (per call, default
+/// [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS)), `max_order` (4 to 12: caps the tableau at
+/// max_order rows for the linearly implicit scheme and max(4, ⌈max_order/2⌉) for the midpoint one),
+/// `initial_step`, `min_step`, `max_step`, `stop_time` (not stepped past; disabled once reached),
+/// `max_err_test_fails` (consecutive rejections by the error test or the rounding test in one step,
+/// default 50), `max_conv_fails` (rows stopped by the stability checks in one step, default 50),
+/// `fail_on_step_underflow`. `max_nonlin_iters` and `nonlin_conv_coef` are InvalidInput errors (no
+/// Newton iteration), as is a `max_order` outside 4..=12.
 ///
 /// Statistics: `lin_setups` counts LU decompositions (one per linearly implicit row),
 /// `step_solve_fails` attempts stopped by a row failure (stability check, growing error,
