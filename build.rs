@@ -9,7 +9,8 @@
 //! bindgen here for ARKStep. One pass over the system headers, with the MPI flags when SUNDIALS
 //! needs them, serves both versions and can never pick up a vendored copy.
 //!
-//! Emits `cfg(sundials7)` for the 7.x API; the version differences stay in src/sundials/.
+//! Emits `cfg(sundials7)` for the 7.x API; the version differences stay in crates/ode/src/sundials/. Cargo runs this script for
+//! crates/ode, the one crate that calls SUNDIALS.
 //! Fails loudly, naming what is actually missing and the Debian package that provides it.
 
 use std::env;
@@ -280,7 +281,9 @@ fn comm_null_shim(inc: &Path, mpi: &Mpi) {
 }
 
 fn main() {
-    println!("cargo:rerun-if-changed=build.rs");
+    // This script sits at the top of the repository and builds crates/ode (its Cargo.toml
+    // says `build = "../../build.rs"`); Cargo reads the path relative to that crate.
+    println!("cargo:rerun-if-changed=../../build.rs");
     for var in ["SUNDIALS_INCLUDE_DIR", "SUNDIALS_LIBRARY_DIR", "MPICC", "PKG_CONFIG_PATH"] {
         println!("cargo:rerun-if-env-changed={var}");
     }

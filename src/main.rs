@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
-use stickslip::robertson_examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
-use stickslip::{compare, engine, report, scene, stress, sweep};
+use stickslip::{compare, engine, report, scene, sweep};
+use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
+use stickslip_cli::stress;
 
-mod cli;
-use cli::progress::Progress;
+use stickslip_cli::cli::progress::Progress;
 
 #[derive(Parser)]
 #[command(
@@ -693,7 +693,7 @@ fn stress_command(
 
 fn reproduce_command(out: PathBuf, threads: Option<usize>, reduced: bool) -> Result<(), Failure> {
     let progress = Progress::new("reproduce", "runs");
-    let summary = stickslip::reproduce::run(&out, worker_threads(threads), reduced, &progress);
+    let summary = stickslip_cli::reproduce::run(&out, worker_threads(threads), reduced, &progress);
     progress.finish();
     let summary = summary.map_err(|e| Failure(1, e.to_string()))?;
     for f in &summary.figures {

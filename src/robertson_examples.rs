@@ -4,9 +4,9 @@
 //! tests/sundials_examples.rs (against the examples' own output files) and the robertson
 //! benchmark.
 
-use crate::integrate::{Options, SolverError, Stats, StepEvent, Task, Tolerance};
-use crate::model::robertson::{roots, Robertson};
-use crate::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
+use stickslip::integrate::{Options, SolverError, Stats, StepEvent, Task, Tolerance};
+use stickslip::model::robertson::{roots, Robertson};
+use stickslip::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
 
 /// One printed line of an example: the time, the state and, after a root return, which roots
 /// were found.

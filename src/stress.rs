@@ -10,13 +10,13 @@
 //! fine. Everywhere a panic or a non-finite number is a defect, and where several methods find
 //! a periodic orbit their periods must agree within 1e3·rtol.
 
-use crate::analysis::cycle::CycleStatus;
-use crate::analysis::hopf;
-use crate::model::{Drr, DrrParams, Friction, StateLaw};
-use crate::scene::{self, Method};
-use crate::{engine, parallel};
 use serde::Serialize;
 use std::collections::BTreeMap;
+use stickslip::analysis::cycle::CycleStatus;
+use stickslip::analysis::hopf;
+use stickslip::model::{Drr, DrrParams, Friction, StateLaw};
+use stickslip::scene::{self, Method};
+use stickslip::{engine, parallel};
 
 /// One cell of the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -3,8 +3,8 @@
 
 mod xml;
 
-use stickslip::figure::svg::{escape, px, Svg};
-use stickslip::figure::{
+use stickslip_cli::figure::svg::{escape, px, Svg};
+use stickslip_cli::figure::{
     Anchor, Axis, Dash, Figure, LegendPlace, Marker, Note, Panel, RefLine, Series, Style,
 };
 use xml::check_well_formed;

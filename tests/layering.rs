@@ -1,6 +1,8 @@
-//! The crate's module graph follows the data flow (issue #17; README, "Layout"): every
-//! top-level module of src/ may use only the modules listed for it below, and the graph has no
-//! cycle. A new `crate::…` path that crosses a layer fails here, naming the file and the line.
+//! Layering inside each crate. Cargo's dependency graph enforces the arrows between the
+//! workspace's crates (stickslip-ode → stickslip → the `stickslip` command and python/); this
+//! test guards what Cargo cannot: inside one crate, every top-level module of its src/ may use
+//! only the modules listed for it below, and the graph has no cycle. A new `crate::…` path that
+//! crosses a layer fails here, naming the file and the line.
 //!
 //! The graph is read from the source text: every `crate::name` and `crate::{a, b}` outside
 //! comments, in each file of a top-level module (src/name.rs or src/name/).
@@ -9,30 +11,52 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// What each top-level module may use, in the order of the data flow (scene → model →
-/// integrator → analysis → report/figure). A module missing here fails the test: place it.
-const ALLOWED: &[(&str, &[&str])] = &[
-    ("parallel", &[]),
-    ("integrate", &[]),
-    ("sundials", &["integrate"]),
-    ("model", &["integrate"]),
-    ("solver", &["integrate", "sundials"]),
-    ("robertson_examples", &["integrate", "model", "sundials"]),
-    ("analysis", &["integrate", "model", "parallel", "solver", "sundials"]),
-    ("scene", &["analysis", "model", "solver", "sundials"]),
-    ("report", &["analysis", "integrate", "model", "scene"]),
-    // The time-series files (CSV, .npy): sinks for the analysis's rows, an output layer.
-    ("series_file", &["analysis"]),
-    ("engine", &["analysis", "integrate", "model", "report", "scene", "solver", "sundials"]),
-    ("figure", &["report"]),
-    ("compare", &["engine", "integrate", "model", "report", "scene"]),
-    ("stress", &["analysis", "engine", "model", "parallel", "scene"]),
-    ("sweep", &["engine", "parallel", "report", "scene"]),
+/// What each top-level module may use, per crate (its src/ folder from the workspace root), in
+/// the order of the data flow (scene → model → integrator → analysis → report/figure). A
+/// module missing here fails the test: place it.
+const CRATES: &[(&str, &[(&str, &[&str])])] = &[
     (
-        "reproduce",
-        &["analysis", "engine", "figure", "model", "parallel", "report", "scene", "sundials"],
+        "crates/ode/src",
+        &[("integrate", &[]), ("sundials", &["integrate"]), ("solver", &["integrate", "sundials"])],
     ),
-    ("cli", &[]),
+    (
+        // integrate, solver and sundials are stickslip-ode's, re-exported at the crate root.
+        "crates/stickslip/src",
+        &[
+            ("parallel", &[]),
+            ("model", &["integrate"]),
+            ("analysis", &["integrate", "model", "parallel", "solver", "sundials"]),
+            ("scene", &["analysis", "model", "solver", "sundials"]),
+            ("report", &["analysis", "integrate", "model", "scene"]),
+            // The time-series files (CSV, .npy): sinks for the analysis's rows, an output layer.
+            ("series_file", &["analysis"]),
+            (
+                "engine",
+                &[
+                    "analysis",
+                    "integrate",
+                    "model",
+                    "report",
+                    "scene",
+                    "series_file",
+                    "solver",
+                    "sundials",
+                ],
+            ),
+            ("compare", &["engine", "integrate", "model", "report", "scene"]),
+            ("sweep", &["engine", "parallel", "report", "scene"]),
+        ],
+    ),
+    (
+        "src",
+        &[
+            ("figure", &[]),
+            ("robertson_examples", &[]),
+            ("stress", &[]),
+            ("reproduce", &["figure"]),
+            ("cli", &["reproduce"]),
+        ],
+    ),
 ];
 
 /// The Rust files of a top-level module.
@@ -115,8 +139,10 @@ fn graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
     out
 }
 
-fn src_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+/// Every crate's src/ folder with its table.
+fn crates() -> impl Iterator<Item = (PathBuf, &'static [(&'static str, &'static [&'static str])])> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    CRATES.iter().map(move |(dir, table)| (root.join(dir), *table))
 }
 
 #[test]
@@ -131,19 +157,21 @@ fn crate_paths_are_read_from_code_only() {
 
 #[test]
 fn every_module_uses_only_the_layers_before_it() {
-    let allowed: BTreeMap<&str, BTreeSet<&str>> =
-        ALLOWED.iter().map(|(m, a)| (*m, a.iter().copied().collect())).collect();
     let mut errors = Vec::new();
-    for (module, uses) in graph(&src_dir()) {
-        let Some(ok) = allowed.get(module.as_str()) else {
-            errors.push(format!("src/{module}: a new top-level module; add it to tests/layering.rs's ALLOWED at its place in the data flow"));
-            continue;
-        };
-        for (used, place) in uses {
-            if !ok.contains(used.as_str()) {
-                errors.push(format!(
-                    "{place}: `{module}` uses `crate::{used}`, which its layer may not"
-                ));
+    for (src, table) in crates() {
+        let allowed: BTreeMap<&str, BTreeSet<&str>> =
+            table.iter().map(|(m, a)| (*m, a.iter().copied().collect())).collect();
+        for (module, uses) in graph(&src) {
+            let Some(ok) = allowed.get(module.as_str()) else {
+                errors.push(format!("{}/{module}: a new top-level module; add it to tests/layering.rs's CRATES at its place in the data flow", src.display()));
+                continue;
+            };
+            for (used, place) in uses {
+                if !ok.contains(used.as_str()) {
+                    errors.push(format!(
+                        "{place}: `{module}` uses `crate::{used}`, which its layer may not"
+                    ));
+                }
             }
         }
     }
@@ -152,7 +180,8 @@ fn every_module_uses_only_the_layers_before_it() {
 
 #[test]
 fn analyses_never_import_scene_engine_or_report() {
-    let uses = &graph(&src_dir())["analysis"];
+    let library = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/stickslip/src");
+    let uses = &graph(&library)["analysis"];
     for forbidden in ["engine", "scene", "report"] {
         assert!(
             !uses.contains_key(forbidden),
@@ -164,7 +193,6 @@ fn analyses_never_import_scene_engine_or_report() {
 
 #[test]
 fn the_module_graph_has_no_cycle() {
-    let g = graph(&src_dir());
     // Depth-first search with colours: a grey node met again closes a cycle.
     fn visit<'a>(
         g: &'a BTreeMap<String, BTreeMap<String, String>>,
@@ -186,10 +214,13 @@ fn the_module_graph_has_no_cycle() {
         done.insert(m);
         Ok(())
     }
-    let mut done = BTreeSet::new();
-    for m in g.keys() {
-        if let Err(cycle) = visit(&g, m, &mut Vec::new(), &mut done) {
-            panic!("the module graph has a cycle: {cycle}");
+    for (src, _) in crates() {
+        let g = graph(&src);
+        let mut done = BTreeSet::new();
+        for m in g.keys() {
+            if let Err(cycle) = visit(&g, m, &mut Vec::new(), &mut done) {
+                panic!("{}: the module graph has a cycle: {cycle}", src.display());
+            }
         }
     }
 }

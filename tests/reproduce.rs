@@ -8,7 +8,7 @@ use xml::check_well_formed;
 
 use std::path::PathBuf;
 use std::process::Command;
-use stickslip::reproduce::{FIGURES, PENDING};
+use stickslip_cli::reproduce::{FIGURES, PENDING};
 
 const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
 

@@ -161,7 +161,7 @@ fn prz_cell_agrees_with_radau5(
     use stickslip::analysis::cycle::CycleStatus;
     use stickslip::model::StateLaw;
     use stickslip::scene::Method;
-    use stickslip::stress::{run_cell, Cell, Outcome};
+    use stickslip_cli::stress::{run_cell, Cell, Outcome};
     let period = |method| {
         let cell =
             Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law: StateLaw::Prz, eta };

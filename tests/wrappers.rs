@@ -5,10 +5,10 @@ use stickslip::integrate::{
     ErrorKind, ImexSystem, JacobianMatrix, OdeSystem, Options, Roots, StepEvent, Task, Tolerance,
 };
 use stickslip::model::robertson::Robertson;
-use stickslip::robertson_examples as robertson;
 use stickslip::sundials::{
     self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
 };
+use stickslip_cli::robertson_examples as robertson;
 
 mod common;
 use common::{Decay, Oscillator, ProtheroRobinson};

@@ -9,8 +9,8 @@ use serde::Serialize;
 use serde_json::{json, Value};
 use std::fmt::Write;
 use std::process::Command;
-use stickslip::figure::{self, Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Style};
 use stickslip::scene::Method;
+use stickslip_cli::figure::{self, Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Style};
 
 /// Everything a run of the benchmark produced (docs/work-precision/results.json).
 #[derive(Debug, Clone, Serialize, serde::Deserialize)]

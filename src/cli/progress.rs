@@ -67,7 +67,7 @@ impl Progress {
     }
 }
 
-impl stickslip::reproduce::Progress for Progress {
+impl crate::reproduce::Progress for Progress {
     /// A line per figure, replacing the counter line on a terminal; the next count starts here.
     fn stage(&self, index: usize, total: usize, what: &str) {
         let mut count = self.count();

@@ -134,10 +134,10 @@ impl Figure {
         Ok(doc.finish())
     }
 
-    /// Writes the SVG to `path` (atomically: see [`crate::report::write_atomic`]).
+    /// Writes the SVG to `path` (atomically: see [`stickslip::report::write_atomic`]).
     pub fn write(&self, path: &Path) -> Result<(), FigureError> {
         let svg = self.to_svg()?;
-        crate::report::write_atomic(path, &svg)
+        stickslip::report::write_atomic(path, &svg)
             .map_err(|source| FigureError::Io { path: path.display().to_string(), source })
     }
 }

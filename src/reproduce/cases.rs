@@ -3,11 +3,11 @@
 //! brute-force cycle analysis where continuation does not reach).
 
 use super::{Context, ReproduceError};
-use crate::analysis::cycle::TrajectoryCycle;
-use crate::report::Report;
-use crate::{engine, scene};
 use serde::Serialize;
 use serde_json::{json, Value};
+use stickslip::analysis::cycle::TrajectoryCycle;
+use stickslip::report::Report;
+use stickslip::{engine, scene};
 
 /// data/scenes/fig1.json: γ = 1e3, ξ = 0.7, ε = 0.72.
 pub const FIG1: &str = include_str!("../../data/scenes/fig1.json");
@@ -64,7 +64,7 @@ pub fn run_scene(scene_json: &Value) -> Result<Report, ReproduceError> {
 
 /// Runs `jobs` on `threads` worker threads, results in input order, reporting progress.
 pub fn parallel<T: Sync, R: Send>(ctx: &Context, jobs: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    crate::parallel::map(
+    stickslip::parallel::map(
         jobs.len(),
         ctx.threads,
         &|done, total| ctx.progress.points(done, total),
@@ -168,7 +168,7 @@ pub fn period_curve(ctx: &Context, base: &Value, param: &str, values: &[f64]) ->
 }
 
 fn outcome(report: &Report) -> PointOutcome {
-    use crate::analysis::cycle::CycleStatus;
+    use stickslip::analysis::cycle::CycleStatus;
     let Some(c) = &report.cycle else {
         return PointOutcome::Failed { error: "no cycle section".into() };
     };

@@ -5,9 +5,9 @@
 use super::cases;
 use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
-use crate::analysis::cycle::TrajectoryCycle;
 use crate::figure::scale::power_of_ten;
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Panel, Series, Style};
+use stickslip::analysis::cycle::TrajectoryCycle;
 
 /// The window of fast time drawn.
 const WINDOW: (f64, f64) = (-8.0, 12.0);

@@ -9,9 +9,9 @@
 use super::cases;
 use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
-use crate::analysis::asymptotics::{matching, scan, verdicts};
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Panel, RefLine, Series, Style};
 use serde_json::json;
+use stickslip::analysis::asymptotics::{matching, scan, verdicts};
 
 /// Window of the zoom (b) in t − t_c: the slip lasts a few 1/γ.
 const ZOOM: (f64, f64) = (-0.015, 0.02);
@@ -24,7 +24,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     // The γ scan (1e2 … 1e12, about a second) is kept: the claim "t0 is γ-independent" takes
     // its reference at the largest γ.
     scene["analyses"] = json!(["cycle", "asymptotics"]);
-    let params = crate::scene::parse(&scene.to_string(), "fig3")
+    let params = stickslip::scene::parse(&scene.to_string(), "fig3")
         .map_err(|e| ReproduceError::Scene(e.to_string()))?
         .params;
     let report = cases::run_scene(&scene)?;

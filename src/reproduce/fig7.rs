@@ -6,8 +6,8 @@
 
 use super::noise_cases::{self, curve, describe, falls_towards_the_event, peaks_inside, tau_claim};
 use super::{Context, Output, ReproduceError};
-use crate::analysis::noise::CorrelationPoint;
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, Series, Style};
+use stickslip::analysis::noise::CorrelationPoint;
 
 /// A panel of τ against t_c − t (both log scales): ensemble markers, linear-response line.
 fn tau_panel(title: &str, curves: &[(&str, &[CorrelationPoint])]) -> Panel {

@@ -5,9 +5,9 @@
 use super::cases;
 use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
-use crate::analysis::cycle::CycleValues;
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, RefLine, Series, Style};
-use crate::model::Friction;
+use stickslip::analysis::cycle::CycleValues;
+use stickslip::model::Friction;
 
 fn alphas(reduced: bool) -> Vec<f64> {
     // Up to 0.3: from α ≈ 0.32 on (γ = 10, ξ = 0.7, ε = 1) v falls to 0 in finite time after
@@ -43,7 +43,7 @@ pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let mut results = results.into_iter();
     let log = results.next().expect("scene 0")?;
     let pow = results.next().expect("scene 1")?;
-    let periodic = |r: &crate::report::Report| r.cycle.as_ref().and_then(|c| c.values);
+    let periodic = |r: &stickslip::report::Report| r.cycle.as_ref().and_then(|c| c.values);
     let log_values = periodic(&log)
         .ok_or_else(|| ReproduceError::Missing("fig8: the ln v cycle is not periodic".into()))?;
     let pow_values = periodic(&pow).ok_or_else(|| {

@@ -8,11 +8,11 @@
 use super::cases;
 use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
-use crate::analysis::claims::{Claim, Source};
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, RefLine, Series, Style};
-use crate::model::StateLaw;
-use crate::report::Report;
 use serde_json::{json, Value};
+use stickslip::analysis::claims::{Claim, Source};
+use stickslip::model::StateLaw;
+use stickslip::report::Report;
 
 /// The slip law's reference table (ξ = 0.7 and 0.8 rows).
 const SLIP_TABLE: &str = include_str!("../../data/reference/drr_cycles.json");

@@ -22,9 +22,9 @@ pub mod laws;
 pub mod noise_cases;
 pub mod summary;
 
-use crate::engine::EngineError;
 use crate::figure::FigureError;
 use std::path::{Path, PathBuf};
+use stickslip::engine::EngineError;
 pub use summary::{Row, Summary};
 
 /// Why a figure could not be made.
@@ -94,7 +94,7 @@ impl Context<'_> {
             std::fs::create_dir_all(dir)
                 .map_err(|source| ReproduceError::Io { path: dir.display().to_string(), source })?;
         }
-        crate::report::write_atomic(&path, text)
+        stickslip::report::write_atomic(&path, text)
             .map_err(|source| ReproduceError::Io { path: path.display().to_string(), source })?;
         Ok(name.to_string())
     }

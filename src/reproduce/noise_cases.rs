@@ -2,10 +2,10 @@
 //! `stickslip run` would, with fewer realisations in the reduced (test) version.
 
 use super::{Context, ReproduceError, Row};
-use crate::analysis::noise::{CorrelationPoint, NoiseReport};
-use crate::scene::{self, AnyScene};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};
+use stickslip::analysis::noise::{CorrelationPoint, NoiseReport};
+use stickslip::scene::{self, AnyScene};
 
 /// Runs already made in this process, by scene (Figs. 6 and 7 both need the DRR scene; its
 /// results do not depend on the thread count, so a second run would give the same numbers).
@@ -57,7 +57,7 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
         .map_err(|e| ReproduceError::Scene(e.to_string()))?
     {
         AnyScene::Drr(s) => {
-            let r = crate::engine::run_with(&s, json.clone(), ctx.threads, &progress)
+            let r = stickslip::engine::run_with(&s, json.clone(), ctx.threads, &progress)
                 .map_err(failed)?;
             let n = r
                 .noise
@@ -66,7 +66,7 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
             (serde_json::to_value(&r).expect("a report serialises"), n)
         }
         AnyScene::Other(s) => {
-            let r = crate::engine::run_other(&s, json.clone(), ctx.threads, &progress)
+            let r = stickslip::engine::run_other(&s, json.clone(), ctx.threads, &progress)
                 .map_err(failed)?;
             (serde_json::to_value(&r).expect("a report serialises"), r.noise)
         }

@@ -2,10 +2,10 @@
 //! its value, ours and a verdict; the figures not yet reproduced. As JSON, Markdown and HTML.
 
 use super::{Entry, Output, Pending, ReproduceError, PENDING};
-use crate::analysis::claims::{Claim, Source, Verdict};
-use crate::analysis::paper;
 use crate::figure::svg::escape;
 use serde::Serialize;
+use stickslip::analysis::claims::{Claim, Source, Verdict};
+use stickslip::analysis::paper;
 
 /// One claim of the paper set beside ours.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -26,7 +26,7 @@ pub struct Row {
 }
 
 impl Row {
-    /// A row from one of [`crate::analysis::paper`]'s claims (its value to four decimals and
+    /// A row from one of [`stickslip::analysis::paper`]'s claims (its value to four decimals and
     /// the relative difference; the criterion, 5 %, is the summary's).
     pub fn from_claim(figure: &str, c: &Claim) -> Self {
         let rel =
@@ -42,7 +42,7 @@ impl Row {
     }
 
     /// A row from a claim of the "asymptotics" or "lyapunov" analyses
-    /// ([`crate::analysis::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
+    /// ([`stickslip::analysis::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
     /// and criterion (in the note).
     pub fn from_analysis(figure: &str, c: &Claim) -> Self {
         let source = match c.source {
@@ -170,7 +170,7 @@ impl Summary {
     ) -> Self {
         Self {
             stickslip_version: env!("CARGO_PKG_VERSION"),
-            sundials_version: crate::sundials::version(),
+            sundials_version: stickslip::sundials::version(),
             threads,
             reduced,
             wall_time_s,

@@ -1,10 +1,10 @@
-//! A well-formedness checker for the XML that `stickslip::figure` writes (test code: the
+//! A well-formedness checker for the XML that `stickslip_cli::figure` writes (test code: the
 //! figures themselves are not checked in production; tests/figures.rs and tests/reproduce.rs
 //! check every kind of figure written).
 
 use std::collections::BTreeMap;
 
-/// Checks that `xml` is a well-formed XML document of the kind `stickslip::figure::svg::Svg` writes (a prolog,
+/// Checks that `xml` is a well-formed XML document of the kind `stickslip_cli::figure::svg::Svg` writes (a prolog,
 /// comments, elements with quoted attributes, text with only the predefined or numeric entity
 /// references) with a single root element. Returns the number of elements of each name.
 pub fn check_well_formed(xml: &str) -> Result<BTreeMap<String, usize>, String> {

@@ -310,10 +310,10 @@ pub(crate) fn implicit_jacobian_hint<S: ImexSystem + ?Sized>(
     error
 }
 
-/// Test support: the system's analytic Jacobian beside central differences of its right-hand
-/// side at y, with step `step(y_col)` per column, as (row, col, analytic, difference).
-#[cfg(test)]
-pub(crate) fn jacobian_against_differences(
+/// The system's analytic Jacobian beside central differences of its right-hand side at y (t = 0),
+/// with step `step(y_col)` per column, as (row, col, analytic, difference): the raw table a
+/// model's unit tests judge with their own bounds ([`check_jacobian`] gives a verdict instead).
+pub fn jacobian_against_differences(
     system: &impl OdeSystem,
     y: &[f64],
     step: impl Fn(f64) -> f64,

@@ -20,11 +20,9 @@ pub use error::{brief_state, ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{ErrorScale, Options, OptionsError, Tolerance, DEFAULT_MAX_STEPS};
-#[cfg(test)]
-pub(crate) use problem::jacobian_against_differences;
 pub use problem::{
-    check_implicit_jacobian, check_jacobian, ImexSystem, JacobianMatrix, JacobianMismatch,
-    OdeSystem, RootFunction, Roots,
+    check_implicit_jacobian, check_jacobian, jacobian_against_differences, ImexSystem,
+    JacobianMatrix, JacobianMismatch, OdeSystem, RootFunction, Roots,
 };
 pub(crate) use problem::{implicit_jacobian_hint, jacobian_hint};
 pub use radau5::Radau5;

@@ -1,0 +1,23 @@
+//! stickslip: very stiff stick-slip (Dieterich–Ruina rate-and-state friction) dynamics
+//! integrated with Debian's SUNDIALS.
+//!
+//! Data flow: [`scene`] (JSON, validated) → [`model`] (the DRR system and its relatives) →
+//! integrator (the [`integrate`] contract, implemented over SUNDIALS in [`sundials`] and by
+//! the homemade methods; [`solver`] picks one by name) → [`analysis`] → [`report`] (JSON).
+//! [`engine`] wires them; [`sweep`] maps a scene over a parameter grid and [`compare`] checks
+//! a trajectory from elsewhere against a scene. The integrators live in the `stickslip-ode`
+//! crate and are re-exported here under their old paths.
+
+#![deny(unsafe_code)]
+
+pub use stickslip_ode::{integrate, solver, sundials};
+
+pub mod analysis;
+pub mod compare;
+pub mod engine;
+pub mod model;
+pub mod parallel;
+pub mod report;
+pub mod scene;
+pub mod series_file;
+pub mod sweep;
