@@ -11,10 +11,13 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
+/// A crate's modules, each with the modules it may use.
+type Table = &'static [(&'static str, &'static [&'static str])];
+
 /// What each top-level module may use, per crate (its src/ folder from the workspace root), in
 /// the order of the data flow (scene → model → integrator → analysis → report/figure). A
 /// module missing here fails the test: place it.
-const CRATES: &[(&str, &[(&str, &[&str])])] = &[
+const CRATES: &[(&str, Table)] = &[
     (
         "crates/ode/src",
         &[("integrate", &[]), ("sundials", &["integrate"]), ("solver", &["integrate", "sundials"])],
@@ -140,7 +143,7 @@ fn graph(src: &Path) -> BTreeMap<String, BTreeMap<String, String>> {
 }
 
 /// Every crate's src/ folder with its table.
-fn crates() -> impl Iterator<Item = (PathBuf, &'static [(&'static str, &'static [&'static str])])> {
+fn crates() -> impl Iterator<Item = (PathBuf, Table)> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     CRATES.iter().map(move |(dir, table)| (root.join(dir), *table))
 }
