@@ -45,6 +45,9 @@ enum Command {
         /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it).
         #[arg(long, value_name = "FILE")]
         series: Option<PathBuf>,
+        /// Lab scenes: draw friction against load-point displacement to FILE (SVG).
+        #[arg(long, value_name = "FILE.svg")]
+        figure: Option<PathBuf>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -220,11 +223,18 @@ fn run_command(
     out: Option<PathBuf>,
     threads: Option<usize>,
     series: Option<PathBuf>,
+    figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
+    if scene::lab::is_lab(&text) {
+        return run_lab(&text, &source, json, out, series, figure);
+    }
+    if figure.is_some() {
+        return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
+    }
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
@@ -282,6 +292,62 @@ fn run_command(
         Some(message) => Err(Failure(4, message)),
         None => Ok(()),
     }
+}
+
+/// Runs a lab scene: report, optional series file (through a staging file, as for DRR
+/// scenes) and optional figure.
+fn run_lab(
+    text: &str,
+    source: &str,
+    json: bool,
+    out: Option<PathBuf>,
+    series: Option<PathBuf>,
+    figure: Option<PathBuf>,
+) -> Result<(), Failure> {
+    let scene = scene::lab::parse(text, source).map_err(|e| Failure(2, e.to_string()))?;
+    let echo: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| Failure(2, e.to_string()))?;
+    let fail = |e: engine::lab::LabError| Failure(1, format!("scene {}: {e}", scene.name));
+    let report = match &series {
+        Some(file) => {
+            let (staging, target) = series_staging(file);
+            let mut sink = stickslip::series_file::create_as(&staging, file).map_err(|e| {
+                Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
+            })?;
+            let report = engine::lab::run(&scene, echo, sink.as_mut());
+            drop(sink);
+            let renamed = match &report {
+                Ok(_) if staging != target => std::fs::rename(&staging, &target),
+                _ => Ok(()),
+            };
+            if (report.is_err() || renamed.is_err()) && staging != target {
+                drop(std::fs::remove_file(&staging));
+            }
+            renamed.map_err(|e| {
+                Failure(1, format!("--series {}: cannot write it: {e}", file.display()))
+            })?;
+            let report = report.map_err(fail)?;
+            report
+        }
+        None => engine::lab::run(&scene, echo, &mut stickslip::analysis::time_series::DiscardSink)
+            .map_err(fail)?,
+    };
+    if let Some(file) = &figure {
+        stickslip_cli::figure::lab::friction_against_displacement(&report)
+            .write(file)
+            .map_err(|e| Failure(1, format!("--figure: {e}")))?;
+    }
+    let report_json = report.to_json();
+    if let Some(file) = &out {
+        report::write_atomic(file, &report_json)
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
+    }
+    if json {
+        println!("{report_json}");
+    } else {
+        print!("{}", report.summary());
+    }
+    Ok(())
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
@@ -759,8 +825,8 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out, threads, series } => {
-            run_command(scene, json, out, threads, series)
+        Command::Run { scene, json, out, threads, series, figure } => {
+            run_command(scene, json, out, threads, series, figure)
         }
         Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {

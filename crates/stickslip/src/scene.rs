@@ -14,6 +14,7 @@ pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
 
 mod analyses;
+pub mod lab;
 pub use analyses::analysis_names;
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
@@ -310,6 +311,9 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         field: field.into(),
         message,
     };
+    if lab::is_lab(text) {
+        return Err(err("model.kind", "\"lab\": a lab scene; parse it with scene::lab::parse (`stickslip run` runs it)".into()));
+    }
     let raw = parse_raw(text, &err)?;
     match raw.model.kind.as_deref() {
         None | Some("drr") => validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s))),

@@ -30,7 +30,8 @@ pub const BLOW_UP_SPAN: f64 = 400.0;
 /// Most state variables a run takes (one output column each).
 pub const MAX_STATES: usize = 8;
 
-const COLUMNS: [&str; 5 + MAX_STATES] = [
+/// The output columns: t, x_lp, delta, mu, v, theta_1 … theta_8 (the first 5 + n are used).
+pub const COLUMNS: [&str; 5 + MAX_STATES] = [
     "t", "x_lp", "delta", "mu", "v", "theta_1", "theta_2", "theta_3", "theta_4", "theta_5",
     "theta_6", "theta_7", "theta_8",
 ];
