@@ -312,7 +312,11 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         message,
     };
     if lab::is_lab(text) {
-        return Err(err("model.kind", "\"lab\": a lab scene; parse it with scene::lab::parse (`stickslip run` runs it)".into()));
+        return Err(err(
+            "model.kind",
+            "\"lab\": a lab scene; parse it with scene::lab::parse (`stickslip run` runs it)"
+                .into(),
+        ));
     }
     let raw = parse_raw(text, &err)?;
     match raw.model.kind.as_deref() {

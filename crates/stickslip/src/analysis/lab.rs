@@ -208,7 +208,8 @@ pub fn run(
         let t0 = seg.t_start;
         let duration = loading.segment_end(j) - t0;
         let system = LabSystem { params, v_lp: seg.velocity };
-        let fail = |source| LabRunError::Solver { segment: j, v_lp: seg.velocity, t_start: t0, source };
+        let fail =
+            |source| LabRunError::Solver { segment: j, v_lp: seg.velocity, t_start: t0, source };
         let emit = |t: f64, y: &[f64], buf: &mut Vec<f64>, row: &mut dyn FnMut(&[f64])| {
             let mu = params.friction(y);
             let x_lp = x_starts[j] + seg.velocity * (t - t0);
@@ -231,10 +232,9 @@ pub fn run(
             ..Options::new(solver.rtol, Tolerance::Scalar(solver.atol))
         };
         let settings = MethodSettings { autonomous: true, ..MethodSettings::default() };
-        let mut integ =
-            solver::build(solver.method, &settings, system.clone(), 0.0, &y, &options)
-                .map_err(fail)?
-                .integrator;
+        let mut integ = solver::build(solver.method, &settings, system.clone(), 0.0, &y, &options)
+            .map_err(fail)?
+            .integrator;
         let after_hold = j > 0 && loading.segments[j - 1].velocity == 0.0 && seg.velocity > 0.0;
         let mut peak_found = !after_hold;
         let mut f = vec![0.0; 1 + n];
@@ -252,7 +252,11 @@ pub fn run(
                 Output::Times(times) => {
                     while next_time < times.len() && times[next_time] - t0 <= t {
                         let local = (times[next_time] - t0).max(t_prev);
-                        let ys = if local >= t { y.clone() } else { integ.dense(local, 0).map_err(fail)?.to_vec() };
+                        let ys = if local >= t {
+                            y.clone()
+                        } else {
+                            integ.dense(local, 0).map_err(fail)?.to_vec()
+                        };
                         emit(times[next_time], &ys, &mut buf, row);
                         buf[0] = times[next_time];
                         next_time += 1;
@@ -263,7 +267,11 @@ pub fn run(
             if dw_prev > 0.0 && dw <= 0.0 && t > t_prev {
                 let tm = bisect_rate(&mut *integ, t_prev, t).map_err(fail)?;
                 let ym = integ.dense(tm, 0).map_err(fail)?.to_vec();
-                out.v_maxima.push(VelocityMaximum { t: t0 + tm, v: ym[LN_V].exp(), mu: params.friction(&ym) });
+                out.v_maxima.push(VelocityMaximum {
+                    t: t0 + tm,
+                    v: ym[LN_V].exp(),
+                    mu: params.friction(&ym),
+                });
             }
             // The friction peak of a reload: V rises through V_lp.
             let lv = seg.velocity.ln();
@@ -429,13 +437,7 @@ impl OdeSystem for InLnV<'_> {
 
 /// Integrates from (t, y) with ln V as the independent variable over [`BLOW_UP_SPAN`]:
 /// Some(blow-up) if V goes on accelerating throughout.
-fn blow_up(
-    params: &LabParams,
-    v_lp: f64,
-    t: f64,
-    y: &[f64],
-    solver: &LabSolver,
-) -> Option<BlowUp> {
+fn blow_up(params: &LabParams, v_lp: f64, t: f64, y: &[f64], solver: &LabSolver) -> Option<BlowUp> {
     let w0 = y[LN_V];
     let mut z = y.to_vec();
     z[0] = t;

@@ -262,7 +262,8 @@ mod tests {
     fn jacobian_matches_central_differences() {
         let p = params();
         let m = LabSystem { params: &p, v_lp: 3.0 };
-        for y in [[0.3, 1.2, 2.0, 0.7, 1.9], [-4.0, 6.0, 1.0, 3.0, -0.5], [2.5, -2.0, 0.1, 0.2, 0.3]]
+        for y in
+            [[0.3, 1.2, 2.0, 0.7, 1.9], [-4.0, 6.0, 1.0, 3.0, -0.5], [2.5, -2.0, 0.1, 0.2, 0.3]]
         {
             for (row, col, exact, fd) in jacobian_against_differences(&m, &y, |_| 1e-6) {
                 assert!((fd - exact).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");

@@ -137,8 +137,8 @@ mod tests {
 
     #[test]
     fn displacement_samples_become_merged_segments() {
-        let l = Loading::from_displacement(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0), (3.0, 12.0)])
-            .unwrap();
+        let l =
+            Loading::from_displacement(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0), (3.0, 12.0)]).unwrap();
         assert_eq!(l.segments.len(), 2);
         assert_eq!(l.segments[1], Segment { t_start: 2.0, velocity: 10.0 });
         assert_eq!(l.t_end, 3.0);

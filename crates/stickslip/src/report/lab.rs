@@ -67,9 +67,17 @@ impl LabReport {
         for h in &o.holds {
             match h.delta_mu_peak {
                 Some(d) => {
-                    s += &format!("  hold of {} s at t = {} s: Δμ_peak = {d:.6e}\n", h.t_hold, h.t_start)
+                    s += &format!(
+                        "  hold of {} s at t = {} s: Δμ_peak = {d:.6e}\n",
+                        h.t_hold, h.t_start
+                    )
                 }
-                None => s += &format!("  hold of {} s at t = {} s: no reload peak\n", h.t_hold, h.t_start),
+                None => {
+                    s += &format!(
+                        "  hold of {} s at t = {} s: no reload peak\n",
+                        h.t_hold, h.t_start
+                    )
+                }
             }
         }
         if let Some(beta) = o.healing_rate {

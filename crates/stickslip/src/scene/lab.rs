@@ -158,12 +158,22 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
         None => steady(&params, v_first, &err)?,
         Some(RawInitial::Named(s)) if s == "steady" => steady(&params, v_first, &err)?,
         Some(RawInitial::Named(s)) => {
-            return Err(err("initial", format!("\"{s}\": use \"steady\" or {{\"mu\": μ, \"theta\": [θ_1, …]}}")))
+            return Err(err(
+                "initial",
+                format!("\"{s}\": use \"steady\" or {{\"mu\": μ, \"theta\": [θ_1, …]}}"),
+            ))
         }
         Some(RawInitial::Explicit { mu, theta }) => {
             finite("initial.mu", *mu, &err)?;
             if theta.len() != params.states.len() {
-                return Err(err("initial.theta", format!("{} values for {} state variables; give one θ per state", theta.len(), params.states.len())));
+                return Err(err(
+                    "initial.theta",
+                    format!(
+                        "{} values for {} state variables; give one θ per state",
+                        theta.len(),
+                        params.states.len()
+                    ),
+                ));
             }
             for (i, t) in theta.iter().enumerate() {
                 positive(&format!("initial.theta[{i}]"), *t, "θ > 0", &err)?;
@@ -191,37 +201,71 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
         }
         _ => return Err(err("analyses", "a lab scene takes at most one analysis, {\"time_series\": {\"times\": [...]}} (without it every step is a row)".into())),
     };
-    Ok(LabScene { name: raw.name, description: raw.description, params, loading, initial, solver, output })
+    Ok(LabScene {
+        name: raw.name,
+        description: raw.description,
+        params,
+        loading,
+        initial,
+        solver,
+        output,
+    })
 }
 
-fn params(m: &RawModel, err: &impl Fn(&str, String) -> SceneError) -> Result<LabParams, SceneError> {
+fn params(
+    m: &RawModel,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<LabParams, SceneError> {
     let mu0 = finite("model.mu0", m.mu0, err)?;
     let a = positive("model.a", m.a, "the direct effect a, e.g. 0.01", err)?;
-    let v0 = positive("model.v0", m.v0.unwrap_or(1.0), "the reference velocity V0 (default 1)", err)?;
-    let k = positive("model.k", m.k, "the stiffness in friction per unit displacement (per µm), e.g. 1e-3", err)?;
+    let v0 =
+        positive("model.v0", m.v0.unwrap_or(1.0), "the reference velocity V0 (default 1)", err)?;
+    let k = positive(
+        "model.k",
+        m.k,
+        "the stiffness in friction per unit displacement (per µm), e.g. 1e-3",
+        err,
+    )?;
     if m.states.is_empty() || m.states.len() > MAX_STATES {
-        return Err(err("model.states", format!("{} state variables; give 1 to {MAX_STATES}, each {{\"law\", \"b\", \"d_c\"}}", m.states.len())));
+        return Err(err(
+            "model.states",
+            format!(
+                "{} state variables; give 1 to {MAX_STATES}, each {{\"law\", \"b\", \"d_c\"}}",
+                m.states.len()
+            ),
+        ));
     }
     let mut states = Vec::new();
     for (i, s) in m.states.iter().enumerate() {
         let field = |name: &str| format!("model.states[{i}].{name}");
         let b = finite(&field("b"), s.b, err)?;
-        let d_c = positive(&field("d_c"), s.d_c, "the critical slip distance D_c, e.g. 10 (µm)", err)?;
+        let d_c =
+            positive(&field("d_c"), s.d_c, "the critical slip distance D_c, e.g. 10 (µm)", err)?;
         let law = match s.law.as_str() {
             "ageing" | "aging" | "dieterich" => LabLaw::Ageing,
             "slip" | "ruina" => LabLaw::Slip,
             "prz" => LabLaw::Prz,
             "nagata" => {
-                let c = s.c.ok_or_else(|| err(&field("c"), "missing: the Nagata law needs c (e.g. 2)".into()))?;
+                let c = s.c.ok_or_else(|| {
+                    err(&field("c"), "missing: the Nagata law needs c (e.g. 2)".into())
+                })?;
                 if b == 0.0 {
                     return Err(err(&field("b"), "the Nagata law divides by b: give b ≠ 0".into()));
                 }
                 LabLaw::Nagata { c: finite(&field("c"), c, err)? }
             }
-            other => return Err(err(&field("law"), format!("unknown law \"{other}\"; use ageing, slip, prz or nagata"))),
+            other => {
+                return Err(err(
+                    &field("law"),
+                    format!("unknown law \"{other}\"; use ageing, slip, prz or nagata"),
+                ))
+            }
         };
         if s.c.is_some() && !matches!(law, LabLaw::Nagata { .. }) {
-            return Err(err(&field("c"), format!("only the nagata law takes c (this state's law is {})", law.name())));
+            return Err(err(
+                &field("c"),
+                format!("only the nagata law takes c (this state's law is {})", law.name()),
+            ));
         }
         states.push(LabState { law, b, d_c });
     }
@@ -235,19 +279,30 @@ fn loading(
 ) -> Result<Loading, SceneError> {
     let given = [l.segments.is_some(), l.steps.is_some(), l.csv.is_some()];
     if given.iter().filter(|g| **g).count() != 1 {
-        return Err(err("loading", "give exactly one of \"segments\" (with \"t_end\"), \"steps\" or \"csv\"".into()));
+        return Err(err(
+            "loading",
+            "give exactly one of \"segments\" (with \"t_end\"), \"steps\" or \"csv\"".into(),
+        ));
     }
-    let bad = |field: &'static str| move |e: crate::model::loading::LoadingError| err(field, e.to_string());
+    let bad = |field: &'static str| {
+        move |e: crate::model::loading::LoadingError| err(field, e.to_string())
+    };
     if let Some(segs) = &l.segments {
         if l.t_start.is_some() {
             return Err(err("loading.t_start", "segments carry their own t_start".into()));
         }
-        let t_end = l.t_end.ok_or_else(|| err("loading.t_end", "missing: the end time of the last segment".into()))?;
-        let segments = segs.iter().map(|s| Segment { t_start: s.t_start, velocity: s.velocity }).collect();
+        let t_end = l.t_end.ok_or_else(|| {
+            err("loading.t_end", "missing: the end time of the last segment".into())
+        })?;
+        let segments =
+            segs.iter().map(|s| Segment { t_start: s.t_start, velocity: s.velocity }).collect();
         return Loading::new(segments, t_end).map_err(bad("loading.segments"));
     }
     if l.t_end.is_some() {
-        return Err(err("loading.t_end", "only \"segments\" take t_end (steps and csv end where they end)".into()));
+        return Err(err(
+            "loading.t_end",
+            "only \"segments\" take t_end (steps and csv end where they end)".into(),
+        ));
     }
     if let Some(steps) = &l.steps {
         let mut t = finite("loading.t_start", l.t_start.unwrap_or(0.0), err)?;
@@ -255,12 +310,31 @@ fn loading(
         for (i, s) in steps.iter().enumerate() {
             let field = |name: &str| format!("loading.steps[{i}].{name}");
             let v = finite(&field("velocity"), s.velocity, err)?;
-            let duration = match (s.displacement, s.duration) {
-                (Some(x), None) if v > 0.0 => positive(&field("displacement"), x, "the load-point displacement of this step", err)? / v,
-                (None, Some(d)) => positive(&field("duration"), d, "the duration of this step (s)", err)?,
-                (Some(_), None) => return Err(err(&field("displacement"), "a hold (velocity 0) has no displacement; give its \"duration\"".into())),
-                _ => return Err(err(&field("displacement"), "give exactly one of \"displacement\" (load-point, µm) or \"duration\" (s)".into())),
-            };
+            let duration =
+                match (s.displacement, s.duration) {
+                    (Some(x), None) if v > 0.0 => {
+                        positive(
+                            &field("displacement"),
+                            x,
+                            "the load-point displacement of this step",
+                            err,
+                        )? / v
+                    }
+                    (None, Some(d)) => {
+                        positive(&field("duration"), d, "the duration of this step (s)", err)?
+                    }
+                    (Some(_), None) => {
+                        return Err(err(
+                            &field("displacement"),
+                            "a hold (velocity 0) has no displacement; give its \"duration\"".into(),
+                        ))
+                    }
+                    _ => return Err(err(
+                        &field("displacement"),
+                        "give exactly one of \"displacement\" (load-point, µm) or \"duration\" (s)"
+                            .into(),
+                    )),
+                };
             segments.push(Segment { t_start: t, velocity: v });
             t += duration;
         }
@@ -270,7 +344,9 @@ fn loading(
     if l.t_start.is_some() {
         return Err(err("loading.t_start", "a csv loading starts at its first time".into()));
     }
-    let path = Path::new(source_name).parent().map_or_else(|| Path::new(file).to_path_buf(), |d| d.join(file));
+    let path = Path::new(source_name)
+        .parent()
+        .map_or_else(|| Path::new(file).to_path_buf(), |d| d.join(file));
     let text = std::fs::read_to_string(&path)
         .map_err(|e| err("loading.csv", format!("cannot read {}: {e}", path.display())))?;
     let mut samples = Vec::new();
@@ -281,26 +357,46 @@ fn loading(
             Some((Ok(t), Ok(x))) => samples.push((t, x)),
             _ if n == 0 => {} // a header
             _ if line.trim().is_empty() => {}
-            _ => return Err(err("loading.csv", format!("{} line {}: expected \"time,load-point displacement\" numbers, got {line:?}", path.display(), n + 1))),
+            _ => return Err(err(
+                "loading.csv",
+                format!(
+                    "{} line {}: expected \"time,load-point displacement\" numbers, got {line:?}",
+                    path.display(),
+                    n + 1
+                ),
+            )),
         }
     }
     Loading::from_displacement(&samples).map_err(bad("loading.csv"))
 }
 
-fn steady(p: &LabParams, v: f64, err: &impl Fn(&str, String) -> SceneError) -> Result<Vec<f64>, SceneError> {
+fn steady(
+    p: &LabParams,
+    v: f64,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Vec<f64>, SceneError> {
     if v <= 0.0 {
         return Err(err("initial", "\"steady\" needs the first segment to slide (velocity > 0); start with a slide or give {\"mu\", \"theta\"}".into()));
     }
     Ok(p.steady_state(v))
 }
 
-fn solver(raw: Option<&RawSolver>, err: &impl Fn(&str, String) -> SceneError) -> Result<LabSolver, SceneError> {
+fn solver(
+    raw: Option<&RawSolver>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<LabSolver, SceneError> {
     let method = match raw.and_then(|r| r.method.as_deref()) {
         None => Method::CvodeBdf,
         Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
     };
-    let rtol = positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-10), "e.g. 1e-10", err)?;
-    let atol = positive("solver.atol", raw.and_then(|r| r.atol).unwrap_or(rtol), "absolute in ln V and ln θ, e.g. 1e-10", err)?;
+    let rtol =
+        positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-10), "e.g. 1e-10", err)?;
+    let atol = positive(
+        "solver.atol",
+        raw.and_then(|r| r.atol).unwrap_or(rtol),
+        "absolute in ln V and ln θ, e.g. 1e-10",
+        err,
+    )?;
     Ok(LabSolver { method, rtol, atol })
 }
 
