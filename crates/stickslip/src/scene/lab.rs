@@ -357,14 +357,16 @@ fn loading(
             Some((Ok(t), Ok(x))) => samples.push((t, x)),
             _ if n == 0 => {} // a header
             _ if line.trim().is_empty() => {}
-            _ => return Err(err(
-                "loading.csv",
-                format!(
+            _ => {
+                return Err(err(
+                    "loading.csv",
+                    format!(
                     "{} line {}: expected \"time,load-point displacement\" numbers, got {line:?}",
                     path.display(),
                     n + 1
                 ),
-            )),
+                ))
+            }
         }
     }
     Loading::from_displacement(&samples).map_err(bad("loading.csv"))
