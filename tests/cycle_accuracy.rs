@@ -10,10 +10,8 @@ use std::process::Command;
 use stickslip::analysis::cycle::CycleStatus;
 use stickslip::{engine, scene};
 
-fn run(text: &str) -> stickslip::report::Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
+mod common;
+use common::run_scene;
 
 /// The 12 quasi-dynamic cases (slip and ageing law × k/k_c = 0.9, 0.5, 0.2 × η = 5e-8, 1e-3;
 /// ξ = 0.5 k/k_c, ε = 0.5, from v = 0.5, θ = 0), radau5 at rtol 1e-10 with the default cycle
@@ -39,7 +37,7 @@ fn quasi_dynamic_cycles_are_within_their_error_estimates() {
                 "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#,
             f("xi")
         );
-        let c = run(&text).cycle.unwrap();
+        let c = run_scene(&text).cycle.unwrap();
         let case = format!("{law} k/k_c = {} η = {eta:e}", f("k_over_kc"));
         assert_eq!(c.status, CycleStatus::Periodic, "{case}");
         let (v, e) = (c.values.unwrap(), c.error_estimate.unwrap());
@@ -74,7 +72,7 @@ fn earthquake(method: &str, initial: &str) -> String {
 fn far_starts_reach_the_earthquake_cycle_with_default_options() {
     for method in ["cvode-bdf", "radau5"] {
         for initial in [r#""u": 0, "v": 1e30, "theta": 0"#, r#""u": -1e6, "v": 1, "theta": 0"#] {
-            let c = run(&earthquake(method, initial)).cycle.unwrap();
+            let c = run_scene(&earthquake(method, initial)).cycle.unwrap();
             assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
             let p = c.values.unwrap().main.period;
             assert!(
@@ -133,7 +131,7 @@ fn far_starts_reach_the_cycle_with_every_stiff_method() {
     ];
     for method in ["cvode-bdf", "radau5", "rodas5p", "extrapolation", "arkode-dirk"] {
         for initial in starts {
-            let c = run(&earthquake(method, initial)).cycle.unwrap();
+            let c = run_scene(&earthquake(method, initial)).cycle.unwrap();
             assert_eq!(c.status, CycleStatus::Periodic, "{method} from {initial}: {c:?}");
             let p = c.values.unwrap().main.period;
             assert!(
