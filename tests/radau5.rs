@@ -3,7 +3,9 @@
 //! the DRR model at γ = 1e8 are tests/methods.rs, run over every homemade method; the
 //! Integrator contract is tests/contract.rs, run over every method).
 
-use stickslip::integrate::{ErrorKind, Integrator, Options, Radau5, Task, Tolerance};
+use stickslip::integrate::{
+    ErrorKind, Integrator, Options, Radau5, Task, Tolerance, ToleranceTransform,
+};
 
 mod common;
 use common::{Linear, NanAfter, Oscillator};
@@ -34,6 +36,36 @@ fn dense_derivatives_restarts_and_jacobian_counts() {
     // Finite-difference Jacobian: n RHS calls per Jacobian, counted apart.
     let s = solver.stats();
     assert!(s.jac_evals > 0 && s.rhs_evals_jacobian == 2 * s.jac_evals, "{s:?}");
+}
+
+/// The two readings of the tolerances: RADAU5's transform at (rtol, atol) is the tolerances
+/// as given at (rtol', atol') = (0.1·rtol^(2/3), atol·rtol'/rtol), step for step; as given at
+/// (rtol, atol) the run is more accurate (the transform loosens rtol 1e-8 to 4.6e-7).
+#[test]
+fn tolerances_as_given_or_transformed() {
+    let run = |rtol: f64, atol: f64, transform| {
+        let options = Options::new(rtol, Tolerance::Scalar(atol));
+        let mut solver =
+            Radau5::with_tolerances(Oscillator, 0.0, &[0.0, 1.0], &options, transform).unwrap();
+        solver.advance(20.0, Task::Normal).unwrap();
+        (solver.state().to_vec(), solver.stats())
+    };
+    let (rtol, atol) = (1e-8, 1e-10);
+    let hairer = run(rtol, atol, ToleranceTransform::Hairer);
+    let rtol_t = 0.1 * rtol.powf(2.0 / 3.0);
+    let as_given_t = run(rtol_t, rtol_t * atol / rtol, ToleranceTransform::AsGiven);
+    assert_eq!(hairer.0, as_given_t.0, "the same integration");
+    assert_eq!(hairer.1.steps, as_given_t.1.steps);
+    assert_eq!(hairer.1.rhs_evals, as_given_t.1.rhs_evals);
+    let as_given = run(rtol, atol, ToleranceTransform::AsGiven);
+    let error = |y: &[f64]| (y[0] - 20f64.sin()).abs().max((y[1] - 20f64.cos()).abs());
+    assert!(as_given.1.steps > 2 * hairer.1.steps, "{:?} {:?}", as_given.1, hairer.1);
+    assert!(
+        error(&as_given.0) < 1e-7 && error(&as_given.0) < 0.1 * error(&hairer.0),
+        "as given {:e}, transformed {:e}",
+        error(&as_given.0),
+        error(&hairer.0)
+    );
 }
 
 #[test]
