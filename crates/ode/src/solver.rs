@@ -7,7 +7,7 @@
 
 use crate::integrate::{
     ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p,
-    SolverError,
+    SolverError, ToleranceTransform,
 };
 use crate::sundials::{
     self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
@@ -146,6 +146,15 @@ pub enum MethodError {
     /// table for a method that is not an ARKODE one.
     #[error("table: {} takes no Butcher table (only the arkode methods do)", method.name())]
     NoTable {
+        /// The method.
+        method: Method,
+    },
+    /// tolerance_transform for a method other than radau5.
+    #[error(
+        "tolerance_transform applies to radau5 only, not {method}: leave it unset (None); \
+         {method} uses rtol and atol as given"
+    )]
+    NoToleranceTransform {
         /// The method.
         method: Method,
     },
@@ -421,6 +430,10 @@ pub struct MethodSettings {
     /// set at rtol 1e-4 and 1e-7 and reports HIRES and VDPOL at 1e-7 about 2000 × rtol off
     /// (docs/test-set.md). An error for the other methods.
     pub deduce_implicit_rhs: bool,
+    /// What radau5 makes of rtol and atol ([`ToleranceTransform`]); None is RADAU5's own
+    /// transform ([`ToleranceTransform::Hairer`]). The other methods use the tolerances as
+    /// given and have no such setting: an error for them.
+    pub tolerance_transform: Option<ToleranceTransform>,
 }
 
 impl MethodSettings {
@@ -432,6 +445,7 @@ impl MethodSettings {
             explicit_table: spec.explicit_table.clone(),
             autonomous,
             deduce_implicit_rhs: false,
+            tolerance_transform: None,
         }
     }
 }
@@ -523,7 +537,10 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
             let message = "arkode-imex needs a system split into explicit and implicit parts: implement ImexSystem and use solver::build";
             return Err(invalid(method, t0, y0, message.into()));
         }
-        Method::Radau5 => Box::new(Radau5::new(system, t0, y0, options)?),
+        Method::Radau5 => {
+            let transform = settings.tolerance_transform.unwrap_or_default();
+            Box::new(Radau5::with_tolerances(system, t0, y0, options, transform)?)
+        }
         Method::Rodas5p if settings.autonomous => {
             Box::new(Rodas5p::new(system, t0, y0, options)?.autonomous())
         }
@@ -580,6 +597,9 @@ fn reject_unsupported(
     let ark_implicit = matches!(method, Method::ArkodeDirk | Method::ArkodeImex);
     if settings.deduce_implicit_rhs && !ark_implicit {
         return Err(MethodError::NoDeducedImplicitRhs { method });
+    }
+    if settings.tolerance_transform.is_some() && method != Method::Radau5 {
+        return Err(MethodError::NoToleranceTransform { method });
     }
     Ok(())
 }
