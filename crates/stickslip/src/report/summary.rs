@@ -17,7 +17,7 @@ impl Report {
     pub fn summary(&self) -> String {
         let sections = [
             Some(self.model_and_solver()),
-            self.hopf.as_ref().map(hopf),
+            self.hopf.as_ref().map(|h| hopf(h, self.model.epsilon)),
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
             self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
@@ -84,7 +84,9 @@ fn model(name: &str, m: &ModelSection) -> String {
     )
 }
 
-fn hopf(h: &HopfReport) -> String {
+/// The threshold and the verdict on the fixed point; with ε < 0 (b < a) the fault is named
+/// velocity-strengthening, the reason it is stable.
+fn hopf(h: &HopfReport, epsilon: f64) -> String {
     format!(
         "hopf: ε_c = {:.12}, ω_c = {:.9}, period_c = {:.9} (2π/√ξ = {:.9}); {}\n",
         h.epsilon_c,
@@ -93,6 +95,8 @@ fn hopf(h: &HopfReport) -> String {
         h.period_c_large_gamma,
         if h.above_threshold {
             "above threshold: fixed point unstable"
+        } else if epsilon < 0.0 {
+            "velocity-strengthening (ε = b/a − 1 < 0, b < a): fixed point stable, no stick-slip"
         } else {
             "below threshold: fixed point stable"
         }
