@@ -27,7 +27,7 @@ pub mod options;
 pub mod sink;
 
 pub use options::{Sampling, TimeSeriesOptions};
-pub use sink::{DiscardSink, SeriesCollector, SeriesSink};
+pub use sink::{DiscardSink, SeriesCollector, SeriesSink, TeeSink};
 
 use super::events;
 use super::AnalysisError;
