@@ -294,3 +294,17 @@ fn warnings_name_the_fields_the_user_gave() {
     assert!(joined.contains("model.dimensional.shear_modulus/length/d_c/a_sigma"), "{joined}");
     assert!(!joined.contains("model.dimensional.k/"), "{joined}");
 }
+
+#[test]
+fn a_declared_si_unit_system_names_the_units_without_hedging() {
+    let text = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "SI", "sigma": 1e7,"#);
+    let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.units.as_ref().unwrap().time_unit, "s");
+    let report = engine::run(&s, serde_json::from_str(&text).unwrap()).unwrap();
+    let summary = report.summary();
+    assert!(summary.contains("in SI units") && summary.contains("m/s"), "{summary}");
+    assert!(!summary.contains("if the dimensional input is SI"), "{summary}");
+    let bad = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "cgs", "sigma": 1e7,"#);
+    let e = scene::parse(&bad, "t").unwrap_err().to_string();
+    assert!(e.contains("unit_system") || e.contains("SI"), "{e}");
+}

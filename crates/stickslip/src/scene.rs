@@ -126,6 +126,10 @@ pub struct Dimensional {
     /// Shear-wave speed c_s (radiation damping; with `shear_modulus`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shear_wave_speed: Option<f64>,
+    /// The unit system of these values: "SI" (Pa, m, m/s, s) lets reports state their units;
+    /// absent, any consistent system is accepted and the units are left to the reader.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit_system: Option<UnitSystem>,
     /// The radiation-damping coefficient η_dim = G/(2c_s) in stress per velocity (e.g. Pa·s/m),
     /// instead of `shear_modulus` with `shear_wave_speed`: η = η_dim·v0/(aσ).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -169,6 +173,14 @@ enum RawFriction {
         #[serde(default)]
         velocity_star: Option<f64>,
     },
+}
+
+/// A declared unit system for `model.dimensional`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum UnitSystem {
+    /// Pa, m, m/s, s (and Pa·s/m for `radiation_damping`).
+    #[serde(rename = "SI")]
+    Si,
 }
 
 /// Physical time units for reports: one dimensionless time unit (D_c/v0) is `time_scale`
@@ -615,7 +627,11 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             Some(u)
         }
         None => scales.map(|s| Units {
-            time_unit: "s (if the dimensional input is SI)".into(),
+            time_unit: match m.dimensional.and_then(|d| d.unit_system) {
+                Some(UnitSystem::Si) => "s",
+                None => "s (if the dimensional input is SI)",
+            }
+            .into(),
             time_scale: s.time_scale(),
         }),
     };

@@ -21,7 +21,9 @@ impl Report {
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
             self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
-            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(cycle_physical),
+            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
+                cycle_physical(p, self.scene["model"]["dimensional"]["unit_system"] == "SI")
+            }),
             Some(self.warnings.iter().map(|w| format!("warning: {w}\n")).collect()),
             self.asymptotics.as_ref().map(asymptotics::summary),
             self.lyapunov.as_ref().map(lyapunov::summary),
@@ -211,8 +213,16 @@ fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>) -> String {
     s
 }
 
-/// The converged cycle in the dimensional input's units.
-fn cycle_physical(p: &CyclePhysical) -> String {
+/// The converged cycle in the dimensional input's units, named when the scene declares them
+/// SI.
+fn cycle_physical(p: &CyclePhysical, si: bool) -> String {
+    if si {
+        return format!(
+            "  in SI units (cycle.physical): v_max {:.6e} m/s, v_min {:.6e} m/s, slip {:.6e} m, \
+             stress drop {:.6e} Pa\n",
+            p.v_max, p.v_min, p.slip, p.stress_drop
+        );
+    }
     format!(
         "  in the input's units (cycle.physical): v_max {:.6e}, v_min {:.6e}, slip {:.6e}, \
          stress drop {:.6e}\n",
