@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
+use stickslip::analysis::time_series::TeeSink;
 use stickslip::sundials;
 use stickslip::{compare, engine, report, scene, sweep};
 use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
@@ -42,9 +43,10 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
         /// Write the "time_series" analysis's rows to FILE as they are computed: CSV if FILE
-        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it).
+        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it). Repeat it
+        /// for several files from one run (e.g. --series a.csv --series a.npy).
         #[arg(long, value_name = "FILE")]
-        series: Option<PathBuf>,
+        series: Vec<PathBuf>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -219,7 +221,7 @@ fn run_command(
     json: bool,
     out: Option<PathBuf>,
     threads: Option<usize>,
-    series: Option<PathBuf>,
+    series: Vec<PathBuf>,
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
@@ -237,15 +239,16 @@ fn run_command(
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
             }
-            let report = match &series {
-                Some(file) => run_writing_series(scene, echo, threads, &update, file)?,
-                None => engine::run_with(scene, echo, threads, &update)
-                    .map_err(|e| failed(&scene.name, e))?,
+            let report = if series.is_empty() {
+                engine::run_with(scene, echo, threads, &update)
+                    .map_err(|e| failed(&scene.name, e))?
+            } else {
+                run_writing_series(scene, echo, threads, &update, &series)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
             (report.to_json(), report.summary())
         }
-        scene::AnyScene::Other(_) if series.is_some() => {
+        scene::AnyScene::Other(_) if !series.is_empty() => {
             return Err(Failure(
                 2,
                 "--series: this scene has no \"time_series\" analysis (only DRR scenes have one); \
@@ -319,41 +322,66 @@ fn series_staging(file: &Path) -> (PathBuf, PathBuf) {
     (staging, file)
 }
 
-/// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix)
-/// through a temporary file ([`series_staging`]), removed if the run fails.
+/// Runs a DRR scene streaming its "time_series" rows to each of `files` (CSV or .npy by its
+/// suffix) through temporary files ([`series_staging`]), removed if the run fails.
 fn run_writing_series(
     scene: &scene::Scene,
     echo: serde_json::Value,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-    file: &Path,
+    files: &[PathBuf],
 ) -> Result<report::Report, Failure> {
+    let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
     if scene.analyses.time_series.is_none() {
         return Err(Failure(
             2,
             format!(
-                "--series {}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
-                file.display(),
+                "--series {named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
                 scene.name
             ),
         ));
     }
-    let (staging, target) = series_staging(file);
-    let mut sink = stickslip::series_file::create_as(&staging, file).map_err(|e| {
-        Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
-    })?;
-    let report = engine::run_with_series(scene, echo, threads, progress, sink.as_mut());
-    drop(sink);
-    let renamed = match &report {
-        Ok(_) if staging != target => std::fs::rename(&staging, &target),
-        _ => Ok(()),
+    let staged: Vec<(PathBuf, PathBuf)> = files.iter().map(|f| series_staging(f)).collect();
+    let remove_staging = |staged: &[(PathBuf, PathBuf)]| {
+        for (staging, target) in staged {
+            if staging != target {
+                drop(std::fs::remove_file(staging));
+            }
+        }
     };
-    if (report.is_err() || renamed.is_err()) && staging != target {
-        drop(std::fs::remove_file(&staging));
+    let mut sinks = Vec::new();
+    for ((staging, _), file) in staged.iter().zip(files) {
+        match stickslip::series_file::create_as(staging, file) {
+            Ok(sink) => sinks.push(sink),
+            Err(e) => {
+                drop(sinks);
+                remove_staging(&staged);
+                return Err(Failure(
+                    2,
+                    format!("--series {}: cannot create the file: {e}", file.display()),
+                ));
+            }
+        }
     }
-    renamed
-        .map_err(|e| Failure(1, format!("--series {}: cannot write it: {e}", file.display())))?;
-    report.map_err(|e| failed(&scene.name, e))
+    let mut tee = TeeSink(sinks);
+    let report = engine::run_with_series(scene, echo, threads, progress, &mut tee);
+    drop(tee);
+    if report.is_err() {
+        remove_staging(&staged);
+    }
+    let report = report.map_err(|e| failed(&scene.name, e))?;
+    for (i, (staging, target)) in staged.iter().enumerate() {
+        if staging != target {
+            if let Err(e) = std::fs::rename(staging, target) {
+                remove_staging(&staged[i..]);
+                return Err(Failure(
+                    1,
+                    format!("--series {}: cannot write it: {e}", files[i].display()),
+                ));
+            }
+        }
+    }
+    Ok(report)
 }
 
 /// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and

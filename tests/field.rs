@@ -260,3 +260,33 @@ fn parameters_far_outside_the_physical_range_warn_in_the_report_and_on_stderr() 
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(report["warnings"][0].as_str().unwrap().contains("ξ"), "{}", report["warnings"]);
 }
+
+#[test]
+fn warnings_name_the_fields_the_user_gave() {
+    // k as G/L (L = 0.12 mm: k = 2.5e14 Pa/m) and the coefficients as stresses.
+    let text = qdyn_with(r#""k": 2.5e8"#, r#""length": 1.2e-4"#)
+        .replacen(
+            r#""sigma": 1e7, "a": 0.01, "b": 0.015"#,
+            r#""a_sigma": 1e5, "b_sigma": 1.5e5"#,
+            1,
+        )
+        .replacen(r#""mu0": 0.6, "v_ref": 1e-6,"#, "", 1);
+    let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
+    let joined = s.warnings.join("\n");
+    assert!(joined.contains("model.dimensional.shear_modulus/length/d_c/a_sigma"), "{joined}");
+    assert!(!joined.contains("model.dimensional.k/"), "{joined}");
+}
+
+#[test]
+fn a_declared_si_unit_system_names_the_units_without_hedging() {
+    let text = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "SI", "sigma": 1e7,"#);
+    let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.units.as_ref().unwrap().time_unit, "s");
+    let report = engine::run(&s, serde_json::from_str(&text).unwrap()).unwrap();
+    let summary = report.summary();
+    assert!(summary.contains("in SI units") && summary.contains("m/s"), "{summary}");
+    assert!(!summary.contains("if the dimensional input is SI"), "{summary}");
+    let bad = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "cgs", "sigma": 1e7,"#);
+    let e = scene::parse(&bad, "t").unwrap_err().to_string();
+    assert!(e.contains("unit_system") || e.contains("SI"), "{e}");
+}

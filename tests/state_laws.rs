@@ -187,6 +187,14 @@ fn radiation_damping_from_the_shear_modulus_and_wave_speed() {
     )
     .unwrap();
     assert_eq!((plain.params.state_law, plain.params.eta), (StateLaw::Slip, 0.0));
+    // The coefficient η_dim = G/(2c_s) = 5e6 Pa·s/m directly: the same η.
+    let direct = text.replace(r#""shear_wave_speed": 3e3"#, r#""radiation_damping": 5e6"#);
+    let direct = direct.replace(r#""shear_modulus": 3e10,"#, "");
+    let s = scene::parse(&direct, "test").unwrap_or_else(|e| panic!("{e}"));
+    assert!((s.params.eta - 1e-8).abs() < 1e-22, "{}", s.params.eta);
+    let both = text.replace(r#""shear_modulus": 3e10,"#, r#""radiation_damping": 5e6,"#);
+    let e = scene::parse(&both, "test").unwrap_err().to_string();
+    assert!(e.contains("model.dimensional.radiation_damping") && e.contains("not both"), "{e}");
 }
 
 #[test]

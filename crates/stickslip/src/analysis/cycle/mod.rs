@@ -688,8 +688,8 @@ impl<'a> Tracker<'a> {
 /// the current rise.
 pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
     let (rtol, atol) = w_tolerance;
-    let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y[W]);
-    drr.offset_feedback(y[W]).abs() * error_g <= 1e-3 * rate
+    let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y);
+    drr.offset_feedback(y).abs() * error_g <= 1e-3 * rate
 }
 
 /// Whether two cycles agree within the tolerance (period, v_max and the ln v range relative).
