@@ -282,7 +282,7 @@ fn a_declared_si_unit_system_names_the_units_without_hedging() {
     let text = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "SI", "sigma": 1e7,"#);
     let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.units.as_ref().unwrap().time_unit, "s");
-    let report = engine::run(&s, serde_json::from_str(&text).unwrap()).unwrap();
+    let report = run_scene(&text);
     let summary = report.summary();
     assert!(summary.contains("in SI units") && summary.contains("m/s"), "{summary}");
     assert!(!summary.contains("if the dimensional input is SI"), "{summary}");
