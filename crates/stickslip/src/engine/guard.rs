@@ -68,6 +68,18 @@ impl Integrator for Guarded<'_> {
         self.inner.reinit(t0, y0)
     }
 
+    fn reinit_with_step(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        first_step: f64,
+    ) -> Result<(), SolverError> {
+        if let Some(frozen) = &mut self.frozen {
+            frozen.reset();
+        }
+        self.inner.reinit_with_step(t0, y0, first_step)
+    }
+
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
         self.inner.set_stop_time(t_stop)
     }
