@@ -126,19 +126,20 @@ impl Drr {
     }
 
     /// Φ(w, θ) + η v at y with its derivatives in (w, θ) ([`Strength`]); the third ones only
-    /// when `third` (the quasi-dynamic Jacobian and ∂J/∂y need them). For the paper's laws
-    /// Φ = θ + f(v), with the value formed as θ + (f + η v).
-    fn total(&self, y: &[f64], third: bool) -> Strength {
+    /// when `third` gives v = e^w (the quasi-dynamic Jacobian and ∂J/∂y need them; their caller
+    /// has v at hand, so it is not computed twice). For the paper's laws Φ = θ + f(v), with the
+    /// value formed as θ + (f + η v).
+    fn total(&self, y: &[f64], third: Option<f64>) -> Strength {
         let p = &self.params;
         let w = y[W];
         if !p.friction.is_classic() {
-            return p.friction.strength(w, y[THETA], 1.0 + p.epsilon).damped(p.eta, w.exp());
+            let v = third.unwrap_or_else(|| w.exp());
+            return p.friction.strength(w, y[THETA], 1.0 + p.epsilon).damped(p.eta, v);
         }
         let r = self.resistance(w);
-        let d3 = if third {
-            p.friction.d2_vfprime_dw2(w) + if p.eta == 0.0 { 0.0 } else { p.eta * w.exp() }
-        } else {
-            0.0
+        let d3 = match third {
+            Some(v) => p.friction.d2_vfprime_dw2(w) + if p.eta == 0.0 { 0.0 } else { p.eta * v },
+            None => 0.0,
         };
         Strength {
             value: y[THETA] + r.value,
@@ -151,7 +152,7 @@ impl Drr {
     /// Φ + η v at y with its derivatives in (w, θ) up to third order: the friction and damping
     /// of the force balance G = u + (Φ + η v)/ξ.
     pub fn strength(&self, y: &[f64]) -> Strength {
-        self.total(y, true)
+        self.total(y, Some(y[W].exp()))
     }
 
     /// f(v) + η v alone, the value of [`Drr::resistance`], given f = f(v) and v: the right-hand
@@ -182,7 +183,7 @@ impl Drr {
         if !p.friction.is_classic() {
             // x = θ/(1+ε) + ln v: θ* = (1+ε) x*.
             let theta = (1.0 + p.epsilon) * p.state_law.steady_x();
-            return [-self.total(&[0.0, 0.0, theta], false).value / p.xi, 0.0, theta];
+            return [-self.total(&[0.0, 0.0, theta], None).value / p.xi, 0.0, theta];
         }
         let (f1, _) = p.friction.eval(0.0);
         let theta = (1.0 + p.epsilon) * (p.state_law.steady_x() - f1);
@@ -192,13 +193,13 @@ impl Drr {
     /// The distance to the slow manifold, G = u + (Φ + η v)/ξ (θ + f(v) + η v for the paper's
     /// laws; dv/dt = −γ² G).
     pub fn manifold_offset(&self, y: &[f64]) -> f64 {
-        self.offset_given(y, self.total(y, false).value)
+        self.offset_given(y, self.total(y, None).value)
     }
 
     /// ∂G/∂w = (Φ_w + η v)/ξ ((v f'(v) + η v)/ξ for the paper's laws) at y: how an error in
     /// w shows in the manifold offset G.
     pub fn manifold_offset_slope(&self, y: &[f64]) -> f64 {
-        self.total(y, false).d1[0] / self.params.xi
+        self.total(y, None).d1[0] / self.params.xi
     }
 
     /// w on the slow manifold G = 0 for given (u, θ), if the friction law allows it
@@ -208,7 +209,7 @@ impl Drr {
         let w = match self.params.friction {
             // Φ + η v increases strictly with w (Φ_w > 0): solve Φ + η v = −ξu.
             Friction::CutOff { .. } | Friction::Regularised { .. } => solve(|w| {
-                let t = self.total(&[u, w, theta], false);
+                let t = self.total(&[u, w, theta], None);
                 (t.value + self.params.xi * u, t.d1[0])
             })?,
             _ if self.params.eta > 0.0 => solve(|w| {
@@ -228,7 +229,7 @@ impl Drr {
     /// u on the slow manifold for given (w, θ).
     pub fn manifold_u(&self, w: f64, theta: f64) -> f64 {
         if !self.params.friction.is_classic() {
-            return -self.total(&[0.0, w, theta], false).value / self.params.xi;
+            return -self.total(&[0.0, w, theta], None).value / self.params.xi;
         }
         -(theta + self.resistance(w).value) / self.params.xi
     }
@@ -310,7 +311,7 @@ impl Drr {
         let law = self.state_rate(y, v);
         jac.set(U, W, v);
         if p.inertia {
-            let t = self.total(y, false);
+            let t = self.total(y, None);
             let g = self.offset_given(y, t.value);
             let (a, varies) = arrest_rate();
             let da = if varies { a } else { 0.0 };
@@ -334,7 +335,7 @@ impl Drr {
         let k = CONSTRAINT_RELAXATION_RATE;
         let w = y[W];
         let v = w.exp();
-        let t = self.total(y, true);
+        let t = self.total(y, Some(v));
         let g = self.offset_given(y, t.value);
         let law = self.state_rate(y, v);
         let r = law.value();
@@ -368,7 +369,7 @@ impl Drr {
     pub fn velocity_slopes(&self, y: &[f64]) -> [f64; 3] {
         let v_inverse = (-y[W]).exp();
         let law = self.state_rate(y, y[W].exp());
-        [self.total(y, false).d1[0] * v_inverse, law.w() * v_inverse, law.theta()]
+        [self.total(y, None).d1[0] * v_inverse, law.w() * v_inverse, law.theta()]
     }
 
     /// ∂(dw/dt)/∂G at y, how an error in the distance G to the force balance shows in dw/dt:
@@ -377,7 +378,7 @@ impl Drr {
         if self.params.inertia {
             -self.arrest_rate(y[W]).0
         } else {
-            -CONSTRAINT_RELAXATION_RATE * self.params.xi / self.total(y, false).d1[0]
+            -CONSTRAINT_RELAXATION_RATE * self.params.xi / self.total(y, None).d1[0]
         }
     }
 
@@ -402,7 +403,7 @@ impl Drr {
         }
         let v = w.exp();
         if !p.friction.is_classic() {
-            let dw = -self.arrest_rate(w).0 * self.offset_given(y, self.total(y, false).value);
+            let dw = -self.arrest_rate(w).0 * self.offset_given(y, self.total(y, None).value);
             return (w.exp_m1(), dw, self.state_rate(y, v).value());
         }
         let (f, _) = p.friction.eval(w);
@@ -575,7 +576,7 @@ impl OdeSystem for Drr {
             }
             return;
         }
-        let t = self.total(y, false);
+        let t = self.total(y, None);
         let g = self.offset_given(y, t.value);
         let (a, varies) = self.arrest_rate(w);
         // da/dw = −a where the rate varies, 0 where it is held. With dw/dt = −aG, G_θ = P/ξ
