@@ -98,7 +98,7 @@ fn deep_stick_exits_resume_with_cvode_bdf_at_rtol_1e_10() {
                 r#"{{"name": "deep", "model": {{"gamma": {gamma}, "xi": 2.0, "epsilon": 40.0, "state_law": "slip"}},
                     "solver": {{"method": "{method}", "rtol": 1e-10}}, "analyses": ["cycle"]}}"#
             );
-            let c = run(&text).cycle.unwrap();
+            let c = run_scene(&text).cycle.unwrap();
             assert_eq!(c.status, CycleStatus::Periodic, "γ = {gamma}, {method}: {c:?}");
             assert!(c.deep_sticks > 0, "γ = {gamma}, {method}: no deep stick crossed");
             (c.values.unwrap().main.period, c.error_estimate.unwrap().period)
