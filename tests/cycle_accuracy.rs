@@ -206,11 +206,11 @@ fn far_starts_reach_the_cycle_with_every_stiff_method() {
 #[test]
 fn arkode_imex_stops_loudly_from_every_far_start() {
     let starts = [
-        (r#""u": 1e6, "v": 1e-300, "theta": 1e3"#, "no progress: 10000 steps in a row"),
+        (r#""u": 1e6, "v": 1e-300, "theta": 1e3"#, "no progress — 10000 steps in a row"),
         (r#""u": -1e6, "v": 1e30, "theta": -1e3"#, "error test failed repeatedly"),
         (r#""u": 0, "v": 1e-300, "theta": -1e3"#, "error test failed repeatedly"),
         (r#""u": 1e6, "v": 1e30, "theta": 1e3"#, "error test failed repeatedly"),
-        (r#""u": -1e6, "v": 1e-300, "theta": 0"#, "no progress: 10000 steps in a row"),
+        (r#""u": -1e6, "v": 1e-300, "theta": 0"#, "no progress — 10000 steps in a row"),
         (r#""u": 0, "v": 1e30, "theta": 0"#, "error test failed repeatedly"),
     ];
     for (initial, cause) in starts {

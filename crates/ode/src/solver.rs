@@ -114,11 +114,13 @@ pub enum MethodError {
         /// The name as given.
         name: String,
     },
-    /// explicit_table for a method other than arkode-imex.
-    #[error("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name())]
+    /// explicit_table for a method that takes none ([`Accepts::explicit_table`]).
+    #[error("explicit_table: {} takes no explicit table (only {} does)", method.name(), takers.join(", "))]
     NoExplicitTable {
         /// The method.
         method: Method,
+        /// The scene names of the methods that take one.
+        takers: Vec<&'static str>,
     },
     /// An optional setting the method does not take ([`Method::capabilities`]).
     #[error(
@@ -134,14 +136,16 @@ pub enum MethodError {
         /// The scene names of the methods that take it.
         takers: Vec<&'static str>,
     },
-    /// deduce_implicit_rhs for a method other than arkode-dirk and arkode-imex.
+    /// deduce_implicit_rhs for a method that does not take it ([`Accepts::deduce_implicit_rhs`]).
     #[error(
-        "deduce_implicit_rhs applies to arkode-dirk and arkode-imex only, not {method}: leave it \
-         false"
+        "deduce_implicit_rhs applies to {} only, not {method}: leave it false",
+        takers.join(" and ")
     )]
     NoDeducedImplicitRhs {
         /// The method.
         method: Method,
+        /// The scene names of the methods that take it.
+        takers: Vec<&'static str>,
     },
     /// table for a method that is not an ARKODE one.
     #[error("table: {} takes no Butcher table (only the arkode methods do)", method.name())]
@@ -179,11 +183,13 @@ impl Method {
             nonlin_conv_coef: true,
             jacobian_max_age: true,
             error_scales: true,
-            table: false,
+            deduce_implicit_rhs: false,
+            table: None,
             explicit_table: false,
         };
         let cvode = Accepts { max_order: true, ..newton };
-        let dirk = Accepts { table: true, ..newton };
+        let dirk =
+            Accepts { deduce_implicit_rhs: true, table: Some(TableKind::Implicit), ..newton };
         // Rodas5P and extrapolation solve linear systems only: no Newton iteration to limit.
         let linearly_implicit =
             Accepts { max_nonlin_iters: false, nonlin_conv_coef: false, ..newton };
@@ -258,6 +264,8 @@ impl Method {
                     max_conv_fails: false,
                     nonlin_conv_coef: false,
                     jacobian_max_age: false,
+                    deduce_implicit_rhs: false,
+                    table: Some(TableKind::Explicit),
                     ..dirk
                 },
                 engine: plain,
@@ -346,10 +354,21 @@ pub struct Accepts {
     pub jacobian_max_age: bool,
     /// [`Options::error_scales`] (SUNDIALS' user error weights, the homemade methods' own).
     pub error_scales: bool,
-    /// [`MethodSettings::table`].
-    pub table: bool,
+    /// [`MethodSettings::deduce_implicit_rhs`] (ARKStep's implicit methods).
+    pub deduce_implicit_rhs: bool,
+    /// [`MethodSettings::table`], and which kind of Butcher table it names; None: no table.
+    pub table: Option<TableKind>,
     /// [`MethodSettings::explicit_table`].
     pub explicit_table: bool,
+}
+
+/// The kind of Butcher table a method's [`MethodSettings::table`] names ([`Accepts::table`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TableKind {
+    /// An implicit (DIRK) table, [`DirkTable`] (arkode-dirk; arkode-imex's implicit part).
+    Implicit,
+    /// An explicit (ERK) table, [`ErkTable`] (arkode-erk).
+    Explicit,
 }
 
 impl Accepts {
@@ -480,7 +499,7 @@ pub fn build<'s, S: ImexSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    if method != Method::ArkodeImex {
+    if !method.capabilities().needs_imex {
         return build_ode(method, settings, system, t0, y0, options);
     }
     let tables = checked_tables(method, settings, options)
@@ -547,10 +566,10 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
         Method::Rodas5p => Box::new(Rodas5p::new(system, t0, y0, options)?),
         Method::Extrapolation => Box::new(Extrapolation::new(system, t0, y0, options)?),
     };
-    let tables = match method {
-        Method::ArkodeDirk => vec![dirk.name().into()],
-        Method::ArkodeErk => vec![erk.name().into()],
-        _ => vec![],
+    let tables = match method.capabilities().accepts.table {
+        Some(TableKind::Implicit) => vec![dirk.name().into()],
+        Some(TableKind::Explicit) => vec![erk.name().into()],
+        None => vec![],
     };
     Ok(Built { integrator, tables })
 }
@@ -594,9 +613,13 @@ fn reject_unsupported(
             .collect();
         return Err(MethodError::UnsupportedOption { name, method, takers });
     }
-    let ark_implicit = matches!(method, Method::ArkodeDirk | Method::ArkodeImex);
-    if settings.deduce_implicit_rhs && !ark_implicit {
-        return Err(MethodError::NoDeducedImplicitRhs { method });
+    if settings.deduce_implicit_rhs && !accepts.deduce_implicit_rhs {
+        let takers = Method::ALL
+            .iter()
+            .filter(|(_, m)| m.capabilities().accepts.deduce_implicit_rhs)
+            .map(|(n, _)| *n)
+            .collect();
+        return Err(MethodError::NoDeducedImplicitRhs { method, takers });
     }
     if settings.tolerance_transform.is_some() && method != Method::Radau5 {
         return Err(MethodError::NoToleranceTransform { method });
@@ -680,17 +703,17 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Met
             .ok_or_else(|| MethodError::UnknownExplicitTable { field, name: name.into() })
     };
     let (table, explicit_table) = (settings.table.as_deref(), settings.explicit_table.as_deref());
-    if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(MethodError::NoExplicitTable { method });
+    let accepts = method.capabilities().accepts;
+    if explicit_table.is_some() && !accepts.explicit_table {
+        let takers = Method::ALL
+            .iter()
+            .filter(|(_, m)| m.capabilities().accepts.explicit_table)
+            .map(|(n, _)| *n)
+            .collect();
+        return Err(MethodError::NoExplicitTable { method, takers });
     }
-    match method {
-        Method::ArkodeDirk => {
-            Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None })
-        }
-        Method::ArkodeErk => {
-            Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? })
-        }
-        Method::ArkodeImex => {
+    match accepts.table {
+        Some(TableKind::Implicit) if accepts.explicit_table => {
             let implicit = table.map(|n| dirk("table", n)).transpose()?;
             let paired = table.and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
             let explicit = match explicit_table {
@@ -699,7 +722,13 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Met
             };
             Ok(Tables { implicit, explicit })
         }
-        _ if table.is_some() => Err(MethodError::NoTable { method }),
-        _ => Ok(Tables { implicit: None, explicit: None }),
+        Some(TableKind::Implicit) => {
+            Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None })
+        }
+        Some(TableKind::Explicit) => {
+            Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? })
+        }
+        None if table.is_some() => Err(MethodError::NoTable { method }),
+        None => Ok(Tables { implicit: None, explicit: None }),
     }
 }

@@ -10,7 +10,7 @@ use crate::integrate::{ErrorKind, Integrator, SolverError, Stats, Step, Task};
 
 /// `integrator`, failing every [`Integrator::advance`] once `cancel` is set, and failing with
 /// the [`FrozenU`] error once `frozen` counts too many steps that left u unchanged. A cancelled
-/// advance is an error of kind [`ErrorKind::Other`] that goes up through the analyses like any
+/// advance is an error of kind [`ErrorKind::Cancelled`] that goes up through the analyses like any
 /// integrator failure; the run then reports [`super::RunError::Cancelled`] instead of it.
 pub(super) fn guarded<'a>(
     integrator: Box<dyn Integrator + 'a>,
@@ -35,11 +35,11 @@ impl Integrator for Guarded<'_> {
         if self.cancel.as_ref().is_some_and(Cancel::is_cancelled) {
             return Err(SolverError {
                 solver: self.inner.name(),
-                kind: ErrorKind::Other,
+                kind: ErrorKind::Cancelled,
                 t: self.inner.t(),
                 state: self.inner.state().to_vec(),
                 flag: 0,
-                message: "the run was cancelled".to_string(),
+                message: String::new(),
             });
         }
         let step = self.inner.advance(tout, task)?;
