@@ -5,6 +5,12 @@ Usage (in a venv with stickslip, scipy, numpy; see docs/python.md):
     python benches/python_peer.py [PROBLEM ...]   (default: every problem but MEDAKZO)
     python benches/python_peer.py SLIDER          (issue #27's done-when: the spring-slider
                                                    of python/tests/problems.py to t = 40)
+    python benches/python_peer.py RADAU           (issue #36: Radau against scipy's Radau at
+                                                   equal rtol and atol on HIRES and van der
+                                                   Pol μ = 1000, digits and speed)
+    python benches/python_peer.py CALLS           (issue #36: f and J calls of Radau and
+                                                   scipy's Radau at equal accuracy, HIRES and
+                                                   POLLU, rtol 1e-4 … 1e-10)
 
 Both sides get the same Python right-hand sides and analytic Jacobians (benches/
 test_set_scipy.py, the problems of docs/test-set.md), tolerances (atol as the Test Set
@@ -31,20 +37,20 @@ METHODS = [("scipy", "Radau"), ("scipy", "BDF"), ("scipy", "LSODA"),
            ("stickslip", "Radau"), ("stickslip", "BDF"), ("stickslip", "rodas5p")]
 
 
-def run_once(side, method, f, jac, ts_, y0, rtol, atol):
+def run_once(side, method, f, jac, ts_, y0, rtol, atol, clock=time.perf_counter):
     solve = scipy_solve_ivp if side == "scipy" else stickslip.solve_ivp
     y, nfev, njev = np.asarray(y0, float), 0, 0
-    start = time.perf_counter()
+    start = clock()
     for t0, t1 in zip(ts_[:-1], ts_[1:]):
         try:
             sol = solve(f, (t0, t1), y, method=method, rtol=rtol, atol=atol, jac=jac)
         except stickslip.SolverError as e:
-            return None, time.perf_counter() - start, 0, 0, f"{e.kind} at t = {e.t:.3e}"
+            return None, clock() - start, 0, 0, f"{e.kind} at t = {e.t:.3e}"
         nfev, njev = nfev + sol.nfev, njev + sol.njev
         if not sol.success:
-            return None, time.perf_counter() - start, nfev, njev, sol.message
+            return None, clock() - start, nfev, njev, sol.message
         y = sol.y[:, -1]
-    return y, time.perf_counter() - start, nfev, njev, ""
+    return y, clock() - start, nfev, njev, ""
 
 
 def timed(fun, spent):
@@ -96,6 +102,96 @@ def slider():
             print(f"| {side} {method} | {best:.3f} | {r.nfev} | {r.njev} | {len(r.t_events[0])} |", flush=True)
 
 
+MU = 1000.0
+#: van der Pol (μ = 1000, y(0) = (2, 0)) at t = 3000: scipy's Radau at rtol 1e-12, atol 1e-14
+#: (256 927 f calls) and LSODA at rtol 1e-13, atol 1e-16 agree to 1.2e-11 in y1 and 2.4e-14 in
+#: y2 (scipy 1.17.1; `solve_ivp(f, (0, 3000), [2, 0], method=..., rtol=..., atol=..., jac=jac)`
+#: with the f and jac below); the Radau values.
+VDP1000_REF = [-1.5106069367439976, 0.0011783800007311384]
+
+
+def vdp1000():
+    """van der Pol with μ = 1000 on [0, 3000] (the classic stiff example), atol 1e-8."""
+    def f(t, y):
+        return np.array([y[1], MU * (1 - y[0] ** 2) * y[1] - y[0]])
+
+    def jac(t, y):
+        return np.array([[0.0, 1.0], [-2 * MU * y[0] * y[1] - 1, MU * (1 - y[0] ** 2)]])
+
+    return "VDP1000", f, jac, [0, 3000.0], [2.0, 0.0], VDP1000_REF, lambda r: 1e-8
+
+
+def best_run(side, method, f, jac, ts_, y0, rtol, atol):
+    """run_once's result with the least CPU time of the process (less disturbed than wall
+    time by other work on a shared machine) of up to three runs (one past 2 s)."""
+    best = None
+    for _ in range(3):
+        r = run_once(side, method, f, jac, ts_, y0, rtol, atol, clock=time.process_time)
+        if best is None or r[1] < best[1]:
+            best = r
+        if r[1] > 2.0 or r[0] is None:
+            break
+    return best
+
+
+def radau():
+    """Radau (rtol, atol as given) and radau5 (RADAU5's transform) against scipy's Radau at the
+    same rtol and atol: HIRES with atol 1e-10, van der Pol μ = 1000 with atol 1e-8; time is
+    the process's CPU time."""
+    hires = ts.hires()
+    cells = [(hires[:6] + (lambda r: 1e-10,)), vdp1000()]
+    print("| problem | rtol | atol | method | scd | Δscd vs scipy | CPU time (ms) | × scipy | f calls | J calls |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, f, jac, ts_, y0, ref, atol_of in cells:
+        for rtol in [1e-6, 1e-8]:
+            atol = atol_of(rtol)
+            rows = []
+            for side, method in [("scipy", "Radau"), ("stickslip", "Radau"), ("stickslip", "radau5")]:
+                y, took, nfev, njev, msg = best_run(side, method, f, jac, ts_, y0, rtol, atol)
+                rows.append((side, method, ts.mescd(y, ref, atol, rtol), took, nfev, njev))
+            scipy_scd, scipy_took = rows[0][2], rows[0][3]
+            for side, method, scd, took, nfev, njev in rows:
+                print(f"| {name} | {rtol:.0e} | {atol:.0e} | {side} {method} | {scd:.2f} | "
+                      f"{scd - scipy_scd:+.2f} | {took * 1e3:.1f} | {scipy_took / took:.1f} | {nfev} | {njev} |",
+                      flush=True)
+
+
+def calls():
+    """f and J calls of Radau and radau5 against scipy's Radau at equal accuracy: each side
+    over rtol 1e-4 … 1e-10 (half decades, Test Set atol), scipy's calls interpolated (log
+    calls linear in scd) at each stickslip point; the geometric mean of the ratios."""
+    print("| problem | method | points | f calls / scipy's at equal scd (geometric mean, range) | J calls / scipy's |")
+    print("|---|---|---|---|---|")
+    rtols = [10 ** (-k / 2) for k in range(8, 21)]
+    for make in [ts.hires, ts.pollu]:
+        name, f, jac, ts_, y0, ref, atol_of = make()
+        curves = {}
+        for side, method in [("scipy", "Radau"), ("stickslip", "Radau"), ("stickslip", "radau5")]:
+            pts = []
+            for rtol in rtols:
+                atol = atol_of(rtol)
+                y, _, nfev, njev, _ = run_once(side, method, f, jac, ts_, y0, rtol, atol)
+                if y is not None:
+                    pts.append((ts.mescd(y, ref, atol, rtol), nfev, njev))
+            curves[method if side == "stickslip" else "scipy"] = pts
+        # scipy's curve made monotone in scd (the best calls for at least that scd).
+        peer = sorted(curves["scipy"])
+        for method in ["Radau", "radau5"]:
+            fr, jr = [], []
+            for scd, nfev, njev in curves[method]:
+                ff = at_scd([(s, n) for s, n, _ in peer], scd)
+                jj = at_scd([(s, j) for s, _, j in peer], scd)
+                if ff is not None:
+                    fr.append(nfev / ff)
+                    jr.append(njev / jj)
+            if fr:
+                g = lambda v: float(np.exp(np.mean(np.log(v))))
+                print(f"| {name} | stickslip {method} | {len(fr)} | {g(fr):.2f} ({min(fr):.2f}–{max(fr):.2f}) | "
+                      f"{g(jr):.2f} ({min(jr):.2f}–{max(jr):.2f}) |", flush=True)
+        for method, pts in curves.items():
+            print(f"<!-- {name} {method}: " + ", ".join(f"{s:.2f}/{n}/{j}" for s, n, j in pts) + " -->")
+
+
 def at_scd(points, scd):
     """A peer's time at accuracy scd: log time linear in scd between its (scd, time) points;
     None outside their range."""
@@ -126,6 +222,10 @@ def equal_accuracy(results):
 
 
 def main(names):
+    if names == ["RADAU"]:
+        return radau()
+    if names == ["CALLS"]:
+        return calls()
     if names == ["SLIDER"]:
         print("| method | time (s) | f calls | J calls | events |")
         print("|---|---|---|---|---|")

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """scipy's solve_ivp (LSODA, Radau, BDF) on stickslip's work-precision problem.
 
-Part of the work-precision runner (examples/work_precision, docs/work-precision.md).
+Part of the work-precision runner (tools/work_precision, docs/work-precision.md).
 
 Usage:
 
@@ -86,7 +86,7 @@ def expm1(x):
 
 
 def model(gamma, xi, epsilon):
-    """The right-hand side and Jacobian of src/model/drr.rs (f = ln v), same operations
+    """The right-hand side and Jacobian of crates/stickslip/src/model/drr.rs (f = ln v), same operations
     (scalar math, which is faster than numpy on three components)."""
     import numpy as np
 

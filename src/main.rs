@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
+use stickslip::analysis::time_series::{SeriesSink, TeeSink};
 use stickslip::sundials;
 use stickslip::{compare, engine, report, scene, sweep};
 use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
@@ -42,9 +43,10 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
         /// Write the "time_series" analysis's rows to FILE as they are computed: CSV if FILE
-        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it).
+        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it). Repeat it
+        /// for several files from one run (e.g. --series a.csv --series a.npy).
         #[arg(long, value_name = "FILE")]
-        series: Option<PathBuf>,
+        series: Vec<PathBuf>,
         /// Lab scenes: draw friction against load-point displacement to FILE (SVG).
         #[arg(long, value_name = "FILE.svg")]
         figure: Option<PathBuf>,
@@ -222,7 +224,7 @@ fn run_command(
     json: bool,
     out: Option<PathBuf>,
     threads: Option<usize>,
-    series: Option<PathBuf>,
+    series: Vec<PathBuf>,
     figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
@@ -247,15 +249,16 @@ fn run_command(
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
             }
-            let report = match &series {
-                Some(file) => run_writing_series(scene, echo, threads, &update, file)?,
-                None => engine::run_with(scene, echo, threads, &update)
-                    .map_err(|e| failed(&scene.name, e))?,
+            let report = if series.is_empty() {
+                engine::run_with(scene, echo, threads, &update)
+                    .map_err(|e| failed(&scene.name, e))?
+            } else {
+                run_writing_series(scene, echo, threads, &update, &series)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
             (report.to_json(), report.summary())
         }
-        scene::AnyScene::Other(_) if series.is_some() => {
+        scene::AnyScene::Other(_) if !series.is_empty() => {
             return Err(Failure(
                 2,
                 "--series: this scene has no \"time_series\" analysis (only DRR scenes have one); \
@@ -294,44 +297,23 @@ fn run_command(
     }
 }
 
-/// Runs a lab scene: report, optional series file (through a staging file, as for DRR
+/// Runs a lab scene: report, optional series files (through staging files, as for DRR
 /// scenes) and optional figure.
 fn run_lab(
     text: &str,
     source: &str,
     json: bool,
     out: Option<PathBuf>,
-    series: Option<PathBuf>,
+    series: Vec<PathBuf>,
     figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
     let scene = scene::lab::parse(text, source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(text).map_err(|e| Failure(2, e.to_string()))?;
-    let fail = |e: engine::lab::LabError| Failure(1, format!("scene {}: {e}", scene.name));
-    let report = match &series {
-        Some(file) => {
-            let (staging, target) = series_staging(file);
-            let mut sink = stickslip::series_file::create_as(&staging, file).map_err(|e| {
-                Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
-            })?;
-            let report = engine::lab::run(&scene, echo, sink.as_mut());
-            drop(sink);
-            let renamed = match &report {
-                Ok(_) if staging != target => std::fs::rename(&staging, &target),
-                _ => Ok(()),
-            };
-            if (report.is_err() || renamed.is_err()) && staging != target {
-                drop(std::fs::remove_file(&staging));
-            }
-            renamed.map_err(|e| {
-                Failure(1, format!("--series {}: cannot write it: {e}", file.display()))
-            })?;
-            let report = report.map_err(fail)?;
-            report
-        }
-        None => engine::lab::run(&scene, echo, &mut stickslip::analysis::time_series::DiscardSink)
-            .map_err(fail)?,
-    };
+    let report = with_series_files(&series, |sink| {
+        engine::lab::run(&scene, echo, sink)
+            .map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))
+    })?;
     if let Some(file) = &figure {
         stickslip_cli::figure::lab::friction_against_displacement(&report)
             .write(file)
@@ -385,41 +367,79 @@ fn series_staging(file: &Path) -> (PathBuf, PathBuf) {
     (staging, file)
 }
 
-/// Runs a DRR scene streaming its "time_series" rows to `file` (CSV or .npy by its suffix)
-/// through a temporary file ([`series_staging`]), removed if the run fails.
+/// Runs a DRR scene streaming its "time_series" rows to each of `files` (CSV or .npy by its
+/// suffix) through [`with_series_files`].
 fn run_writing_series(
     scene: &scene::Scene,
     echo: serde_json::Value,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
-    file: &Path,
+    files: &[PathBuf],
 ) -> Result<report::Report, Failure> {
     if scene.analyses.time_series.is_none() {
+        let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(Failure(
             2,
             format!(
-                "--series {}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
-                file.display(),
+                "--series {named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
                 scene.name
             ),
         ));
     }
-    let (staging, target) = series_staging(file);
-    let mut sink = stickslip::series_file::create_as(&staging, file).map_err(|e| {
-        Failure(2, format!("--series {}: cannot create the file: {e}", file.display()))
-    })?;
-    let report = engine::run_with_series(scene, echo, threads, progress, sink.as_mut());
-    drop(sink);
-    let renamed = match &report {
-        Ok(_) if staging != target => std::fs::rename(&staging, &target),
-        _ => Ok(()),
+    with_series_files(files, |sink| {
+        engine::run_with_series(scene, echo, threads, progress, sink)
+            .map_err(|e| failed(&scene.name, e))
+    })
+}
+
+/// Runs `run` with one sink that writes every row to each of `files` (CSV or .npy by its
+/// suffix; none: rows are discarded) through temporary files ([`series_staging`]): renamed to
+/// the files when `run` succeeds, removed when it fails.
+fn with_series_files<R>(
+    files: &[PathBuf],
+    run: impl FnOnce(&mut dyn SeriesSink) -> Result<R, Failure>,
+) -> Result<R, Failure> {
+    let staged: Vec<(PathBuf, PathBuf)> = files.iter().map(|f| series_staging(f)).collect();
+    let remove_staging = |staged: &[(PathBuf, PathBuf)]| {
+        for (staging, target) in staged {
+            if staging != target {
+                drop(std::fs::remove_file(staging));
+            }
+        }
     };
-    if (report.is_err() || renamed.is_err()) && staging != target {
-        drop(std::fs::remove_file(&staging));
+    let mut sinks = Vec::new();
+    for ((staging, _), file) in staged.iter().zip(files) {
+        match stickslip::series_file::create_as(staging, file) {
+            Ok(sink) => sinks.push(sink),
+            Err(e) => {
+                drop(sinks);
+                remove_staging(&staged);
+                return Err(Failure(
+                    2,
+                    format!("--series {}: cannot create the file: {e}", file.display()),
+                ));
+            }
+        }
     }
-    renamed
-        .map_err(|e| Failure(1, format!("--series {}: cannot write it: {e}", file.display())))?;
-    report.map_err(|e| failed(&scene.name, e))
+    let mut tee = TeeSink(sinks);
+    let result = run(&mut tee);
+    drop(tee);
+    if result.is_err() {
+        remove_staging(&staged);
+    }
+    let result = result?;
+    for (i, (staging, target)) in staged.iter().enumerate() {
+        if staging != target {
+            if let Err(e) = std::fs::rename(staging, target) {
+                remove_staging(&staged[i..]);
+                return Err(Failure(
+                    1,
+                    format!("--series {}: cannot write it: {e}", files[i].display()),
+                ));
+            }
+        }
+    }
+    Ok(result)
 }
 
 /// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and

@@ -3,18 +3,10 @@
 //! the stick's distance from the 2D slow flow scales as 1/γ².
 
 use stickslip::analysis::asymptotics::AsymptoticsReport;
-use stickslip::report::Report;
-use stickslip::{engine, scene};
+use stickslip::scene;
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn run_file(name: &str) -> Report {
-    run(&std::fs::read_to_string(format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
-        .unwrap())
-}
+mod common;
+use common::{run_scene, run_scene_file};
 
 fn verdict(a: &AsymptoticsReport, start: &str) -> &'static str {
     a.claims
@@ -34,7 +26,7 @@ fn increasing(x: &[f64]) -> bool {
 #[test]
 fn fig1_and_earthquake_scenes_hold_the_matched_asymptotics() {
     for (name, gamma) in [("fig1-asymptotics.json", 1e3), ("earthquake-asymptotics.json", 1e8)] {
-        let report = run_file(name);
+        let report = run_scene_file(name);
         let a = report.asymptotics.as_ref().unwrap();
         assert!(a.note.is_none(), "{name}: {:?}", a.note);
         let m = a.manifold.as_ref().unwrap();
@@ -141,13 +133,13 @@ fn fig1_and_earthquake_scenes_hold_the_matched_asymptotics() {
 #[test]
 fn the_after_branch_exists_at_gamma_1e3_and_not_at_1e8() {
     // Fig. 1's slip ends on S while v is still ≫ 1; the earthquake's arrest brings v below 1 off S.
-    let fig1 = run(
+    let fig1 = run_scene(
         r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72}, "solver": {"rtol": 1e-10, "atol": 1e-12},
                       "analyses": ["cycle", {"asymptotics": {"gammas": [1e3]}}]}"#,
     );
     let m = fig1.asymptotics.unwrap().matching.unwrap();
     assert!(m.after.as_ref().is_some_and(|b| b.c > 0.0 && b.points > 10), "{:?}", m.after);
-    let eq = run(
+    let eq = run_scene(
         r#"{"name": "t", "model": {"gamma": 1e8, "xi": 0.8, "epsilon": 1}, "solver": {"rtol": 1e-10, "atol": 1e-12},
                     "analyses": ["cycle", {"asymptotics": {"gammas": [1e8]}}]}"#,
     );
@@ -166,7 +158,7 @@ fn the_stick_leaves_the_slow_flow_by_order_one_over_gamma_squared() {
             r#"{{"name": "t", "model": {{"gamma": {gamma:e}, "xi": 0.7, "epsilon": 0.72}}, "solver": {{"rtol": 1e-11, "atol": 1e-13}},
                 "analyses": ["cycle", {{"asymptotics": {{"gammas": [{gamma:e}]}}}}]}}"#
         );
-        run(&text).asymptotics.unwrap().manifold.unwrap().stick_deviation.max_abs_ln_v
+        run_scene(&text).asymptotics.unwrap().manifold.unwrap().stick_deviation.max_abs_ln_v
     };
     let (d2, d3) = (deviation(1e2), deviation(1e3));
     // 1/γ² falls by 100 from γ = 1e2 to 1e3 (the γ-dependence of the cycle itself moves the
@@ -181,7 +173,7 @@ fn the_stick_leaves_the_slow_flow_by_order_one_over_gamma_squared() {
 #[test]
 fn without_a_limit_cycle_the_sections_say_why() {
     // Below the Hopf threshold the oscillation dies out: no orbit to analyse, no failure.
-    let r = run(
+    let r = run_scene(
         r#"{"name": "t", "model": {"gamma": 10, "xi": 0.8, "epsilon": 0.5}, "solver": {"rtol": 1e-9, "atol": 1e-11},
                    "analyses": ["hopf", "cycle", {"asymptotics": {"gammas": [10]}}, {"lyapunov": {"ftle_periods": 1}}]}"#,
     );

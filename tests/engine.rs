@@ -3,18 +3,10 @@
 
 use stickslip::analysis::cycle::CycleStatus;
 use stickslip::analysis::AnalysisError;
-use stickslip::report::Report;
 use stickslip::{engine, scene};
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn run_file(name: &str) -> Report {
-    let path = format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR"));
-    run(&std::fs::read_to_string(path).unwrap())
-}
+mod common;
+use common::{run_scene, run_scene_file};
 
 fn cycle_scene(gamma: f64, xi: f64, epsilon: f64, solver: &str) -> String {
     format!(
@@ -26,7 +18,7 @@ fn cycle_scene(gamma: f64, xi: f64, epsilon: f64, solver: &str) -> String {
 #[test]
 fn the_papers_scenes_run_to_a_periodic_cycle() {
     for name in ["earthquake.json", "fig1.json", "power-law.json", "ice-stream.json"] {
-        let report = run_file(name);
+        let report = run_scene_file(name);
         let c = report.cycle.as_ref().unwrap();
         assert_eq!(c.status, CycleStatus::Periodic, "{name}");
         let v = c.values.unwrap();
@@ -61,7 +53,7 @@ fn the_papers_scenes_run_to_a_periodic_cycle() {
 
 #[test]
 fn earthquake_report_compares_with_the_paper_in_years() {
-    let report = run_file("earthquake.json");
+    let report = run_scene_file("earthquake.json");
     let physical = report.physical.unwrap();
     assert_eq!(physical.time_unit, "years");
     let v = report.cycle.unwrap().values.unwrap();
@@ -77,7 +69,7 @@ fn cvode_arkode_and_radau5_agree_on_the_period_for_large_gamma() {
     let tight = r#""solver": {"method": "METHOD", "rtol": 1e-10, "atol": 1e-12},"#;
     for gamma in [1e3, 1e5, 1e8] {
         let period = |method: &str| {
-            let r = run(&cycle_scene(gamma, 0.8, 1.0, &tight.replace("METHOD", method)));
+            let r = run_scene(&cycle_scene(gamma, 0.8, 1.0, &tight.replace("METHOD", method)));
             r.cycle.unwrap().values.unwrap().main.period
         };
         let bdf = period("cvode-bdf");
@@ -94,7 +86,7 @@ fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
     for method in ["cvode-bdf", "arkode-dirk", "arkode-imex", "radau5", "rodas5p", "extrapolation"]
     {
         let solver = format!(r#""solver": {{"method": "{method}"}},"#);
-        let r = run(&cycle_scene(1e8, 0.8, 1.0, &solver));
+        let r = run_scene(&cycle_scene(1e8, 0.8, 1.0, &solver));
         let c = r.cycle.unwrap();
         assert_eq!(c.status, CycleStatus::Periodic, "{method}");
         let p = c.values.unwrap().main.period;
@@ -104,7 +96,7 @@ fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
 
 #[test]
 fn beyond_1e8_gamma_1e12_runs() {
-    let r = run(&cycle_scene(1e12, 0.8, 1.0, r#""solver": {"rtol": 1e-10, "atol": 1e-12},"#));
+    let r = run_scene(&cycle_scene(1e12, 0.8, 1.0, r#""solver": {"rtol": 1e-10, "atol": 1e-12},"#));
     let c = r.cycle.unwrap();
     assert_eq!(c.status, CycleStatus::Periodic);
     let v = c.values.unwrap();
@@ -115,7 +107,7 @@ fn beyond_1e8_gamma_1e12_runs() {
 #[test]
 fn below_threshold_the_fixed_point_is_reported_stable() {
     let text = r#"{"name": "t", "model": {"gamma": 10, "xi": 0.8, "epsilon": 0.5}, "analyses": ["hopf", "cycle"]}"#;
-    let r = run(text);
+    let r = run_scene(text);
     let h = r.hopf.unwrap();
     assert!(!h.above_threshold && h.max_real_part < 0.0);
     let c = r.cycle.unwrap();
@@ -125,7 +117,7 @@ fn below_threshold_the_fixed_point_is_reported_stable() {
 
 #[test]
 fn half_width_matches_the_recorded_trajectory() {
-    let r = run_file("fig1.json");
+    let r = run_scene_file("fig1.json");
     let c = r.cycle.unwrap();
     let v = c.values.unwrap();
     let traj = c.trajectory.last().expect("trajectory asked for one cycle");
@@ -151,7 +143,7 @@ fn half_width_matches_the_recorded_trajectory() {
 fn an_unsettled_run_lists_its_cycles_and_averages_nothing() {
     let text = r#"{"name": "t", "model": {"gamma": 10, "xi": 0.7, "epsilon": 0.72},
                    "analyses": [{"cycle": {"max_cycles": 3}}]}"#;
-    let c = run(text).cycle.unwrap();
+    let c = run_scene(text).cycle.unwrap();
     assert_eq!(c.status, CycleStatus::NotConverged);
     assert!(!c.converged && c.values.is_none() && c.spread.is_none() && c.orbit.is_empty());
     assert_eq!(c.last_cycles.len(), 3);
@@ -195,7 +187,7 @@ fn the_block_stopping_in_finite_time_is_diagnosed_not_hidden() {
 fn asinh_friction_has_a_cycle_above_its_own_threshold() {
     let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.2, "friction": "asinh"},
                    "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["hopf", "cycle"]}"#;
-    let r = run(text);
+    let r = run_scene(text);
     let h = r.hopf.unwrap();
     assert!((h.epsilon_c - 0.7 * 2f64.sqrt()).abs() < 1e-5 && h.above_threshold);
     assert_eq!(r.cycle.unwrap().status, CycleStatus::Periodic);
@@ -207,7 +199,7 @@ fn a_start_at_v_1e_minus_30_reaches_the_reference_cycle() {
     // w = ln v to 1e-3 (a solver's own estimate overflowed v = e^w). Reference period
     // 31.8375089404 (data/reference/drr_cycles.json, γ = 1e4, ξ = 0.8, ε = 1).
     for method in ["cvode-bdf", "radau5", "rodas5p", "extrapolation", "arkode-dirk"] {
-        let report = run(&format!(
+        let report = run_scene(&format!(
             r#"{{"name": "far", "model": {{"gamma": 1e4, "xi": 0.8, "epsilon": 1}}, "initial": {{"u": 0, "v": 1e-30, "theta": 0}},
                 "solver": {{"method": "{method}", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle"]}}"#
         ));
@@ -234,7 +226,7 @@ fn far_off_starts_reach_the_cycle_far_from_threshold() {
     for (xi, epsilon, reference) in cases {
         for method in ["cvode-bdf", "arkode-dirk", "radau5", "rodas5p", "extrapolation"] {
             for (u, v, theta) in starts {
-                let report = run(&format!(
+                let report = run_scene(&format!(
                     r#"{{"name": "far", "model": {{"gamma": 1e8, "xi": {xi}, "epsilon": {epsilon}}},
                         "initial": {{"u": {u:e}, "v": {v:e}, "theta": {theta:e}}},
                         "solver": {{"method": "{method}", "rtol": 1e-8}},
@@ -273,7 +265,7 @@ fn a_start_that_lands_on_the_unstable_fixed_point_leaves_it() {
     // (cycle::EscapeStep) and every method leaves it for the relaxation cycle.
     for method in ["cvode-bdf", "arkode-dirk", "radau5", "rodas5p", "extrapolation"] {
         for rtol in [1e-4, 1e-10] {
-            let report = run(&format!(
+            let report = run_scene(&format!(
                 r#"{{"name": "focus", "model": {{"gamma": 1e8, "xi": 2, "epsilon": 3}},
                     "initial": {{"u": 0, "v": 1e-30, "theta": 0}},
                     "solver": {{"method": "{method}", "rtol": {rtol:e}, "atol": {:e}}}, "analyses": ["cycle"]}}"#,
@@ -303,7 +295,7 @@ fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
     // From v = 1e-30 the run passes close to the unstable fixed point (ε − ε_c = 0.02) and
     // spirals out over ~250 turns of period 7.51 whose ln v range grows ~8 % per turn; the
     // period alone settles at once. The attractor is the relaxation cycle (reference 23.1513298).
-    let report = run(
+    let report = run_scene(
         r#"{"name": "spiral", "model": {"gamma": 1e4, "xi": 0.7, "epsilon": 0.72}, "initial": {"u": 0, "v": 1e-30, "theta": 0},
             "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#,
     );
@@ -318,7 +310,7 @@ fn a_slowly_growing_oscillation_at_an_unstable_fixed_point_is_not_a_cycle() {
 /// its size gave −3.4e-8.
 #[test]
 fn the_earthquake_scene_meets_1e9_with_the_default_method() {
-    let report = run_file("earthquake.json");
+    let report = run_scene_file("earthquake.json");
     assert_eq!(report.solver.method, stickslip::solver::Method::CvodeBdf);
     let p = report.cycle.as_ref().unwrap().values.unwrap().main.period;
     let reference = 56.412_468_697_640_86;

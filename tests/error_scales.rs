@@ -41,7 +41,7 @@ fn options(scales: Option<Vec<ErrorScale>>) -> Options {
 }
 
 /// The largest error in w over the outputs t = 0.5, 1, …, 10, with the states at the outputs.
-fn run(solver: &mut dyn Integrator) -> (f64, Vec<f64>) {
+fn advance_to_10(solver: &mut dyn Integrator) -> (f64, Vec<f64>) {
     let (mut worst, mut states) = (0.0f64, Vec::new());
     for k in 1..=20 {
         let t = 0.5 * k as f64;
@@ -57,8 +57,8 @@ fn an_absolute_scale_on_a_logarithm_tightens_its_error() {
     let relative = integrators(&options(None));
     let absolute = integrators(&options(Some(vec![ErrorScale::Absolute(1.0)])));
     for ((name, mut rel), (_, mut abs)) in relative.into_iter().zip(absolute) {
-        let (err_rel, _) = run(rel.as_mut());
-        let (err_abs, _) = run(abs.as_mut());
+        let (err_rel, _) = advance_to_10(rel.as_mut());
+        let (err_abs, _) = advance_to_10(abs.as_mut());
         // w ≈ 20: the relative weight allows 20·rtol, the absolute one rtol.
         assert!(
             err_abs < err_rel / 3.0,
@@ -72,8 +72,8 @@ fn relative_scales_everywhere_are_no_scales() {
     let none = integrators(&options(None));
     let relative = integrators(&options(Some(vec![ErrorScale::Relative])));
     for ((name, mut a), (_, mut b)) in none.into_iter().zip(relative) {
-        let (_, states_a) = run(a.as_mut());
-        let (_, states_b) = run(b.as_mut());
+        let (_, states_a) = advance_to_10(a.as_mut());
+        let (_, states_b) = advance_to_10(b.as_mut());
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&states_a), bits(&states_b), "{name}");
         assert_eq!(a.stats(), b.stats(), "{name}");

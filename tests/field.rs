@@ -3,22 +3,14 @@
 //! dimensionless twin, every output key is the documented conversion, and every bad input is
 //! refused naming its field (exit 2 from the CLI).
 
-use stickslip::report::Report;
-use stickslip::{engine, scene};
+use stickslip::scene;
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn qdyn_text() -> String {
-    let path = format!("{}/data/scenes/qdyn-spring-block.json", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read_to_string(path).unwrap()
-}
+mod common;
+use common::{cli_run, run_scene, scene_file_text};
 
 /// The QDYN scene with `from` replaced by `to` (each must occur).
 fn qdyn_with(from: &str, to: &str) -> String {
-    let text = qdyn_text();
+    let text = scene_file_text("qdyn-spring-block.json");
     assert!(text.contains(from), "{from} not in the scene");
     text.replacen(from, to, 1)
 }
@@ -31,7 +23,7 @@ const DIMENSIONLESS_TWIN: &str = r#"{"name": "twin",
 
 #[test]
 fn the_qdyn_scene_is_its_dimensionless_twin() {
-    let s = scene::parse(&qdyn_text(), "t").unwrap();
+    let s = scene::parse(&scene_file_text("qdyn-spring-block.json"), "t").unwrap();
     let p = s.params;
     assert!((p.xi - 0.25).abs() < 1e-15 && (p.epsilon - 0.5).abs() < 1e-15, "{p:?}");
     assert!((p.eta - 5e-8).abs() < 1e-21, "η = {:e}", p.eta);
@@ -40,8 +32,9 @@ fn the_qdyn_scene_is_its_dimensionless_twin() {
     assert_eq!(s.initial[2], 0.0);
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
 
-    let field = run(&qdyn_text()).cycle.unwrap().values.unwrap();
-    let twin = run(DIMENSIONLESS_TWIN).cycle.unwrap().values.unwrap();
+    let field =
+        run_scene(&scene_file_text("qdyn-spring-block.json")).cycle.unwrap().values.unwrap();
+    let twin = run_scene(DIMENSIONLESS_TWIN).cycle.unwrap().values.unwrap();
     let pairs = [
         ("period", field.main.period, twin.main.period),
         ("t0", field.main.t0, twin.main.t0),
@@ -58,7 +51,7 @@ fn the_qdyn_scene_is_its_dimensionless_twin() {
 
 #[test]
 fn cycle_physical_is_the_cycle_in_si_units() {
-    let report = run(&qdyn_text());
+    let report = run_scene(&scene_file_text("qdyn-spring-block.json"));
     let c = report.cycle.unwrap();
     let v = c.values.unwrap();
     let ph = c.physical.clone().expect("dimensional input gives cycle.physical");
@@ -111,7 +104,7 @@ fn without_mu0_shear_stress_is_relative_and_units_add_durations() {
         r#""units": {"time_unit": "days", "time_scale": 1.1574074074074074}, "initial""#,
         1,
     );
-    let ph = run(&text).cycle.unwrap().physical.clone().unwrap();
+    let ph = run_scene(&text).cycle.unwrap().physical.clone().unwrap();
     assert_eq!(ph.shear_stress_reference, Some("relative to σμ_ref, steady sliding at v0"));
     assert!(ph.friction_before.is_none() && ph.friction_steady.is_none());
     let rel = ph.shear_stress_before.unwrap() - ph.shear_stress_after.unwrap();
@@ -230,22 +223,10 @@ fn each_bad_field_input_is_refused_naming_its_field() {
     }
 }
 
-fn cli(text: &str, name: &str) -> std::process::Output {
-    let path =
-        std::env::temp_dir().join(format!("stickslip-field-{}-{name}.json", std::process::id()));
-    std::fs::write(&path, text).unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(["run", path.to_str().unwrap(), "--json"])
-        .output()
-        .unwrap();
-    let _ = std::fs::remove_file(&path);
-    out
-}
-
 #[test]
 fn a_and_b_without_sigma_exit_2_naming_sigma_and_a_sigma() {
     // The issue's case: QDYN's "a": 0.01, "b": 0.015 given without σ.
-    let out = cli(&qdyn_with(r#""sigma": 1e7, "#, ""), "nosigma");
+    let out = cli_run(&qdyn_with(r#""sigma": 1e7, "#, ""), "nosigma", &["--json"]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("model.dimensional.sigma") && stderr.contains("a_sigma"), "{stderr}");
@@ -268,13 +249,44 @@ fn parameters_far_outside_the_physical_range_warn_in_the_report_and_on_stderr() 
     let huge_xi = qdyn_with(r#""k": 2.5e8"#, r#""k": 2.5e14"#);
     let s = scene::parse(&huge_xi, "t").unwrap();
     assert!(s.warnings.iter().any(|w| w.contains("ξ = k·D_c/(aσ)")), "{:?}", s.warnings);
-    let out = cli(
+    let out = cli_run(
         &huge_xi.replacen(r#""analyses": ["hopf", "cycle"]"#, r#""analyses": ["hopf"]"#, 1),
         "xi",
+        &["--json"],
     );
     assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("warning") && stderr.contains("model.dimensional.k"), "{stderr}");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(report["warnings"][0].as_str().unwrap().contains("ξ"), "{}", report["warnings"]);
+}
+
+#[test]
+fn warnings_name_the_fields_the_user_gave() {
+    // k as G/L (L = 0.12 mm: k = 2.5e14 Pa/m) and the coefficients as stresses.
+    let text = qdyn_with(r#""k": 2.5e8"#, r#""length": 1.2e-4"#)
+        .replacen(
+            r#""sigma": 1e7, "a": 0.01, "b": 0.015"#,
+            r#""a_sigma": 1e5, "b_sigma": 1.5e5"#,
+            1,
+        )
+        .replacen(r#""mu0": 0.6, "v_ref": 1e-6,"#, "", 1);
+    let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
+    let joined = s.warnings.join("\n");
+    assert!(joined.contains("model.dimensional.shear_modulus/length/d_c/a_sigma"), "{joined}");
+    assert!(!joined.contains("model.dimensional.k/"), "{joined}");
+}
+
+#[test]
+fn a_declared_si_unit_system_names_the_units_without_hedging() {
+    let text = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "SI", "sigma": 1e7,"#);
+    let s = scene::parse(&text, "t").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.units.as_ref().unwrap().time_unit, "s");
+    let report = run_scene(&text);
+    let summary = report.summary();
+    assert!(summary.contains("in SI units") && summary.contains("m/s"), "{summary}");
+    assert!(!summary.contains("if the dimensional input is SI"), "{summary}");
+    let bad = qdyn_with(r#""sigma": 1e7,"#, r#""unit_system": "cgs", "sigma": 1e7,"#);
+    let e = scene::parse(&bad, "t").unwrap_err().to_string();
+    assert!(e.contains("unit_system") || e.contains("SI"), "{e}");
 }

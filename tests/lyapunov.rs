@@ -6,22 +6,13 @@ use stickslip::analysis::cycle_period::CyclePeriod;
 use stickslip::analysis::events;
 use stickslip::integrate::{Options, Radau5, Task, Tolerance};
 use stickslip::model::{Drr, DrrParams, Friction};
-use stickslip::report::Report;
-use stickslip::{engine, scene};
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn run_file(name: &str) -> Report {
-    run(&std::fs::read_to_string(format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR")))
-        .unwrap())
-}
+mod common;
+use common::{run_scene, run_scene_file};
 
 #[test]
 fn fig5_transitions_and_the_eigenvalues_two_ways() {
-    let r = run_file("fig1-asymptotics.json");
+    let r = run_scene_file("fig1-asymptotics.json");
     let l = r.lyapunov.unwrap();
     // The paper: complex at t_c − 4.6, real part through zero at t_c − 2.3 (both within 5 %).
     let (onset, zero) = (l.complex_onset_before_tc.unwrap(), l.zero_crossing_before_tc.unwrap());
@@ -50,7 +41,7 @@ fn fig5_transitions_and_the_eigenvalues_two_ways() {
 
 #[test]
 fn power_law_zero_crossing() {
-    let l = run_file("power-law-lyapunov.json").lyapunov.unwrap();
+    let l = run_scene_file("power-law-lyapunov.json").lyapunov.unwrap();
     let zero = l.zero_crossing_before_tc.unwrap();
     assert!((zero - 2.45).abs() < 0.05 * 2.45, "{zero}");
 }
@@ -102,7 +93,7 @@ fn ftle_matches_finite_differences_of_the_poincare_map() {
     // Jacobian at rtol 1e-10 (it gives ln |μ₂| = −16.2) but not of the FTLE.
     let text = r#"{"name": "t", "model": {"gamma": 1e4, "xi": 0.8, "epsilon": 1}, "solver": {"rtol": 1e-10, "atol": 1e-12},
                    "analyses": ["cycle", {"trajectory": {"cycles": 1}}, {"lyapunov": {"ftle_periods": 3}}]}"#;
-    let r = run(text);
+    let r = run_scene(text);
     let ftle = r.lyapunov.as_ref().unwrap().ftle.as_ref().unwrap();
     let ours = ftle.per_period.last().unwrap().ln_r[1];
     let orbit = CyclePeriod::from_cycle(r.cycle.as_ref().unwrap()).unwrap();

@@ -5,12 +5,10 @@
 
 use stickslip::analysis::cycle::CycleStatus;
 use stickslip::report::Report;
-use stickslip::{engine, scene};
+use stickslip::scene;
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
+mod common;
+use common::run_scene;
 
 /// ξ = 0.8, ε = 1, η = 0.05 (the docs' table), radau5-class tolerances: quasi-dynamic when
 /// `gamma` is None, inertial at γ otherwise.
@@ -45,7 +43,7 @@ fn quasi_dynamic_cycle_is_the_inertial_limit_with_every_stiff_method() {
     // and 9.6891841756 were means over cycles that still carried the transient (Floquet
     // multiplier 0.12; the cycle rule before issue #28), 3.5e-9 and 8.6e-9 low.
     for (law, limit) in [("slip", 9.61804750103), ("ageing", 9.68918425999)] {
-        let (p0, s0, v0) = cycle(&run(&scene(law, Some(1e8), "radau5", r#"["cycle"]"#)));
+        let (p0, s0, v0) = cycle(&run_scene(&scene(law, Some(1e8), "radau5", r#"["cycle"]"#)));
         assert!((p0 - limit).abs() < 1e-9 * limit, "{law}: inertial {p0} vs the docs' {limit}");
         for (method, period_tol, slip_tol, v_tol) in [
             ("radau5", 1e-9, 1e-9, 3e-8),
@@ -53,7 +51,7 @@ fn quasi_dynamic_cycle_is_the_inertial_limit_with_every_stiff_method() {
             ("extrapolation", 1e-9, 1e-9, 3e-8),
             ("cvode-bdf", 1e-8, 2e-8, 1e-7),
         ] {
-            let (p, s, v) = cycle(&run(&scene(law, None, method, r#"["cycle"]"#)));
+            let (p, s, v) = cycle(&run_scene(&scene(law, None, method, r#"["cycle"]"#)));
             let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * b;
             assert!(
                 close(p, p0, period_tol) && close(s, s0, slip_tol) && close(v, v0, v_tol),
@@ -69,9 +67,9 @@ fn inertial_cycle_approaches_the_quasi_dynamic_one_as_one_over_gamma_squared() {
     // at γ = 1e2, 1e3, 1e4, i.e.
     // 100-fold per decade of γ.
     for (law, constant) in [("slip", 16.76), ("ageing", 125.19)] {
-        let (limit, _, _) = cycle(&run(&scene(law, None, "radau5", r#"["cycle"]"#)));
+        let (limit, _, _) = cycle(&run_scene(&scene(law, None, "radau5", r#"["cycle"]"#)));
         let distance = |gamma: f64| {
-            (cycle(&run(&scene(law, Some(gamma), "radau5", r#"["cycle"]"#))).0 - limit).abs()
+            (cycle(&run_scene(&scene(law, Some(gamma), "radau5", r#"["cycle"]"#))).0 - limit).abs()
         };
         let (d3, d4) = (distance(1e3), distance(1e4));
         assert!((d3 / d4 - 100.0).abs() < 2.0, "{law}: {d3:e} at γ = 1e3, {d4:e} at 1e4");
@@ -89,7 +87,7 @@ fn shipped_scene_shooting_and_floquet() {
         "/data/scenes/quasi-dynamic.json"
     ))
     .unwrap();
-    let r = run(&text);
+    let r = run_scene(&text);
     assert!(!r.model.inertia && r.model.gamma == f64::INFINITY);
     let json: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
     assert_eq!(
@@ -112,7 +110,7 @@ fn shipped_scene_shooting_and_floquet() {
     // The non-trivial multipliers: the model's (0.1207293 at γ = 1e8 with inertia, where the
     // other is ~0) and the stabilisation's e^{−κ_G T}, κ_G = 1.
     let m: Vec<f64> = orbit.multipliers[1..].iter().map(|m| m.re).collect();
-    let inertial = run(&scene("slip", Some(1e8), "radau5", r#"["shooting"]"#));
+    let inertial = run_scene(&scene("slip", Some(1e8), "radau5", r#"["shooting"]"#));
     let physical = inertial.shooting.as_ref().unwrap().orbit.as_ref().unwrap().multipliers[1].re;
     assert!((m[0] - physical).abs() < 1e-5 * physical, "{m:?} vs inertial {physical}");
     assert!(
@@ -124,7 +122,7 @@ fn shipped_scene_shooting_and_floquet() {
 
 #[test]
 fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
-    let curve = run(&scene(
+    let curve = run_scene(&scene(
         "slip",
         None,
         "radau5",
@@ -132,7 +130,8 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
     ));
     let c = curve.continuation.as_ref().unwrap();
     assert!(c.completed && c.points.last().unwrap().value == 0.1, "{c:?}");
-    let direct = run(&scene("slip", None, "radau5", r#"["shooting"]"#).replace("0.05}", "0.1}"));
+    let direct =
+        run_scene(&scene("slip", None, "radau5", r#"["shooting"]"#).replace("0.05}", "0.1}"));
     let (a, b) = (
         c.points.last().unwrap().orbit.period,
         direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period,
@@ -143,8 +142,10 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
 #[test]
 fn below_the_threshold_the_oscillation_decays() {
     // ε_c = ξ + η = 0.85: at ε = 0.8 the fixed point is stable.
-    let r = run(&scene("ageing", None, "cvode-bdf", r#"["hopf", "cycle"]"#)
-        .replace("\"epsilon\": 1.0", "\"epsilon\": 0.8"));
+    let r = run_scene(
+        &scene("ageing", None, "cvode-bdf", r#"["hopf", "cycle"]"#)
+            .replace("\"epsilon\": 1.0", "\"epsilon\": 0.8"),
+    );
     assert!(!r.hopf.as_ref().unwrap().above_threshold);
     assert_eq!(r.cycle.as_ref().unwrap().status, CycleStatus::FixedPoint);
 }

@@ -3,16 +3,18 @@
 //! the DRR model at γ = 1e8 are tests/methods.rs, run over every homemade method; the
 //! Integrator contract is tests/contract.rs, run over every method).
 
-use stickslip::integrate::{ErrorKind, Integrator, Options, Radau5, Task, Tolerance};
+use stickslip::integrate::{
+    ErrorKind, Integrator, Options, Radau5, Task, Tolerance, ToleranceTransform,
+};
 
 mod common;
 use common::{Linear, NanAfter, Oscillator};
 
-/// Radau5's own part of the contract (the rest is tests/contract.rs, over every method): the
-/// cubic's derivatives up to the third, the first step kept across restarts, and the
-/// finite-difference Jacobian's count.
+/// Radau5's own part of the contract (the rest, restarts included, is tests/contract.rs, over
+/// every method): the cubic's derivatives up to the third and the finite-difference Jacobian's
+/// count.
 #[test]
-fn dense_derivatives_restarts_and_jacobian_counts() {
+fn dense_derivatives_and_jacobian_counts() {
     let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
     let mut solver = Radau5::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap();
     assert_eq!(solver.name(), "radau5");
@@ -24,16 +26,43 @@ fn dense_derivatives_restarts_and_jacobian_counts() {
     assert!(solver.dense(end, 3).is_ok());
     assert_eq!(solver.dense(end, 4).unwrap_err().kind, ErrorKind::InvalidInput);
 
-    // Restart: the step history starts afresh, the first step of the run is kept.
-    let before = solver.stats();
-    solver.reinit(0.0, &[0.0, 1.0]).unwrap();
-    solver.advance(2.0, Task::Normal).unwrap();
-    assert_eq!(solver.stats().initial_step, before.initial_step, "the very first step of the run");
-    assert!((solver.state()[0] - 2f64.sin()).abs() < 1e-7);
-
     // Finite-difference Jacobian: n RHS calls per Jacobian, counted apart.
     let s = solver.stats();
     assert!(s.jac_evals > 0 && s.rhs_evals_jacobian == 2 * s.jac_evals, "{s:?}");
+}
+
+/// The two readings of the tolerances: as given at (rtol, atol) the run is more accurate than
+/// with RADAU5's transform (which loosens rtol 1e-8 to 4.6e-7), within a few rtol of the
+/// solution, and its Newton iteration never stops before its second iteration (scipy's rule),
+/// where RADAU5's stops after one on most steps of this smooth problem.
+#[test]
+fn tolerances_as_given_or_transformed() {
+    let run = |transform| {
+        let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+        let mut solver =
+            Radau5::with_tolerances(Oscillator, 0.0, &[0.0, 1.0], &options, transform).unwrap();
+        solver.advance(20.0, Task::Normal).unwrap();
+        (solver.state().to_vec(), solver.stats())
+    };
+    let (hairer, as_given) = (run(ToleranceTransform::Hairer), run(ToleranceTransform::AsGiven));
+    let default = {
+        let options = Options::new(1e-8, Tolerance::Scalar(1e-10));
+        let mut solver = Radau5::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap();
+        solver.advance(20.0, Task::Normal).unwrap();
+        solver.state().to_vec()
+    };
+    assert_eq!(default, hairer.0, "Radau5::new is RADAU5's transform");
+    let error = |y: &[f64]| (y[0] - 20f64.sin()).abs().max((y[1] - 20f64.cos()).abs());
+    assert!(as_given.1.steps > 2 * hairer.1.steps, "{:?} {:?}", as_given.1, hairer.1);
+    assert!(
+        error(&as_given.0) < 1e-7 && error(&as_given.0) < 0.1 * error(&hairer.0),
+        "as given {:e}, transformed {:e}",
+        error(&as_given.0),
+        error(&hairer.0)
+    );
+    let (a, h) = (as_given.1, hairer.1);
+    assert!(a.nonlin_iters >= 2 * a.step_attempts, "{a:?}");
+    assert!(h.nonlin_iters < 2 * h.step_attempts, "{h:?}");
 }
 
 #[test]

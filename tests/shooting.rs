@@ -3,16 +3,14 @@
 
 use stickslip::{engine, scene};
 
+mod common;
+use common::run_scene;
+
 fn reference_rows() -> Vec<serde_json::Value> {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/reference/drr_cycles.json");
     let table: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     table["rows"].as_array().unwrap().clone()
-}
-
-fn run(text: &str) -> stickslip::report::Report {
-    let s = scene::parse(text, "test").unwrap();
-    engine::run(&s, serde_json::Value::Null).unwrap()
 }
 
 #[test]
@@ -24,7 +22,7 @@ fn shooting_agrees_with_brute_force_on_every_reference_cycle() {
             row["xi"].as_f64().unwrap(),
             row["epsilon"].as_f64().unwrap(),
         );
-        let report = run(&format!(
+        let report = run_scene(&format!(
             r#"{{"name": "s", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
                 "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["shooting"]}}"#
         ));
@@ -71,8 +69,10 @@ fn shooting_agrees_with_brute_force_on_every_reference_cycle() {
 fn shooting_converges_near_the_hopf_threshold_where_brute_force_is_slow() {
     // ε 1e-3 above ε_c at γ = 10: the orbit's non-trivial multiplier is close to 1, so plain
     // iteration (brute force) converges slowly; Newton does not care.
-    let report = run(r#"{"name": "h", "model": {"gamma": 10, "xi": 0.7, "epsilon": 0.6961},
-            "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["hopf", "shooting"]}"#);
+    let report = run_scene(
+        r#"{"name": "h", "model": {"gamma": 10, "xi": 0.7, "epsilon": 0.6961},
+            "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["hopf", "shooting"]}"#,
+    );
     let hopf = report.hopf.unwrap();
     assert!(hopf.above_threshold && report.model.epsilon - hopf.epsilon_c < 1.1e-3);
     let orbit = report.shooting.unwrap().orbit.unwrap();
@@ -91,7 +91,7 @@ fn fig1c_continuation_in_gamma_reproduces_the_reference_periods() {
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/fig1c.json"))
             .unwrap();
-    let c = run(&text).continuation.unwrap();
+    let c = run_scene(&text).continuation.unwrap();
     assert!(c.completed, "{:?}", c.stopped);
     assert_eq!(c.points.len(), 71);
     for row in reference_rows().iter().filter(|r| r["xi"].as_f64() == Some(0.7)) {
@@ -119,7 +119,7 @@ fn continuation_in_epsilon_stops_near_the_threshold_and_says_why() {
     let text =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/data/scenes/fig1b.json"))
             .unwrap();
-    let report = run(&text);
+    let report = run_scene(&text);
     let eps_c = report.hopf.unwrap().epsilon_c;
     let c = report.continuation.unwrap();
     let stop = c.stopped.expect("the relaxation branch cannot be followed down to ε_c");
@@ -167,7 +167,7 @@ fn period_doubling_is_detected_and_the_doubled_orbit_matches_brute_force() {
         "/data/scenes/period-doubling.json"
     ))
     .unwrap();
-    let report = run(&text);
+    let report = run_scene(&text);
     let shooting = report.shooting.unwrap();
     let single = shooting.orbit.unwrap();
     assert!(
@@ -225,7 +225,7 @@ fn shooting_crosses_the_ageing_and_prz_sticks_at_gamma_1e8() {
     // block ∂(JΦ)/∂y (docs/shooting.md). Measured: periods 2.6e-8 (ageing) and 3.7e-9 (PRZ)
     // from the cycle's, trivial multipliers 1 within 5.0e-3 and 3.1e-2.
     for law in ["ageing", "prz"] {
-        let r = run(&earthquake_under(law));
+        let r = run_scene(&earthquake_under(law));
         let cycle = r.cycle.as_ref().unwrap().values.unwrap().main.period;
         let shooting = r.shooting.as_ref().unwrap();
         let orbit =

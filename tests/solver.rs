@@ -4,6 +4,7 @@
 
 use stickslip::integrate::{
     ErrorKind, ErrorScale, Extrapolation, Options, Radau5, Rodas5p, Task, Tolerance,
+    ToleranceTransform,
 };
 use stickslip::solver::{build, build_ode, Method, MethodError, MethodSettings};
 
@@ -122,7 +123,7 @@ fn the_capability_table_agrees_with_the_integrators() {
         let table = MethodSettings { table: Some("X".into()), ..MethodSettings::default() };
         let error = build(method, &table, Decay(1.0), 0.0, &[1.0], &options()).err().unwrap();
         let unknown = error.message.contains("unknown");
-        assert_eq!(unknown, caps.accepts.table, "{name}: {}", error.message);
+        assert_eq!(unknown, caps.accepts.table.is_some(), "{name}: {}", error.message);
         let explicit =
             MethodSettings { explicit_table: Some("X".into()), ..MethodSettings::default() };
         let error = build(method, &explicit, Decay(1.0), 0.0, &[1.0], &options()).err().unwrap();
@@ -131,6 +132,21 @@ fn the_capability_table_agrees_with_the_integrators() {
         let ode =
             build_ode(method, &MethodSettings::default(), Decay(1.0), 0.0, &[1.0], &options());
         assert_eq!(ode.is_err(), caps.needs_imex, "{name}");
+        // Only radau5 transforms its tolerances; the others refuse either reading.
+        for transform in [ToleranceTransform::Hairer, ToleranceTransform::AsGiven] {
+            let settings = MethodSettings {
+                tolerance_transform: Some(transform),
+                ..MethodSettings::default()
+            };
+            match build(method, &settings, Decay(1.0), 0.0, &[1.0], &options()) {
+                Ok(_) => assert_eq!(method, Method::Radau5),
+                Err(e) => {
+                    assert_ne!(method, Method::Radau5, "{e}");
+                    assert_eq!(e.kind, ErrorKind::InvalidInput);
+                    assert!(e.message.contains("tolerance_transform applies to radau5"), "{e}");
+                }
+            }
+        }
     }
 }
 

@@ -5,16 +5,10 @@
 use stickslip::analysis::cycle::CycleStatus;
 use stickslip::model::StateLaw;
 use stickslip::report::Report;
-use stickslip::{engine, scene};
+use stickslip::scene;
 
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn scene_file(name: &str) -> String {
-    std::fs::read_to_string(format!("{}/data/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
+mod common;
+use common::{run_scene, scene_file_text};
 
 fn with_method(text: &str, method: &str) -> String {
     let mut s: serde_json::Value = serde_json::from_str(text).unwrap();
@@ -40,10 +34,10 @@ fn ageing_earthquake_cycle_agrees_across_independent_integrators() {
     // γ = 1e8, ξ = 0.8, ε = 1 under the ageing law (issue #16's done-when): cvode-bdf (which
     // failed in the deep stick, v ≈ 1e-9 … 1e-14, until it got a fresh Jacobian at every
     // step) and the three one-step methods agree.
-    let text = scene_file("earthquake-ageing.json");
+    let text = scene_file_text("earthquake-ageing.json");
     let reports: Vec<Report> = ["radau5", "rodas5p", "extrapolation", "cvode-bdf"]
         .iter()
-        .map(|m| run(&with_method(&text, m)))
+        .map(|m| run_scene(&with_method(&text, m)))
         .collect();
     let periods: Vec<f64> = reports.iter().map(period).collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
@@ -64,20 +58,20 @@ fn ageing_cycle_agrees_across_cvode_radau5_and_rodas5p_at_gamma_1e3() {
                    "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#;
     let periods: Vec<f64> = ["cvode-bdf", "radau5", "rodas5p"]
         .iter()
-        .map(|m| period(&run(&with_method(text, m))))
+        .map(|m| period(&run_scene(&with_method(text, m))))
         .collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
 }
 
 #[test]
 fn damped_ageing_earthquake_agrees_across_integrators_and_damping_shortens_the_cycle() {
-    let text = scene_file("earthquake-ageing-damped.json");
+    let text = scene_file_text("earthquake-ageing-damped.json");
     let reports: Vec<Report> =
-        ["radau5", "rodas5p"].iter().map(|m| run(&with_method(&text, m))).collect();
+        ["radau5", "rodas5p"].iter().map(|m| run_scene(&with_method(&text, m))).collect();
     let periods: Vec<f64> = reports.iter().map(period).collect();
     assert!(spread(&periods) < 1e-7, "{periods:?}");
     assert_eq!(reports[0].model.radiation_damping, 1e-8);
-    let undamped = period(&run(&scene_file("earthquake-ageing.json")));
+    let undamped = period(&run_scene(&scene_file_text("earthquake-ageing.json")));
     let v_max = reports[0].cycle.as_ref().unwrap().values.unwrap().main.v_max;
     // η v_max = O(1) at the peak: the damping caps the slip speed and shortens the cycle.
     assert!(
@@ -88,7 +82,7 @@ fn damped_ageing_earthquake_agrees_across_integrators_and_damping_shortens_the_c
 
 #[test]
 fn prz_orbit_by_integration_and_by_shooting_agree() {
-    let r = run(&scene_file("prz.json"));
+    let r = run_scene(&scene_file_text("prz.json"));
     let cycle = period(&r);
     let shooting = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period;
     assert!((cycle - shooting).abs() < 1e-7 * cycle, "cycle {cycle} vs shooting {shooting}");
@@ -100,9 +94,9 @@ fn shooting_and_continuation_run_with_the_ageing_law_and_damping() {
     let text = r#"{"name": "t", "model": {"gamma": 1e4, "xi": 0.8, "epsilon": 1.0, "state_law": "ageing", "radiation_damping": 0.01},
                    "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12},
                    "analyses": ["shooting", {"continuation": {"parameter": "epsilon", "to": 1.1, "points": 3}}]}"#;
-    let r = run(text);
+    let r = run_scene(text);
     let shot = r.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period;
-    let cycle = period(&run(&with_method(
+    let cycle = period(&run_scene(&with_method(
         &text.replace(
             r#""shooting", {"continuation": {"parameter": "epsilon", "to": 1.1, "points": 3}}"#,
             r#""cycle""#,
@@ -123,7 +117,7 @@ fn damping_moves_the_threshold_and_the_engine_sees_it() {
             r#"{{"name": "t", "model": {{"gamma": 1e3, "xi": 0.8, "epsilon": 0.85, "state_law": "ageing", "radiation_damping": {eta}}},
                  "solver": {{"rtol": 1e-10, "atol": 1e-12}}, "analyses": ["hopf", "cycle"]}}"#
         );
-        run(&text)
+        run_scene(&text)
     };
     let (free, damped) = (at(0.0), at(0.1));
     assert!(free.hopf.as_ref().unwrap().above_threshold);
@@ -193,6 +187,14 @@ fn radiation_damping_from_the_shear_modulus_and_wave_speed() {
     )
     .unwrap();
     assert_eq!((plain.params.state_law, plain.params.eta), (StateLaw::Slip, 0.0));
+    // The coefficient η_dim = G/(2c_s) = 5e6 Pa·s/m directly: the same η.
+    let direct = text.replace(r#""shear_wave_speed": 3e3"#, r#""radiation_damping": 5e6"#);
+    let direct = direct.replace(r#""shear_modulus": 3e10,"#, "");
+    let s = scene::parse(&direct, "test").unwrap_or_else(|e| panic!("{e}"));
+    assert!((s.params.eta - 1e-8).abs() < 1e-22, "{}", s.params.eta);
+    let both = text.replace(r#""shear_modulus": 3e10,"#, r#""radiation_damping": 5e6,"#);
+    let e = scene::parse(&both, "test").unwrap_err().to_string();
+    assert!(e.contains("model.dimensional.radiation_damping") && e.contains("not both"), "{e}");
 }
 
 #[test]
@@ -203,7 +205,7 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
                  "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": {analyses}}}"#
         )
     };
-    let curve = run(&scene(
+    let curve = run_scene(&scene(
         0.0,
         r#"["shooting", {"continuation": {"parameter": "radiation_damping", "to": 0.0005, "points": 2}}]"#,
     ));
@@ -211,7 +213,7 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
     assert!(c.completed, "{c:?}");
     let end = c.points.last().unwrap();
     assert_eq!(end.value, 0.0005);
-    let direct = run(&scene(0.0005, r#"["shooting"]"#));
+    let direct = run_scene(&scene(0.0005, r#"["shooting"]"#));
     let (a, b) =
         (end.orbit.period, direct.shooting.as_ref().unwrap().orbit.as_ref().unwrap().period);
     assert!((a - b).abs() < 1e-7 * b, "continued {a} vs direct {b}");
@@ -226,7 +228,7 @@ fn continuation_in_the_radiation_damping_reaches_the_orbit_found_directly() {
 #[test]
 fn lyapunov_runs_with_every_state_law() {
     for (law, eta) in [("ageing", 0.0), ("prz", 1e-3)] {
-        let report = run(&format!(
+        let report = run_scene(&format!(
             r#"{{"name": "t", "model": {{"gamma": 1e3, "xi": 0.7, "epsilon": 0.72, "state_law": "{law}", "radiation_damping": {eta}}},
                  "solver": {{"method": "radau5", "rtol": 1e-10, "atol": 1e-12}}, "analyses": ["cycle", {{"lyapunov": {{"ftle_periods": 1}}}}]}}"#
         ));
@@ -254,7 +256,7 @@ fn a_deep_ageing_stick_reports_its_true_lowest_ln_v_and_the_cycle_converges_at_r
         "analyses": [{"cycle": {"max_cycles": 60, "max_time": 3e4, "max_steps": 2000000}}]}"#;
     let mut periods = vec![];
     for method in ["radau5", "rodas5p"] {
-        let report = run(&with_method(text, method));
+        let report = run_scene(&with_method(text, method));
         periods.push(period(&report));
         let v = report.cycle.as_ref().unwrap().values.unwrap();
         assert!((v.main.ln_v_min + 563.544).abs() < 1e-2, "{method}: ln v_min {}", v.main.ln_v_min);

@@ -154,6 +154,37 @@ fn field_scene_25_cycles_csv_and_npy_recur_at_the_cycle_period() {
 }
 
 #[test]
+fn several_series_files_come_from_one_run() {
+    let dir = temp_dir("several");
+    let scene_path = dir.join("scene.json");
+    std::fs::write(&scene_path, field_scene(r#"{"t_max": 120}"#)).unwrap();
+    let (csv, npy) = (dir.join("a.csv"), dir.join("a.npy"));
+    let run = Command::new(EXE)
+        .args(["run", scene_path.to_str().unwrap(), "--json"])
+        .args(["--series", csv.to_str().unwrap(), "--series", npy.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(0), "{}", String::from_utf8_lossy(&run.stderr));
+    let (a, b) = (read_csv(&csv), series_file::read_npy(&npy).unwrap());
+    assert_eq!(a.names, b.names);
+    assert!(a.columns[0].len() > 100, "{} rows", a.columns[0].len());
+    assert_eq!(a.columns, b.columns, "the same rows in both files");
+    // A file that cannot be created: exit 2 naming it, and no file left behind.
+    let bad = dir.join("missing-dir").join("b.csv");
+    let other = dir.join("c.npy");
+    let run = Command::new(EXE)
+        .args(["run", scene_path.to_str().unwrap(), "--json"])
+        .args(["--series", other.to_str().unwrap(), "--series", bad.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("b.csv") && !other.exists(), "{stderr}");
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert!(!left.iter().any(|n| n.to_string_lossy().contains("tmp")), "{left:?}");
+}
+
+#[test]
 fn gamma_1e8_absolute_time_keeps_its_digits() {
     // The earthquake scene (γ = 1e8): the arrests take steps far below the spacing of t ~ 400,
     // so many steps merge into one row, yet the recurrences, differences of absolute times,

@@ -389,18 +389,22 @@ fn too_much_work_is_typed_and_located() {
     assert!(text.starts_with("cvode-bdf failed") && text.contains("max_steps"), "{text}");
 }
 
+/// Fast forcing y' = cos(1e7 (t − 1e10)), run at t ≈ 1e10, where the spacing of t (~2e-6)
+/// exceeds the steps it needs: the step-underflow tests' system.
+struct Fast;
+
+impl OdeSystem for Fast {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&self, t: f64, _y: &[f64], d: &mut [f64]) {
+        d[0] = (1e7 * (t - 1e10)).cos();
+    }
+}
+
 #[test]
 fn step_underflow_is_an_error_unless_allowed() {
     // Fast forcing at t ≈ 1e10, where the spacing of t (~2e-6) exceeds the steps needed.
-    struct Fast;
-    impl OdeSystem for Fast {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn rhs(&self, t: f64, _y: &[f64], d: &mut [f64]) {
-            d[0] = (1e7 * (t - 1e10)).cos();
-        }
-    }
     let mut options = Options::new(1e-10, Tolerance::Scalar(1e-14));
     options.max_steps = Some(5000);
     let t0 = 1e10;
@@ -423,15 +427,6 @@ fn step_underflow_is_an_error_unless_allowed() {
 fn step_underflow_stops_at_the_first_warning() {
     // With `fail_on_step_underflow` the solver must return at the first "t + h = t", not when
     // the step budget runs out: the right-hand side refuses the step after the warning.
-    struct Fast;
-    impl OdeSystem for Fast {
-        fn dim(&self) -> usize {
-            1
-        }
-        fn rhs(&self, t: f64, _y: &[f64], d: &mut [f64]) {
-            d[0] = (1e7 * (t - 1e10)).cos();
-        }
-    }
     let mut options = Options::new(1e-10, Tolerance::Scalar(1e-14));
     options.max_steps = Some(1_000_000);
     let t0 = 1e10;

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The README's Slurm recipe on a real (one-node) Slurm cluster: installs Debian's slurm-wlm
-# and munge when missing, starts munged, slurmctld and slurmd on localhost with a generated
+# The Slurm recipe of docs/slurm.md on a real (one-node) Slurm cluster: installs Debian's
+# slurm-wlm and munge when missing, starts munged, slurmctld and slurmd on localhost with a generated
 # munge key and a minimal slurm.conf in a temporary directory (no systemd), submits the
-# README's files tools/slurm-sweep.sbatch (a job array of 4 `sweep --shard` tasks) and
+# files tools/slurm-sweep.sbatch (a job array of 4 `sweep --shard` tasks) and
 # tools/slurm-submit.sh (the array, then `merge --total` once every task succeeded) from a
 # directory holding the earthquake scene as scene.json, and compares the merged rows with an
 # unsharded sweep of the same grid, row for row. Exits non-zero on any difference or failure;
@@ -141,7 +141,7 @@ pids+=($!)
 node_idle() { sinfo -h -n "$node" -o %T | grep -qx idle; }
 wait_for 60 node_idle
 
-# The README's recipe, as the README shows it, from a directory holding scene.json.
+# The recipe, as docs/slurm.md shows it, from a directory holding scene.json.
 work="$dir/work"
 cp tools/slurm-sweep.sbatch tools/slurm-submit.sh "$work/"
 cp data/scenes/earthquake.json "$work/scene.json"

@@ -11,9 +11,12 @@ cargo fmt --check || { echo "tools/test.sh: run cargo fmt" >&2; exit 1; }
 cargo clippy --release --all-targets --quiet -- -D warnings
 RUSTDOCFLAGS='-D warnings' cargo doc --no-deps --quiet
 cargo test --release "$@"
-# The library guide's example (docs/library.md): every stiff method on a user's system.
+# The user's examples: the library guide's (docs/library.md), every stiff method on a user's
+# system, and the README's Rust lines (examples/readme.rs, from the repository's root).
 cargo run --release --quiet --example own_system
-# The work–precision runner (docs/work-precision.md) still runs: one small cell, nothing written.
+cargo run --release --quiet --example readme
+# The work–precision runner (a maintenance tool in tools/work_precision/, docs/README.md;
+# docs/work-precision.md) still runs: one small cell, nothing written.
 cargo run --release --quiet --example work_precision -- --smoke
 # The Python package (docs/python.md): a fresh venv of its own, `pip install ./python` (maturin
 # builds the extension against the same SUNDIALS), then its pytest suite (which compares with

@@ -23,6 +23,7 @@ use std::time::Duration;
 use stickslip::analysis::time_series::SeriesCollector;
 use stickslip::analysis::AnalysisError;
 use stickslip::engine::{self, Cancel, EngineError, RunError};
+use stickslip::integrate::ToleranceTransform;
 use stickslip::scene::{self, AnyScene, SceneError};
 use stickslip::{parallel, sweep};
 
@@ -234,7 +235,7 @@ fn sweep_scene(
 /// The stepping loop of `stickslip.solve_ivp` (see python/stickslip/_ivp.py, which checks
 /// and normalises the arguments first).
 #[pyfunction]
-#[pyo3(signature = (fun, jac, method, table, t0, t_bound, y0, rtol, atol, t_eval, dense_output, events, options))]
+#[pyo3(signature = (fun, jac, method, table, tolerances, t0, t_bound, y0, rtol, atol, t_eval, dense_output, events, options))]
 #[allow(clippy::too_many_arguments)]
 fn solve_ivp<'py>(
     py: Python<'py>,
@@ -242,6 +243,7 @@ fn solve_ivp<'py>(
     jac: Bound<'py, PyAny>,
     method: String,
     table: Option<String>,
+    tolerances: Option<String>,
     t0: f64,
     t_bound: f64,
     y0: Vec<f64>,
@@ -253,6 +255,16 @@ fn solve_ivp<'py>(
     options: Bound<'py, PyDict>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let n = y0.len();
+    let tolerance_transform = match tolerances.as_deref() {
+        None => None,
+        Some("as_given") => Some(ToleranceTransform::AsGiven),
+        Some("hairer") => Some(ToleranceTransform::Hairer),
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "tolerances = {other:?}: use \"as_given\" or \"hairer\""
+            )))
+        }
+    };
     let jac = if jac.is_none() {
         system::Jacobian::None
     } else if jac.is_callable() {
@@ -288,6 +300,7 @@ fn solve_ivp<'py>(
         jac,
         method,
         table,
+        tolerance_transform,
         t0,
         t_bound,
         y0,

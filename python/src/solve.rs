@@ -10,6 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use stickslip::integrate::{
     ErrorKind, Integrator, OdeSystem as _, Options, SolverError, Task, Tolerance,
+    ToleranceTransform,
 };
 use stickslip::solver::{self, Method, MethodSettings};
 
@@ -34,6 +35,8 @@ pub struct Problem<'py> {
     pub jac: Jacobian<'py>,
     pub method: String,
     pub table: Option<String>,
+    /// How radau5 reads rtol and atol (None: RADAU5's transform).
+    pub tolerance_transform: Option<ToleranceTransform>,
     pub t0: f64,
     pub t_bound: f64,
     pub y0: Vec<f64>,
@@ -194,7 +197,11 @@ pub fn solve<'py>(py: Python<'py>, p: Problem<'py>) -> PyResult<Bound<'py, PyDic
     if p.t_bound != p.t0 {
         options.stop_time = Some(p.t_bound);
     }
-    let settings = MethodSettings { table: p.table.clone(), ..MethodSettings::default() };
+    let settings = MethodSettings {
+        table: p.table.clone(),
+        tolerance_transform: p.tolerance_transform,
+        ..MethodSettings::default()
+    };
     let mut out = Outputs {
         n,
         ts: Vec::new(),

@@ -12,6 +12,7 @@ field), :class:`RunError`, :class:`SolverError` (``t``, ``y``, ``kind``).
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
@@ -25,7 +26,9 @@ from .errors import RunError, SceneError, SolverError, StickslipError
 
 __all__ = ["run", "sweep", "solve_ivp", "OdeResult", "OdeSolution", "METHODS", "SCIPY_METHODS",
            "SceneError", "RunError", "SolverError", "StickslipError", "sundials_version"]
-__version__ = "0.1.0"
+# Single-sourced: the workspace version in the root Cargo.toml, which maturin writes into the
+# package metadata (pyproject.toml's `dynamic = ["version"]`).
+__version__ = importlib.metadata.version("stickslip")
 
 Scene = Union[Mapping[str, Any], str, "os.PathLike[str]"]
 

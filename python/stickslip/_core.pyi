@@ -10,7 +10,8 @@ def run(text: str, source: str, threads: Optional[int] = None) -> tuple[str, lis
 def sweep(text: str, source: str, axes: Sequence[tuple[str, Any]], threads: Optional[int] = None) -> str:
     """Runs a sweep of the scene over the axes and returns the rows as a JSON array."""
 
-def solve_ivp(fun: Any, jac: Any, method: str, table: Optional[str], t0: float, t_bound: float,
+def solve_ivp(fun: Any, jac: Any, method: str, table: Optional[str], tolerances: Optional[str],
+              t0: float, t_bound: float,
               y0: Sequence[float], rtol: float, atol: Sequence[float],
               t_eval: Optional[Sequence[float]], dense_output: bool,
               events: Sequence[tuple[Any, float, float]], options: dict[str, Any]) -> dict[str, Any]:

@@ -16,21 +16,26 @@ from .errors import SolverError
 METHODS = ("cvode-bdf", "cvode-adams", "arkode-dirk", "arkode-imex", "arkode-erk", "radau5",
            "rodas5p", "extrapolation")
 
-#: scipy's method names and what they run here: (stickslip method, ARKODE Butcher table).
+#: scipy's method names and what they run here: (stickslip method, ARKODE Butcher table,
+#: radau5's reading of the tolerances). Radau reads rtol and atol as scipy's Radau does (as
+#: given); stickslip's own "radau5" keeps RADAU5's transform rtol' = 0.1·rtol^(2/3).
 #: RK45 and RK23 are the same Dormand–Prince 5(4) and Bogacki–Shampine 3(2) pairs as scipy's
 #: (through ARKODE's adaptivity, not scipy's); DOP853 becomes Fehlberg's 13-stage 8(7) pair,
 #: the ARKODE table of the same order (DOP853's own pair is not in ARKODE).
 SCIPY_METHODS = {
-    "Radau": ("radau5", None),
-    "BDF": ("cvode-bdf", None),
-    "RK45": ("arkode-erk", "DORMAND_PRINCE_7_4_5"),
-    "RK23": ("arkode-erk", "BOGACKI_SHAMPINE_4_2_3"),
-    "DOP853": ("arkode-erk", "FEHLBERG_13_7_8"),
+    "Radau": ("radau5", None, "as_given"),
+    "BDF": ("cvode-bdf", None, None),
+    "RK45": ("arkode-erk", "DORMAND_PRINCE_7_4_5", None),
+    "RK23": ("arkode-erk", "BOGACKI_SHAMPINE_4_2_3", None),
+    "DOP853": ("arkode-erk", "FEHLBERG_13_7_8", None),
 }
 
 #: The options stickslip's methods take (scipy's names first); others warn, as in scipy.
 OPTIONS = ("first_step", "max_step", "min_step", "max_steps", "max_order", "jacobian_max_age",
-           "table")
+           "table", "raise_on_failure")
+
+#: The methods without a Jacobian: a ``jac`` given to them warns, as scipy's explicit methods do.
+EXPLICIT = ("arkode-erk",)
 
 _EPS = np.finfo(float).eps
 
@@ -65,12 +70,13 @@ class OdeResult(dict):
 
 
 def resolve_method(method: Any) -> tuple:
-    """(stickslip method, Butcher table or None) for a stickslip or scipy method name."""
+    """(stickslip method, Butcher table or None, tolerance reading or None) for a stickslip or
+    scipy method name."""
     if not isinstance(method, str):
         raise ValueError(f"`method` must be one of {list(METHODS)} or of scipy's names "
                          f"{list(SCIPY_METHODS)}; stickslip takes no OdeSolver class, got {method!r}")
     if method in METHODS:
-        return method, None
+        return method, None, None
     if method in SCIPY_METHODS:
         return SCIPY_METHODS[method]
     if method == "LSODA":
@@ -129,23 +135,61 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
     ``method``: stickslip's own methods by name (``"cvode-bdf"``, ``"cvode-adams"``,
     ``"arkode-dirk"``, ``"arkode-erk"``, ``"radau5"``, ``"rodas5p"``, ``"extrapolation"``;
     ``"arkode-imex"`` needs a split system and is refused here) or scipy's names mapped to
-    them: ``"Radau"`` → radau5, ``"BDF"`` → cvode-bdf, ``"RK45"``/``"RK23"``/``"DOP853"`` →
-    arkode-erk with the Dormand–Prince 5(4), Bogacki–Shampine 3(2) and Fehlberg 8(7) tables.
+    them: ``"Radau"`` → radau5 with rtol and atol as given (scipy's meaning; ``"radau5"``
+    applies RADAU5's transform, see below), ``"BDF"`` → cvode-bdf,
+    ``"RK45"``/``"RK23"``/``"DOP853"`` → arkode-erk with the Dormand–Prince 5(4),
+    Bogacki–Shampine 3(2) and Fehlberg 8(7) tables.
     ``"LSODA"`` has no counterpart and raises ValueError naming the alternatives.
 
     ``options``: ``first_step``, ``max_step``, ``min_step`` (scipy's names), and stickslip's
-    ``max_steps`` (internal steps of the whole integration, default no limit), ``max_order`` (cvode, extrapolation),
-    ``jacobian_max_age`` and ``table`` (an ARKODE Butcher table name). An option a method
-    does not have is a ValueError; an unknown option warns, as in scipy.
+    ``max_steps`` (internal steps of the whole integration, default no limit), ``max_order``
+    (cvode, extrapolation), ``jacobian_max_age``, ``table`` (an ARKODE Butcher table name) and
+    ``raise_on_failure``. An option a method does not have is a ValueError; an unknown option
+    warns, as in scipy.
 
-    Differences from scipy: a failed integration raises :class:`stickslip.SolverError` (with
-    ``t``, ``y``, ``kind`` and the partial ``result``) instead of returning status -1; an
-    exception raised in ``fun``, ``jac`` or an event propagates unchanged; ``nfev`` counts the
-    calls of ``fun``; ``nlu`` counts the integrator's linear-solver setups. ``rtol`` is a
-    scalar, ``y0`` real.
+    A failed integration returns ``status`` -1, ``success`` False and the integrator's
+    ``message`` (where, when and why), with ``t`` and ``y`` up to the last accepted step, as
+    scipy does. ``raise_on_failure=True`` (stickslip's keyword) raises
+    :class:`stickslip.SolverError` instead (``t``, ``y``, ``kind``, ``solver`` and the partial
+    ``result``).
+
+    A complex ``y0`` is integrated as the real system of twice the size (real parts, then
+    imaginary parts); ``fun`` gets and returns complex arrays, ``jac`` returns the complex
+    derivative df/dy (f holomorphic in y, as scipy's BDF also assumes), and
+    ``y``, ``sol`` and ``y_events`` are complex. A ``jac`` with a method that has no Jacobian
+    (``RK45``, ``RK23``, ``DOP853``, ``"arkode-erk"``) warns, as in scipy, and is not used.
+    Every method takes a complex ``y0`` (scipy's Radau and LSODA refuse one).
+
+    Differences that remain from scipy:
+
+    - ``Radau`` is RADAU5's Radau IIA (Hairer & Wanner) with rtol and atol as given, as scipy
+      reads them, and its Newton iteration stops no earlier than the second iteration, as
+      scipy's; its step-size control and Jacobian reuse are RADAU5's, not scipy's port of
+      them, so the same (rtol, atol) gives a different, not a systematically better or worse,
+      error (docs/python.md measures both: within about ±0.6 digits of scipy's, and on HIRES
+      and van der Pol sometimes more than 0.1 digit below it). ``"radau5"`` is the same method with
+      RADAU5's own tolerance transform rtol' = 0.1·rtol^(2/3), atol' = atol·rtol'/rtol, as the
+      scenes run it: about CVODE's accuracy for an rtol, fewer digits than scipy's ``Radau``.
+    - ``BDF`` is CVODE's variable-order BDF, not scipy's NDF; ``RK45``/``RK23`` are scipy's
+      Runge–Kutta pairs with ARKODE's step control; ``DOP853`` is Fehlberg's 8(7) pair;
+      ``LSODA`` is refused (ValueError naming the alternatives).
+    - A complex system's error is weighed per real and imaginary part (scipy weighs |z|), and
+      one ``atol`` per complex component applies to both its parts.
+    - ``rtol`` is a scalar; ``jac_sparsity``, ``lband`` and ``uband`` are not options (they
+      warn and are ignored: the Jacobian is dense).
+    - An exception raised in ``fun``, ``jac`` or an event propagates unchanged; ``nfev``
+      counts the calls of ``fun`` (Jacobians by differences included), ``njev`` the calls of
+      ``jac`` (or the Jacobians by differences), ``nlu`` the integrator's linear-solver
+      setups (Radau5 factors a real and a complex matrix per setup, counted once).
+    - ``sol`` interpolates each step's own dense output (the method's interpolant), and
+      events are located on it by Brent's method as in scipy.
+    - A failure's ``message`` is the integrator's (e.g. "radau5 failed at t = … : step
+      underflow …"), not scipy's wording, and a step underflow is RADAU5's or SUNDIALS'
+      test, not scipy's "step size less than spacing between numbers".
     """
-    stick_method, table = resolve_method(method)
+    stick_method, table, tolerances = resolve_method(method)
     table = options.pop("table", table)
+    raise_on_failure = bool(options.pop("raise_on_failure", False))
     unknown = sorted(set(options) - set(OPTIONS))
     if unknown:
         warnings.warn("The following arguments have no effect for a chosen solver: "
@@ -169,18 +213,24 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
         if callable(jac):
             user_jac = jac
             jac = (lambda t, x, jac=user_jac: jac(t, x, *args))
+    if jac is not None and stick_method in EXPLICIT:
+        warnings.warn("The following arguments have no effect for a chosen solver: `jac`.",
+                      UserWarning, stacklevel=2)
+        jac = None
     if vectorized:
         vec_fun = fun
         fun = (lambda t, y, fun=vec_fun: np.asarray(fun(t, y[:, None])).ravel())
     y0 = np.asarray(y0)
-    if np.issubdtype(y0.dtype, np.complexfloating):
-        raise ValueError("`y0` is complex, but the chosen solver does not support integration in a complex domain.")
-    y0 = y0.astype(float, copy=False)
+    is_complex = np.issubdtype(y0.dtype, np.complexfloating)
     if y0.ndim != 1:
         raise ValueError("`y0` must be 1-dimensional.")
     if not np.isfinite(y0).all():
         raise ValueError("All components of the initial state `y0` must be finite.")
     n = y0.size
+    if is_complex:
+        fun, jac, events = _as_real(fun, jac, events, n)
+        y0 = np.concatenate([y0.real, y0.imag])
+    y0 = y0.astype(float, copy=False)
     rtol_a = np.asarray(rtol, dtype=float)
     if rtol_a.ndim != 0:
         raise ValueError("`rtol` must be a scalar in stickslip (one relative tolerance for every component).")
@@ -198,6 +248,8 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
         raise ValueError("`atol` must be positive.")
     if not np.all(np.isfinite(atol_a)):
         raise ValueError("`atol` must be finite.")
+    if is_complex and atol_a.ndim > 0:
+        atol_a = np.concatenate([atol_a, atol_a])
     first_step = options.get("first_step")
     if first_step is not None:
         if first_step <= 0:
@@ -225,21 +277,74 @@ def solve_ivp(fun: Callable, t_span: Sequence[float], y0: Any, method: str = "RK
             jac = jac.toarray()
         jac = np.asarray(jac, dtype=float)
     prepared = _events(events, args) if events is not None else []
-    raw = _core.solve_ivp(fun, jac, stick_method, table, t0, tf, [float(v) for v in y0], rtol,
-                          [float(a) for a in np.atleast_1d(atol_a)], t_eval, bool(dense_output),
-                          prepared, options)
+    raw = _core.solve_ivp(fun, jac, stick_method, table, tolerances, t0, tf,
+                          [float(v) for v in y0], rtol, [float(a) for a in np.atleast_1d(atol_a)],
+                          t_eval, bool(dense_output), prepared, options)
     status = raw["status"]
     error = raw["error"]
-    sol = OdeSolution(raw["sol_ts"], raw["sol_spans"], raw["sol_values"]) if dense_output else None
+    complex_ = _to_complex if is_complex else (lambda y: y)
+    sol = (OdeSolution(raw["sol_ts"], raw["sol_spans"], raw["sol_values"], complex_=is_complex)
+           if dense_output else None)
     result = OdeResult(
-        t=raw["t"], y=raw["y"], sol=sol,
+        t=raw["t"], y=complex_(raw["y"]), sol=sol,
         t_events=raw["t_events"] if events is not None else None,
         # scipy's y_events[i] is np.asarray of a list: shape (k, n), or (0,) without zeros.
-        y_events=[ye if len(ye) else np.empty((0,)) for ye in raw["y_events"]]
+        y_events=[complex_(ye.T).T if len(ye) else np.empty((0,)) for ye in raw["y_events"]]
         if events is not None else None,
         nfev=raw["nfev"], njev=raw["njev"], nlu=raw["nlu"], status=status,
         message=error["message"] if error else _MESSAGES[status], success=status >= 0)
-    if error:
-        raise SolverError(error["message"], t=error["t"], y=error["y"], kind=error["kind"],
-                          solver=error["solver"], flag=error["flag"], result=result)
+    if error and raise_on_failure:
+        y_err = error["y"]
+        raise SolverError(error["message"], t=error["t"],
+                          y=_to_complex(y_err) if is_complex and len(y_err) else y_err,
+                          kind=error["kind"], solver=error["solver"], flag=error["flag"],
+                          result=result)
     return result
+
+
+def _to_complex(y: np.ndarray) -> np.ndarray:
+    """The complex states of real ones stacked as (real parts, imaginary parts) on axis 0."""
+    m = y.shape[0] // 2
+    return y[:m] + 1j * y[m:]
+
+
+def _as_real(fun: Callable, jac: Any, events: Any, n: int) -> tuple:
+    """``fun``, ``jac`` and ``events`` of a complex system of dimension n as those of the real
+    system of dimension 2n whose state is (Re z, Im z)."""
+    def real_fun(t, x, fun=fun):
+        f = np.asarray(fun(t, x[:n] + 1j * x[n:]), dtype=complex)
+        return np.concatenate([f.real, f.imag])
+
+    def blocks(j):
+        # df/dz = A + iB of a holomorphic f: d(Re f, Im f)/d(Re z, Im z) = [[A, −B], [B, A]].
+        if hasattr(j, "toarray"):
+            j = j.toarray()
+        j = np.asarray(j, dtype=complex)
+        if j.shape != (n, n):
+            raise ValueError(f"`jac` is expected to have shape {(n, n)}, but actually has {j.shape}.")
+        a, b = j.real, j.imag
+        return np.block([[a, -b], [b, a]])
+
+    if callable(jac):
+        user_jac = jac
+        jac = (lambda t, x: blocks(user_jac(t, x[:n] + 1j * x[n:])))
+    elif jac is not None:
+        jac = blocks(jac)
+    if events is not None:
+        if callable(events):
+            events = (events,)
+        wrapped = []
+        for event in events:
+            if not callable(event):
+                wrapped.append(event)
+                continue
+
+            def real_event(t, x, *args, event=event):
+                return event(t, x[:n] + 1j * x[n:], *args)
+
+            for attr in ("terminal", "direction"):
+                if hasattr(event, attr):
+                    setattr(real_event, attr, getattr(event, attr))
+            wrapped.append(real_event)
+        events = wrapped
+    return real_fun, jac, events

@@ -17,11 +17,13 @@ class OdeSolution:
     (CVODE's of order ≤ 5, Radau5's, Rodas5P's, ARKODE's) to round-off. Outside
     ``[t_min, t_max]`` the first or last step's polynomial is extrapolated, as in scipy.
 
+    For a complex system (integrated as its real and imaginary parts) the values are complex.
+
     Attributes: ``ts`` (the step boundaries, in the direction of integration), ``t_min``,
     ``t_max``, ``n_segments``.
     """
 
-    def __init__(self, ts: Any, spans: Any, values: Any) -> None:
+    def __init__(self, ts: Any, spans: Any, values: Any, complex_: bool = False) -> None:
         self.ts = np.asarray(ts, dtype=float)
         self._spans = np.asarray(spans, dtype=float)
         self._values = np.asarray(values, dtype=float)
@@ -37,6 +39,8 @@ class OdeSolution:
         w[0] *= 0.5
         w[-1] *= 0.5
         self._weights = w
+        #: A complex system integrated as (real parts, imaginary parts): values come back complex.
+        self._complex = complex_
 
     def _segments(self, t: np.ndarray) -> np.ndarray:
         """The step of each time, as scipy's OdeSolution picks it (a boundary belongs to the
@@ -65,4 +69,7 @@ class OdeSolution:
         c[exact] = 1.0
         vals = self._values[seg]  # (m, k, n)
         y = np.einsum("mk,mkn->mn", c, vals) / c.sum(axis=1)[:, None]
+        if self._complex:
+            m = y.shape[1] // 2
+            y = y[:, :m] + 1j * y[:, m:]
         return y[0] if scalar else y.T

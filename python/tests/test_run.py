@@ -186,3 +186,13 @@ def test_time_series_as_arrays_with_absolute_time(tmp_path):
     for k, name in enumerate(["u", "ln_v", "theta"]):
         assert np.abs(own.y[k] - series[name]).max() < 1e-5, name
     assert "series" not in stickslip.run(scene_path("fig1"))
+
+
+def test_the_version_is_the_workspace_version():
+    # One source: [workspace.package] in the root Cargo.toml, through python/Cargo.toml and
+    # maturin into the installed metadata that stickslip.__version__ reads.
+    import tomllib
+
+    with open(os.path.join(REPO, "Cargo.toml"), "rb") as f:
+        version = tomllib.load(f)["workspace"]["package"]["version"]
+    assert stickslip.__version__ == version

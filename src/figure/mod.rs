@@ -3,7 +3,7 @@
 //! hide the least data, reference lines and text notes.
 //!
 //! ```
-//! use crate::figure::{Axis, Figure, Panel, Series, Style};
+//! use stickslip_cli::figure::{Axis, Figure, Panel, Series, Style};
 //! let t: Vec<f64> = (0..50).map(|i| i as f64 * 0.1).collect();
 //! let v: Vec<f64> = t.iter().map(|t| (-t).exp()).collect();
 //! let panel = Panel::new("(a) decay", Axis::linear("t").unit("D_{c}/v_{0}"), Axis::log10("v").unit("v_{0}"))

@@ -1,4 +1,4 @@
-//! Peer Rust ODE solvers on stickslip's work-precision problem (examples/work_precision): the
+//! Peer Rust ODE solvers on stickslip's work-precision problem (tools/work_precision): the
 //! crates a user would pick instead — diffsol (BDF, ESDIRK34, TR-BDF2) and
 //! differential-equations (Radau5, BDF) — each with its defaults, or with the least tuning
 //! that makes it run ("tuned", stated in the output).

@@ -7,7 +7,7 @@
 
 use crate::integrate::{
     ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p,
-    SolverError,
+    SolverError, ToleranceTransform,
 };
 use crate::sundials::{
     self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
@@ -114,11 +114,13 @@ pub enum MethodError {
         /// The name as given.
         name: String,
     },
-    /// explicit_table for a method other than arkode-imex.
-    #[error("explicit_table: {} takes no explicit table (only arkode-imex does)", method.name())]
+    /// explicit_table for a method that takes none ([`Accepts::explicit_table`]).
+    #[error("explicit_table: {} takes no explicit table (only {} does)", method.name(), takers.join(", "))]
     NoExplicitTable {
         /// The method.
         method: Method,
+        /// The scene names of the methods that take one.
+        takers: Vec<&'static str>,
     },
     /// An optional setting the method does not take ([`Method::capabilities`]).
     #[error(
@@ -134,18 +136,29 @@ pub enum MethodError {
         /// The scene names of the methods that take it.
         takers: Vec<&'static str>,
     },
-    /// deduce_implicit_rhs for a method other than arkode-dirk and arkode-imex.
+    /// deduce_implicit_rhs for a method that does not take it ([`Accepts::deduce_implicit_rhs`]).
     #[error(
-        "deduce_implicit_rhs applies to arkode-dirk and arkode-imex only, not {method}: leave it \
-         false"
+        "deduce_implicit_rhs applies to {} only, not {method}: leave it false",
+        takers.join(" and ")
     )]
     NoDeducedImplicitRhs {
         /// The method.
         method: Method,
+        /// The scene names of the methods that take it.
+        takers: Vec<&'static str>,
     },
     /// table for a method that is not an ARKODE one.
     #[error("table: {} takes no Butcher table (only the arkode methods do)", method.name())]
     NoTable {
+        /// The method.
+        method: Method,
+    },
+    /// tolerance_transform for a method other than radau5.
+    #[error(
+        "tolerance_transform applies to radau5 only, not {method}: leave it unset (None); \
+         {method} uses rtol and atol as given"
+    )]
+    NoToleranceTransform {
         /// The method.
         method: Method,
     },
@@ -170,11 +183,13 @@ impl Method {
             nonlin_conv_coef: true,
             jacobian_max_age: true,
             error_scales: true,
-            table: false,
+            deduce_implicit_rhs: false,
+            table: None,
             explicit_table: false,
         };
         let cvode = Accepts { max_order: true, ..newton };
-        let dirk = Accepts { table: true, ..newton };
+        let dirk =
+            Accepts { deduce_implicit_rhs: true, table: Some(TableKind::Implicit), ..newton };
         // Rodas5P and extrapolation solve linear systems only: no Newton iteration to limit.
         let linearly_implicit =
             Accepts { max_nonlin_iters: false, nonlin_conv_coef: false, ..newton };
@@ -249,6 +264,8 @@ impl Method {
                     max_conv_fails: false,
                     nonlin_conv_coef: false,
                     jacobian_max_age: false,
+                    deduce_implicit_rhs: false,
+                    table: Some(TableKind::Explicit),
                     ..dirk
                 },
                 engine: plain,
@@ -337,10 +354,21 @@ pub struct Accepts {
     pub jacobian_max_age: bool,
     /// [`Options::error_scales`] (SUNDIALS' user error weights, the homemade methods' own).
     pub error_scales: bool,
-    /// [`MethodSettings::table`].
-    pub table: bool,
+    /// [`MethodSettings::deduce_implicit_rhs`] (ARKStep's implicit methods).
+    pub deduce_implicit_rhs: bool,
+    /// [`MethodSettings::table`], and which kind of Butcher table it names; None: no table.
+    pub table: Option<TableKind>,
     /// [`MethodSettings::explicit_table`].
     pub explicit_table: bool,
+}
+
+/// The kind of Butcher table a method's [`MethodSettings::table`] names ([`Accepts::table`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TableKind {
+    /// An implicit (DIRK) table, [`DirkTable`] (arkode-dirk; arkode-imex's implicit part).
+    Implicit,
+    /// An explicit (ERK) table, [`ErkTable`] (arkode-erk).
+    Explicit,
 }
 
 impl Accepts {
@@ -421,6 +449,10 @@ pub struct MethodSettings {
     /// set at rtol 1e-4 and 1e-7 and reports HIRES and VDPOL at 1e-7 about 2000 × rtol off
     /// (docs/test-set.md). An error for the other methods.
     pub deduce_implicit_rhs: bool,
+    /// What radau5 makes of rtol and atol ([`ToleranceTransform`]); None is RADAU5's own
+    /// transform ([`ToleranceTransform::Hairer`]). The other methods use the tolerances as
+    /// given and have no such setting: an error for them.
+    pub tolerance_transform: Option<ToleranceTransform>,
 }
 
 impl MethodSettings {
@@ -432,6 +464,7 @@ impl MethodSettings {
             explicit_table: spec.explicit_table.clone(),
             autonomous,
             deduce_implicit_rhs: false,
+            tolerance_transform: None,
         }
     }
 }
@@ -466,7 +499,7 @@ pub fn build<'s, S: ImexSystem + 's>(
     y0: &[f64],
     options: &Options,
 ) -> Result<Built<'s>, SolverError> {
-    if method != Method::ArkodeImex {
+    if !method.capabilities().needs_imex {
         return build_ode(method, settings, system, t0, y0, options);
     }
     let tables = checked_tables(method, settings, options)
@@ -523,17 +556,20 @@ pub fn build_ode<'s, S: OdeSystem + 's>(
             let message = "arkode-imex needs a system split into explicit and implicit parts: implement ImexSystem and use solver::build";
             return Err(invalid(method, t0, y0, message.into()));
         }
-        Method::Radau5 => Box::new(Radau5::new(system, t0, y0, options)?),
+        Method::Radau5 => {
+            let transform = settings.tolerance_transform.unwrap_or_default();
+            Box::new(Radau5::with_tolerances(system, t0, y0, options, transform)?)
+        }
         Method::Rodas5p if settings.autonomous => {
             Box::new(Rodas5p::new(system, t0, y0, options)?.autonomous())
         }
         Method::Rodas5p => Box::new(Rodas5p::new(system, t0, y0, options)?),
         Method::Extrapolation => Box::new(Extrapolation::new(system, t0, y0, options)?),
     };
-    let tables = match method {
-        Method::ArkodeDirk => vec![dirk.name().into()],
-        Method::ArkodeErk => vec![erk.name().into()],
-        _ => vec![],
+    let tables = match method.capabilities().accepts.table {
+        Some(TableKind::Implicit) => vec![dirk.name().into()],
+        Some(TableKind::Explicit) => vec![erk.name().into()],
+        None => vec![],
     };
     Ok(Built { integrator, tables })
 }
@@ -577,9 +613,16 @@ fn reject_unsupported(
             .collect();
         return Err(MethodError::UnsupportedOption { name, method, takers });
     }
-    let ark_implicit = matches!(method, Method::ArkodeDirk | Method::ArkodeImex);
-    if settings.deduce_implicit_rhs && !ark_implicit {
-        return Err(MethodError::NoDeducedImplicitRhs { method });
+    if settings.deduce_implicit_rhs && !accepts.deduce_implicit_rhs {
+        let takers = Method::ALL
+            .iter()
+            .filter(|(_, m)| m.capabilities().accepts.deduce_implicit_rhs)
+            .map(|(n, _)| *n)
+            .collect();
+        return Err(MethodError::NoDeducedImplicitRhs { method, takers });
+    }
+    if settings.tolerance_transform.is_some() && method != Method::Radau5 {
+        return Err(MethodError::NoToleranceTransform { method });
     }
     Ok(())
 }
@@ -660,17 +703,17 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Met
             .ok_or_else(|| MethodError::UnknownExplicitTable { field, name: name.into() })
     };
     let (table, explicit_table) = (settings.table.as_deref(), settings.explicit_table.as_deref());
-    if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(MethodError::NoExplicitTable { method });
+    let accepts = method.capabilities().accepts;
+    if explicit_table.is_some() && !accepts.explicit_table {
+        let takers = Method::ALL
+            .iter()
+            .filter(|(_, m)| m.capabilities().accepts.explicit_table)
+            .map(|(n, _)| *n)
+            .collect();
+        return Err(MethodError::NoExplicitTable { method, takers });
     }
-    match method {
-        Method::ArkodeDirk => {
-            Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None })
-        }
-        Method::ArkodeErk => {
-            Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? })
-        }
-        Method::ArkodeImex => {
+    match accepts.table {
+        Some(TableKind::Implicit) if accepts.explicit_table => {
             let implicit = table.map(|n| dirk("table", n)).transpose()?;
             let paired = table.and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
             let explicit = match explicit_table {
@@ -679,7 +722,13 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Met
             };
             Ok(Tables { implicit, explicit })
         }
-        _ if table.is_some() => Err(MethodError::NoTable { method }),
-        _ => Ok(Tables { implicit: None, explicit: None }),
+        Some(TableKind::Implicit) => {
+            Ok(Tables { implicit: table.map(|n| dirk("table", n)).transpose()?, explicit: None })
+        }
+        Some(TableKind::Explicit) => {
+            Ok(Tables { implicit: None, explicit: table.map(|n| erk("table", n)).transpose()? })
+        }
+        None if table.is_some() => Err(MethodError::NoTable { method }),
+        None => Ok(Tables { implicit: None, explicit: None }),
     }
 }

@@ -10,7 +10,7 @@ use crate::analysis::time_series::{
 };
 use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
 use crate::integrate::{
-    ErrorScale, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance,
+    ErrorKind, ErrorScale, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance,
 };
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
@@ -231,6 +231,12 @@ impl EngineError {
     pub fn is_bad_input(&self) -> bool {
         matches!(*self.kind, AnalysisError::InvalidOption(_))
     }
+
+    /// Whether an integration stopped because the run was cancelled ([`Cancel`]): an error of
+    /// kind [`ErrorKind::Cancelled`], not a failed computation.
+    pub fn is_cancelled(&self) -> bool {
+        matches!(&*self.kind, AnalysisError::Solver(e) if e.kind == ErrorKind::Cancelled)
+    }
 }
 
 /// The engine's error for `analysis` from an analysis error or an integrator's, with the
@@ -399,11 +405,12 @@ pub fn run_cancellable(
 ) -> Result<Report, RunError> {
     let mut discard = DiscardSink;
     let series = series.unwrap_or(&mut discard);
-    let report = run_inner(scene, scene_json, threads, progress, series, Some(cancel));
-    if cancel.is_cancelled() {
-        return Err(RunError::Cancelled);
+    match run_inner(scene, scene_json, threads, progress, series, Some(cancel)) {
+        Err(e) if e.is_cancelled() => Err(RunError::Cancelled),
+        // A noise analysis stopped between realisations, or an analysis skipped.
+        _ if cancel.is_cancelled() => Err(RunError::Cancelled),
+        report => Ok(report?),
     }
-    Ok(report?)
 }
 
 /// [`run_with_series`], stopping early once `cancel` is given and set.

@@ -10,7 +10,7 @@ use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::ShootingReport;
 use crate::analysis::time_series::{Event, TimeSeriesReport};
 use crate::integrate::Stats;
-use crate::model::{DrrParams, PhysicalScales, StateLaw};
+use crate::model::{DrrParams, Friction, PhysicalScales, StateLaw};
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
 use std::io::Write;
@@ -132,8 +132,9 @@ pub struct CyclePhysical {
     /// The shear stress τ = σμ where V falls back through v0 (the event's end).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shear_stress_after: Option<f64>,
-    /// What the shear stresses are measured from: "absolute (σμ)" or "relative to σμ_ref,
-    /// steady sliding at v0".
+    /// What the shear stresses are measured from: "absolute (σμ)" (also under the
+    /// regularised law, whose μ = aΦ is absolute), "relative to σμ_ref, steady sliding at v0",
+    /// or under the cut-off law "relative to σμ*".
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shear_stress_reference: Option<&'static str>,
     /// The friction coefficient μ at the event's start (with μ0, v_ref and σ).
@@ -193,12 +194,11 @@ impl CyclePhysical {
             stress_drop: s.stress_drop(v.extremes.u_min, v.extremes.u_max),
             shear_stress_before: stress(phi_before),
             shear_stress_after: stress(phi_after),
-            shear_stress_reference: phi_before.map(|_| {
-                if absolute {
-                    "absolute (σμ)"
-                } else {
-                    "relative to σμ_ref, steady sliding at v0"
-                }
+            shear_stress_reference: phi_before.map(|_| match params.friction {
+                _ if absolute => "absolute (σμ)",
+                Friction::Regularised { .. } => "absolute (σμ, the regularised law's μ = aΦ)",
+                Friction::CutOff { .. } => "relative to σμ*, the cut-off law's μ* (μ = μ* + aΦ)",
+                _ => "relative to σμ_ref, steady sliding at v0",
             }),
             friction_before: phi_before.and_then(|phi| s.friction_coefficient(phi)),
             friction_after: phi_after.and_then(|phi| s.friction_coefficient(phi)),

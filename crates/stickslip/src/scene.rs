@@ -127,6 +127,14 @@ pub struct Dimensional {
     /// Shear-wave speed c_s (radiation damping; with `shear_modulus`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shear_wave_speed: Option<f64>,
+    /// The unit system of these values: "SI" (Pa, m, m/s, s) lets reports state their units;
+    /// absent, any consistent system is accepted and the units are left to the reader.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit_system: Option<UnitSystem>,
+    /// The radiation-damping coefficient η_dim = G/(2c_s) in stress per velocity (e.g. Pa·s/m),
+    /// instead of `shear_modulus` with `shear_wave_speed`: η = η_dim·v0/(aσ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radiation_damping: Option<f64>,
     /// μ0, the steady-state friction coefficient at `v_ref` (with `v_ref` and σ).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mu0: Option<f64>,
@@ -140,7 +148,40 @@ pub struct Dimensional {
 enum RawFriction {
     Log,
     Asinh,
-    Power { alpha: f64 },
+    Power {
+        alpha: f64,
+    },
+    /// QDYN's cut-off velocity law: v1 = V1/v0, v2 = V2/v0, or in a dimensional scene the
+    /// velocities V1, V2 themselves.
+    CutOff {
+        #[serde(default)]
+        v1: Option<f64>,
+        #[serde(default)]
+        v2: Option<f64>,
+        #[serde(default)]
+        velocity_1: Option<f64>,
+        #[serde(default)]
+        velocity_2: Option<f64>,
+    },
+    /// QDYN's regularised law: f* = μ*/a and v* = V*/v0, or in a dimensional scene μ* and V*.
+    Regularised {
+        #[serde(default)]
+        f_star: Option<f64>,
+        #[serde(default)]
+        v_star: Option<f64>,
+        #[serde(default)]
+        mu_star: Option<f64>,
+        #[serde(default)]
+        velocity_star: Option<f64>,
+    },
+}
+
+/// A declared unit system for `model.dimensional`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum UnitSystem {
+    /// Pa, m, m/s, s (and Pa·s/m for `radiation_damping`).
+    #[serde(rename = "SI")]
+    Si,
 }
 
 /// Physical time units for reports: one dimensionless time unit (D_c/v0) is `time_scale`
@@ -542,18 +583,8 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     }
     let xi = positive("model.xi", xi, "ξ = k·D_c/A, of order one, e.g. 0.7", err)?;
     let epsilon = finite("model.epsilon", epsilon, err)?;
-    let friction = match m.friction.clone().unwrap_or(RawFriction::Log) {
-        RawFriction::Log => Friction::Log,
-        RawFriction::Asinh => Friction::Asinh,
-        RawFriction::Power { alpha } => Friction::Power {
-            alpha: positive(
-                "model.friction.power.alpha",
-                alpha,
-                "g_α(v) = (v^α − 1)/α, e.g. 0.31",
-                err,
-            )?,
-        },
-    };
+    let friction =
+        friction_law(m.friction.clone().unwrap_or(RawFriction::Log), scales.as_ref(), err)?;
     let state_law = match m.state_law.as_deref() {
         None => StateLaw::Slip,
         Some(name) => StateLaw::from_name(name).ok_or_else(|| {
@@ -604,7 +635,11 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             Some(u)
         }
         None => scales.map(|s| Units {
-            time_unit: "s (if the dimensional input is SI)".into(),
+            time_unit: match m.dimensional.and_then(|d| d.unit_system) {
+                Some(UnitSystem::Si) => "s",
+                None => "s (if the dimensional input is SI)",
+            }
+            .into(),
             time_scale: s.time_scale(),
         }),
     };
@@ -625,10 +660,90 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         dimensional: m.dimensional,
         units,
         scales,
-        warnings: scales.map_or_else(Vec::new, |s| field_warnings(&s, &params)),
+        warnings: m
+            .dimensional
+            .zip(scales)
+            .map_or_else(Vec::new, |(d, s)| field_warnings(&d, &s, &params)),
         initial,
         solver,
         analyses,
+    })
+}
+
+/// The friction law from `model.friction`: QDYN's laws take dimensionless velocities (v1, v2,
+/// v*) and f* = μ*/a in a dimensionless scene, velocities (velocity_1, velocity_2,
+/// velocity_star) and μ* (`mu_star`, with σ) in a dimensional one.
+fn friction_law(
+    raw: RawFriction,
+    scales: Option<&PhysicalScales>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Friction, SceneError> {
+    // One input of a pair, dimensionless (`plain`) or dimensional (`field`), by the scene's
+    // form; the value in units of v0 (velocities) or of a (μ*).
+    let pick = |law: &str,
+                (plain, plain_value): (&'static str, Option<f64>),
+                (field, field_value): (&'static str, Option<f64>),
+                hint: &str|
+     -> Result<(f64, &'static str), SceneError> {
+        let (name, wrong, value) = if scales.is_some() {
+            (field, (plain, plain_value), field_value)
+        } else {
+            (plain, (field, field_value), plain_value)
+        };
+        let path = |n: &str| format!("model.friction.{law}.{n}");
+        if wrong.1.is_some() {
+            let form = if scales.is_some() { "a dimensional" } else { "a dimensionless" };
+            return Err(err(
+                &path(wrong.0),
+                format!("{form} scene gives {name} here, not {} ({hint})", wrong.0),
+            ));
+        }
+        let value = value.ok_or_else(|| err(&path(name), format!("missing ({hint})")))?;
+        Ok((finite(&path(name), value, err)?, name))
+    };
+    let velocity =
+        |law: &str, plain: (&'static str, Option<f64>), field: (&'static str, Option<f64>)| {
+            let hint = "a velocity: v = V/v0 in a dimensionless scene, V in a dimensional one";
+            let (value, name) = pick(law, plain, field, hint)?;
+            let value = positive(&format!("model.friction.{law}.{name}"), value, hint, err)?;
+            Ok::<f64, SceneError>(scales.map_or(value, |s| value / s.v0))
+        };
+    Ok(match raw {
+        RawFriction::Log => Friction::Log,
+        RawFriction::Asinh => Friction::Asinh,
+        RawFriction::Power { alpha } => Friction::Power {
+            alpha: positive(
+                "model.friction.power.alpha",
+                alpha,
+                "g_α(v) = (v^α − 1)/α, e.g. 0.31",
+                err,
+            )?,
+        },
+        RawFriction::CutOff { v1, v2, velocity_1, velocity_2 } => Friction::CutOff {
+            v1: velocity("cut_off", ("v1", v1), ("velocity_1", velocity_1))?,
+            v2: velocity("cut_off", ("v2", v2), ("velocity_2", velocity_2))?,
+        },
+        RawFriction::Regularised { f_star, v_star, mu_star, velocity_star } => {
+            let hint = "μ*/a in a dimensionless scene (f_star, e.g. 60), μ* in a dimensional one (mu_star, e.g. 0.6, with sigma)";
+            let (value, _) = pick("regularised", ("f_star", f_star), ("mu_star", mu_star), hint)?;
+            let f_star = match scales {
+                None => value,
+                Some(s) => {
+                    let (a, _) = s.friction_coefficients().ok_or_else(|| {
+                        err("model.dimensional.sigma", "missing: mu_star is a friction coefficient; f* = μ*/a needs a and sigma (not a_sigma alone)".into())
+                    })?;
+                    value / a
+                }
+            };
+            Friction::Regularised {
+                f_star,
+                v_star: velocity(
+                    "regularised",
+                    ("v_star", v_star),
+                    ("velocity_star", velocity_star),
+                )?,
+            }
+        }
     })
 }
 
@@ -734,7 +849,15 @@ fn dimensional_scales(
 /// the instability ξ_c = ε (warn outside 1e-4 … 1e3); ε = b/a − 1 ≈ −0.5 … 1 (warn above 10);
 /// η = G·v0/(2·c_s·aσ) ≈ 5e-8 on crustal faults (warn at η ≥ 0.1, where radiation damping
 /// caps the slip rate at v0/η ≤ 10 v0 and no fast slip can happen); μ0 ≈ 0.6 (warn above 2).
-fn field_warnings(s: &PhysicalScales, p: &DrrParams) -> Vec<String> {
+fn field_warnings(d: &Dimensional, s: &PhysicalScales, p: &DrrParams) -> Vec<String> {
+    // The fields the user gave for each quantity, to name in the warnings.
+    let (a, b) = if d.a.is_some() { ("a/sigma", "b") } else { ("a_sigma", "b_sigma") };
+    let k = if d.k.is_some() { "k" } else { "shear_modulus/length" };
+    let damping = if d.radiation_damping.is_some() {
+        "radiation_damping"
+    } else {
+        "shear_modulus/shear_wave_speed"
+    };
     let mut w = Vec::new();
     if let Some((a, b)) = s.friction_coefficients() {
         for (name, value) in [("a", a), ("b", b)] {
@@ -744,18 +867,24 @@ fn field_warnings(s: &PhysicalScales, p: &DrrParams) -> Vec<String> {
         }
     }
     if !(1e-4..=1e3).contains(&p.xi) {
-        w.push(format!("model.dimensional.k/d_c/a/sigma: ξ = k·D_c/(aσ) = {:e} is far outside the physical 1e-4 … 1e3 (k/k_c = ξ/ε; crustal and laboratory values are O(0.01 … 10)); check the units of k, d_c, a and sigma", p.xi));
+        w.push(format!("model.dimensional.{k}/d_c/{a}: ξ = k·D_c/(aσ) = {:e} is far outside the physical 1e-4 … 1e3 (k/k_c = ξ/ε; crustal and laboratory values are O(0.01 … 10)); check the units of {}, d_c and {}", p.xi, k.replace('/', " and "), a.replace('/', " and ")));
     }
     if p.epsilon > 10.0 {
-        w.push(format!("model.dimensional.a/b: ε = b/a − 1 = {:e}: b/a above 11 is far outside laboratory values (b/a ≈ 0.5 … 2)", p.epsilon));
+        w.push(format!("model.dimensional.{a}/{b}: ε = b/a − 1 = {:e}: b/a above 11 is far outside laboratory values (b/a ≈ 0.5 … 2)", p.epsilon));
     }
-    if p.eta >= 0.1 {
-        w.push(format!("model.dimensional.shear_modulus/shear_wave_speed/a/sigma: η = G·v0/(2·c_s·aσ) = {:e} ≥ 0.1 (crustal faults: ≈ 5e-8): radiation damping caps the slip rate near v0/η = {:e} v0, so no fast slip can happen; check the units of a/sigma (or a_sigma), shear_modulus and shear_wave_speed", p.eta, 1.0 / p.eta));
+    if p.eta >= 0.1 && m_has_medium(d) {
+        w.push(format!("model.dimensional.{damping}/{a}: η = G·v0/(2·c_s·aσ) = {:e} ≥ 0.1 (crustal faults: ≈ 5e-8): radiation damping caps the slip rate near v0/η = {:e} v0, so no fast slip can happen; check the units of {} and {}", p.eta, 1.0 / p.eta, damping.replace('/', " and "), a.replace('/', " and ")));
     }
     if let Some(r) = s.reference.filter(|r| r.mu0 > 2.0) {
         w.push(format!("model.dimensional.mu0: μ0 = {} is far above rock friction (≈ 0.6)", r.mu0));
     }
     w
+}
+
+/// Whether the radiation damping came from `model.dimensional` (not from the dimensionless
+/// `model.radiation_damping`, which the dimensional warnings do not judge).
+fn m_has_medium(d: &Dimensional) -> bool {
+    d.radiation_damping.is_some() || d.shear_wave_speed.is_some()
 }
 
 /// η from `model.radiation_damping` (dimensionless) or from `model.dimensional`'s shear
@@ -766,6 +895,16 @@ fn radiation_damping(
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<f64, SceneError> {
     let from_medium = match (m.dimensional, scales) {
+        (Some(Dimensional { radiation_damping: Some(_), shear_wave_speed: Some(_), .. }), _) => {
+            return Err(err("model.dimensional.radiation_damping", "give radiation_damping (η_dim = G/(2c_s)) or shear_modulus with shear_wave_speed, not both".into()));
+        }
+        (Some(Dimensional { radiation_damping: Some(d), .. }), Some(s)) => {
+            let d = finite("model.dimensional.radiation_damping", d, err)?;
+            if d < 0.0 {
+                return Err(err("model.dimensional.radiation_damping", format!("{d} must be ≥ 0 (η_dim = G/(2c_s) in stress per velocity, e.g. 5e6 Pa·s/m; 0 = no radiation damping)")));
+            }
+            Some(d * s.v0 / s.a_sigma)
+        }
         (Some(Dimensional { shear_modulus: Some(g), shear_wave_speed: Some(c), .. }), Some(s)) => {
             let g = positive(
                 "model.dimensional.shear_modulus",
@@ -794,7 +933,7 @@ fn radiation_damping(
     };
     let eta = match (m.radiation_damping, from_medium) {
         (Some(_), Some(_)) => {
-            return Err(err("model.radiation_damping", "give either radiation_damping or dimensional.shear_modulus/shear_wave_speed, not both".into()));
+            return Err(err("model.radiation_damping", "give either radiation_damping or dimensional.radiation_damping (or dimensional.shear_modulus/shear_wave_speed), not both".into()));
         }
         (Some(eta), None) => finite("model.radiation_damping", eta, err)?,
         (None, Some(eta)) => eta,
@@ -875,6 +1014,16 @@ fn papers_model_only(
             format!("the \"{name}\" analysis needs the inertial model ({why}); the quasi-dynamic model (\"inertia\": false) has no inertia: drop \"{name}\" or use an inertial model"),
         ));
     }
+    if !params.friction.is_classic() {
+        let derived = [
+            (a.paper, "paper"),
+            (a.asymptotics.is_some(), "asymptotics"),
+            (a.lyapunov.is_some(), "lyapunov"),
+        ];
+        if let Some((_, name)) = derived.iter().find(|(asked, _)| *asked) {
+            return Err(err("model.friction", format!("the \"{name}\" analysis is derived for friction θ + f(v) (log, asinh, power); QDYN's {} law is not of that form: drop \"{name}\" (hopf, cycle, trajectory, time_series, shooting, continuation and noise run with it)", params.friction.label())));
+        }
+    }
     if params.is_papers_model() {
         return Ok(());
     }
@@ -946,7 +1095,12 @@ fn field_start(
         None => r.v,
     };
     let theta = match r.state {
-        Some(_) if params.friction != Friction::Log => {
+        Some(_)
+            if !matches!(
+                params.friction,
+                Friction::Log | Friction::CutOff { .. } | Friction::Regularised { .. }
+            ) =>
+        {
             return Err(err("initial.state", format!("the state Θ means θ = (b/a) ln(v0Θ/D_c) only under logarithmic friction (μ = μ0 + a ln(V/V_ref) + b ln(ΘV_ref/D_c)); this scene's friction is {}: give theta instead", params.friction.label())));
         }
         Some(big_theta) => Some(s.theta_from_state(positive(

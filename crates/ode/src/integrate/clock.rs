@@ -174,9 +174,18 @@ impl<'a> Clock<'a> {
         Ok(t)
     }
 
-    /// Restarts the integrator at global time `at` with state `y0` (local time 0).
-    pub fn reinit(&mut self, at: Time, y0: &[f64]) -> Result<(), SolverError> {
-        self.integ.reinit(0.0, y0)?;
+    /// Restarts the integrator at global time `at` with state `y0` (local time 0), with
+    /// `first_step` as its first step if given ([`Integrator::reinit_with_step`]).
+    pub fn reinit(
+        &mut self,
+        at: Time,
+        y0: &[f64],
+        first_step: Option<f64>,
+    ) -> Result<(), SolverError> {
+        match first_step {
+            Some(h) => self.integ.reinit_with_step(0.0, y0, h)?,
+            None => self.integ.reinit(0.0, y0)?,
+        }
         self.epoch = at;
         self.last_step = f64::INFINITY;
         Ok(())

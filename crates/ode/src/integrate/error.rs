@@ -37,6 +37,16 @@ pub enum ErrorKind {
     /// Invalid input (options, initial state, output time, dense-output request).
     #[error("invalid input")]
     InvalidInput,
+    /// The caller stopped the integration (e.g. Ctrl-C): not a numerical failure. The engine's
+    /// guard returns it once its cancel flag is set, and a cancellable run then reports that it
+    /// was cancelled instead of this error.
+    #[error("cancelled by the caller")]
+    Cancelled,
+    /// The steps no longer move the solution: a run stopped because many steps in a row left
+    /// the state unchanged although its derivative is not zero (the message says which
+    /// component and why).
+    #[error("no progress")]
+    NoProgress,
     /// Any other failure reported by the integrator (the code is in the message).
     #[error("integrator failure")]
     Other,

@@ -20,6 +20,20 @@ pub trait Integrator {
     fn dense(&mut self, t: f64, k: u32) -> Result<&[f64], SolverError>;
     /// Restarts at (t0, y0).
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError>;
+    /// Restarts at (t0, y0) with `first_step` as the first step, for a method that otherwise
+    /// sizes its first step (and predicts its first stage) from f(t0, y0): SUNDIALS'. Where
+    /// f(y0) is not the derivative of the solution through y0 (on a slow manifold deeper than
+    /// its round-off, [`super::Clock::reinit`]'s caller knows the true one), such an estimate
+    /// can be off by decades. The homemade methods start their stages from y0 and ignore it.
+    fn reinit_with_step(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        first_step: f64,
+    ) -> Result<(), SolverError> {
+        let _ = first_step;
+        self.reinit(t0, y0)
+    }
     /// Sets (or moves) the time the integrator must not step past, as
     /// [`Options::stop_time`](super::Options::stop_time) does at construction. A call whose
     /// `tout` lies beyond the stop time returns there with

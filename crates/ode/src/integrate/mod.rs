@@ -25,7 +25,7 @@ pub use problem::{
     JacobianMatrix, JacobianMismatch, OdeSystem, RootFunction, Roots,
 };
 pub(crate) use problem::{implicit_jacobian_hint, jacobian_hint};
-pub use radau5::Radau5;
+pub use radau5::{Radau5, ToleranceTransform};
 pub use rodas5p::Rodas5p;
 pub use stats::Stats;
 pub(crate) use stepper::ErrorWeights;

@@ -90,8 +90,8 @@ pub struct Options {
     pub fail_on_step_underflow: bool,
     /// One [`ErrorScale`] per component; `None` weighs every component relative to its size.
     /// CVODE and ARKStep take it through a user error-weight function (`*WFtolerances`); the
-    /// homemade integrators use it wherever they form error weights (Radau5 with its
-    /// transformed rtol' = 0.1·rtol^(2/3): an absolute scale c weighs rtol'·c; Rodas5P and
+    /// homemade integrators use it wherever they form error weights (Radau5 with the rtol' its
+    /// [`crate::integrate::ToleranceTransform`] gives: an absolute scale c weighs rtol'·c; Rodas5P and
     /// Extrapolation's explicit scheme, which weigh by the larger of |y| at the step's two
     /// ends, weigh rtol·c instead). Every scale [`ErrorScale::Relative`] is the same
     /// integration, bit for bit, as `None`.

@@ -900,6 +900,14 @@ impl<S> Integrator for Solver<S> {
     fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         Solver::reinit(self, t0, y0)
     }
+    fn reinit_with_step(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        first_step: f64,
+    ) -> Result<(), SolverError> {
+        Solver::restart(self, t0, y0, Some(first_step))
+    }
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {
         Solver::set_stop_time(self, t_stop)
     }

@@ -30,12 +30,25 @@
 //! inertial formulas' limits). Its stabilised w equation adds the eigenvalue −κ_G (the
 //! relaxation of G), which is not a property of the model and is not reported.
 //!
+//! **QDYN's friction laws** (cut-off and regularised, [`crate::model::Friction`]), where the
+//! friction Φ(v, θ) is not θ + f(v): with A = Φ_v + η and P = Φ_θ at the fixed point and the
+//! state law's argument x = θ/(1+ε) + ln v, the same polynomial holds with f₁ + η → A and
+//! (1+ε) f₁ → B = (1+ε) P:
+//!
+//! ```text
+//! a₂ = κ + g A/ξ,   a₁ = g (1 + κ (A − B)/ξ),   a₀ = g κ,
+//! ```
+//!
+//! so the threshold is B = A + ξ g A/(κ (κξ + g A)) (quasi-dynamic: A + ξ/κ), solved for ε:
+//! ε_c = B/P − 1 for the cut-off law (A and P do not depend on ε), by bisection for the
+//! regularised law (whose P does, through ε ln v*).
+//!
 //! The eigenvalues are computed from the polynomial, not from the 3×3 matrix: at γ = 1e8 its
 //! entries reach 1e16 and a matrix eigen-solver would lose the O(1) real part of the slow pair.
 //! The large real root is found by Newton's method from the left of all roots, then deflated
 //! without cancellation (q = −a₀/λ_r, p = (q − a₁)/λ_r).
 
-use crate::model::Drr;
+use crate::model::{Drr, DrrParams};
 use serde::Serialize;
 
 /// The "hopf" analysis of a scene.
@@ -46,7 +59,9 @@ pub struct HopfReport {
     /// Eigenvalues of the Jacobian at the fixed point, as [re, im] (1/time unit), fast real
     /// one first; without inertia the two of the quasi-dynamic model (see the module docs).
     pub eigenvalues: Vec<[f64; 2]>,
-    /// Threshold ε_c (dimensionless; ξγ²/(ξ + γ²) for f = ln v without damping).
+    /// Threshold ε_c (dimensionless; ξγ²/(ξ + γ²) for f = ln v without damping). Under the
+    /// regularised law with v* < 1 the fixed point may stay stable for every ε: then the
+    /// largest double (no threshold below it).
     pub epsilon_c: f64,
     /// Angular frequency at threshold ω_c = √(a₀/a₂) (1/time unit).
     pub omega_c: f64,
@@ -64,6 +79,11 @@ pub struct HopfReport {
 /// point.
 pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
     let p = drr.params();
+    if !p.friction.is_classic() {
+        let (a, b, kappa) = slopes(drr);
+        let g = p.gamma * p.gamma;
+        return (kappa + g * a / p.xi, g * (1.0 + kappa * (a - b) / p.xi), g * kappa);
+    }
     let g = p.gamma * p.gamma;
     let (_, f1) = p.friction.eval(0.0);
     let kappa = p.state_law.steady_rate();
@@ -78,6 +98,10 @@ pub fn characteristic_polynomial(drr: &Drr) -> (f64, f64, f64) {
 /// the fixed point, on the force balance (see the module docs).
 pub fn quasi_dynamic_polynomial(drr: &Drr) -> (f64, f64) {
     let p = drr.params();
+    if !p.friction.is_classic() {
+        let (a, b, kappa) = slopes(drr);
+        return ((p.xi + kappa * (a - b)) / a, kappa * p.xi / a);
+    }
     let (_, f1) = p.friction.eval(0.0);
     let kappa = p.state_law.steady_rate();
     let e = f1 + p.eta;
@@ -88,6 +112,9 @@ pub fn quasi_dynamic_polynomial(drr: &Drr) -> (f64, f64) {
 /// without inertia, its γ → ∞ limit (ξ/κ + η)/f₁.
 pub fn epsilon_c(drr: &Drr) -> f64 {
     let p = drr.params();
+    if !p.friction.is_classic() {
+        return qdyn_epsilon_c(drr);
+    }
     let (_, f1) = p.friction.eval(0.0);
     let kappa = p.state_law.steady_rate();
     if !p.inertia {
@@ -96,6 +123,56 @@ pub fn epsilon_c(drr: &Drr) -> f64 {
     let g = p.gamma * p.gamma;
     let e = f1 + p.eta;
     (p.eta + p.xi * g * e / (kappa * (kappa * p.xi + g * e))) / f1
+}
+
+/// (A, B, κ) at the fixed point under QDYN's laws (module docs): A = Φ_w + η, B = (1+ε)Φ_θ.
+fn slopes(drr: &Drr) -> (f64, f64, f64) {
+    let p = drr.params();
+    let t = drr.strength(&drr.fixed_point());
+    (t.d1[0], (1.0 + p.epsilon) * t.d1[1], p.state_law.steady_rate())
+}
+
+/// B at threshold minus B at the parameters' ε, under QDYN's laws: < 0 where the fixed point
+/// is unstable.
+fn threshold_margin(drr: &Drr) -> f64 {
+    let p = drr.params();
+    let (a, b, kappa) = slopes(drr);
+    let critical = if p.inertia {
+        let g = p.gamma * p.gamma;
+        a + p.xi * g * a / (kappa * (kappa * p.xi + g * a))
+    } else {
+        a + p.xi / kappa
+    };
+    critical - b
+}
+
+/// ε_c under QDYN's laws: ε where [`threshold_margin`] vanishes, by bisection between
+/// ε = −1 (no state effect: stable) and the first of 1, 2, 4, … 2^40 where it is negative;
+/// the largest double when there is none.
+fn qdyn_epsilon_c(drr: &Drr) -> f64 {
+    let base = *drr.params();
+    let margin = |epsilon: f64| threshold_margin(&Drr::new(DrrParams { epsilon, ..base }));
+    let mut lo = -1.0f64;
+    let mut hi = 1.0f64;
+    while margin(hi) > 0.0 {
+        lo = hi;
+        hi *= 2.0;
+        if hi > 1.1e12 {
+            return f64::MAX;
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if margin(mid) > 0.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Roots of λ² + bλ + c as [re, im].
@@ -140,15 +217,19 @@ pub fn cubic_roots(a2: f64, a1: f64, a0: f64) -> Vec<[f64; 2]> {
 /// The Hopf analysis.
 pub fn analyse(drr: &Drr) -> HopfReport {
     let params = drr.params();
+    let epsilon_c = epsilon_c(drr);
+    // ω_c is taken at ε_c: under the regularised law a₂ (and c) depend on ε.
+    let at_threshold = Drr::new(DrrParams { epsilon: epsilon_c, ..*params });
+    let threshold = if params.friction.is_classic() { drr } else { &at_threshold };
     let (eigenvalues, omega_c) = if params.inertia {
         let (a2, a1, a0) = characteristic_polynomial(drr);
-        (cubic_roots(a2, a1, a0), (a0 / a2).sqrt())
+        let (a2_c, _, a0_c) = characteristic_polynomial(threshold);
+        (cubic_roots(a2, a1, a0), (a0_c / a2_c).sqrt())
     } else {
         let (b, c) = quasi_dynamic_polynomial(drr);
-        // ω_c² = c at b = 0, where c does not depend on ε.
-        (quadratic_roots(b, c), c.sqrt())
+        // ω_c² = c at b = 0, where c does not depend on ε for the paper's laws.
+        (quadratic_roots(b, c), quasi_dynamic_polynomial(threshold).1.sqrt())
     };
-    let epsilon_c = epsilon_c(drr);
     let fp = drr.fixed_point();
     HopfReport {
         fixed_point: [fp[0], fp[1].exp(), fp[2]],
@@ -173,8 +254,14 @@ mod tests {
         Drr::new(DrrParams::new(gamma, xi, epsilon, friction))
     }
 
-    fn frictions() -> [Friction; 3] {
-        [Friction::Log, Friction::Asinh, Friction::Power { alpha: 0.31 }]
+    fn frictions() -> [Friction; 5] {
+        [
+            Friction::Log,
+            Friction::Asinh,
+            Friction::Power { alpha: 0.31 },
+            Friction::CutOff { v1: 0.3, v2: 0.5 },
+            Friction::Regularised { f_star: 0.7, v_star: 3.0 },
+        ]
     }
 
     /// The model's analytic Jacobian at its fixed point, in (u, w, θ). At v = 1 the change of
@@ -319,7 +406,8 @@ mod tests {
 
     #[test]
     fn the_three_state_laws_share_the_threshold_and_frequency() {
-        for friction in frictions() {
+        // Under QDYN's laws the PRZ fixed point (x* = ln 2) has another Φ_θ: not shared.
+        for friction in frictions().into_iter().filter(|f| f.is_classic()) {
             for gamma in [10.0, 1e3, 1e8] {
                 let at = |state_law| {
                     analyse(&Drr::new(DrrParams {

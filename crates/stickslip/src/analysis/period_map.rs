@@ -289,7 +289,7 @@ impl Progress {
                 self.section_jacobian = section_map(&phi, &velocity) * self.section_jacobian;
                 let at = clock.global(t);
                 clock
-                    .reinit(at, &Variational::<Drr, 3>::initial(&y))
+                    .reinit(at, &Variational::<Drr, 3>::initial(&y), None)
                     .map_err(|e| in_global_time(clock, e))?;
                 self.rebase_pending = false;
                 // Back on w = 0 at the arrest's cut: the fall below −floor must be seen anew

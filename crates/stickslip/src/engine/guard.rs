@@ -10,7 +10,7 @@ use crate::integrate::{ErrorKind, Integrator, SolverError, Stats, Step, Task};
 
 /// `integrator`, failing every [`Integrator::advance`] once `cancel` is set, and failing with
 /// the [`FrozenU`] error once `frozen` counts too many steps that left u unchanged. A cancelled
-/// advance is an error of kind [`ErrorKind::Other`] that goes up through the analyses like any
+/// advance is an error of kind [`ErrorKind::Cancelled`] that goes up through the analyses like any
 /// integrator failure; the run then reports [`super::RunError::Cancelled`] instead of it.
 pub(super) fn guarded<'a>(
     integrator: Box<dyn Integrator + 'a>,
@@ -35,11 +35,11 @@ impl Integrator for Guarded<'_> {
         if self.cancel.as_ref().is_some_and(Cancel::is_cancelled) {
             return Err(SolverError {
                 solver: self.inner.name(),
-                kind: ErrorKind::Other,
+                kind: ErrorKind::Cancelled,
                 t: self.inner.t(),
                 state: self.inner.state().to_vec(),
                 flag: 0,
-                message: "the run was cancelled".to_string(),
+                message: String::new(),
             });
         }
         let step = self.inner.advance(tout, task)?;
@@ -66,6 +66,18 @@ impl Integrator for Guarded<'_> {
             frozen.reset();
         }
         self.inner.reinit(t0, y0)
+    }
+
+    fn reinit_with_step(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        first_step: f64,
+    ) -> Result<(), SolverError> {
+        if let Some(frozen) = &mut self.frozen {
+            frozen.reset();
+        }
+        self.inner.reinit_with_step(t0, y0, first_step)
     }
 
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), SolverError> {

@@ -84,12 +84,12 @@ impl FrozenU {
         let rate = self.gamma2_over_xi * (-w).exp();
         Err(SolverError {
             solver: integrator.name(),
-            kind: ErrorKind::Other,
+            kind: ErrorKind::NoProgress,
             t,
             state: y.to_vec(),
             flag: 0,
             message: format!(
-                "no progress: {FROZEN_STEPS} steps in a row, each of h = {h:.3e}, left u = {} \
+                "{FROZEN_STEPS} steps in a row, each of h = {h:.3e}, left u = {} \
                  unchanged to the last bit, though du/dt = v − 1 = {:.3}: the steps lie below \
                  u's spacing. At ln v = {w} the stiff rate γ²e^(−ln v)/ξ = {rate:.1e} amplifies \
                  the round-off of arkode-imex's explicit first stage f_I(y_n), which holds its \

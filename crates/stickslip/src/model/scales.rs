@@ -30,7 +30,7 @@
 //! takes u from u₁ to u₂ drops the stress by k D_c (u₂ − u₁) ([`PhysicalScales::stress_drop`]),
 //! positive when the block slips ahead of the load point.
 
-use super::friction::Friction;
+use super::drr::DrrParams;
 use serde::Serialize;
 
 /// The absolute friction level: μ0 at the reference velocity V_ref.
@@ -140,14 +140,21 @@ impl PhysicalScales {
 }
 
 /// The dimensionless friction φ = θ + f(v) at (θ, w = ln v): the friction's departure from
-/// steady sliding at v0 in units of a (so τ − σμ_ref = aσ·φ).
-pub fn dimensionless_friction(friction: Friction, theta: f64, w: f64) -> f64 {
+/// steady sliding at v0 in units of a (so τ − σμ_ref = aσ·φ). Under QDYN's laws φ = Φ(v, θ)
+/// ([`super::Friction::strength`]; μ = μ* + aΦ for the cut-off law, μ = aΦ for the
+/// regularised law).
+pub fn dimensionless_friction(params: &DrrParams, theta: f64, w: f64) -> f64 {
+    let friction = params.friction;
+    if !friction.is_classic() {
+        return friction.strength(w, theta, 1.0 + params.epsilon).value;
+    }
     theta + friction.eval(w).0
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Friction;
 
     fn crustal() -> PhysicalScales {
         PhysicalScales {
@@ -171,20 +178,22 @@ mod tests {
         }
     }
 
+    /// The crustal case's law: ε = b/a − 1 = 0.5 under logarithmic friction.
+    fn log_law() -> DrrParams {
+        DrrParams::new(1.0, 1.0, 0.5, Friction::Log)
+    }
+
     #[test]
     fn friction_at_steady_sliding_is_the_steady_state_law() {
         // At V = v0 with Θ = D_c/v0 (θ = 0, ln v = 0): μ = μ0 + (a − b) ln(v0/V_ref).
         let s = crustal();
-        let mu = s.friction_coefficient(dimensionless_friction(Friction::Log, 0.0, 0.0)).unwrap();
+        let mu = s.friction_coefficient(dimensionless_friction(&log_law(), 0.0, 0.0)).unwrap();
         let direct = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();
         assert!((mu - direct).abs() < 1e-15, "{mu} vs {direct}");
         // Any (V, Θ): the dimensional law directly.
         let (big_v, big_theta) = (3e-7f64, 42.0f64);
-        let phi = dimensionless_friction(
-            Friction::Log,
-            s.theta_from_state(big_theta),
-            (big_v / s.v0).ln(),
-        );
+        let phi =
+            dimensionless_friction(&log_law(), s.theta_from_state(big_theta), (big_v / s.v0).ln());
         let direct = 0.6 + 0.01 * (big_v / 1e-6).ln() + 0.015 * (big_theta * 1e-6 / 1e-4).ln();
         assert!((s.friction_coefficient(phi).unwrap() - direct).abs() < 1e-14);
         assert!((s.shear_stress(phi).unwrap() - 1e7 * direct).abs() < 1e-7);

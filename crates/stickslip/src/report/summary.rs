@@ -17,11 +17,13 @@ impl Report {
     pub fn summary(&self) -> String {
         let sections = [
             Some(self.model_and_solver()),
-            self.hopf.as_ref().map(hopf),
+            self.hopf.as_ref().map(|h| hopf(h, self.model.epsilon)),
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
             self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
-            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(cycle_physical),
+            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
+                cycle_physical(p, self.scene["model"]["dimensional"]["unit_system"] == "SI")
+            }),
             Some(self.warnings.iter().map(|w| format!("warning: {w}\n")).collect()),
             self.asymptotics.as_ref().map(asymptotics::summary),
             self.lyapunov.as_ref().map(lyapunov::summary),
@@ -84,7 +86,9 @@ fn model(name: &str, m: &ModelSection) -> String {
     )
 }
 
-fn hopf(h: &HopfReport) -> String {
+/// The threshold and the verdict on the fixed point; with ε < 0 (b < a) the fault is named
+/// velocity-strengthening, the reason it is stable.
+fn hopf(h: &HopfReport, epsilon: f64) -> String {
     format!(
         "hopf: ε_c = {:.12}, ω_c = {:.9}, period_c = {:.9} (2π/√ξ = {:.9}); {}\n",
         h.epsilon_c,
@@ -93,6 +97,8 @@ fn hopf(h: &HopfReport) -> String {
         h.period_c_large_gamma,
         if h.above_threshold {
             "above threshold: fixed point unstable"
+        } else if epsilon < 0.0 {
+            "velocity-strengthening (ε = b/a − 1 < 0, b < a): fixed point stable, no stick-slip"
         } else {
             "below threshold: fixed point stable"
         }
@@ -207,8 +213,16 @@ fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>) -> String {
     s
 }
 
-/// The converged cycle in the dimensional input's units.
-fn cycle_physical(p: &CyclePhysical) -> String {
+/// The converged cycle in the dimensional input's units, named when the scene declares them
+/// SI.
+fn cycle_physical(p: &CyclePhysical, si: bool) -> String {
+    if si {
+        return format!(
+            "  in SI units (cycle.physical): v_max {:.6e} m/s, v_min {:.6e} m/s, slip {:.6e} m, \
+             stress drop {:.6e} Pa\n",
+            p.v_max, p.v_min, p.slip, p.stress_drop
+        );
+    }
     format!(
         "  in the input's units (cycle.physical): v_max {:.6e}, v_min {:.6e}, slip {:.6e}, \
          stress drop {:.6e}\n",

@@ -498,15 +498,15 @@ impl<'a> Tracker<'a> {
             self.update_ranges(&at_lowest);
             self.record(self.prev.t + t_lowest, &at_lowest);
         }
-        let at = self.clock.now().plus(stick.duration);
-        self.clock.reinit(at, &stick.exit)?;
-        self.steps += 1;
-        self.deep_sticks += 1;
-        self.stick_time += stick.duration;
         // On the slow manifold dw/dt = −(ξ du/dt + dθ/dt) exactly; the right-hand side's dw/dt
         // there is G's round-off times the held rate.
         let mut next = first_sample(self.drr, 0.0, stick.exit);
         next.d[W] = -(self.drr.params().xi * next.d[U] + next.d[THETA]);
+        let at = self.clock.now().plus(stick.duration);
+        self.clock.reinit(at, &stick.exit, exit_step(self.settings.w_tolerance.0, next.d[W]))?;
+        self.steps += 1;
+        self.deep_sticks += 1;
+        self.stick_time += stick.duration;
         self.update_ranges(&stick.exit);
         self.record(0.0, &stick.exit);
         self.rise_rate = 0.0;
@@ -682,14 +682,34 @@ impl<'a> Tracker<'a> {
     }
 }
 
+/// The first step after a deep stick's exit ([`Tracker::cross`]): w moves by a tenth of `rtol`
+/// at its true rate `dw` on the slow manifold (the weight CVODE BDF gives ln v,
+/// `EngineSettings::absolute_ln_v`), None if that rate is not a positive finite number.
+///
+/// The right-hand side cannot give that rate there: at ln v = −50 the manifold attracts at
+/// γ²e^(−w)/ξ (2.6e37 at γ = 1e8, ξ = 2), so one ulp of u (5.7e-14 at u ≈ 469) in
+/// G = u + (θ + w)/ξ makes dw/dt ±3e24, and G exactly 0 makes it 0, where the solution's is
+/// ξ(1 − v) − dθ/dt ≈ ξ. CVODE sized its first step from f (at least 100 ulps of its output
+/// time, 2e-8 here); BDF's order-1 predictor (dw/dt = 0) then missed the corrector by ξh, far
+/// above the weight 1e-11 of rtol 1e-10, and after three error-test failures CVODE reloads its
+/// first derivative from f at its restored state, which its restore had left one ulp off in u:
+/// dw/dt = 3e24 predicted ln v at 7.8e12, exp overflowed, and 18 non-finite right-hand sides
+/// later the run stopped (γ = 1e8 and 1e11, ξ = 2, ε = 40, slip law, rtol 1e-10, issue #36;
+/// rtol 1e-9's weight let the first step pass). A first step that meets the error test from
+/// the start avoids that cascade: measured, 1e-10 … 1e-13 all converge there.
+fn exit_step(rtol: f64, dw: f64) -> Option<f64> {
+    let h = 0.1 * rtol / dw.abs();
+    (h.is_finite() && h > 0.0).then_some(h)
+}
+
 /// Whether a restart (time re-base) at y is safe: the model's dw/dt there, whose error is the
 /// solver's error in G (its tolerance `w_tolerance` = (rtol, atol) on w, times ∂G/∂w) amplified by
 /// |∂(dw/dt)/∂G| (γ² e^{−w} with inertia), is resolved to 1e-3 of `rate`, the scale of dw/dt in
 /// the current rise.
 pub(crate) fn restart_safe(drr: &Drr, w_tolerance: (f64, f64), y: &[f64; 3], rate: f64) -> bool {
     let (rtol, atol) = w_tolerance;
-    let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y[W]);
-    drr.offset_feedback(y[W]).abs() * error_g <= 1e-3 * rate
+    let error_g = (rtol * y[W].abs() + atol) * drr.manifold_offset_slope(y);
+    drr.offset_feedback(y).abs() * error_g <= 1e-3 * rate
 }
 
 /// Whether two cycles agree within the tolerance (period, v_max and the ln v range relative).

@@ -270,7 +270,7 @@ pub fn analyse(
             (period_t0, logs, quad, period_start, down_seen, stage) =
                 (at, [0.0; 2], 0.0, yc, false, first_stage(yc[W]));
         }
-        clock.reinit(at, &restart)?;
+        clock.reinit(at, &restart, None)?;
         prev = Sample { t: 0.0, y: yc, d: vc };
     }
     let sum = |f: &dyn Fn(&PeriodLogs) -> f64| per_period.iter().map(f).sum::<f64>();

@@ -27,7 +27,7 @@ pub mod options;
 pub mod sink;
 
 pub use options::{Sampling, TimeSeriesOptions};
-pub use sink::{DiscardSink, SeriesCollector, SeriesSink};
+pub use sink::{DiscardSink, SeriesCollector, SeriesSink, TeeSink};
 
 use super::events;
 use super::AnalysisError;
@@ -182,7 +182,7 @@ impl Rows<'_> {
         }
         let v = y[W].exp();
         let slip = y[U] - self.u0 + t;
-        let stress = dimensionless_friction(self.drr.params().friction, y[THETA], y[W]);
+        let stress = dimensionless_friction(self.drr.params(), y[THETA], y[W]);
         self.buffer.clear();
         self.buffer.extend([t, y[U], v, y[THETA], y[W], slip, stress]);
         if let Some(s) = &self.scales {

@@ -31,6 +31,22 @@ impl SeriesSink for DiscardSink {
     }
 }
 
+/// A sink that forwards every call to each of its sinks in turn (several `--series` files
+/// from one run); the first error stops the call.
+pub struct TeeSink(pub Vec<Box<dyn SeriesSink>>);
+
+impl SeriesSink for TeeSink {
+    fn begin(&mut self, columns: &[&'static str]) -> std::io::Result<()> {
+        self.0.iter_mut().try_for_each(|s| s.begin(columns))
+    }
+    fn row(&mut self, values: &[f64]) -> std::io::Result<()> {
+        self.0.iter_mut().try_for_each(|s| s.row(values))
+    }
+    fn finish(&mut self) -> std::io::Result<()> {
+        self.0.iter_mut().try_for_each(|s| s.finish())
+    }
+}
+
 /// A time series held in memory, column by column (for short runs: every row is kept).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SeriesCollector {

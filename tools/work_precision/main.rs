@@ -5,9 +5,9 @@
 //! Radau, BDF) — on the same problem: the DRR spring-slider at ξ = 0.8, ε = 1,
 //! γ ∈ {1e1, 1e3, 1e5, 1e8}, rtol 1e-3 … 1e-12 (atol = rtol·1e-2 on u, ln v and θ).
 //!
-//! A tool, not a benchmark: it rewrites committed documentation, as examples/reference_table
+//! A tool, not a benchmark: it rewrites committed documentation, as tools/reference_table
 //! rewrites data/reference/. Run (about an hour on 2 shared cores; writes
-//! docs/work-precision/results.json, the SVG diagrams there and docs/work-precision.md, keeping
+//! data/work-precision/results.json, the SVG diagrams there and docs/work-precision.md, keeping
 //! that file's hand-written notes):
 //!
 //!     cargo run --release --example work_precision
@@ -19,7 +19,7 @@
 //! default 2), `--limit S` (time limit of one peer process, default 900), `--no-peers`,
 //! `--no-write` (print, write nothing), `--reanalyse` (tables and diagrams again from the
 //! committed results.json, no measurement), `--wrapper` (the same after measuring the wrapper
-//! against plain C anew, into docs/work-precision/wrapper.json), `--smoke` (one small cell of
+//! against plain C anew, into data/work-precision/wrapper.json), `--smoke` (one small cell of
 //! our side, nothing written: a check that the runner works).
 //!
 //! What is measured (protocol.rs): every method starts from the same state on the settled
@@ -271,7 +271,7 @@ fn parse_args() -> Args {
                 a.reanalyse = true;
                 a.wrapper_only = true;
             }
-            other => panic!("unknown option {other} (see the options at the top of examples/work_precision/main.rs)"),
+            other => panic!("unknown option {other} (see the options at the top of tools/work_precision/main.rs)"),
         }
     }
     a
