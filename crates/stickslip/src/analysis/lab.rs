@@ -4,7 +4,8 @@
 //! The run integrates each segment of constant V_lp on its own, in local time from 0, starting
 //! from the state where the previous one ended: no step crosses a jump of V_lp. Along the way
 //! it finds
-//! - the maxima of V (dense output; the root of d ln V/dt by bisection inside the step);
+//! - the maxima of V (dense output; the root of d ln V/dt by bisection inside the step) that
+//!   stand out of the integration's noise ([`MAXIMUM_PROMINENCE`]);
 //! - the friction peak of each reload after a hold (μ is largest where V rises through V_lp);
 //! - a finite-time blow-up: once V exceeds [`BLOW_UP_FACTOR`] times the fastest velocity of
 //!   the run and still accelerates, ln V becomes the independent variable (dt/d ln V =
@@ -27,6 +28,10 @@ use serde::Serialize;
 pub const BLOW_UP_FACTOR: f64 = 1e8;
 /// How far in ln V the blow-up integration goes past its start.
 pub const BLOW_UP_SPAN: f64 = 400.0;
+/// A maximum of V counts only if ln V rose by more than this many times the integration's
+/// tolerance on ln V (atol + rtol·|ln V|) since the lowest ln V after the previous maximum:
+/// near steady sliding d ln V/dt is round-off, and its sign flips are no maxima.
+pub const MAXIMUM_PROMINENCE: f64 = 10.0;
 /// Most state variables a run takes (one output column each).
 pub const MAX_STATES: usize = 8;
 
@@ -204,6 +209,8 @@ pub fn run(
     let mut y = y0.to_vec();
     let mut segment_end_mu: Vec<f64> = Vec::new();
     let mut buf = vec![0.0; 5 + n];
+    // The lowest ln V since the previous maximum of V (or the start).
+    let mut w_low = y[LN_V];
     'segments: for (j, seg) in loading.segments.iter().enumerate() {
         let t0 = seg.t_start;
         let duration = loading.segment_end(j) - t0;
@@ -267,12 +274,17 @@ pub fn run(
             if dw_prev > 0.0 && dw <= 0.0 && t > t_prev {
                 let tm = bisect_rate(&mut *integ, t_prev, t).map_err(fail)?;
                 let ym = integ.dense(tm, 0).map_err(fail)?.to_vec();
-                out.v_maxima.push(VelocityMaximum {
-                    t: t0 + tm,
-                    v: ym[LN_V].exp(),
-                    mu: params.friction(&ym),
-                });
+                let noise = solver.atol + solver.rtol * ym[LN_V].abs();
+                if ym[LN_V] - w_low > MAXIMUM_PROMINENCE * noise {
+                    out.v_maxima.push(VelocityMaximum {
+                        t: t0 + tm,
+                        v: ym[LN_V].exp(),
+                        mu: params.friction(&ym),
+                    });
+                    w_low = ym[LN_V];
+                }
             }
+            w_low = w_low.min(y[LN_V]);
             // The friction peak of a reload: V rises through V_lp.
             let lv = seg.velocity.ln();
             if !peak_found && w_prev < lv && y[LN_V] >= lv {
@@ -338,15 +350,16 @@ pub fn run(
     Ok(out)
 }
 
-fn check_times(times: &[f64], loading: &Loading) -> Result<(), LabRunError> {
-    if let Some(w) = times.windows(2).find(|w| !(w[1] >= w[0])) {
+/// Checks requested output times: finite, non-decreasing and inside the loading.
+pub fn check_times(times: &[f64], loading: &Loading) -> Result<(), LabRunError> {
+    if let Some(w) = times.windows(2).find(|w| w[1].partial_cmp(&w[0]).is_none_or(|o| o.is_lt())) {
         return Err(LabRunError::BadTimes(format!(
             "output times must not decrease: {} then {}",
             w[0], w[1]
         )));
     }
     let (lo, hi) = (loading.t_start(), loading.t_end);
-    if let Some(t) = times.iter().find(|t| !(**t >= lo && **t <= hi)) {
+    if let Some(t) = times.iter().find(|t| !(lo..=hi).contains(*t)) {
         return Err(LabRunError::BadTimes(format!(
             "output time {t} lies outside the loading [{lo}, {hi}]"
         )));

@@ -97,6 +97,37 @@ impl LabState {
             }
         }
     }
+    /// ∂g/∂ln D_c, ∂g/∂b and ∂g/∂k of g = d ln θ/dt at V = e^w, θ = e^ψ, with dμ/dt = `dmu`
+    /// and ∂(dμ/dt)/∂k = `dmu_dk` (only Nagata's law has b and k in g).
+    fn rate_parameter_derivatives(&self, w: f64, psi: f64, dmu: f64, dmu_dk: f64) -> [f64; 3] {
+        let v_dc = w.exp() / self.d_c;
+        match self.law {
+            LabLaw::Ageing => [v_dc, 0.0, 0.0],
+            LabLaw::Slip => [v_dc * (w + psi - self.d_c.ln() + 1.0), 0.0, 0.0],
+            LabLaw::Prz => [2.0 * (psi + 2.0 * w).exp() / (4.0 * self.d_c * self.d_c), 0.0, 0.0],
+            LabLaw::Nagata { c } => {
+                let r = c / self.b;
+                [v_dc, r / self.b * dmu, -r * dmu_dk]
+            }
+        }
+    }
+}
+
+/// A parameter of the lab model that a fit or a sensitivity analysis may vary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LabParameter {
+    /// a.
+    A,
+    /// b of state variable i (0-based).
+    B(usize),
+    /// ln D_c of state variable i (0-based): D_c varies over decades, its logarithm is the
+    /// natural scale.
+    LnDc(usize),
+    /// The machine stiffness k.
+    K,
+    /// μ0 (enters μ only, not the dynamics in (ln V, ln θ)).
+    Mu0,
 }
 
 /// The parameters of the laboratory model: everything a fit may vary, in one place.
@@ -145,6 +176,61 @@ impl LabParams {
         y
     }
 
+    /// Every parameter of the model: a, then b_i and ln D_c,i of each state variable, k, μ0.
+    pub fn all_parameters(&self) -> Vec<LabParameter> {
+        let mut all = vec![LabParameter::A];
+        for i in 0..self.states.len() {
+            all.extend([LabParameter::B(i), LabParameter::LnDc(i)]);
+        }
+        all.extend([LabParameter::K, LabParameter::Mu0]);
+        all
+    }
+
+    /// The value of `p` (ln D_c for [`LabParameter::LnDc`]).
+    pub fn get(&self, p: LabParameter) -> f64 {
+        match p {
+            LabParameter::A => self.a,
+            LabParameter::B(i) => self.states[i].b,
+            LabParameter::LnDc(i) => self.states[i].d_c.ln(),
+            LabParameter::K => self.k,
+            LabParameter::Mu0 => self.mu0,
+        }
+    }
+
+    /// Sets `p` to `value` (ln D_c for [`LabParameter::LnDc`]).
+    pub fn set(&mut self, p: LabParameter, value: f64) {
+        match p {
+            LabParameter::A => self.a = value,
+            LabParameter::B(i) => self.states[i].b = value,
+            LabParameter::LnDc(i) => self.states[i].d_c = value.exp(),
+            LabParameter::K => self.k = value,
+            LabParameter::Mu0 => self.mu0 = value,
+        }
+    }
+
+    /// ∂μ/∂p at the state y (explicit dependence: the state held fixed).
+    pub fn friction_parameter_derivative(&self, y: &[f64], p: LabParameter) -> f64 {
+        match p {
+            LabParameter::A => y[LN_V] - self.v0.ln(),
+            LabParameter::B(i) => {
+                let s = &self.states[i];
+                y[1 + i] + (self.v0 / s.friction_length()).ln()
+            }
+            LabParameter::LnDc(i) => -self.states[i].b,
+            LabParameter::K => 0.0,
+            LabParameter::Mu0 => 1.0,
+        }
+    }
+
+    /// ∂y_ss/∂p of the steady state at V ([`LabParams::steady_state`]): ln V does not depend
+    /// on the parameters; ln θ_ss,i = ln D_c,i − ln V (+ ln 2 for PRZ).
+    pub fn steady_state_parameter_derivative(&self, p: LabParameter, out: &mut [f64]) {
+        out.fill(0.0);
+        if let LabParameter::LnDc(i) = p {
+            out[1 + i] = 1.0;
+        }
+    }
+
     /// a − Σ b_i: the steady-state friction change per unit of ln V.
     pub fn a_minus_b(&self) -> f64 {
         self.a - self.states.iter().map(|s| s.b).sum::<f64>()
@@ -173,6 +259,46 @@ impl LabSystem<'_> {
     /// dμ/dt = k (V_lp − V) at ln V = w.
     pub fn friction_rate(&self, w: f64) -> f64 {
         self.params.k * (self.v_lp - w.exp())
+    }
+}
+
+impl LabSystem<'_> {
+    /// ∂f/∂p at (t, y): the right-hand side's derivative with respect to the parameter `p`
+    /// (the state held fixed), written to `out` (length [`LabParams::dim`]).
+    pub fn parameter_derivative(&self, y: &[f64], p: LabParameter, out: &mut [f64]) {
+        let params = self.params;
+        let w = y[LN_V];
+        let dmu = self.friction_rate(w);
+        let dmu_dk = self.v_lp - w.exp();
+        out.fill(0.0);
+        // d ln V/dt = (dμ/dt − Σ b_i g_i)/a; the sum's derivative collects here.
+        let mut numerator = 0.0;
+        for (i, s) in params.states.iter().enumerate() {
+            let [g_dc, g_b, g_k] = s.rate_parameter_derivatives(w, y[1 + i], dmu, dmu_dk);
+            let dg = match p {
+                LabParameter::LnDc(j) if j == i => g_dc,
+                LabParameter::B(j) if j == i => g_b,
+                LabParameter::K => g_k,
+                _ => 0.0,
+            };
+            out[1 + i] = dg;
+            numerator -= s.b * dg;
+        }
+        match p {
+            LabParameter::A => {
+                let mut f = vec![0.0; params.dim()];
+                self.rhs(0.0, y, &mut f);
+                out[LN_V] = -f[LN_V] / params.a;
+                return;
+            }
+            LabParameter::B(i) => {
+                let (g, _, _) = params.states[i].rate(w, y[1 + i], dmu, params.k);
+                numerator -= g;
+            }
+            LabParameter::K => numerator += dmu_dk,
+            LabParameter::LnDc(_) | LabParameter::Mu0 => {}
+        }
+        out[LN_V] = numerator / params.a;
     }
 }
 
@@ -268,6 +394,37 @@ mod tests {
             for (row, col, exact, fd) in jacobian_against_differences(&m, &y, |_| 1e-6) {
                 assert!((fd - exact).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
             }
+        }
+    }
+
+    #[test]
+    fn parameter_derivatives_match_central_differences() {
+        let p = params();
+        let y = [0.3, 1.2, 2.0, 0.7, 1.9];
+        let rhs = |q: &LabParams| {
+            let mut f = vec![0.0; q.dim()];
+            LabSystem { params: q, v_lp: 3.0 }.rhs(0.0, &y, &mut f);
+            f
+        };
+        for par in p.all_parameters() {
+            let mut exact = vec![0.0; p.dim()];
+            LabSystem { params: &p, v_lp: 3.0 }.parameter_derivative(&y, par, &mut exact);
+            let h = 1e-6 * p.get(par).abs().max(1e-3);
+            let (mut up, mut down) = (p.clone(), p.clone());
+            up.set(par, p.get(par) + h);
+            down.set(par, p.get(par) - h);
+            let (fu, fd) = (rhs(&up), rhs(&down));
+            for i in 0..p.dim() {
+                let diff = (fu[i] - fd[i]) / (2.0 * h);
+                assert!(
+                    (diff - exact[i]).abs() < 1e-6 * (1.0 + diff.abs()),
+                    "{par:?}[{i}]: {diff} vs {}",
+                    exact[i]
+                );
+            }
+            let mu_diff = (up.friction(&y) - down.friction(&y)) / (2.0 * h);
+            let mu_exact = p.friction_parameter_derivative(&y, par);
+            assert!((mu_diff - mu_exact).abs() < 1e-8 * (1.0 + mu_diff.abs()), "{par:?}: mu");
         }
     }
 

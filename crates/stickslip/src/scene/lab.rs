@@ -190,13 +190,8 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
         [] => Output::EveryStep,
         [a] => {
             let times = &a.time_series.times;
-            if let Some(w) = times.windows(2).find(|w| !(w[1] >= w[0])) {
-                return Err(err("analyses[0].time_series.times", format!("must not decrease ({} then {})", w[0], w[1])));
-            }
-            let (lo, hi) = (loading.t_start(), loading.t_end);
-            if let Some(t) = times.iter().find(|t| !(**t >= lo && **t <= hi)) {
-                return Err(err("analyses[0].time_series.times", format!("{t} lies outside the loading's [{lo}, {hi}]")));
-            }
+            crate::analysis::lab::check_times(times, &loading)
+                .map_err(|e| err("analyses[0].time_series.times", e.to_string()))?;
             Output::Times(times.clone())
         }
         _ => return Err(err("analyses", "a lab scene takes at most one analysis, {\"time_series\": {\"times\": [...]}} (without it every step is a row)".into())),
