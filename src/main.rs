@@ -231,12 +231,6 @@ fn run_command(
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
-    if scene::lab::is_lab(&text) {
-        return run_lab(&text, &source, json, out, series, figure);
-    }
-    if figure.is_some() {
-        return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
-    }
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
@@ -244,7 +238,11 @@ fn run_command(
     let update = |d, t| progress.update(d, t);
     let threads = worker_threads(threads);
     let mut not_converged = None;
-    let (report_json, summary) = match &scene {
+    let (report_json, summary, ensembles) = match &scene {
+        scene::AnyScene::Lab(scene) => return run_lab(scene, echo, json, out, &series, figure),
+        _ if figure.is_some() => {
+            return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
+        }
         scene::AnyScene::Drr(scene) => {
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
@@ -256,7 +254,7 @@ fn run_command(
                 run_writing_series(scene, echo, threads, &update, &series)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
-            (report.to_json(), report.summary())
+            (report.to_json(), report.summary(), scene.analyses.noise.is_some())
         }
         scene::AnyScene::Other(_) if !series.is_empty() => {
             return Err(Failure(
@@ -269,12 +267,8 @@ fn run_command(
         scene::AnyScene::Other(scene) => {
             let report = engine::run_other(scene, echo, threads, &update)
                 .map_err(|e| failed(&scene.name, e))?;
-            (report.to_json(), report.summary())
+            (report.to_json(), report.summary(), true)
         }
-    };
-    let ensembles = match &scene {
-        scene::AnyScene::Drr(scene) => scene.analyses.noise.is_some(),
-        scene::AnyScene::Other(_) => true,
     };
     if ensembles {
         progress.finish();
@@ -300,18 +294,15 @@ fn run_command(
 /// Runs a lab scene: report, optional series files (through staging files, as for DRR
 /// scenes) and optional figure.
 fn run_lab(
-    text: &str,
-    source: &str,
+    scene: &scene::lab::LabScene,
+    echo: serde_json::Value,
     json: bool,
     out: Option<PathBuf>,
-    series: Vec<PathBuf>,
+    series: &[PathBuf],
     figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
-    let scene = scene::lab::parse(text, source).map_err(|e| Failure(2, e.to_string()))?;
-    let echo: serde_json::Value =
-        serde_json::from_str(text).map_err(|e| Failure(2, e.to_string()))?;
-    let report = with_series_files(&series, |sink| {
-        engine::lab::run(&scene, echo, sink)
+    let report = with_series_files(series, |sink| {
+        engine::lab::run(scene, echo, sink)
             .map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))
     })?;
     if let Some(file) = &figure {

@@ -343,6 +343,8 @@ pub enum AnyScene {
     Drr(Box<Scene>),
     /// A saddle-node or van der Pol scene.
     Other(Box<OtherScene>),
+    /// A laboratory scene (`"kind": "lab"`, [`lab`]).
+    Lab(Box<lab::LabScene>),
 }
 
 /// Parses and validates a scene of any model kind (`"model": {"kind": ...}`).
@@ -353,11 +355,7 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         message,
     };
     if lab::is_lab(text) {
-        return Err(err(
-            "model.kind",
-            "\"lab\": a lab scene; parse it with scene::lab::parse (`stickslip run` runs it)"
-                .into(),
-        ));
+        return lab::parse(text, source_name).map(|s| AnyScene::Lab(Box::new(s)));
     }
     let raw = parse_raw(text, &err)?;
     match raw.model.kind.as_deref() {
