@@ -93,6 +93,7 @@ fn main() {
             AnyScene::Other(s) => {
                 stickslip::engine::run_other(&s, json, 2, &|_, _| {}).expect("the scene runs").noise
             }
+            AnyScene::Lab(_) => panic!("{other}: a noise scene, not a lab one"),
         };
         println!(
             "{other}: {} realisations, {:.2} s wall, {:.2} s CPU, {:.0} nodes per realisation; load average {}",

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
-use stickslip::analysis::time_series::TeeSink;
+use stickslip::analysis::time_series::{SeriesSink, TeeSink};
 use stickslip::sundials;
 use stickslip::{compare, engine, report, scene, sweep};
 use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
@@ -47,6 +47,9 @@ enum Command {
         /// for several files from one run (e.g. --series a.csv --series a.npy).
         #[arg(long, value_name = "FILE")]
         series: Vec<PathBuf>,
+        /// Lab scenes: draw friction against load-point displacement to FILE (SVG).
+        #[arg(long, value_name = "FILE.svg")]
+        figure: Option<PathBuf>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -222,6 +225,7 @@ fn run_command(
     out: Option<PathBuf>,
     threads: Option<usize>,
     series: Vec<PathBuf>,
+    figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
@@ -234,7 +238,11 @@ fn run_command(
     let update = |d, t| progress.update(d, t);
     let threads = worker_threads(threads);
     let mut not_converged = None;
-    let (report_json, summary) = match &scene {
+    let (report_json, summary, ensembles) = match &scene {
+        scene::AnyScene::Lab(scene) => return run_lab(scene, echo, json, out, &series, figure),
+        _ if figure.is_some() => {
+            return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
+        }
         scene::AnyScene::Drr(scene) => {
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
@@ -246,7 +254,7 @@ fn run_command(
                 run_writing_series(scene, echo, threads, &update, &series)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
-            (report.to_json(), report.summary())
+            (report.to_json(), report.summary(), scene.analyses.noise.is_some())
         }
         scene::AnyScene::Other(_) if !series.is_empty() => {
             return Err(Failure(
@@ -259,12 +267,8 @@ fn run_command(
         scene::AnyScene::Other(scene) => {
             let report = engine::run_other(scene, echo, threads, &update)
                 .map_err(|e| failed(&scene.name, e))?;
-            (report.to_json(), report.summary())
+            (report.to_json(), report.summary(), true)
         }
-    };
-    let ensembles = match &scene {
-        scene::AnyScene::Drr(scene) => scene.analyses.noise.is_some(),
-        scene::AnyScene::Other(_) => true,
     };
     if ensembles {
         progress.finish();
@@ -285,6 +289,38 @@ fn run_command(
         Some(message) => Err(Failure(4, message)),
         None => Ok(()),
     }
+}
+
+/// Runs a lab scene: report, optional series files (through staging files, as for DRR
+/// scenes) and optional figure.
+fn run_lab(
+    scene: &scene::lab::LabScene,
+    echo: serde_json::Value,
+    json: bool,
+    out: Option<PathBuf>,
+    series: &[PathBuf],
+    figure: Option<PathBuf>,
+) -> Result<(), Failure> {
+    let report = with_series_files(series, |sink| {
+        engine::lab::run(scene, echo, sink)
+            .map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))
+    })?;
+    if let Some(file) = &figure {
+        stickslip_cli::figure::lab::friction_against_displacement(&report)
+            .write(file)
+            .map_err(|e| Failure(1, format!("--figure: {e}")))?;
+    }
+    let report_json = report.to_json();
+    if let Some(file) = &out {
+        report::write_atomic(file, &report_json)
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
+    }
+    if json {
+        println!("{report_json}");
+    } else {
+        print!("{}", report.summary());
+    }
+    Ok(())
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
@@ -323,7 +359,7 @@ fn series_staging(file: &Path) -> (PathBuf, PathBuf) {
 }
 
 /// Runs a DRR scene streaming its "time_series" rows to each of `files` (CSV or .npy by its
-/// suffix) through temporary files ([`series_staging`]), removed if the run fails.
+/// suffix) through [`with_series_files`].
 fn run_writing_series(
     scene: &scene::Scene,
     echo: serde_json::Value,
@@ -331,8 +367,8 @@ fn run_writing_series(
     progress: &(dyn Fn(usize, usize) + Sync),
     files: &[PathBuf],
 ) -> Result<report::Report, Failure> {
-    let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
     if scene.analyses.time_series.is_none() {
+        let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
         return Err(Failure(
             2,
             format!(
@@ -341,6 +377,19 @@ fn run_writing_series(
             ),
         ));
     }
+    with_series_files(files, |sink| {
+        engine::run_with_series(scene, echo, threads, progress, sink)
+            .map_err(|e| failed(&scene.name, e))
+    })
+}
+
+/// Runs `run` with one sink that writes every row to each of `files` (CSV or .npy by its
+/// suffix; none: rows are discarded) through temporary files ([`series_staging`]): renamed to
+/// the files when `run` succeeds, removed when it fails.
+fn with_series_files<R>(
+    files: &[PathBuf],
+    run: impl FnOnce(&mut dyn SeriesSink) -> Result<R, Failure>,
+) -> Result<R, Failure> {
     let staged: Vec<(PathBuf, PathBuf)> = files.iter().map(|f| series_staging(f)).collect();
     let remove_staging = |staged: &[(PathBuf, PathBuf)]| {
         for (staging, target) in staged {
@@ -364,12 +413,12 @@ fn run_writing_series(
         }
     }
     let mut tee = TeeSink(sinks);
-    let report = engine::run_with_series(scene, echo, threads, progress, &mut tee);
+    let result = run(&mut tee);
     drop(tee);
-    if report.is_err() {
+    if result.is_err() {
         remove_staging(&staged);
     }
-    let report = report.map_err(|e| failed(&scene.name, e))?;
+    let result = result?;
     for (i, (staging, target)) in staged.iter().enumerate() {
         if staging != target {
             if let Err(e) = std::fs::rename(staging, target) {
@@ -381,7 +430,7 @@ fn run_writing_series(
             }
         }
     }
-    Ok(report)
+    Ok(result)
 }
 
 /// Largest scene file accepted: scenes are a few hundred bytes; a huge file is a mistake, and
@@ -787,8 +836,8 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out, threads, series } => {
-            run_command(scene, json, out, threads, series)
+        Command::Run { scene, json, out, threads, series, figure } => {
+            run_command(scene, json, out, threads, series, figure)
         }
         Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {

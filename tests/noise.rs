@@ -448,6 +448,7 @@ fn shipped_noise_scenes_run_in_reduced_form() {
                 stickslip::engine::run_other(&s, json.clone(), 2, &|_, _| {}).unwrap(),
             )
             .unwrap(),
+            AnyScene::Lab(_) => panic!("{name}: a noise scene, not a lab one"),
         };
         let points = report["noise"]["correlation_time"].as_array().unwrap();
         assert_eq!(points.len(), 12, "{name}");

@@ -83,6 +83,12 @@ fn run_error(py: Python<'_>, name: &str, e: &EngineError) -> PyErr {
     }
 }
 
+/// Why a scene's run failed: the engine's error (or a cancel), or a lab run's.
+enum Failed {
+    Run(RunError),
+    Lab(Box<engine::lab::LabError>),
+}
+
 /// Runs `work` on a thread of its own without the GIL, checking for signals every 50 ms. On a
 /// signal's exception (KeyboardInterrupt) `cancel` is set and, once the thread has ended, the
 /// exception returned; a second one while waiting is returned at once.
@@ -165,20 +171,33 @@ fn run(
                 let mut series = SeriesCollector::default();
                 let report =
                     engine::run_cancellable(s, echo, threads, &|_, _| {}, Some(&mut series), &stop)
-                        .map_err(|e| (s.name.clone(), e))?;
+                        .map_err(|e| (s.name.clone(), Failed::Run(e)))?;
                 let columns =
                     series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
                 Ok((report.to_json(), columns))
             }
             AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
                 .map(|r| (r.to_json(), Vec::new()))
-                .map_err(|e| (s.name.clone(), RunError::Failed(e))),
+                .map_err(|e| (s.name.clone(), Failed::Run(RunError::Failed(e)))),
+            AnyScene::Lab(s) => {
+                let mut series = SeriesCollector::default();
+                let report = engine::lab::run(s, echo, &mut series)
+                    .map_err(|e| (s.name.clone(), Failed::Lab(Box::new(e))))?;
+                let columns =
+                    series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
+                Ok((report.to_json(), columns))
+            }
         }
     })?;
     let (json, columns) = outcome.map_err(|(name, e)| match e {
-        RunError::Failed(e) => run_error(py, &name, &e),
+        Failed::Lab(e) => {
+            python_error(py, "RunError", format!("scene {name}: {e}"), PyDict::new(py))
+        }
+        Failed::Run(RunError::Failed(e)) => run_error(py, &name, &e),
         // Only set on a signal, whose exception off_the_gil has returned instead.
-        RunError::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"),
+        Failed::Run(RunError::Cancelled) => {
+            pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled")
+        }
     })?;
     let columns = columns.into_iter().map(|(n, c)| (n, numpy::PyArray1::from_vec(py, c))).collect();
     Ok((json, columns))

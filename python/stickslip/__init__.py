@@ -74,7 +74,9 @@ def run(scene: Scene, threads: Optional[int] = None, arrays: bool = True) -> Dic
     docs/scenes.md) also gets the one key the JSON report does not have: ``"series"``, its rows
     (those ``stickslip run --series FILE`` writes) as a dict of numpy arrays by column:
     ``report["series"]["t"]`` (absolute time), ``"u"``, ``"v"``, ``"theta"``, ``"ln_v"``,
-    ``"slip"``, ``"stress"`` (and the physical columns with ``model.dimensional``). The GIL is released while the scene runs; Ctrl-C raises KeyboardInterrupt
+    ``"slip"``, ``"stress"`` (and the physical columns with ``model.dimensional``). A lab scene
+    (``"model": {"kind": "lab"}``, docs/lab.md) gives its columns ``"t"``, ``"x_lp"``,
+    ``"delta"``, ``"mu"``, ``"v"``, ``"theta_1"``, … there in place of the report's rows. The GIL is released while the scene runs; Ctrl-C raises KeyboardInterrupt
     at once (the abandoned run finishes in the background and is dropped).
 
     Raises :class:`SceneError` (a ValueError; ``field`` is the path of the bad field, e.g.

@@ -46,6 +46,17 @@ def test_run_equals_the_cli_report(name):
     assert list(got) == list(expected)
 
 
+def test_lab_scene_gives_its_columns_as_arrays():
+    expected = json.loads(cli("run", scene_path("lab-velocity-step"), "--json"))
+    got = stickslip.run(scene_path("lab-velocity-step"))
+    assert got["velocity_steps"] == expected["velocity_steps"]
+    assert got["v_maxima"] == expected["v_maxima"]
+    rows = np.array(expected["series"]["rows"])
+    assert list(got["series"]) == expected["series"]["columns"] == ["t", "x_lp", "delta", "mu", "v", "theta_1"]
+    for i, column in enumerate(expected["series"]["columns"]):
+        np.testing.assert_array_equal(got["series"][column], rows[:, i])
+
+
 def test_run_from_a_dict_and_arrays():
     with open(scene_path("fig1")) as f:
         scene = json.load(f)

@@ -70,6 +70,9 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
                 .map_err(failed)?;
             (serde_json::to_value(&r).expect("a report serialises"), r.noise)
         }
+        AnyScene::Lab(_) => {
+            return Err(ReproduceError::Scene(format!("{name}: a lab scene has no noise analysis")))
+        }
     };
     let run = Arc::new(NoiseRun { name, report, noise });
     DONE.lock().unwrap_or_else(|e| e.into_inner()).push((key, run.clone()));

@@ -25,6 +25,7 @@ use crate::sundials;
 mod cancel;
 mod guard;
 mod imex_stick;
+pub mod lab;
 pub use cancel::{Cancel, RunError};
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the

@@ -16,6 +16,7 @@ use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
 
+pub mod lab;
 mod summary;
 
 /// Model parameters as used (dimensionless).

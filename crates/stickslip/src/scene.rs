@@ -14,6 +14,7 @@ pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
 
 mod analyses;
+pub mod lab;
 pub use analyses::analysis_names;
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
@@ -342,6 +343,8 @@ pub enum AnyScene {
     Drr(Box<Scene>),
     /// A saddle-node or van der Pol scene.
     Other(Box<OtherScene>),
+    /// A laboratory scene (`"kind": "lab"`, [`lab`]).
+    Lab(Box<lab::LabScene>),
 }
 
 /// Parses and validates a scene of any model kind (`"model": {"kind": ...}`).
@@ -351,6 +354,9 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         field: field.into(),
         message,
     };
+    if lab::is_lab(text) {
+        return lab::parse(text, source_name).map(|s| AnyScene::Lab(Box::new(s)));
+    }
     let raw = parse_raw(text, &err)?;
     match raw.model.kind.as_deref() {
         None | Some("drr") => validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s))),

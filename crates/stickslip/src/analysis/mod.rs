@@ -10,6 +10,7 @@ pub mod events;
 pub mod finite;
 pub mod fit;
 pub mod hopf;
+pub mod lab;
 pub mod lyapunov;
 pub mod noise;
 pub mod paper;

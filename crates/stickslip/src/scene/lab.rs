@@ -1,0 +1,427 @@
+//! Lab scenes (`"model": {"kind": "lab", …}`): the laboratory spring-slider driven through a
+//! load-point history (docs/lab.md). Parsed apart from the DRR scenes: their keys differ.
+
+use super::{finite, positive, SceneError};
+use crate::analysis::lab::{LabSolver, Output, MAX_STATES};
+use crate::model::{LabLaw, LabParams, LabState, Loading, Segment};
+use crate::solver::Method;
+use serde::Deserialize;
+use std::path::Path;
+
+/// A validated lab scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabScene {
+    /// Scene name.
+    pub name: String,
+    /// Free text.
+    pub description: Option<String>,
+    /// The model's parameters.
+    pub params: LabParams,
+    /// The load-point history.
+    pub loading: Loading,
+    /// The start (ln V, ln θ_1, …) at the loading's start.
+    pub initial: Vec<f64>,
+    /// The solver.
+    pub solver: LabSolver,
+    /// Which rows to write.
+    pub output: Output,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Raw {
+    name: String,
+    #[serde(default)]
+    description: Option<String>,
+    model: RawModel,
+    loading: RawLoading,
+    #[serde(default)]
+    initial: Option<RawInitial>,
+    #[serde(default)]
+    solver: Option<RawSolver>,
+    #[serde(default)]
+    analyses: Vec<RawAnalysis>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawModel {
+    #[allow(dead_code)] // "lab": checked by [`is_lab`]
+    kind: String,
+    mu0: f64,
+    a: f64,
+    #[serde(default)]
+    v0: Option<f64>,
+    k: f64,
+    states: Vec<RawState>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawState {
+    law: String,
+    b: f64,
+    d_c: f64,
+    #[serde(default)]
+    c: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLoading {
+    #[serde(default)]
+    segments: Option<Vec<RawSegment>>,
+    #[serde(default)]
+    t_end: Option<f64>,
+    #[serde(default)]
+    steps: Option<Vec<RawStep>>,
+    #[serde(default)]
+    t_start: Option<f64>,
+    #[serde(default)]
+    csv: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSegment {
+    t_start: f64,
+    velocity: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStep {
+    velocity: f64,
+    #[serde(default)]
+    displacement: Option<f64>,
+    #[serde(default)]
+    duration: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawInitial {
+    Named(String),
+    Explicit { mu: f64, theta: Vec<f64> },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    #[serde(default)]
+    method: Option<String>,
+    #[serde(default)]
+    rtol: Option<f64>,
+    #[serde(default)]
+    atol: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAnalysis {
+    time_series: RawTimes,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTimes {
+    times: Vec<f64>,
+}
+
+/// Whether the scene text is a lab scene (`model.kind` is "lab").
+pub fn is_lab(text: &str) -> bool {
+    serde_json::from_str::<serde_json::Value>(text)
+        .is_ok_and(|v| v["model"]["kind"].as_str() == Some("lab"))
+}
+
+/// Parses and validates a lab scene. `source_name` names it in errors; a relative
+/// `loading.csv` path is read relative to `source_name`'s folder.
+pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
+    let err = |field: &str, message: String| SceneError {
+        source_name: source_name.into(),
+        field: field.into(),
+        message,
+    };
+    let deserializer = &mut serde_json::Deserializer::from_str(text);
+    let raw: Raw = serde_path_to_error::deserialize(deserializer).map_err(|e| {
+        let path = e.path().to_string();
+        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
+        err(&field, e.into_inner().to_string())
+    })?;
+    if raw.name.trim().is_empty() {
+        return Err(err("name", "must not be empty".into()));
+    }
+    let params = params(&raw.model, &err)?;
+    let loading = loading(&raw.loading, source_name, &err)?;
+    let v_first = loading.segments[0].velocity;
+    let initial = match &raw.initial {
+        None => steady(&params, v_first, &err)?,
+        Some(RawInitial::Named(s)) if s == "steady" => steady(&params, v_first, &err)?,
+        Some(RawInitial::Named(s)) => {
+            return Err(err(
+                "initial",
+                format!("\"{s}\": use \"steady\" or {{\"mu\": μ, \"theta\": [θ_1, …]}}"),
+            ))
+        }
+        Some(RawInitial::Explicit { mu, theta }) => {
+            finite("initial.mu", *mu, &err)?;
+            if theta.len() != params.states.len() {
+                return Err(err(
+                    "initial.theta",
+                    format!(
+                        "{} values for {} state variables; give one θ per state",
+                        theta.len(),
+                        params.states.len()
+                    ),
+                ));
+            }
+            for (i, t) in theta.iter().enumerate() {
+                positive(&format!("initial.theta[{i}]"), *t, "θ > 0", &err)?;
+            }
+            let y = params.state_from(*mu, theta);
+            if !y[0].exp().is_finite() || y[0].exp() <= 0.0 {
+                return Err(err("initial.mu", format!("μ = {mu} gives V = e^{} outside the floating-point range; choose μ nearer the steady state", y[0])));
+            }
+            y
+        }
+    };
+    let solver = solver(raw.solver.as_ref(), &err)?;
+    let output = match raw.analyses.as_slice() {
+        [] => Output::EveryStep,
+        [a] => {
+            let times = &a.time_series.times;
+            crate::analysis::lab::check_times(times, &loading)
+                .map_err(|e| err("analyses[0].time_series.times", e.to_string()))?;
+            Output::Times(times.clone())
+        }
+        _ => return Err(err("analyses", "a lab scene takes at most one analysis, {\"time_series\": {\"times\": [...]}} (without it every step is a row)".into())),
+    };
+    Ok(LabScene {
+        name: raw.name,
+        description: raw.description,
+        params,
+        loading,
+        initial,
+        solver,
+        output,
+    })
+}
+
+fn params(
+    m: &RawModel,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<LabParams, SceneError> {
+    let mu0 = finite("model.mu0", m.mu0, err)?;
+    let a = positive("model.a", m.a, "the direct effect a, e.g. 0.01", err)?;
+    let v0 =
+        positive("model.v0", m.v0.unwrap_or(1.0), "the reference velocity V0 (default 1)", err)?;
+    let k = positive(
+        "model.k",
+        m.k,
+        "the stiffness in friction per unit displacement (per µm), e.g. 1e-3",
+        err,
+    )?;
+    if m.states.is_empty() || m.states.len() > MAX_STATES {
+        return Err(err(
+            "model.states",
+            format!(
+                "{} state variables; give 1 to {MAX_STATES}, each {{\"law\", \"b\", \"d_c\"}}",
+                m.states.len()
+            ),
+        ));
+    }
+    let mut states = Vec::new();
+    for (i, s) in m.states.iter().enumerate() {
+        let field = |name: &str| format!("model.states[{i}].{name}");
+        let b = finite(&field("b"), s.b, err)?;
+        let d_c =
+            positive(&field("d_c"), s.d_c, "the critical slip distance D_c, e.g. 10 (µm)", err)?;
+        let law = match s.law.as_str() {
+            "ageing" | "aging" | "dieterich" => LabLaw::Ageing,
+            "slip" | "ruina" => LabLaw::Slip,
+            "prz" => LabLaw::Prz,
+            "nagata" => {
+                let c = s.c.ok_or_else(|| {
+                    err(&field("c"), "missing: the Nagata law needs c (e.g. 2)".into())
+                })?;
+                if b == 0.0 {
+                    return Err(err(&field("b"), "the Nagata law divides by b: give b ≠ 0".into()));
+                }
+                LabLaw::Nagata { c: finite(&field("c"), c, err)? }
+            }
+            other => {
+                return Err(err(
+                    &field("law"),
+                    format!("unknown law \"{other}\"; use ageing, slip, prz or nagata"),
+                ))
+            }
+        };
+        if s.c.is_some() && !matches!(law, LabLaw::Nagata { .. }) {
+            return Err(err(
+                &field("c"),
+                format!("only the nagata law takes c (this state's law is {})", law.name()),
+            ));
+        }
+        states.push(LabState { law, b, d_c });
+    }
+    Ok(LabParams { mu0, a, v0, k, states })
+}
+
+fn loading(
+    l: &RawLoading,
+    source_name: &str,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Loading, SceneError> {
+    let given = [l.segments.is_some(), l.steps.is_some(), l.csv.is_some()];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(err(
+            "loading",
+            "give exactly one of \"segments\" (with \"t_end\"), \"steps\" or \"csv\"".into(),
+        ));
+    }
+    let bad = |field: &'static str| {
+        move |e: crate::model::loading::LoadingError| err(field, e.to_string())
+    };
+    if let Some(segs) = &l.segments {
+        if l.t_start.is_some() {
+            return Err(err("loading.t_start", "segments carry their own t_start".into()));
+        }
+        let t_end = l.t_end.ok_or_else(|| {
+            err("loading.t_end", "missing: the end time of the last segment".into())
+        })?;
+        let segments =
+            segs.iter().map(|s| Segment { t_start: s.t_start, velocity: s.velocity }).collect();
+        return Loading::new(segments, t_end).map_err(bad("loading.segments"));
+    }
+    if l.t_end.is_some() {
+        return Err(err(
+            "loading.t_end",
+            "only \"segments\" take t_end (steps and csv end where they end)".into(),
+        ));
+    }
+    if let Some(steps) = &l.steps {
+        let mut t = finite("loading.t_start", l.t_start.unwrap_or(0.0), err)?;
+        let mut segments = Vec::new();
+        for (i, s) in steps.iter().enumerate() {
+            let field = |name: &str| format!("loading.steps[{i}].{name}");
+            let v = finite(&field("velocity"), s.velocity, err)?;
+            let duration =
+                match (s.displacement, s.duration) {
+                    (Some(x), None) if v > 0.0 => {
+                        positive(
+                            &field("displacement"),
+                            x,
+                            "the load-point displacement of this step",
+                            err,
+                        )? / v
+                    }
+                    (None, Some(d)) => {
+                        positive(&field("duration"), d, "the duration of this step (s)", err)?
+                    }
+                    (Some(_), None) => {
+                        return Err(err(
+                            &field("displacement"),
+                            "a hold (velocity 0) has no displacement; give its \"duration\"".into(),
+                        ))
+                    }
+                    _ => return Err(err(
+                        &field("displacement"),
+                        "give exactly one of \"displacement\" (load-point, µm) or \"duration\" (s)"
+                            .into(),
+                    )),
+                };
+            segments.push(Segment { t_start: t, velocity: v });
+            t += duration;
+        }
+        return Loading::new(segments, t).map_err(bad("loading.steps"));
+    }
+    let file = l.csv.as_deref().unwrap_or_default();
+    if l.t_start.is_some() {
+        return Err(err("loading.t_start", "a csv loading starts at its first time".into()));
+    }
+    let path = Path::new(source_name)
+        .parent()
+        .map_or_else(|| Path::new(file).to_path_buf(), |d| d.join(file));
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| err("loading.csv", format!("cannot read {}: {e}", path.display())))?;
+    let mut samples = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed = (cols.len() >= 2).then(|| (cols[0].parse::<f64>(), cols[1].parse::<f64>()));
+        match parsed {
+            Some((Ok(t), Ok(x))) => samples.push((t, x)),
+            _ if n == 0 => {} // a header
+            _ if line.trim().is_empty() => {}
+            _ => {
+                return Err(err(
+                    "loading.csv",
+                    format!(
+                    "{} line {}: expected \"time,load-point displacement\" numbers, got {line:?}",
+                    path.display(),
+                    n + 1
+                ),
+                ))
+            }
+        }
+    }
+    Loading::from_displacement(&samples).map_err(bad("loading.csv"))
+}
+
+fn steady(
+    p: &LabParams,
+    v: f64,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Vec<f64>, SceneError> {
+    if v <= 0.0 {
+        return Err(err("initial", "\"steady\" needs the first segment to slide (velocity > 0); start with a slide or give {\"mu\", \"theta\"}".into()));
+    }
+    Ok(p.steady_state(v))
+}
+
+fn solver(
+    raw: Option<&RawSolver>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<LabSolver, SceneError> {
+    let method = match raw.and_then(|r| r.method.as_deref()) {
+        None => Method::CvodeBdf,
+        Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
+    };
+    let rtol =
+        positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-10), "e.g. 1e-10", err)?;
+    let atol = positive(
+        "solver.atol",
+        raw.and_then(|r| r.atol).unwrap_or(rtol),
+        "absolute in ln V and ln θ, e.g. 1e-10",
+        err,
+    )?;
+    Ok(LabSolver { method, rtol, atol })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const STEP: &str = r#"{"name": "s", "model": {"kind": "lab", "mu0": 0.6, "a": 0.005, "k": 1e-3,
+        "states": [{"law": "ageing", "b": 0.01, "d_c": 10}]},
+        "loading": {"steps": [{"velocity": 1, "displacement": 10}, {"velocity": 0, "duration": 100}, {"velocity": 10, "displacement": 300}]}}"#;
+
+    #[test]
+    fn parses_steps_into_segments() {
+        assert!(is_lab(STEP));
+        let s = parse(STEP, "x.json").unwrap();
+        assert_eq!(s.loading.segments.len(), 3);
+        assert_eq!(s.loading.segments[2].t_start, 110.0);
+        assert_eq!(s.loading.t_end, 140.0);
+        assert_eq!(s.output, Output::EveryStep);
+    }
+
+    #[test]
+    fn names_the_bad_field() {
+        let bad = STEP.replace("\"ageing\"", "\"aging-law\"");
+        assert_eq!(parse(&bad, "x").unwrap_err().field, "model.states[0].law");
+        let bad = STEP.replace("\"k\": 1e-3", "\"k\": -1");
+        assert_eq!(parse(&bad, "x").unwrap_err().field, "model.k");
+        let bad = STEP.replace("\"duration\": 100", "\"displacement\": 100");
+        assert_eq!(parse(&bad, "x").unwrap_err().field, "loading.steps[1].displacement");
+    }
+}
