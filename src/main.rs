@@ -14,6 +14,7 @@ use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
 use stickslip_cli::stress;
 
 use stickslip_cli::cli::progress::Progress;
+use stickslip_cli::cli::qdyn;
 
 #[derive(Parser)]
 #[command(
@@ -47,6 +48,13 @@ enum Command {
         /// for several files from one run (e.g. --series a.csv --series a.npy).
         #[arg(long, value_name = "FILE")]
         series: Vec<PathBuf>,
+        /// Print the scene (JSON) instead of running it: a QDYN input file's mapped scene.
+        #[arg(long)]
+        print_scene: bool,
+        /// Write QDYN's output files (output_ot_0, output_vmax, output_ox) of the
+        /// "time_series" analysis in DIR (created if needed), in QDYN's format and SI units.
+        #[arg(long, value_name = "DIR")]
+        qdyn_output: Option<PathBuf>,
     },
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
@@ -222,11 +230,17 @@ fn run_command(
     out: Option<PathBuf>,
     threads: Option<usize>,
     series: Vec<PathBuf>,
+    (print_scene, qdyn_output): (bool, Option<PathBuf>),
 ) -> Result<(), Failure> {
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
+    let text = qdyn::scene_text(path.as_deref(), text).map_err(|e| Failure(2, e))?;
+    if print_scene {
+        println!("{text}");
+        return Ok(());
+    }
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
@@ -239,16 +253,18 @@ fn run_command(
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
             }
-            let report = if series.is_empty() {
+            let report = if series.is_empty() && qdyn_output.is_none() {
                 engine::run_with(scene, echo, threads, &update)
                     .map_err(|e| failed(&scene.name, e))?
             } else {
-                run_writing_series(scene, echo, threads, &update, &series)?
+                let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
+                let qdyn = qdyn.map_err(|e| Failure(2, e))?;
+                run_writing_series(scene, echo, threads, &update, &series, qdyn)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
             (report.to_json(), report.summary())
         }
-        scene::AnyScene::Other(_) if !series.is_empty() => {
+        scene::AnyScene::Other(_) if !series.is_empty() || qdyn_output.is_some() => {
             return Err(Failure(
                 2,
                 "--series: this scene has no \"time_series\" analysis (only DRR scenes have one); \
@@ -330,13 +346,18 @@ fn run_writing_series(
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
     files: &[PathBuf],
+    qdyn: Option<Box<dyn stickslip::analysis::time_series::SeriesSink>>,
 ) -> Result<report::Report, Failure> {
-    let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
+    let mut named: Vec<String> = files.iter().map(|f| format!("--series {}", f.display())).collect();
+    if qdyn.is_some() {
+        named.push("--qdyn-output".into());
+    }
+    let named = named.join(", ");
     if scene.analyses.time_series.is_none() {
         return Err(Failure(
             2,
             format!(
-                "--series {named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
+                "{named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
                 scene.name
             ),
         ));
@@ -363,6 +384,7 @@ fn run_writing_series(
             }
         }
     }
+    sinks.extend(qdyn);
     let mut tee = TeeSink(sinks);
     let report = engine::run_with_series(scene, echo, threads, progress, &mut tee);
     drop(tee);
@@ -787,8 +809,8 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out, threads, series } => {
-            run_command(scene, json, out, threads, series)
+        Command::Run { scene, json, out, threads, series, print_scene, qdyn_output } => {
+            run_command(scene, json, out, threads, series, (print_scene, qdyn_output))
         }
         Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {

@@ -59,6 +59,8 @@ pub struct PhysicalScales {
     pub k: f64,
     /// μ0 at V_ref, when given (needed for absolute shear stress and friction).
     pub reference: Option<FrictionReference>,
+    /// QDYN's cut-off law's μ* (μ = μ* + aΦ), when given.
+    pub mu_star: Option<f64>,
 }
 
 impl PhysicalScales {
@@ -126,6 +128,20 @@ impl PhysicalScales {
         Some(self.sigma? * self.friction_coefficient(phi)?)
     }
 
+    /// The friction coefficient at φ = 0 under `friction` (so μ = level + aφ): μ_ref for the
+    /// logarithmic law, μ* for QDYN's cut-off law, 0 for its regularised law (μ = aΦ); None
+    /// when the scene does not fix it (no σ, no μ0/V_ref or μ*, or another law).
+    pub fn friction_level(&self, friction: &super::Friction) -> Option<f64> {
+        use super::Friction;
+        self.friction_coefficients()?;
+        match friction {
+            Friction::Log => self.reference_friction(),
+            Friction::CutOff { .. } => self.mu_star,
+            Friction::Regularised { .. } => Some(0.0),
+            _ => None,
+        }
+    }
+
     /// The model's θ for the state Θ (time units): θ = (b/a) ln(v0 Θ/D_c), the same for the
     /// slip, ageing and PRZ laws under logarithmic friction (docs/state-laws.md).
     pub fn theta_from_state(&self, state: f64) -> f64 {
@@ -165,6 +181,7 @@ mod tests {
             sigma: Some(1e7),
             k: 2.5e8,
             reference: Some(FrictionReference { mu0: 0.6, v_ref: 1e-6 }),
+            mu_star: None,
         }
     }
 
