@@ -348,7 +348,8 @@ fn run_writing_series(
     files: &[PathBuf],
     qdyn: Option<Box<dyn stickslip::analysis::time_series::SeriesSink>>,
 ) -> Result<report::Report, Failure> {
-    let mut named: Vec<String> = files.iter().map(|f| format!("--series {}", f.display())).collect();
+    let mut named: Vec<String> =
+        files.iter().map(|f| format!("--series {}", f.display())).collect();
     if qdyn.is_some() {
         named.push("--qdyn-output".into());
     }

@@ -161,7 +161,12 @@ fn unsupported_or_bad_files_exit_2_naming_the_line_and_field() {
             "not a finite number",
         ),
         (with_line(16, "1e7 5e-10 1e5"), 16, "A", "14 values"),
-        (text.lines().take(10).collect::<Vec<_>>().join("\n"), 11, "DTTRY, DTMAX, TMAX, ACC", "missing"),
+        (
+            text.lines().take(10).collect::<Vec<_>>().join("\n"),
+            11,
+            "DTTRY, DTMAX, TMAX, ACC",
+            "missing",
+        ),
     ];
     for (bad, line, field, says) in &cases {
         let e = qdyn_input::to_scene(bad, "bad.in", "bad").unwrap_err();
@@ -218,8 +223,8 @@ fn qdyn_output_has_qdyns_headers_columns_and_format() {
         ("output_vmax", 5, 24 + 15 + 6 * 15),
         ("output_ox", 7, 2 * 24 + 8 * 15),
     ] {
-        let theirs = std::fs::read_to_string(data(&format!("reference/qdyn_output/{name}")))
-            .unwrap();
+        let theirs =
+            std::fs::read_to_string(data(&format!("reference/qdyn_output/{name}"))).unwrap();
         let ours = std::fs::read_to_string(dir.join("qdyn").join(name)).unwrap();
         assert_eq!(headers(&ours)[..2], headers(&theirs)[..2], "{name}");
         // Both start from the same state: the first row is QDYN's, field for field, except
@@ -238,8 +243,16 @@ fn qdyn_output_has_qdyns_headers_columns_and_format() {
         assert_eq!(data_lines(&theirs)[0].len(), width, "{name} (QDYN's)");
     }
     assert_eq!(
-        std::fs::read_to_string(dir.join("qdyn/output_ot_0")).unwrap().lines().take(4).collect::<Vec<_>>(),
-        std::fs::read_to_string(data("reference/qdyn_output/output_ot_0")).unwrap().lines().take(4).collect::<Vec<_>>()
+        std::fs::read_to_string(dir.join("qdyn/output_ot_0"))
+            .unwrap()
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>(),
+        std::fs::read_to_string(data("reference/qdyn_output/output_ot_0"))
+            .unwrap()
+            .lines()
+            .take(4)
+            .collect::<Vec<_>>()
     );
 }
 
@@ -355,4 +368,46 @@ print(p.ox[["t", "v", "theta", "tau", "slip"]].to_csv(index=False, float_format=
             assert_printed(r[k], e[k], if k == 0 { 14 } else { 7 }, "pyqdyn ox");
         }
     }
+}
+
+#[test]
+fn cut_off_mu_star_makes_stresses_absolute_and_needs_a_dimensional_scene() {
+    let dimensionless = r#"{"name": "q", "model": {"inertia": false, "xi": 0.25,
+        "epsilon": 0.5, "radiation_damping": 5e-8,
+        "friction": {"cut_off": {"v1": 1e3, "v2": 1e2, "mu_star": 0.6}}},
+        "analyses": ["hopf"]}"#;
+    let e = scene::parse(dimensionless, "test").unwrap_err();
+    assert_eq!(e.field, "model.friction.cut_off.mu_star", "{e}");
+    // The mapped cut-off scene: τ = σ(μ* + aΦ) is absolute, in the report and the series.
+    let file = data("qdyn/cut_a_slip.in");
+    let report = json_of(&stickslip(&["run", file.to_str().unwrap(), "--json"]));
+    let physical = &report["cycle"]["physical"];
+    let reference = physical["shear_stress_reference"].as_str().unwrap();
+    assert!(reference.starts_with("absolute"), "{reference}");
+    let mu = physical["friction_before"].as_f64().unwrap();
+    assert!((physical["shear_stress_before"].as_f64().unwrap() - 1e7 * mu).abs() < 1e-6);
+    let columns = report["time_series"]["columns"].as_array().unwrap();
+    assert!(columns.iter().any(|c| c == "tau_phys"), "{columns:?}");
+}
+
+#[test]
+fn qdyn_output_refuses_a_scene_it_cannot_express() {
+    // A dimensionless scene has no physical units; exit 2 naming the option and the field.
+    let dir = temp_dir("refuse");
+    let scene = dir.join("s.json");
+    std::fs::write(
+        &scene,
+        r#"{"name": "q", "model": {"inertia": false, "xi": 0.25, "epsilon": 0.5,
+            "radiation_damping": 5e-8}, "analyses": [{"time_series": {"t_max": 10}}]}"#,
+    )
+    .unwrap();
+    let out = stickslip(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--qdyn-output",
+        dir.join("out").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("--qdyn-output") && stderr.contains("model.dimensional"), "{stderr}");
 }

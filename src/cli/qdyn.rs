@@ -27,6 +27,7 @@ pub fn sink(scene: &Scene, dir: &Path) -> Result<Box<dyn SeriesSink>, String> {
     if scene.analyses.time_series.is_none() {
         return Err(named(format!("scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses", scene.name)));
     }
-    let sink = QdynOutputSink::create(dir, columns).map_err(|e| named(format!("cannot create the files: {e}")))?;
+    let sink = QdynOutputSink::create(dir, columns)
+        .map_err(|e| named(format!("cannot create the files: {e}")))?;
     Ok(Box::new(sink))
 }

@@ -170,7 +170,11 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
         3 => return Err(l.error(0, "3 (the Chen–Niemeijer–Spiers model, FRICTION_MODEL = \"CNS\") is not supported; stickslip runs RNS_LAW = 0 (classic), 1 (cut-off velocities) and 2 (regularised)".into())),
         other => return Err(l.error(0, format!("{other} is not a QDYN friction law; stickslip runs RNS_LAW = 0 (classic), 1 (cut-off velocities) and 2 (regularised)"))),
     }
-    lines.next(&["SIGMA_CPL"])?.only(0, 0, "normal-stress coupling (i_sigma_law) is not modelled; stickslip's σ is constant (0)")?;
+    lines.next(&["SIGMA_CPL"])?.only(
+        0,
+        0,
+        "normal-stress coupling (i_sigma_law) is not modelled; stickslip's σ is constant (0)",
+    )?;
     let l = lines.next(&["FEAT_STRESS_COUPL", "FEAT_TP", "FEAT_LOCALISATION"])?;
     l.only(0, 0, "normal-stress coupling is not modelled; stickslip's σ is constant (0)")?;
     l.only(1, 0, "thermal pressurisation is not modelled (0)")?;
@@ -191,7 +195,10 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
     let l = lines.next(&["VS", "MU", "LAM", "D", "HD", "V_TH"])?;
     let vs = l.number(0)?;
     if vs < 0.0 {
-        return Err(l.error(0, format!("{vs} must be ≥ 0 (the shear-wave speed c_s; 0 = no radiation damping)")));
+        return Err(l.error(
+            0,
+            format!("{vs} must be ≥ 0 (the shear-wave speed c_s; 0 = no radiation damping)"),
+        ));
     }
     if vs == 0.0 {
         return Err(l.error(0, "0 means no radiation damping, which the quasi-dynamic spring-block cannot run (without it V blows up in finite time at the first event); give the shear-wave speed c_s, e.g. 3000 (m/s)".into()));

@@ -12,6 +12,7 @@
 
 use crate::analysis::time_series::SeriesSink;
 use crate::model::scales::PhysicalScales;
+use crate::model::Friction;
 use crate::scene::Scene;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -35,8 +36,8 @@ pub struct QdynColumns {
     length: f64,
     /// σ.
     sigma: f64,
-    /// The friction coefficient at φ = 0 (μ = level + aφ).
-    level: f64,
+    /// The friction law (μ's absolute level).
+    friction: Friction,
 }
 
 impl QdynColumns {
@@ -53,12 +54,12 @@ impl QdynColumns {
             (None, None) => return Err("QDYN's potency columns (slip·L) need the spring-block's length: model.dimensional.length with shear_modulus (k = G/L), or shear_modulus beside k (L = G/k)".into()),
         };
         let friction = scene.params.friction;
-        let level = scales.friction_level(&friction).ok_or_else(|| match friction {
-            crate::model::Friction::Log => "QDYN's τ = σμ is absolute: the scene needs model.dimensional.mu0 and v_ref (QDYN's MU_SS, V_SS)".to_string(),
-            crate::model::Friction::CutOff { .. } => "QDYN's τ = σμ is absolute: the cut-off law needs model.friction.cut_off.mu_star (QDYN's MU_SS)".to_string(),
+        scales.friction_level(&friction).ok_or_else(|| match friction {
+            Friction::Log => "QDYN's τ = σμ is absolute: the scene needs model.dimensional.mu0 and v_ref (QDYN's MU_SS, V_SS)".to_string(),
+            Friction::CutOff { .. } => "QDYN's τ = σμ is absolute: the cut-off law needs model.friction.cut_off.mu_star (QDYN's MU_SS)".to_string(),
             other => format!("QDYN's τ = σμ is absolute, which the {} friction law does not fix; use the log, cut-off or regularised law", other.label()),
         })?;
-        Ok(Self { scales, length, sigma, level })
+        Ok(Self { scales, length, sigma, friction })
     }
 
     /// QDYN's nine ot values (t, pot, pot_rate, V, Θ, τ, dtau_dt, slip, σ) from the
@@ -72,7 +73,7 @@ impl QdynColumns {
             big_v * self.length,
             big_v,
             s.state_from_theta(theta),
-            self.sigma * self.level + s.shear_stress_change(phi),
+            s.shear_stress(&self.friction, phi).expect("the level is checked in for_scene"),
             s.k * (s.v0 - big_v),
             slip,
             self.sigma,
