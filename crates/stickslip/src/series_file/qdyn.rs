@@ -63,34 +63,41 @@ impl QdynColumns {
     }
 
     /// QDYN's nine ot values (t, pot, pot_rate, V, Θ, τ, dtau_dt, slip, σ) from the
-    /// dimensionless t, θ, v, φ and slip of one row.
-    fn values(&self, t: f64, theta: f64, v: f64, phi: f64, slip: f64) -> [f64; 9] {
+    /// dimensionless t, θ, v, φ and slip of one row (None if μ's level is not fixed, which
+    /// [`QdynColumns::for_scene`] rules out).
+    fn values(&self, t: f64, theta: f64, v: f64, phi: f64, slip: f64) -> Option<[f64; 9]> {
         let s = &self.scales;
         let (big_v, slip) = (s.velocity(v), s.slip(slip));
-        [
+        Some([
             s.time(t),
             slip * self.length,
             big_v * self.length,
             big_v,
             s.state_from_theta(theta),
-            s.shear_stress(&self.friction, phi).expect("the level is checked in for_scene"),
+            s.shear_stress(&self.friction, phi)?,
             s.k * (s.v0 - big_v),
             slip,
             self.sigma,
-        ]
+        ])
     }
 }
 
 /// Fortran's `Ew.d` edit descriptor: a mantissa 0.d…d with `d` digits, `E±ee` (or `±eee`
-/// without the E beyond ±99), right-aligned in `w` characters.
+/// without the E beyond ±99), right-aligned in `w` characters; `Infinity`, `-Infinity` and
+/// `NaN` as gfortran writes them.
 pub fn fortran_e(x: f64, w: usize, d: usize) -> String {
-    let body = if x == 0.0 {
+    let body = if x.is_nan() {
+        "NaN".to_string()
+    } else if x.is_infinite() {
+        if x > 0.0 { "Infinity" } else { "-Infinity" }.to_string()
+    } else if x == 0.0 {
         format!("0.{}E+00", "0".repeat(d))
     } else {
-        let s = format!("{:.*e}", d - 1, x.abs());
-        let (mantissa, exponent) = s.split_once('e').expect("Rust's {:e} has an exponent");
+        // Rust's d.ddde±x (mantissa in [1, 10)) is Fortran's 0.dddd (in [0.1, 1)) times 10^(x+1).
+        let s = format!("{:.*e}", d.max(1) - 1, x.abs());
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
         let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
-        let e = exponent.parse::<i32>().expect("an integer exponent") + 1;
+        let e = exponent.parse::<i32>().unwrap_or(0) + 1;
         let sign = if e < 0 { '-' } else { '+' };
         let exponent = if e.abs() <= 99 {
             format!("E{sign}{:02}", e.abs())
@@ -169,14 +176,12 @@ impl SeriesSink for QdynOutputSink {
     }
 
     fn row(&mut self, values: &[f64]) -> io::Result<()> {
-        let i = self.indices.expect("begin before row");
-        let q = self.columns.values(
-            values[i.t],
-            values[i.theta],
-            values[i.v],
-            values[i.stress],
-            values[i.slip],
-        );
+        let invalid = |m: &str| io::Error::new(io::ErrorKind::InvalidData, m.to_string());
+        let i = self.indices.ok_or_else(|| invalid("a row before the columns"))?;
+        let q = self
+            .columns
+            .values(values[i.t], values[i.theta], values[i.v], values[i.stress], values[i.slip])
+            .ok_or_else(|| invalid("QDYN's τ = σμ needs μ's absolute level"))?;
         let mut ot = fortran_e(q[0], 24, 14);
         let mut vmax = ot.clone() + &format!("{:>15}", 1);
         for (k, x) in q.iter().enumerate().skip(1) {
@@ -221,5 +226,6 @@ mod tests {
         assert_eq!(fortran_e(-1.5, 15, 7), " -0.1500000E+01");
         assert_eq!(fortran_e(0.99999999, 15, 7), "  0.1000000E+01");
         assert_eq!(fortran_e(1.5e-120, 15, 7), "  0.1500000-119");
+        assert_eq!(fortran_e(f64::INFINITY, 15, 7), "       Infinity");
     }
 }
