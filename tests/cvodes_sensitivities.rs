@@ -286,9 +286,9 @@ fn worst_difference(a: &Replay, b: &Replay) -> f64 {
         assert_eq!(t, t2);
         for i in 0..3 {
             worst = worst.max((y[i] - y2[i]).abs() / (1e-4 * y[i].abs() + atol[i]));
-            for j in 0..3 {
+            for (j, pj) in p.iter().enumerate() {
                 let k = j * 3 + i;
-                worst = worst.max((s[k] - s2[k]).abs() / (1e-4 * s[k].abs() + atol[i] / p[j]));
+                worst = worst.max((s[k] - s2[k]).abs() / (1e-4 * s[k].abs() + atol[i] / pj));
             }
         }
     }
