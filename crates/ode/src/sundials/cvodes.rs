@@ -218,8 +218,8 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
             )
         })?;
         match &settings.tolerance {
-            // SAFETY: live memory with sensitivities initialised; stores a switch.
             SensitivityTolerance::Estimated => {
+                // SAFETY: live memory with sensitivities initialised; stores a switch.
                 solver.check(unsafe { ffi::CVodeSensEEtolerances(mem) })?
             }
             SensitivityTolerance::Scalar { rtol, atol } => {
