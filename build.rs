@@ -9,9 +9,17 @@
 //! bindgen here for ARKStep. One pass over the system headers, with the MPI flags when SUNDIALS
 //! needs them, serves both versions and can never pick up a vendored copy.
 //!
-//! Emits `cfg(sundials7)` for the 7.x API; the version differences stay in crates/ode/src/sundials/. Cargo runs this script for
-//! crates/ode, the one crate that calls SUNDIALS.
-//! Fails loudly, naming what is actually missing and the Debian package that provides it.
+//! CVODE comes from CVODES (`libsundials_cvodes`, header `cvodes/cvodes.h`), never from
+//! `libsundials_cvode`: CVODES is a superset of CVODE's API with the same function names
+//! (`CVodeCreate`, `CVode`, `CVodeInit`, ...) and its own memory layout, so linking both would
+//! bind every `CVode*` call to whichever library the dynamic linker meets first, and a
+//! CVODES-only call (`CVodeSensInit`) on memory made by CVODE's `CVodeCreate` would corrupt it.
+//! One library serves the plain CVODE wrapper and the forward sensitivities.
+//!
+//! Emits `cfg(sundials7)` for the 7.x API; the version differences stay in
+//! crates/ode/src/sundials/. Cargo runs this script for crates/ode, the one crate that calls
+//! SUNDIALS. Fails loudly, naming what is actually missing and the Debian package that
+//! provides it.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -35,7 +43,7 @@ fn include_dir() -> PathBuf {
         env::var_os("SUNDIALS_INCLUDE_DIR").map(|d| vec![PathBuf::from(d)]).unwrap_or_else(|| {
             vec![PathBuf::from("/usr/include"), PathBuf::from("/usr/local/include")]
         });
-    let needed = ["sundials/sundials_config.h", "cvode/cvode.h", "arkode/arkode_arkstep.h"];
+    let needed = ["sundials/sundials_config.h", "cvodes/cvodes.h", "arkode/arkode_arkstep.h"];
     for dir in &candidates {
         if needed.iter().all(|h| dir.join(h).is_file()) {
             return dir.clone();
@@ -119,7 +127,8 @@ fn library_dir(config: &Config) -> PathBuf {
 /// The SUNDIALS libraries stickslip links.
 fn libraries(config: &Config) -> Vec<&'static str> {
     let mut libs = vec![
-        "sundials_cvode",
+        // CVODE and its forward sensitivities; never also sundials_cvode (see the header).
+        "sundials_cvodes",
         "sundials_arkode",
         "sundials_nvecserial",
         "sundials_sunmatrixdense",
@@ -210,12 +219,13 @@ fn has_mpi_h(mpi: &Mpi) -> bool {
 }
 
 /// Bindings for everything src/sundials/ calls: context (and on 7.x logger and error
-/// handlers), serial vectors, dense matrix and linear solver, CVODE, ARKStep and ARKODE.
+/// handlers), serial vectors, dense matrix and linear solver, CVODES (CVODE with forward
+/// sensitivities), ARKStep and ARKODE.
 fn bindings(inc: &Path, config: &Config, mpi: &Mpi, out: &Path) {
     let mut header = String::from(
         "#include <sundials/sundials_context.h>\n#include <sundials/sundials_version.h>\n\
          #include <nvector/nvector_serial.h>\n#include <sunmatrix/sunmatrix_dense.h>\n\
-         #include <sunlinsol/sunlinsol_dense.h>\n#include <cvode/cvode.h>\n\
+         #include <sunlinsol/sunlinsol_dense.h>\n#include <cvodes/cvodes.h>\n\
          #include <arkode/arkode_arkstep.h>\n",
     );
     if config.major >= 7 {

@@ -8,6 +8,7 @@ mod extrapolation;
 mod integrator;
 mod linalg;
 mod options;
+mod parametric;
 mod problem;
 mod radau5;
 mod rodas5p;
@@ -20,6 +21,7 @@ pub use error::{brief_state, ErrorKind, SolverError};
 pub use extrapolation::Extrapolation;
 pub use integrator::Integrator;
 pub use options::{ErrorScale, Options, OptionsError, Tolerance, DEFAULT_MAX_STEPS};
+pub use parametric::ParametricSystem;
 pub use problem::{
     check_implicit_jacobian, check_jacobian, jacobian_against_differences, ImexSystem,
     JacobianMatrix, JacobianMismatch, OdeSystem, RootFunction, Roots,

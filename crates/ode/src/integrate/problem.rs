@@ -85,11 +85,15 @@ pub trait ImexSystem: OdeSystem {
     fn implicit_jacobian(&self, _t: f64, _y: &[f64], _jac: &mut JacobianMatrix<'_>) {}
 }
 
-/// A dense square matrix in column-major storage, as handed to a Jacobian callback.
+/// A dense matrix in column-major storage, as handed to a Jacobian callback: square for ∂f/∂y
+/// ([`JacobianMatrix::new`]), n × n_params for ∂f/∂p ([`JacobianMatrix::rectangular`], in
+/// [`ParametricSystem::param_jacobian`](super::ParametricSystem::param_jacobian)).
 #[derive(Debug)]
 pub struct JacobianMatrix<'a> {
     data: &'a mut [f64],
+    /// Rows (and the column stride).
     n: usize,
+    cols: usize,
 }
 
 impl<'a> JacobianMatrix<'a> {
@@ -99,15 +103,30 @@ impl<'a> JacobianMatrix<'a> {
     /// If `data.len() != n * n`.
     pub fn new(data: &'a mut [f64], n: usize) -> Self {
         assert_eq!(data.len(), n * n, "JacobianMatrix storage must hold n*n values");
-        Self { data, n }
+        Self { data, n, cols: n }
     }
 
-    /// Matrix dimension n.
+    /// Wraps column-major storage of a `rows`×`cols` matrix (entry (row, col) at
+    /// `data[col * rows + row]`).
+    ///
+    /// # Panics
+    /// If `data.len() != rows * cols`.
+    pub fn rectangular(data: &'a mut [f64], rows: usize, cols: usize) -> Self {
+        assert_eq!(data.len(), rows * cols, "JacobianMatrix storage must hold rows*cols values");
+        Self { data, n: rows, cols }
+    }
+
+    /// Number of rows n (the dimension of a square matrix).
     pub fn dim(&self) -> usize {
         self.n
     }
 
-    /// Sets entry (row, col) = ∂f_row/∂y_col.
+    /// Number of columns (n for ∂f/∂y, n_params for ∂f/∂p).
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    /// Sets entry (row, col) = ∂f_row/∂y_col (∂f_row/∂p_col in ∂f/∂p).
     pub fn set(&mut self, row: usize, col: usize, value: f64) {
         self.data[col * self.n + row] = value;
     }

@@ -8,7 +8,8 @@
 use super::ffi;
 use super::vector::{slice, slice_mut};
 use crate::integrate::{
-    panic_message, ErrorWeights, ImexSystem, JacobianMatrix, OdeSystem, RootFunction,
+    panic_message, ErrorWeights, ImexSystem, JacobianMatrix, OdeSystem, ParametricSystem,
+    RootFunction,
 };
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -134,6 +135,71 @@ pub(crate) struct Shared<S> {
     pub step_ends: Option<StepEnds>,
     /// The tolerances behind [`error_weights`], when it is registered.
     pub weights: Option<ErrorWeights>,
+    /// ∂f/∂y and ∂f/∂p for [`sensitivity_rhs`], when it is registered (CVODES).
+    pub sensitivity: Option<SensitivityScratch>,
+}
+
+/// ∂f/∂y and ∂f/∂p at the (t, y) of the last sensitivity right-hand-side call. CVODES asks for
+/// s_j' one parameter at a time, each time at the same (t, y): both matrices are evaluated
+/// once per point, not once per parameter.
+#[derive(Debug)]
+pub(crate) struct SensitivityScratch {
+    /// Number of parameters m.
+    params: usize,
+    /// Whether the matrices belong to (`t`, `y`) (not before the first evaluation, nor after a
+    /// failed one).
+    valid: bool,
+    t: f64,
+    y: Vec<f64>,
+    /// ∂f/∂y, n × n, column-major.
+    jacobian: Vec<f64>,
+    /// ∂f/∂p, n × m, column-major.
+    param_jacobian: Vec<f64>,
+    /// Sensitivity right-hand sides that came out non-finite (reported as recoverable).
+    pub nonfinite: u64,
+    /// Whether the system forms the sensitivity right-hand side itself
+    /// ([`ParametricSystem::sensitivity_rhs`]); the matrices are unused then.
+    own_rhs: bool,
+}
+
+impl SensitivityScratch {
+    /// Room for a system of dimension `n` with `params` parameters; `own_rhs`: the system
+    /// forms the sensitivity right-hand side itself.
+    pub fn new(n: usize, params: usize, own_rhs: bool) -> Self {
+        // No matrices when the system forms the right-hand side itself.
+        let n = if own_rhs { 0 } else { n };
+        Self {
+            params,
+            valid: false,
+            t: 0.0,
+            y: vec![0.0; n],
+            jacobian: vec![0.0; n * n],
+            param_jacobian: vec![0.0; n * params],
+            nonfinite: 0,
+            own_rhs,
+        }
+    }
+
+    /// The return code for a sensitivity right-hand side `sdot`: 0, or +1 (recoverable) if a
+    /// value is not finite.
+    fn finite(&mut self, sdot: &[f64]) -> c_int {
+        if sdot.iter().all(|v| v.is_finite()) {
+            0
+        } else {
+            self.nonfinite += 1;
+            1
+        }
+    }
+
+    /// Forgets the matrices (the system changed).
+    pub fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
+    /// Whether the matrices were evaluated at exactly (t, y).
+    fn holds(&self, t: f64, y: &[f64]) -> bool {
+        self.valid && self.t == t && self.y == y
+    }
 }
 
 /// ewt_i = 1/tolerance_i with the tolerances of [`ErrorWeights::scale`]. False if a weight is
@@ -355,6 +421,70 @@ jacobian_trampoline!(
     ImexSystem,
     implicit_jacobian
 );
+
+/// The sensitivity right-hand side of parameter `is` (CVSensRhs1Fn signature):
+/// s_is' = (∂f/∂y) s_is + ∂f/∂p_is at (t, y), from the system's analytic Jacobian and
+/// [`ParametricSystem::param_jacobian`], or from [`ParametricSystem::sensitivity_rhs`] when
+/// the system has its own. A panic returns −1 (unrecoverable), a non-finite
+/// result +1 (recoverable: CVODES retries with a smaller step).
+pub(crate) unsafe extern "C" fn sensitivity_rhs<S: ParametricSystem>(
+    _ns: c_int,
+    t: f64,
+    y: ffi::N_Vector,
+    _ydot: ffi::N_Vector,
+    is: c_int,
+    ys: ffi::N_Vector,
+    ysdot: ffi::N_Vector,
+    data: *mut c_void,
+    _tmp1: ffi::N_Vector,
+    _tmp2: ffi::N_Vector,
+) -> c_int {
+    // SAFETY: `data` is the `Shared<S>` registered as user data (CVODES passes the same user
+    // data to f and fS), alive for the solver's life; no other reference to it is alive
+    // during a SUNDIALS call.
+    let shared = unsafe { &mut *(data as *mut Shared<S>) };
+    let n = shared.dim;
+    // SAFETY: `y`, `ys` and `ysdot` are serial vectors of length `n` (clones of the state
+    // vector), valid for this call; `ysdot` is distinct from the other two.
+    let (y, s, sdot) = unsafe { (slice(y, n), slice(ys, n), slice_mut(ysdot, n)) };
+    let (system, diag) = (&shared.system, &mut shared.diag);
+    let Some(scratch) = shared.sensitivity.as_mut() else { return -1 };
+    let Some(j) = usize::try_from(is).ok().filter(|j| *j < scratch.params) else { return -1 };
+    if scratch.own_rhs {
+        if !diag.guarded(|| system.sensitivity_rhs(t, y, j, s, sdot)) {
+            return -1;
+        }
+        return scratch.finite(sdot);
+    }
+    if !scratch.holds(t, y) {
+        scratch.valid = false;
+        let (jac, dfdp) = (&mut scratch.jacobian, &mut scratch.param_jacobian);
+        jac.fill(0.0);
+        dfdp.fill(0.0);
+        let params = scratch.params;
+        let evaluated = diag.guarded(|| {
+            system.jacobian(t, y, &mut JacobianMatrix::new(jac, n));
+            system.param_jacobian(t, y, &mut JacobianMatrix::rectangular(dfdp, n, params));
+        });
+        if !evaluated {
+            return -1;
+        }
+        scratch.t = t;
+        scratch.y.copy_from_slice(y);
+        scratch.valid = true;
+    }
+    // J·s column by column, then ∂f/∂p_j.
+    sdot.fill(0.0);
+    for (k, sk) in s.iter().enumerate() {
+        for (out, jik) in sdot.iter_mut().zip(&scratch.jacobian[k * n..(k + 1) * n]) {
+            *out += jik * sk;
+        }
+    }
+    for (out, dfdp) in sdot.iter_mut().zip(&scratch.param_jacobian[j * n..(j + 1) * n]) {
+        *out += dfdp;
+    }
+    scratch.finite(sdot)
+}
 
 /// Root functions g(t, y) (CVRootFn / ARKRootFn signature).
 pub(crate) unsafe extern "C" fn roots<S>(

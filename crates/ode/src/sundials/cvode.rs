@@ -43,14 +43,22 @@ fn classify(flag: c_int) -> ErrorKind {
         ffi::CV_RHSFUNC_FAIL
         | ffi::CV_FIRST_RHSFUNC_ERR
         | ffi::CV_REPTD_RHSFUNC_ERR
-        | ffi::CV_UNREC_RHSFUNC_ERR => ErrorKind::RhsFailure,
+        | ffi::CV_UNREC_RHSFUNC_ERR
+        // CVODES' forward sensitivities (crates/ode/src/sundials/cvodes.rs): their right-hand
+        // side.
+        | ffi::CV_SRHSFUNC_FAIL
+        | ffi::CV_FIRST_SRHSFUNC_ERR
+        | ffi::CV_REPTD_SRHSFUNC_ERR
+        | ffi::CV_UNREC_SRHSFUNC_ERR => ErrorKind::RhsFailure,
         ffi::CV_RTFUNC_FAIL => ErrorKind::RootFunctionFailure,
         ffi::CV_ILL_INPUT
         | ffi::CV_BAD_K
         | ffi::CV_BAD_T
         | ffi::CV_BAD_DKY
         | ffi::CV_TOO_CLOSE
-        | ffi::CV_NO_MALLOC => ErrorKind::InvalidInput,
+        | ffi::CV_NO_MALLOC
+        | ffi::CV_NO_SENS
+        | ffi::CV_BAD_IS => ErrorKind::InvalidInput,
         _ => ErrorKind::Other,
     }
 }

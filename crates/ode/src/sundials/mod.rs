@@ -1,11 +1,13 @@
-//! Safe wrappers over Debian's SUNDIALS (CVODE and ARKODE's ARKStep). This module is the only
-//! home of `unsafe` code in stickslip; every unsafe block carries a SAFETY comment.
+//! Safe wrappers over Debian's SUNDIALS (CVODE, with CVODES' forward sensitivities, and
+//! ARKODE's ARKStep). This module is the only home of `unsafe` code in stickslip; every unsafe
+//! block carries a SAFETY comment.
 //!
 //! One type, [`Solver`], drives either family through the contract of
 //! [`crate::integrate`]: tolerances and options, analytic dense Jacobians, root finding with
 //! directions (changeable between calls), dense output, restarts and full statistics. Failures
 //! come back as [`SolverError`](crate::integrate::SolverError) with t, state and SUNDIALS'
-//! message; panics in callbacks never cross into C.
+//! message; panics in callbacks never cross into C. [`SensitivitySolver`] adds CVODES' forward
+//! sensitivities s_j = ∂y/∂p_j for a [`ParametricSystem`](crate::integrate::ParametricSystem).
 
 #![allow(unsafe_code)]
 
@@ -13,6 +15,7 @@ mod arkode;
 mod callbacks;
 mod context;
 mod cvode;
+mod cvodes;
 mod dense;
 mod ffi;
 mod solver;
@@ -20,6 +23,10 @@ mod vector;
 
 pub use arkode::{default_imex_tables, ArkMethod, ArkSettings, DirkTable, ErkTable};
 pub use cvode::{CvodeMethod, CvodeSettings};
+pub use cvodes::{
+    SensitivityCorrector, SensitivitySettings, SensitivitySolver, SensitivityStats,
+    SensitivityTolerance,
+};
 pub use solver::Solver;
 
 /// Version of the SUNDIALS library linked at run time, e.g. "6.4.1".

@@ -305,6 +305,7 @@ impl<S> Solver<S> {
             diag,
             step_ends: None,
             weights: None,
+            sensitivity: None,
         });
         let shared = NonNull::from(Box::leak(shared));
         let mut solver = Self {
@@ -438,14 +439,14 @@ impl<S> Solver<S> {
 
     /// The callback data, shared. Called only between SUNDIALS calls (or from getters that do
     /// not call back), so no callback holds a reference at the same time.
-    fn shared(&self) -> &Shared<S> {
+    pub(crate) fn shared(&self) -> &Shared<S> {
         // SAFETY: the pointer comes from a leaked Box freed only in Drop; no `&mut` to it is
         // alive while `&self` is borrowed (callbacks run only inside `&mut self` methods).
         unsafe { self.shared.as_ref() }
     }
 
     /// The callback data, exclusively (between SUNDIALS calls).
-    fn shared_mut(&mut self) -> &mut Shared<S> {
+    pub(crate) fn shared_mut(&mut self) -> &mut Shared<S> {
         // SAFETY: as in `shared`; `&mut self` excludes every other access, and no SUNDIALS
         // call (hence no callback) is in progress.
         unsafe { self.shared.as_mut() }
@@ -454,6 +455,11 @@ impl<S> Solver<S> {
     /// Raw solver memory, for solver-specific setters in the constructors.
     pub(crate) fn mem(&self) -> Mem {
         self.mem.as_ptr()
+    }
+
+    /// The context every SUNDIALS object of this solver is created in.
+    pub(crate) fn context(&self) -> &Context {
+        &self.ctx
     }
 
     /// Turns a SUNDIALS return code into `Ok` or a typed error at the current time and state.
@@ -472,7 +478,8 @@ impl<S> Solver<S> {
         Err(self.error(kind, flag, message))
     }
 
-    fn error(&self, kind: ErrorKind, flag: c_int, message: String) -> SolverError {
+    /// A typed error at the current time and state.
+    pub(crate) fn error(&self, kind: ErrorKind, flag: c_int, message: String) -> SolverError {
         SolverError {
             solver: self.name,
             kind,
