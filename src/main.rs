@@ -14,6 +14,7 @@ use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
 use stickslip_cli::stress;
 
 use stickslip_cli::cli::progress::Progress;
+use stickslip_cli::cli::qdyn;
 
 #[derive(Parser)]
 #[command(
@@ -26,31 +27,42 @@ struct Cli {
     command: Command,
 }
 
+/// `stickslip run`'s arguments.
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Scene file (JSON, see docs/scenes.md).
+    scene: Option<PathBuf>,
+    /// Print the JSON report to stdout instead of the summary.
+    #[arg(long)]
+    json: bool,
+    /// Write the JSON report to FILE (atomically).
+    #[arg(long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Worker threads for ensembles (the "noise" analysis; default: all cores). Results do
+    /// not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Write the "time_series" analysis's rows to FILE as they are computed: CSV if FILE
+    /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it). Repeat it
+    /// for several files from one run (e.g. --series a.csv --series a.npy).
+    #[arg(long, value_name = "FILE")]
+    series: Vec<PathBuf>,
+    /// Lab scenes: draw friction against load-point displacement to FILE (SVG).
+    #[arg(long, value_name = "FILE.svg")]
+    figure: Option<PathBuf>,
+    /// Print the scene (JSON) instead of running it: a QDYN input file's mapped scene.
+    #[arg(long)]
+    print_scene: bool,
+    /// Write QDYN's output files (output_ot_0, output_vmax, output_ox) of the
+    /// "time_series" analysis in DIR (created if needed), in QDYN's format and SI units.
+    #[arg(long, value_name = "DIR")]
+    qdyn_output: Option<PathBuf>,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Run a scene (default: the built-in earthquake scene, γ = 1e8) and print a summary.
-    Run {
-        /// Scene file (JSON, see docs/scenes.md).
-        scene: Option<PathBuf>,
-        /// Print the JSON report to stdout instead of the summary.
-        #[arg(long)]
-        json: bool,
-        /// Write the JSON report to FILE (atomically).
-        #[arg(long, value_name = "FILE")]
-        out: Option<PathBuf>,
-        /// Worker threads for ensembles (the "noise" analysis; default: all cores). Results do
-        /// not depend on it.
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Write the "time_series" analysis's rows to FILE as they are computed: CSV if FILE
-        /// ends in .csv, otherwise a structured NumPy .npy array (np.load reads it). Repeat it
-        /// for several files from one run (e.g. --series a.csv --series a.npy).
-        #[arg(long, value_name = "FILE")]
-        series: Vec<PathBuf>,
-        /// Lab scenes: draw friction against load-point displacement to FILE (SVG).
-        #[arg(long, value_name = "FILE.svg")]
-        figure: Option<PathBuf>,
-    },
+    Run(RunArgs),
     /// Replay SUNDIALS' Robertson examples (cvRoberts_dns, ark_robertson_root) through the
     /// safe wrappers and print them as the C programs do, with solver statistics.
     Robertson,
@@ -219,18 +231,18 @@ fn failed(name: &str, error: engine::EngineError) -> Failure {
 
 const EARTHQUAKE: &str = include_str!("../data/scenes/earthquake.json");
 
-fn run_command(
-    path: Option<PathBuf>,
-    json: bool,
-    out: Option<PathBuf>,
-    threads: Option<usize>,
-    series: Vec<PathBuf>,
-    figure: Option<PathBuf>,
-) -> Result<(), Failure> {
+fn run_command(args: RunArgs) -> Result<(), Failure> {
+    let RunArgs { scene: path, json, out, threads, series, figure, print_scene, qdyn_output } =
+        args;
     let (text, source) = match &path {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
+    let text = qdyn::scene_text(path.as_deref(), text).map_err(|e| Failure(2, e))?;
+    if print_scene {
+        println!("{text}");
+        return Ok(());
+    }
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
@@ -239,6 +251,9 @@ fn run_command(
     let threads = worker_threads(threads);
     let mut not_converged = None;
     let (report_json, summary, ensembles) = match &scene {
+        scene::AnyScene::Lab(_) if qdyn_output.is_some() => {
+            return Err(Failure(2, "--qdyn-output: a lab scene has no QDYN output (QDYN's files hold a fault's slip history); use --series".into()));
+        }
         scene::AnyScene::Lab(scene) => return run_lab(scene, echo, json, out, &series, figure),
         _ if figure.is_some() => {
             return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
@@ -247,16 +262,18 @@ fn run_command(
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
             }
-            let report = if series.is_empty() {
+            let report = if series.is_empty() && qdyn_output.is_none() {
                 engine::run_with(scene, echo, threads, &update)
                     .map_err(|e| failed(&scene.name, e))?
             } else {
-                run_writing_series(scene, echo, threads, &update, &series)?
+                let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
+                let qdyn = qdyn.map_err(|e| Failure(2, e))?;
+                run_writing_series(scene, echo, threads, &update, &series, qdyn)?
             };
             not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
             (report.to_json(), report.summary(), scene.analyses.noise.is_some())
         }
-        scene::AnyScene::Other(_) if !series.is_empty() => {
+        scene::AnyScene::Other(_) if !series.is_empty() || qdyn_output.is_some() => {
             return Err(Failure(
                 2,
                 "--series: this scene has no \"time_series\" analysis (only DRR scenes have one); \
@@ -301,7 +318,7 @@ fn run_lab(
     series: &[PathBuf],
     figure: Option<PathBuf>,
 ) -> Result<(), Failure> {
-    let report = with_series_files(series, |sink| {
+    let report = with_series_files(series, None, |sink| {
         engine::lab::run(scene, echo, sink)
             .map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))
     })?;
@@ -366,18 +383,24 @@ fn run_writing_series(
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
     files: &[PathBuf],
+    qdyn: Option<Box<dyn SeriesSink>>,
 ) -> Result<report::Report, Failure> {
     if scene.analyses.time_series.is_none() {
-        let named = files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>().join(", ");
+        let mut named: Vec<String> =
+            files.iter().map(|f| format!("--series {}", f.display())).collect();
+        if qdyn.is_some() {
+            named.push("--qdyn-output".into());
+        }
+        let named = named.join(", ");
         return Err(Failure(
             2,
             format!(
-                "--series {named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
+                "{named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
                 scene.name
             ),
         ));
     }
-    with_series_files(files, |sink| {
+    with_series_files(files, qdyn, |sink| {
         engine::run_with_series(scene, echo, threads, progress, sink)
             .map_err(|e| failed(&scene.name, e))
     })
@@ -385,9 +408,10 @@ fn run_writing_series(
 
 /// Runs `run` with one sink that writes every row to each of `files` (CSV or .npy by its
 /// suffix; none: rows are discarded) through temporary files ([`series_staging`]): renamed to
-/// the files when `run` succeeds, removed when it fails.
+/// the files when `run` succeeds, removed when it fails; and to `extra` (QDYN's files).
 fn with_series_files<R>(
     files: &[PathBuf],
+    extra: Option<Box<dyn SeriesSink>>,
     run: impl FnOnce(&mut dyn SeriesSink) -> Result<R, Failure>,
 ) -> Result<R, Failure> {
     let staged: Vec<(PathBuf, PathBuf)> = files.iter().map(|f| series_staging(f)).collect();
@@ -412,6 +436,7 @@ fn with_series_files<R>(
             }
         }
     }
+    sinks.extend(extra);
     let mut tee = TeeSink(sinks);
     let result = run(&mut tee);
     drop(tee);
@@ -836,9 +861,7 @@ fn noise_curves_command(out: PathBuf, reports: Vec<PathBuf>) -> Result<(), Failu
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Run { scene, json, out, threads, series, figure } => {
-            run_command(scene, json, out, threads, series, figure)
-        }
+        Command::Run(args) => run_command(args),
         Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };

@@ -13,9 +13,12 @@
 //!   ∂f/∂p, a panic in ∂f/∂p.
 
 use stickslip::integrate::{
-    ErrorKind, JacobianMatrix, OdeSystem, Options, ParametricSystem, Task, Tolerance,
+    ErrorKind, JacobianMatrix, OdeSystem, Options, ParametricSystem, SolverError, Task, Tolerance,
 };
-use stickslip::sundials::{self, SensitivityCorrector, SensitivitySettings, SensitivitySolver};
+use stickslip::sundials::{
+    self, CvodeSettings, SensitivityCorrector, SensitivitySettings, SensitivitySolver,
+    SensitivityTolerance, Solver,
+};
 use stickslip_cli::robertson_examples::c_exponential;
 
 // ---------------------------------------------------------------------------------------------
@@ -283,9 +286,9 @@ fn worst_difference(a: &Replay, b: &Replay) -> f64 {
         assert_eq!(t, t2);
         for i in 0..3 {
             worst = worst.max((y[i] - y2[i]).abs() / (1e-4 * y[i].abs() + atol[i]));
-            for j in 0..3 {
+            for (j, pj) in p.iter().enumerate() {
                 let k = j * 3 + i;
-                worst = worst.max((s[k] - s2[k]).abs() / (1e-4 * s[k].abs() + atol[i] / p[j]));
+                worst = worst.max((s[k] - s2[k]).abs() / (1e-4 * s[k].abs() + atol[i] / pj));
             }
         }
     }
@@ -308,4 +311,391 @@ fn staggered_and_the_dense_product_agree_with_the_example() {
         println!("{name}: worst difference {worst:.2} tolerances");
         assert!(worst < 10.0, "{name} differs from the example by {worst} tolerances");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Central differences.
+
+/// Central differences of `run` (y at the output times) in each parameter, of fourth order
+/// (y(p − 2h) − 8 y(p − h) + 8 y(p + h) − y(p + 2h))/(12 h) with h = `h_rel`·|p_j|: per
+/// output time, column-major as the solver's sensitivities.
+fn central_differences(
+    p: &[f64],
+    h_rel: f64,
+    run: impl Fn(&[f64]) -> Vec<Vec<f64>>,
+) -> Vec<Vec<f64>> {
+    let shifted = |j: usize, steps: f64| {
+        let mut q = p.to_vec();
+        q[j] += steps * h_rel * p[j].abs();
+        run(&q)
+    };
+    let (outputs, n) = {
+        let base = run(p);
+        (base.len(), base[0].len())
+    };
+    let mut cd = vec![vec![0.0; n * p.len()]; outputs];
+    for j in 0..p.len() {
+        let h = h_rel * p[j].abs();
+        let [m2, m1, p1, p2] = [-2.0, -1.0, 1.0, 2.0].map(|steps| shifted(j, steps));
+        for (k, out) in cd.iter_mut().enumerate() {
+            for i in 0..n {
+                out[j * n + i] =
+                    (m2[k][i] - 8.0 * m1[k][i] + 8.0 * p1[k][i] - p2[k][i]) / (12.0 * h);
+            }
+        }
+    }
+    cd
+}
+
+/// The largest relative difference |s − cd|/max(|s|, |cd|) over every entry and output time,
+/// and where. `zeros` lists the entries (j·n + i) that are identically zero (∂y_i/∂p_j = 0 for
+/// every t: a parameter that cannot move that component); central differences give them their
+/// rounding noise, so instead of a relative difference the solver's value must be zero to
+/// within 1e-12 there.
+fn worst_relative(s: &[Vec<f64>], cd: &[Vec<f64>], n: usize, zeros: &[usize]) -> (f64, String) {
+    let mut worst = (0.0, String::new());
+    for (k, (a, b)) in s.iter().zip(cd).enumerate() {
+        for (e, (x, y)) in a.iter().zip(b).enumerate() {
+            let rel = if zeros.contains(&e) {
+                x.abs() / 1.0e-12 * 1.0e-6
+            } else {
+                (x - y).abs() / x.abs().max(y.abs())
+            };
+            if rel > worst.0 {
+                worst =
+                    (rel, format!("output {k}, ∂y_{}/∂p_{}: {x:e} against {y:e}", e % n, e / n));
+            }
+        }
+    }
+    worst
+}
+
+const ROBERTSON_TIMES: [f64; 8] = [0.4, 4.0, 40.0, 400.0, 4.0e3, 4.0e4, 4.0e5, 4.0e6];
+
+/// Robertson's y at [`ROBERTSON_TIMES`] by plain CVODE at rtol 1e-13 with the rates `p` (at
+/// 1e-12 or 1e-11 second-order differences with h = 1e-4·p_j carried up to 1e-5 of the runs'
+/// error).
+fn robertson_y(p: &[f64]) -> Vec<Vec<f64>> {
+    let mut system = Robertson::generic();
+    system.set_params(p);
+    let options = Options::new(1.0e-13, Tolerance::Scalar(1.0e-30));
+    let mut solver =
+        Solver::cvode(system, CvodeSettings::default(), 0.0, &[1.0, 0.0, 0.0], &options)
+            .expect("valid settings");
+    ROBERTSON_TIMES
+        .iter()
+        .map(|t| {
+            solver.advance(*t, Task::Normal).expect("Robertson runs");
+            solver.state().to_vec()
+        })
+        .collect()
+}
+
+/// Robertson's sensitivities at [`ROBERTSON_TIMES`] through the wrapper's dense J·s_j + ∂f/∂p_j.
+fn robertson_s(corrector: SensitivityCorrector) -> Vec<Vec<f64>> {
+    let options = Options::new(1.0e-10, Tolerance::Scalar(1.0e-30));
+    let settings = SensitivitySettings { corrector, ..SensitivitySettings::default() };
+    let mut solver = SensitivitySolver::new(
+        Robertson::generic(),
+        &settings,
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[0.0; 9],
+        &options,
+    )
+    .expect("valid settings");
+    ROBERTSON_TIMES
+        .iter()
+        .map(|t| {
+            solver.advance(*t, Task::Normal).expect("Robertson runs");
+            solver.sensitivities().to_vec()
+        })
+        .collect()
+}
+
+#[test]
+fn robertson_sensitivities_equal_central_differences() {
+    let cd = central_differences(&Robertson::example().p, 1.0e-3, robertson_y);
+    for corrector in [SensitivityCorrector::Simultaneous, SensitivityCorrector::Staggered] {
+        let (worst, at) = worst_relative(&robertson_s(corrector), &cd, 3, &[]);
+        println!("Robertson, {corrector:?}: worst relative difference {worst:.2e} ({at})");
+        assert!(worst < 1.0e-6, "{corrector:?}: {worst:e} at {at}");
+    }
+}
+
+/// A stiff spring-slider with rate-and-state friction (ageing law) driven at a load-point
+/// velocity that steps: y = (μ, ln θ), p = (a, b, d_c, k, μ0), V0 = 1 µm/s,
+/// μ = μ0 + a ln(V/V0) + b ln(V0 θ/d_c), dμ/dt = k (V_lp − V), dθ/dt = 1 − V θ/d_c. With
+/// a = 0.005, b = 0.008, d_c = 10 µm and k = 0.1 per µm (330 k_c) the machine's rate k V/a is
+/// 200 times the state's V/d_c at 10 µm/s. A test system, not the lab model.
+#[derive(Debug, Clone)]
+struct SpringSlider {
+    p: [f64; 5],
+    v_lp: f64,
+}
+
+impl SpringSlider {
+    const P: [f64; 5] = [0.005, 0.008, 10.0, 0.1, 0.6];
+
+    /// Slip rate V and ln(V/V0) = z at y.
+    fn velocity(&self, y: &[f64]) -> (f64, f64) {
+        let [a, b, d_c, _, mu0] = self.p;
+        let z = (y[0] - mu0 - b * ((1.0 / d_c).ln() + y[1])) / a;
+        (z.exp(), z)
+    }
+
+    /// The steady state sliding at `v` and its sensitivities (column-major 2 × 5).
+    fn steady(&self, v: f64) -> ([f64; 2], Vec<f64>) {
+        let [a, b, d_c, _, mu0] = self.p;
+        let l = v.ln();
+        let y = [mu0 + (a - b) * l, (d_c / v).ln()];
+        //       ∂/∂a        ∂/∂b        ∂/∂d_c          ∂/∂k        ∂/∂μ0
+        let s = vec![l, 0.0, -l, 0.0, 0.0, 1.0 / d_c, 0.0, 0.0, 1.0, 0.0];
+        (y, s)
+    }
+}
+
+impl OdeSystem for SpringSlider {
+    fn dim(&self) -> usize {
+        2
+    }
+
+    fn rhs(&self, _t: f64, y: &[f64], dydt: &mut [f64]) {
+        let (v, _) = self.velocity(y);
+        dydt[0] = self.p[3] * (self.v_lp - v);
+        dydt[1] = (-y[1]).exp() - v / self.p[2];
+    }
+
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+
+    fn jacobian(&self, _t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        let [a, b, d_c, k, _] = self.p;
+        let (v, _) = self.velocity(y);
+        jac.set(0, 0, -k * v / a);
+        jac.set(0, 1, k * b * v / a);
+        jac.set(1, 0, -v / (a * d_c));
+        jac.set(1, 1, -(-y[1]).exp() + b * v / (a * d_c));
+    }
+}
+
+impl ParametricSystem for SpringSlider {
+    fn n_params(&self) -> usize {
+        5
+    }
+
+    fn params(&self) -> Vec<f64> {
+        self.p.to_vec()
+    }
+
+    fn set_params(&mut self, p: &[f64]) {
+        self.p.copy_from_slice(p);
+    }
+
+    fn param_jacobian(&self, _t: f64, y: &[f64], dfdp: &mut JacobianMatrix<'_>) {
+        let [a, b, d_c, k, _] = self.p;
+        let (v, z) = self.velocity(y);
+        // ∂z/∂p for (a, b, d_c, k, μ0).
+        let dz = [-z / a, -((1.0 / d_c).ln() + y[1]) / a, b / (a * d_c), 0.0, -1.0 / a];
+        for (j, dzj) in dz.iter().enumerate() {
+            dfdp.set(0, j, -k * v * dzj);
+            dfdp.set(1, j, -v / d_c * dzj);
+        }
+        dfdp.set(0, 3, self.v_lp - v);
+        dfdp.set(1, 2, -v / d_c * dz[2] + v / (d_c * d_c));
+    }
+}
+
+/// The load point: 3 µm/s before t = 0 (the start is steady there), 10 µm/s on (0, 5], then
+/// 1 µm/s on (5, 25]; outputs on both sides of the step at t = 5, within the transients (the
+/// sensitivities that decay to zero at steady state are still well above the differences'
+/// noise).
+const SLIDER_SEGMENTS: [(f64, f64); 2] = [(5.0, 10.0), (25.0, 1.0)];
+const SLIDER_TIMES: [f64; 8] = [0.5, 2.0, 5.0, 5.5, 7.0, 10.0, 15.0, 25.0];
+
+/// y at [`SLIDER_TIMES`] by plain CVODE at rtol 1e-13 with the parameters `p`, a new solver
+/// per segment (started where the last ended).
+fn slider_y(p: &[f64]) -> Vec<Vec<f64>> {
+    let mut system = SpringSlider { p: SpringSlider::P, v_lp: 3.0 };
+    system.set_params(p);
+    let (y, _) = system.steady(3.0);
+    let mut y = y.to_vec();
+    let (mut t0, mut out) = (0.0, Vec::new());
+    for (t_end, v_lp) in SLIDER_SEGMENTS {
+        let system = SpringSlider { v_lp, ..system.clone() };
+        let mut options = Options::new(1.0e-13, Tolerance::Scalar(1.0e-15));
+        options.stop_time = Some(t_end);
+        let mut solver = Solver::cvode(system, CvodeSettings::default(), t0, &y, &options)
+            .expect("valid settings");
+        for t in SLIDER_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
+            solver.advance(*t, Task::Normal).expect("the slider runs");
+            out.push(solver.state().to_vec());
+        }
+        (t0, y) = (t_end, solver.state().to_vec());
+    }
+    out
+}
+
+/// The sensitivities at [`SLIDER_TIMES`] through the wrapper, restarted at the step with
+/// `reinit_with` (y and s go on; only V_lp changes).
+fn slider_s(corrector: SensitivityCorrector) -> Vec<Vec<f64>> {
+    let system = SpringSlider { p: SpringSlider::P, v_lp: SLIDER_SEGMENTS[0].1 };
+    let (y0, s0) = system.steady(3.0);
+    let mut options = Options::new(1.0e-10, Tolerance::Scalar(1.0e-13));
+    options.stop_time = Some(SLIDER_SEGMENTS[0].0);
+    let settings = SensitivitySettings { corrector, ..SensitivitySettings::default() };
+    let mut solver =
+        SensitivitySolver::new(system, &settings, 0.0, &y0, &s0, &options).expect("valid settings");
+    let mut out = Vec::new();
+    let mut t0 = 0.0;
+    for (segment, (t_end, v_lp)) in SLIDER_SEGMENTS.into_iter().enumerate() {
+        if segment > 0 {
+            let (y, s) = (solver.state().to_vec(), solver.sensitivities().to_vec());
+            solver.reinit_with(t0, &y, &s, |system| system.v_lp = v_lp).expect("a valid restart");
+            solver.set_stop_time(t_end).expect("a valid stop time");
+        }
+        for t in SLIDER_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
+            solver.advance(*t, Task::Normal).expect("the slider runs");
+            out.push(solver.sensitivities().to_vec());
+        }
+        t0 = t_end;
+    }
+    assert_eq!(solver.stats().reinits, 1);
+    out
+}
+
+#[test]
+fn spring_slider_sensitivities_equal_central_differences_across_a_velocity_step() {
+    // μ hardly depends on k while the slider follows the load point (∂μ/∂k·k/μ ≈ 8e-6 at
+    // t = 2), so the differences need a large step to rise above the runs' own error (with
+    // h = 1e-4·k they miss ∂μ/∂k by 4e-5, with 1e-3·k by 2e-6); the fourth-order formula
+    // keeps the truncation error of h = 1e-2·p_j near (1e-2)^4.
+    let cd = central_differences(&SpringSlider::P, 1.0e-2, slider_y);
+    for corrector in [SensitivityCorrector::Simultaneous, SensitivityCorrector::Staggered] {
+        let (worst, at) = worst_relative(&slider_s(corrector), &cd, 2, &[9]);
+        // ∂ln θ/∂μ0 = 0: μ0 shifts μ and leaves V, hence θ, alone.
+        println!("spring-slider, {corrector:?}: worst relative difference {worst:.2e} ({at})");
+        assert!(worst < 1.0e-6, "{corrector:?}: {worst:e} at {at}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Failures are typed errors.
+
+/// Robertson whose ∂f/∂p turns bad after `t_bad`: non-finite, or a panic.
+#[derive(Debug, Clone)]
+struct Faulty {
+    inner: Robertson,
+    t_bad: f64,
+    panic: bool,
+    jacobian: bool,
+}
+
+impl OdeSystem for Faulty {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.inner.rhs(t, y, dydt);
+    }
+    fn has_jacobian(&self) -> bool {
+        self.jacobian
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        self.inner.jacobian(t, y, jac);
+    }
+}
+
+impl ParametricSystem for Faulty {
+    fn n_params(&self) -> usize {
+        3
+    }
+    fn params(&self) -> Vec<f64> {
+        self.inner.params()
+    }
+    fn set_params(&mut self, p: &[f64]) {
+        self.inner.set_params(p);
+    }
+    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut JacobianMatrix<'_>) {
+        self.inner.param_jacobian(t, y, dfdp);
+        if t > self.t_bad {
+            assert!(!self.panic, "∂f/∂p refuses t = {t}");
+            dfdp.set(0, 0, f64::NAN);
+        }
+    }
+}
+
+fn faulty(
+    t_bad: f64,
+    panic: bool,
+    jacobian: bool,
+) -> Result<SensitivitySolver<Faulty>, SolverError> {
+    let system = Faulty { inner: Robertson::generic(), t_bad, panic, jacobian };
+    let options = Options::new(1.0e-6, Tolerance::Scalar(1.0e-12));
+    SensitivitySolver::new(
+        system,
+        &SensitivitySettings::default(),
+        0.0,
+        &[1.0, 0.0, 0.0],
+        &[0.0; 9],
+        &options,
+    )
+}
+
+#[test]
+fn bad_input_is_an_invalid_input_error() {
+    let e = faulty(1.0, false, false).expect_err("no Jacobian");
+    assert_eq!(e.kind, ErrorKind::InvalidInput);
+    assert!(e.message.contains("analytic Jacobian"), "{e}");
+
+    let options = Options::new(1.0e-6, Tolerance::Scalar(1.0e-12));
+    let settings = SensitivitySettings::default();
+    let y0 = [1.0, 0.0, 0.0];
+    let e = SensitivitySolver::new(Robertson::generic(), &settings, 0.0, &y0, &[0.0; 6], &options)
+        .expect_err("s0 of the wrong length");
+    assert_eq!(e.kind, ErrorKind::InvalidInput);
+    assert!(e.message.contains("3 × 3"), "{e}");
+
+    let scales =
+        SensitivitySettings { param_scales: Some(vec![1.0, 0.0, 1.0]), ..settings.clone() };
+    let e = SensitivitySolver::new(Robertson::generic(), &scales, 0.0, &y0, &[0.0; 9], &options)
+        .expect_err("a zero parameter scale");
+    assert!(e.kind == ErrorKind::InvalidInput && e.message.contains("param_scales"), "{e}");
+
+    let tolerance = SensitivityTolerance::Scalar { rtol: 1.0e-6, atol: vec![1.0e-8; 2] };
+    let bad = SensitivitySettings { tolerance, ..settings.clone() };
+    let e = SensitivitySolver::new(Robertson::generic(), &bad, 0.0, &y0, &[0.0; 9], &options)
+        .expect_err("two absolute tolerances for three parameters");
+    assert!(e.kind == ErrorKind::InvalidInput && e.message.contains("atol"), "{e}");
+
+    let mut solver = faulty(f64::INFINITY, false, true).expect("valid");
+    solver.advance(1.0, Task::Normal).expect("runs");
+    let (y, s) = (solver.state().to_vec(), solver.sensitivities().to_vec());
+    let mut s_bad = s.clone();
+    s_bad[4] = f64::NAN;
+    let e = solver.reinit_with(1.0, &y, &s_bad, |_| panic!("not called")).expect_err("NaN in s0");
+    assert!(e.kind == ErrorKind::InvalidInput && e.message.contains("∂y_1/∂p_1"), "{e}");
+    solver.reinit(1.0, &y, &s).expect("a valid restart");
+    solver.advance(2.0, Task::Normal).expect("goes on");
+}
+
+#[test]
+fn non_finite_sensitivity_derivatives_are_a_typed_error_at_the_last_good_point() {
+    let mut solver = faulty(1.0, false, true).expect("valid");
+    let e = solver.advance(10.0, Task::Normal).expect_err("∂f/∂p is NaN after t = 1");
+    println!("{e}");
+    assert_eq!(e.kind, ErrorKind::RhsFailure, "{e}");
+    assert!(e.t > 0.5 && e.t <= 1.0, "the last good point, at t = {}", e.t);
+    assert!(e.message.contains("sensitivity right-hand side"), "{e}");
+}
+
+#[test]
+fn a_panic_in_the_parameter_jacobian_is_a_callback_panic() {
+    let mut solver = faulty(1.0, true, true).expect("valid");
+    let e = solver.advance(10.0, Task::Normal).expect_err("∂f/∂p panics after t = 1");
+    println!("{e}");
+    assert_eq!(e.kind, ErrorKind::CallbackPanic, "{e}");
+    assert!(e.message.contains("∂f/∂p refuses"), "{e}");
+    assert!(e.t <= 1.0, "the last good point, at t = {}", e.t);
 }

@@ -31,8 +31,9 @@ const CRATES: &[(&str, Table)] = &[
             ("analysis", &["integrate", "model", "parallel", "solver", "sundials"]),
             ("scene", &["analysis", "model", "solver", "sundials"]),
             ("report", &["analysis", "integrate", "model", "scene"]),
-            // The time-series files (CSV, .npy): sinks for the analysis's rows, an output layer.
-            ("series_file", &["analysis"]),
+            // The time-series files (CSV, .npy, QDYN's output files): sinks for the analysis's
+            // rows, an output layer; QDYN's files take their physical units from the scene.
+            ("series_file", &["analysis", "model", "scene"]),
             (
                 "engine",
                 &[

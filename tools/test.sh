@@ -12,8 +12,10 @@ cargo clippy --release --all-targets --quiet -- -D warnings
 RUSTDOCFLAGS='-D warnings' cargo doc --no-deps --quiet
 cargo test --release "$@"
 # The user's examples: the library guide's (docs/library.md), every stiff method on a user's
-# system, and the README's Rust lines (examples/readme.rs, from the repository's root).
+# system and CVODES' sensitivities against an exact solution, and the README's Rust lines
+# (examples/readme.rs, from the repository's root).
 cargo run --release --quiet --example own_system
+cargo run --release --quiet --example sensitivities
 cargo run --release --quiet --example readme
 # The work–precision runner (a maintenance tool in tools/work_precision/, docs/README.md;
 # docs/work-precision.md) still runs: one small cell, nothing written.

@@ -175,9 +175,11 @@ impl CyclePhysical {
         let phi_at = |u: f64| (!params.inertia).then(|| -params.xi * u - params.eta);
         let (phi_before, phi_after) = (phi_at(v.extremes.u_min), phi_at(v.extremes.u_max));
         let stress = |phi: Option<f64>| {
-            phi.map(|phi| s.shear_stress(phi).unwrap_or_else(|| s.shear_stress_change(phi)))
+            phi.map(|phi| {
+                s.shear_stress(&params.friction, phi).unwrap_or_else(|| s.shear_stress_change(phi))
+            })
         };
-        let absolute = s.reference_friction().is_some();
+        let absolute = s.friction_level(&params.friction).is_some();
         Self {
             period: s.time(v.main.period),
             t0: s.time(v.main.t0),
@@ -195,13 +197,14 @@ impl CyclePhysical {
             shear_stress_before: stress(phi_before),
             shear_stress_after: stress(phi_after),
             shear_stress_reference: phi_before.map(|_| match params.friction {
-                _ if absolute => "absolute (σμ)",
                 Friction::Regularised { .. } => "absolute (σμ, the regularised law's μ = aΦ)",
-                Friction::CutOff { .. } => "relative to σμ*, the cut-off law's μ* (μ = μ* + aΦ)",
+                Friction::CutOff { .. } if absolute => "absolute (σμ, the cut-off law's μ = μ* + aΦ)",
+                Friction::CutOff { .. } => "relative to σμ*, the cut-off law's μ* (μ = μ* + aΦ; give cut_off.mu_star for absolute values)",
+                _ if absolute => "absolute (σμ)",
                 _ => "relative to σμ_ref, steady sliding at v0",
             }),
-            friction_before: phi_before.and_then(|phi| s.friction_coefficient(phi)),
-            friction_after: phi_after.and_then(|phi| s.friction_coefficient(phi)),
+            friction_before: phi_before.and_then(|phi| s.friction_coefficient(&params.friction, phi)),
+            friction_after: phi_after.and_then(|phi| s.friction_coefficient(&params.friction, phi)),
             friction_steady: s.reference_friction(),
         }
     }

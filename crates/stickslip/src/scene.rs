@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 mod analyses;
 pub mod lab;
+pub mod qdyn_input;
 pub use analyses::analysis_names;
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
@@ -162,6 +163,10 @@ enum RawFriction {
         velocity_1: Option<f64>,
         #[serde(default)]
         velocity_2: Option<f64>,
+        /// μ* (dimensional scenes, optional): the absolute level μ = μ* + aΦ, which only
+        /// shifts μ (for QDYN's output files' τ).
+        #[serde(default)]
+        mu_star: Option<f64>,
     },
     /// QDYN's regularised law: f* = μ*/a and v* = V*/v0, or in a dimensional scene μ* and V*.
     Regularised {
@@ -583,6 +588,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let epsilon = finite("model.epsilon", epsilon, err)?;
     let friction =
         friction_law(m.friction.clone().unwrap_or(RawFriction::Log), scales.as_ref(), err)?;
+    let scales = cut_off_mu_star(m.friction.as_ref(), scales, err)?;
     let state_law = match m.state_law.as_deref() {
         None => StateLaw::Slip,
         Some(name) => StateLaw::from_name(name).ok_or_else(|| {
@@ -717,7 +723,7 @@ fn friction_law(
                 err,
             )?,
         },
-        RawFriction::CutOff { v1, v2, velocity_1, velocity_2 } => Friction::CutOff {
+        RawFriction::CutOff { v1, v2, velocity_1, velocity_2, .. } => Friction::CutOff {
             v1: velocity("cut_off", ("v1", v1), ("velocity_1", velocity_1))?,
             v2: velocity("cut_off", ("v2", v2), ("velocity_2", velocity_2))?,
         },
@@ -743,6 +749,24 @@ fn friction_law(
             }
         }
     })
+}
+
+/// The scales with the cut-off law's μ* (`model.friction.cut_off.mu_star`) when given: a
+/// friction coefficient, so only in a dimensional scene with `a` and `sigma`.
+fn cut_off_mu_star(
+    raw: Option<&RawFriction>,
+    scales: Option<PhysicalScales>,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Option<PhysicalScales>, SceneError> {
+    let Some(RawFriction::CutOff { mu_star: Some(mu_star), .. }) = raw else { return Ok(scales) };
+    let field = "model.friction.cut_off.mu_star";
+    let mu_star = finite(field, *mu_star, err)?;
+    match scales {
+        Some(s) if s.friction_coefficients().is_some() => {
+            Ok(Some(PhysicalScales { mu_star: Some(mu_star), ..s }))
+        }
+        _ => Err(err(field, "μ* is a friction coefficient: it needs model.dimensional with a, b and sigma (a dimensionless scene's cut-off law has no absolute level)".into())),
+    }
 }
 
 /// The physical scales from `model.dimensional`: A and B from a, b with σ or from a_sigma,
@@ -837,7 +861,7 @@ fn dimensional_scales(
         }
         (None, None) => None,
     };
-    Ok(PhysicalScales { d_c, v0, a_sigma, b_sigma, sigma, k, reference })
+    Ok(PhysicalScales { d_c, v0, a_sigma, b_sigma, sigma, k, reference, mu_star: None })
 }
 
 /// Warnings for dimensional input whose derived parameters lie far outside the physical range

@@ -14,6 +14,8 @@
 //!
 //! Both stream: a row is written (buffered) as it comes and nothing is kept.
 
+pub mod qdyn;
+
 use crate::analysis::time_series::SeriesSink;
 use npyz::{DType, Field, TypeRead, TypeWrite, WriterBuilder};
 use std::fs::File;

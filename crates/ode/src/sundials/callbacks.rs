@@ -191,6 +191,11 @@ impl SensitivityScratch {
         }
     }
 
+    /// Forgets the matrices (the system changed).
+    pub fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
     /// Whether the matrices were evaluated at exactly (t, y).
     fn holds(&self, t: f64, y: &[f64]) -> bool {
         self.valid && self.t == t && self.y == y

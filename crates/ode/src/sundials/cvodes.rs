@@ -218,8 +218,8 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
             )
         })?;
         match &settings.tolerance {
-            // SAFETY: live memory with sensitivities initialised; stores a switch.
             SensitivityTolerance::Estimated => {
+                // SAFETY: live memory with sensitivities initialised; stores a switch.
                 solver.check(unsafe { ffi::CVodeSensEEtolerances(mem) })?
             }
             SensitivityTolerance::Scalar { rtol, atol } => {
@@ -282,11 +282,12 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
     /// (a velocity step of a load point) y and s_j go on from their values there, and a
     /// parameter that moves the jump itself adds its own term to s0.
     pub fn reinit(&mut self, t0: f64, y0: &[f64], s0: &[f64]) -> Result<(), SolverError> {
-        let (n, m) = (self.solver.state().len(), self.vectors.len());
-        if let Err(message) = check_sensitivities(n, m, s0) {
-            return Err(self.solver.error(ErrorKind::InvalidInput, 0, message));
-        }
+        self.check_restart(t0, y0, s0)?;
+        let n = self.solver.state().len();
         let before = self.raw_sensitivity_stats();
+        if let Some(scratch) = self.solver.shared_mut().sensitivity.as_mut() {
+            scratch.invalidate();
+        }
         self.solver.reinit(t0, y0)?;
         for (v, column) in self.vectors.iter_mut().zip(s0.chunks(n)) {
             v.as_mut_slice().copy_from_slice(column);
@@ -303,6 +304,22 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
         self.stats_before_reinit.accumulate(&before);
         self.s.copy_from_slice(s0);
         Ok(())
+    }
+
+    /// Changes the system (its parameters, its forcing: the load point's new velocity after a
+    /// step) and restarts at (t0, y0, s0) as [`SensitivitySolver::reinit`] does. The only way
+    /// to change the system: a change without a restart would leave CVODES' history
+    /// describing another right-hand side.
+    pub fn reinit_with(
+        &mut self,
+        t0: f64,
+        y0: &[f64],
+        s0: &[f64],
+        change: impl FnOnce(&mut S),
+    ) -> Result<(), SolverError> {
+        self.check_restart(t0, y0, s0)?;
+        change(&mut self.solver.shared_mut().system);
+        self.reinit(t0, y0, s0)
     }
 
     /// Sets (or moves) the stop time (see [`Solver::set_stop_time`]): put it at the next
@@ -368,6 +385,23 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
         self.solver.name()
     }
 
+    /// An [`ErrorKind::InvalidInput`] error unless t0, y0 and s0 are a finite restart point of
+    /// the right dimensions.
+    fn check_restart(&self, t0: f64, y0: &[f64], s0: &[f64]) -> Result<(), SolverError> {
+        let (n, m) = (self.solver.state().len(), self.vectors.len());
+        let state = if y0.len() != n || !t0.is_finite() || y0.iter().any(|v| !v.is_finite()) {
+            Err(format!(
+                "a restart needs a finite t0 and {n} finite components, got t0 = {t0}, y0 = {}",
+                crate::integrate::brief_state(y0)
+            ))
+        } else {
+            Ok(())
+        };
+        state
+            .and_then(|()| check_sensitivities(n, m, s0))
+            .map_err(|message| self.solver.error(ErrorKind::InvalidInput, 0, message))
+    }
+
     /// CVODES' sensitivity counters since the last (re)start.
     fn raw_sensitivity_stats(&self) -> SensitivityStats {
         let m = self.solver.mem();
@@ -394,6 +428,11 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
             e.message.push_str(&format!(" [{why}]"));
         }
         let nonfinite = self.nonfinite() - nonfinite_before;
+        if nonfinite > 0 && e.kind != ErrorKind::CallbackPanic {
+            // The steps shrank (to a step underflow, to too much work) because the sensitivity
+            // right-hand side kept failing: that is the root cause.
+            e.kind = ErrorKind::RhsFailure;
+        }
         if nonfinite > 0 {
             e.message.push_str(&format!(
                 " [{nonfinite} sensitivity right-hand sides J·s_j + ∂f/∂p_j were not finite]"

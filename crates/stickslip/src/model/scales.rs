@@ -59,6 +59,8 @@ pub struct PhysicalScales {
     pub k: f64,
     /// μ0 at V_ref, when given (needed for absolute shear stress and friction).
     pub reference: Option<FrictionReference>,
+    /// QDYN's cut-off law's μ* (μ = μ* + aΦ), when given.
+    pub mu_star: Option<f64>,
 }
 
 impl PhysicalScales {
@@ -113,17 +115,32 @@ impl PhysicalScales {
         Some(r.mu0 + (a - b) * (self.v0 / r.v_ref).ln())
     }
 
-    /// The friction coefficient μ = μ_ref + a·φ for the dimensionless friction φ = θ + f(v);
-    /// None without σ, μ0 and V_ref.
-    pub fn friction_coefficient(&self, phi: f64) -> Option<f64> {
-        let (a, _) = self.friction_coefficients()?;
-        Some(self.reference_friction()? + a * phi)
+    /// The friction coefficient at φ = 0 under `friction` (so μ = level + aφ): μ_ref for the
+    /// logarithmic law, μ* for QDYN's cut-off law, 0 for its regularised law (μ = aΦ); None
+    /// when the scene does not fix it (no σ, no μ0/V_ref or μ*, or another law).
+    pub fn friction_level(&self, friction: &super::Friction) -> Option<f64> {
+        use super::Friction;
+        self.friction_coefficients()?;
+        match friction {
+            Friction::Log => self.reference_friction(),
+            Friction::CutOff { .. } => self.mu_star,
+            Friction::Regularised { .. } => Some(0.0),
+            _ => None,
+        }
     }
 
-    /// The absolute shear stress τ = σμ for the dimensionless friction φ = θ + f(v); None
-    /// without σ, μ0 and V_ref.
-    pub fn shear_stress(&self, phi: f64) -> Option<f64> {
-        Some(self.sigma? * self.friction_coefficient(phi)?)
+    /// The friction coefficient μ = level + a·φ under `friction` for the dimensionless friction
+    /// φ ([`dimensionless_friction`]; level: [`PhysicalScales::friction_level`]); None when the
+    /// scene does not fix the level.
+    pub fn friction_coefficient(&self, friction: &super::Friction, phi: f64) -> Option<f64> {
+        let (a, _) = self.friction_coefficients()?;
+        Some(self.friction_level(friction)? + a * phi)
+    }
+
+    /// The absolute shear stress τ = σμ under `friction` for the dimensionless friction φ;
+    /// None when the scene does not fix μ's level.
+    pub fn shear_stress(&self, friction: &super::Friction, phi: f64) -> Option<f64> {
+        Some(self.sigma? * self.friction_coefficient(friction, phi)?)
     }
 
     /// The model's θ for the state Θ (time units): θ = (b/a) ln(v0 Θ/D_c), the same for the
@@ -165,6 +182,7 @@ mod tests {
             sigma: Some(1e7),
             k: 2.5e8,
             reference: Some(FrictionReference { mu0: 0.6, v_ref: 1e-6 }),
+            mu_star: None,
         }
     }
 
@@ -187,7 +205,9 @@ mod tests {
     fn friction_at_steady_sliding_is_the_steady_state_law() {
         // At V = v0 with Θ = D_c/v0 (θ = 0, ln v = 0): μ = μ0 + (a − b) ln(v0/V_ref).
         let s = crustal();
-        let mu = s.friction_coefficient(dimensionless_friction(&log_law(), 0.0, 0.0)).unwrap();
+        let mu = s
+            .friction_coefficient(&Friction::Log, dimensionless_friction(&log_law(), 0.0, 0.0))
+            .unwrap();
         let direct = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();
         assert!((mu - direct).abs() < 1e-15, "{mu} vs {direct}");
         // Any (V, Θ): the dimensional law directly.
@@ -195,8 +215,8 @@ mod tests {
         let phi =
             dimensionless_friction(&log_law(), s.theta_from_state(big_theta), (big_v / s.v0).ln());
         let direct = 0.6 + 0.01 * (big_v / 1e-6).ln() + 0.015 * (big_theta * 1e-6 / 1e-4).ln();
-        assert!((s.friction_coefficient(phi).unwrap() - direct).abs() < 1e-14);
-        assert!((s.shear_stress(phi).unwrap() - 1e7 * direct).abs() < 1e-7);
+        assert!((s.friction_coefficient(&Friction::Log, phi).unwrap() - direct).abs() < 1e-14);
+        assert!((s.shear_stress(&Friction::Log, phi).unwrap() - 1e7 * direct).abs() < 1e-7);
     }
 
     #[test]
@@ -211,7 +231,7 @@ mod tests {
         assert!(close(s.stress_drop(-1.0, 1.0), 2.0 * 2.5e8 * 1e-4));
         assert!(close(s.shear_stress_change(2.0), 2e5));
         let without = PhysicalScales { reference: None, ..s };
-        assert_eq!(without.shear_stress(0.0), None);
-        assert_eq!(without.friction_coefficient(0.0), None);
+        assert_eq!(without.shear_stress(&Friction::Log, 0.0), None);
+        assert_eq!(without.friction_coefficient(&Friction::Log, 0.0), None);
     }
 }

@@ -59,7 +59,7 @@ pub const COLUMNS: [&str; 7] = ["t", "u", "v", "theta", "ln_v", "slip", "stress"
 pub const PHYSICAL_COLUMNS: [&str; 4] = ["t_phys", "v_phys", "slip_phys", "stress_phys"];
 
 /// The columns that follow [`PHYSICAL_COLUMNS`] when the scene gives the absolute friction
-/// level (σ, μ0 at V_ref): the shear stress τ = σμ and the friction coefficient μ.
+/// level (σ with μ0 at V_ref, the cut-off law's μ*, or the regularised law): the shear stress τ = σμ and the friction coefficient μ.
 pub const ABSOLUTE_COLUMNS: [&str; 2] = ["tau_phys", "mu"];
 
 /// One event's quantities (dimensionless, or in physical units in [`Event::physical`]).
@@ -164,7 +164,7 @@ struct Rows<'s> {
     sink: &'s mut dyn SeriesSink,
     drr: &'s Drr,
     scales: Option<PhysicalScales>,
-    /// Whether the absolute shear stress and friction are known (σ, μ0 at V_ref).
+    /// Whether the absolute shear stress and friction are known ([`PhysicalScales::friction_level`]).
     absolute: bool,
     u0: f64,
     last_t: f64,
@@ -192,9 +192,11 @@ impl Rows<'_> {
                 s.slip(slip),
                 s.shear_stress_change(stress),
             ]);
-            if let (true, Some(tau), Some(mu)) =
-                (self.absolute, s.shear_stress(stress), s.friction_coefficient(stress))
-            {
+            if let (true, Some(tau), Some(mu)) = (
+                self.absolute,
+                s.shear_stress(&self.drr.params().friction, stress),
+                s.friction_coefficient(&self.drr.params().friction, stress),
+            ) {
                 self.buffer.extend([tau, mu]);
             }
         }
@@ -221,7 +223,7 @@ pub fn run(
     drr.rhs(integ.t(), &y0, &mut d0);
     let prev = Sample { t: integ.t(), y: y0, d: d0 };
     let mut columns: Vec<&'static str> = COLUMNS.to_vec();
-    let absolute = scales.is_some_and(|s| s.shear_stress(0.0).is_some());
+    let absolute = scales.is_some_and(|s| s.shear_stress(&drr.params().friction, 0.0).is_some());
     if scales.is_some() {
         columns.extend(PHYSICAL_COLUMNS);
     }

@@ -1,0 +1,289 @@
+//! QDYN's input file (`qdyn.in`) for its spring-block (`MESHDIM = 0`), read line by line in the
+//! layout of QDYN's reader (its src/input.f90) as QDYN's Python wrapper (pyqdyn's
+//! `write_input`) writes it, and mapped to a scene in the `dimensional` form
+//! (docs/from-qdyn.md has the table). The scene is returned as JSON text, so that
+//! `stickslip run qdyn.in --print-scene` shows exactly what runs and a kept copy runs the same.
+//!
+//! Each line holds its values separated by blanks or commas (Fortran's list-directed read);
+//! whatever follows them is a comment (pyqdyn writes the field names there), and a Fortran
+//! `d` exponent (`1d-9`) is accepted. Whatever stickslip does not run is refused naming the
+//! line, the field and what is supported.
+
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// A QDYN input file stickslip cannot read or run: the line, the field and why. CLI exit 2.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("QDYN input {source_name} line {line}: {field}: {message}")]
+pub struct QdynInputError {
+    /// The file.
+    pub source_name: String,
+    /// Line number (from 1).
+    pub line: usize,
+    /// QDYN's name of the field, e.g. `APER`.
+    pub field: String,
+    /// What is wrong and what is supported.
+    pub message: String,
+}
+
+/// Whether a scene file is a QDYN input file: its name ends in `.in`, or its first line is an
+/// integer followed by the word `meshdim` (as pyqdyn writes it). A JSON scene starts with `{`.
+pub fn is_qdyn_input(path: &Path, text: &str) -> bool {
+    if path.extension().is_some_and(|e| e == "in") {
+        return true;
+    }
+    let mut first = text.lines().next().unwrap_or("").split_whitespace();
+    first.next().is_some_and(|t| t.parse::<i64>().is_ok())
+        && first.next().is_some_and(|t| t.eq_ignore_ascii_case("meshdim"))
+}
+
+/// The scene (pretty JSON text) equivalent to a QDYN spring-block input file: quasi-dynamic,
+/// SI units, radau5 at rtol = `ACC`, the "cycle" analysis and a "time_series" run to `TMAX`.
+/// `name` names the scene (e.g. the file's stem).
+pub fn to_scene(text: &str, source_name: &str, name: &str) -> Result<String, QdynInputError> {
+    let mut scene = map(&mut Lines::new(text, source_name))?;
+    scene["name"] = json!(name);
+    Ok(serde_json::to_string_pretty(&scene).expect("a JSON value serialises"))
+}
+
+/// The file's lines with their numbers, consumed in QDYN's reading order.
+struct Lines<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    source_name: &'a str,
+    last: usize,
+}
+
+/// One line's values, with its number for messages.
+struct Line<'a> {
+    number: usize,
+    tokens: Vec<&'a str>,
+    source_name: &'a str,
+    names: &'static [&'static str],
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str, source_name: &'a str) -> Self {
+        Self { lines: text.lines().enumerate(), source_name, last: 0 }
+    }
+
+    /// The next line, which must hold the values `names` (QDYN's names, in order).
+    fn next(&mut self, names: &'static [&'static str]) -> Result<Line<'a>, QdynInputError> {
+        let Some((i, text)) = self.lines.next() else {
+            return Err(QdynInputError {
+                source_name: self.source_name.into(),
+                line: self.last + 1,
+                field: names.join(", "),
+                message: "missing: the file ends here; QDYN's spring-block input has this line \
+                          next (pyqdyn's write_input writes it)"
+                    .into(),
+            });
+        };
+        self.last = i + 1;
+        let tokens: Vec<&str> =
+            text.split(|c: char| c.is_whitespace() || c == ',').filter(|t| !t.is_empty()).collect();
+        let line = Line { number: i + 1, tokens, source_name: self.source_name, names };
+        if line.tokens.len() < names.len() {
+            return Err(line.error(
+                line.tokens.len().min(names.len() - 1),
+                format!(
+                    "this line needs {} values ({}); it has {}",
+                    names.len(),
+                    names.join(", "),
+                    line.tokens.len()
+                ),
+            ));
+        }
+        Ok(line)
+    }
+}
+
+impl Line<'_> {
+    fn error(&self, index: usize, message: String) -> QdynInputError {
+        QdynInputError {
+            source_name: self.source_name.into(),
+            line: self.number,
+            field: self.names[index].into(),
+            message,
+        }
+    }
+
+    /// The value `index` as a number (a Fortran `d` exponent accepted).
+    fn number(&self, index: usize) -> Result<f64, QdynInputError> {
+        let token = self.tokens[index];
+        token
+            .replace(['d', 'D'], "e")
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| self.error(index, format!("\"{token}\" is not a finite number")))
+    }
+
+    /// The value `index` as an integer flag.
+    fn integer(&self, index: usize) -> Result<i64, QdynInputError> {
+        let token = self.tokens[index];
+        token
+            .parse::<i64>()
+            .map_err(|_| self.error(index, format!("\"{token}\" is not an integer")))
+    }
+
+    /// The value `index`, which must be > 0.
+    fn positive(&self, index: usize, what: &str) -> Result<f64, QdynInputError> {
+        let v = self.number(index)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.error(index, format!("{v} must be > 0 ({what})")))
+        }
+    }
+
+    /// The flag `index`, which stickslip supports only at `supported` (QDYN's off value).
+    fn only(&self, index: usize, supported: i64, what: &str) -> Result<(), QdynInputError> {
+        let v = self.integer(index)?;
+        if v == supported {
+            Ok(())
+        } else {
+            Err(self.error(index, format!("{v} is not supported: {what}")))
+        }
+    }
+}
+
+/// Reads the file in QDYN's order (src/input.f90, mesh.f90's read_mesh_parameters) and builds
+/// the scene's JSON value (without its name).
+fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
+    let l = lines.next(&["MESHDIM"])?;
+    l.only(0, 0, "stickslip runs QDYN's spring-block, MESHDIM = 0 (a single degree of freedom); 1D and 2D faults (MESHDIM = 1, 2) are not supported")?;
+    lines.next(&["NN"])?.integer(0)?; // QDYN sets NN = 1 for MESHDIM = 0.
+    let l = lines.next(&["L", "W"])?;
+    let length = l.positive(0, "the spring-block's length L, k = MU/L, e.g. 120 (m)")?;
+    l.number(1)?; // W: unused by the spring-block.
+    let l = lines.next(&["THETA_LAW"])?;
+    let state_law = match l.integer(0)? {
+        1 => "ageing",
+        2 => "slip",
+        0 => return Err(l.error(0, "0 (the ageing law without healing) is not supported yet; stickslip runs THETA_LAW = 1 (ageing) and 2 (slip)".into())),
+        other => return Err(l.error(0, format!("{other} is not a QDYN state law; stickslip runs THETA_LAW = 1 (ageing) and 2 (slip)"))),
+    };
+    let l = lines.next(&["RNS_LAW"])?;
+    let rns_law = l.integer(0)?;
+    match rns_law {
+        0..=2 => {}
+        3 => return Err(l.error(0, "3 (the Chen–Niemeijer–Spiers model, FRICTION_MODEL = \"CNS\") is not supported; stickslip runs RNS_LAW = 0 (classic), 1 (cut-off velocities) and 2 (regularised)".into())),
+        other => return Err(l.error(0, format!("{other} is not a QDYN friction law; stickslip runs RNS_LAW = 0 (classic), 1 (cut-off velocities) and 2 (regularised)"))),
+    }
+    lines.next(&["SIGMA_CPL"])?.only(
+        0,
+        0,
+        "normal-stress coupling (i_sigma_law) is not modelled; stickslip's σ is constant (0)",
+    )?;
+    let l = lines.next(&["FEAT_STRESS_COUPL", "FEAT_TP", "FEAT_LOCALISATION"])?;
+    l.only(0, 0, "normal-stress coupling is not modelled; stickslip's σ is constant (0)")?;
+    l.only(1, 0, "thermal pressurisation is not modelled (0)")?;
+    l.only(2, 0, "strain localisation (a CNS feature) is not modelled (0)")?;
+    // Output decimation and snapshot settings: stickslip writes every step (see --series and
+    // --qdyn-output) and takes none of them.
+    lines.next(&[
+        "NTOUT_OT",
+        "NTOUT",
+        "IC",
+        "NXOUT",
+        "NWOUT",
+        "NXOUT_DYN",
+        "NWOUT_DYN",
+        "OX_SEQ",
+        "OX_DYN",
+    ])?;
+    let l = lines.next(&["VS", "MU", "LAM", "D", "HD", "V_TH"])?;
+    let vs = l.number(0)?;
+    if vs < 0.0 {
+        return Err(l.error(
+            0,
+            format!("{vs} must be ≥ 0 (the shear-wave speed c_s; 0 = no radiation damping)"),
+        ));
+    }
+    if vs == 0.0 {
+        return Err(l.error(0, "0 means no radiation damping, which the quasi-dynamic spring-block cannot run (without it V blows up in finite time at the first event); give the shear-wave speed c_s, e.g. 3000 (m/s)".into()));
+    }
+    let mu = l.positive(1, "the shear modulus G, e.g. 3e10 (Pa)")?;
+    for i in 2..6 {
+        l.number(i)?; // LAM, D, HD: 2D/3D kernels only; V_TH: QDYN's event output only.
+    }
+    let l = lines.next(&["TPER", "APER"])?;
+    l.number(0)?;
+    let aper = l.number(1)?;
+    if aper != 0.0 {
+        return Err(l.error(1, format!("{aper}: periodic loading is not supported yet; stickslip runs a constant loading rate (APER = 0)")));
+    }
+    let l = lines.next(&["DTTRY", "DTMAX", "TMAX", "ACC"])?;
+    l.number(0)?; // DTTRY, DTMAX: stickslip's integrators choose their own steps.
+    l.number(1)?;
+    let t_max = l.positive(2, "the end of the run in s (NSTOP = 0)")?;
+    let acc = l.positive(3, "the solver's relative accuracy, e.g. 1e-7")?;
+    if acc >= 1.0 {
+        return Err(l.error(3, format!("{acc} must be < 1 (a relative accuracy, e.g. 1e-7)")));
+    }
+    lines.next(&["NSTOP"])?.only(0, 0, "stickslip stops at TMAX (NSTOP = 0); the stops after the first peak (2) and at a slip-rate threshold (3) are not supported")?;
+    let l = lines.next(&["DYN_FLAG", "DYN_SKIP"])?;
+    l.only(0, 0, "coupling to a dynamic-rupture code is not supported (0)")?;
+    lines.next(&["DYN_M", "DYN_TH_ON", "DYN_TH_OFF"])?;
+    let l = lines.next(&["FAULT_TYPE", "SOLVER"])?;
+    l.integer(0)?; // FAULT_TYPE: 3D faults only.
+    l.integer(1)?; // SOLVER: QDYN's integrator; stickslip runs radau5 at rtol = ACC.
+    let l = lines.next(&[
+        "SIGMA", "V_0", "TH_0", "A", "B", "DC", "V1", "V2", "MU_SS", "V_SS", "IOT", "IASP", "CO",
+        "V_PL",
+    ])?;
+    let sigma = l.positive(0, "the effective normal stress σ, e.g. 1e7 (Pa)")?;
+    let v_0 = l.positive(1, "the initial slip rate, e.g. 5e-10 (m/s)")?;
+    let th_0 = l.positive(2, "the initial state Θ, e.g. 1e5 (s)")?;
+    let a = l.positive(3, "the direct-effect coefficient a, e.g. 0.01")?;
+    let b = l.positive(4, "the state-effect coefficient b, e.g. 0.015")?;
+    let d_c = l.positive(5, "the critical slip distance D_c, e.g. 1e-4 (m)")?;
+    for i in 6..10 {
+        l.number(i)?; // V1, V2, MU_SS, V_SS: read below by the law that uses them.
+    }
+    l.integer(10)?; // IOT, IASP: QDYN's output selection.
+    l.integer(11)?;
+    let co = l.number(12)?;
+    if co != 0.0 {
+        return Err(l.error(12, format!("{co}: cohesion is not supported (τ = σμ; CO = 0)")));
+    }
+    let v_pl = l.positive(13, "the loading velocity V_pl, e.g. 1e-9 (m/s)")?;
+    let friction = match rns_law {
+        0 => json!("log"),
+        1 => {
+            let mu_ss = l.number(8)?;
+            let v1 = l.positive(6, "the cut-off velocity V1 of the direct effect (m/s)")?;
+            let v2 = l.positive(7, "the cut-off velocity V2 of the state effect (m/s)")?;
+            json!({"cut_off": {"velocity_1": v1, "velocity_2": v2, "mu_star": mu_ss}})
+        }
+        _ => {
+            let mu_ss = l.number(8)?;
+            let v_ss = l.positive(9, "the reference velocity V* (m/s)")?;
+            json!({"regularised": {"mu_star": mu_ss, "velocity_star": v_ss}})
+        }
+    };
+    let mut dimensional = json!({
+        "unit_system": "SI",
+        "sigma": sigma, "a": a, "b": b, "d_c": d_c, "v0": v_pl,
+        "shear_modulus": mu, "length": length, "shear_wave_speed": vs,
+    });
+    if rns_law == 0 {
+        let mu_ss = l.positive(8, "the reference friction coefficient μ*, e.g. 0.6")?;
+        let v_ss = l.positive(9, "the reference velocity V*, e.g. 1e-6 (m/s)")?;
+        dimensional["mu0"] = json!(mu_ss);
+        dimensional["v_ref"] = json!(v_ss);
+    }
+    Ok(json!({
+        "name": "",
+        "description": "QDYN spring-block input (MESHDIM = 0) mapped by stickslip (docs/from-qdyn.md)",
+        "model": {
+            "inertia": false,
+            "state_law": state_law,
+            "friction": friction,
+            "dimensional": dimensional,
+        },
+        "initial": {"velocity": v_0, "state": th_0},
+        "solver": {"method": "radau5", "rtol": acc},
+        "analyses": ["cycle", {"time_series": {"t_max": t_max}}],
+    }))
+}

@@ -1,0 +1,231 @@
+//! QDYN's output files for a spring-block (`stickslip run … --qdyn-output DIR`): `output_ot_0`
+//! (the time series at the block), `output_vmax` (the same at the fastest point: the block)
+//! and `output_ox` (snapshots: the first and the last row), with QDYN's headers, columns and
+//! Fortran formats (`E24.14` for time, `E15.7` for the rest, `I15` for `ivmax`) and its SI
+//! units, so that pyqdyn's `read_output` reads them unchanged. The layout is copied from files
+//! QDYN wrote (data/reference/qdyn_output/, its README says how they were made).
+//!
+//! Columns (QDYN's names): t (s), potency and potency rate (slip·L and V·L, L the
+//! spring-block's length, m²·… as QDYN computes them), V (m/s), Θ (s), τ = σμ (Pa), dtau_dt,
+//! slip (m, from t = 0) and σ (Pa). QDYN's own spring-block files hold 0 in dtau_dt (it never
+//! updates it when MESHDIM = 0); stickslip writes the spring's stressing rate k(V_pl − V).
+
+use crate::analysis::time_series::SeriesSink;
+use crate::model::scales::PhysicalScales;
+use crate::model::Friction;
+use crate::scene::Scene;
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
+
+/// The header of `output_ot_0`.
+pub const OT_HEADER: &str = "# macroscopic values:\n# 1=t, 2=pot, 3=pot_rate\n# values at selected point:\n# 4=V, 5=theta, 6=tau, 7=dtau_dt, 8=slip, 9=sigma\n";
+
+/// The header of `output_vmax`.
+pub const VMAX_HEADER: &str =
+    "# values at max(V) location:\n# 1=t, 2=ivmax, 3=v, 4=theta, 5=tau, 6=dtau_dt, 7=slip, 8=sigma\n";
+
+/// The header of each snapshot in `output_ox`.
+pub const OX_HEADER: &str = "# t x y z v theta tau tau_dot slip sigma\n";
+
+/// What turns a scene's time-series rows into QDYN's columns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QdynColumns {
+    scales: PhysicalScales,
+    /// The spring-block's length L (potency = slip·L).
+    length: f64,
+    /// σ.
+    sigma: f64,
+    /// The friction law (μ's absolute level).
+    friction: Friction,
+}
+
+impl QdynColumns {
+    /// The columns for `scene`; the error names the scene field that is missing (QDYN's files
+    /// are physical: σ, the length L and the absolute friction level are needed).
+    pub fn for_scene(scene: &Scene) -> Result<Self, String> {
+        let (Some(scales), Some(d)) = (scene.scales, scene.dimensional) else {
+            return Err("QDYN's output is in physical units: the scene needs model.dimensional (SI: Pa, m, m/s, s)".into());
+        };
+        let sigma = scales.sigma.ok_or("QDYN's σ column and τ = σμ need model.dimensional.sigma (with a and b as friction coefficients)")?;
+        let length = match (d.length, d.shear_modulus) {
+            (Some(l), _) => l,
+            (None, Some(g)) => g / scales.k,
+            (None, None) => return Err("QDYN's potency columns (slip·L) need the spring-block's length: model.dimensional.length with shear_modulus (k = G/L), or shear_modulus beside k (L = G/k)".into()),
+        };
+        let friction = scene.params.friction;
+        scales.friction_level(&friction).ok_or_else(|| match friction {
+            Friction::Log => "QDYN's τ = σμ is absolute: the scene needs model.dimensional.mu0 and v_ref (QDYN's MU_SS, V_SS)".to_string(),
+            Friction::CutOff { .. } => "QDYN's τ = σμ is absolute: the cut-off law needs model.friction.cut_off.mu_star (QDYN's MU_SS)".to_string(),
+            other => format!("QDYN's τ = σμ is absolute, which the {} friction law does not fix; use the log, cut-off or regularised law", other.label()),
+        })?;
+        Ok(Self { scales, length, sigma, friction })
+    }
+
+    /// QDYN's nine ot values (t, pot, pot_rate, V, Θ, τ, dtau_dt, slip, σ) from the
+    /// dimensionless t, θ, v, φ and slip of one row (None if μ's level is not fixed, which
+    /// [`QdynColumns::for_scene`] rules out).
+    fn values(&self, t: f64, theta: f64, v: f64, phi: f64, slip: f64) -> Option<[f64; 9]> {
+        let s = &self.scales;
+        let (big_v, slip) = (s.velocity(v), s.slip(slip));
+        Some([
+            s.time(t),
+            slip * self.length,
+            big_v * self.length,
+            big_v,
+            s.state_from_theta(theta),
+            s.shear_stress(&self.friction, phi)?,
+            s.k * (s.v0 - big_v),
+            slip,
+            self.sigma,
+        ])
+    }
+}
+
+/// Fortran's `Ew.d` edit descriptor: a mantissa 0.d…d with `d` digits, `E±ee` (or `±eee`
+/// without the E beyond ±99), right-aligned in `w` characters; `Infinity`, `-Infinity` and
+/// `NaN` as gfortran writes them.
+pub fn fortran_e(x: f64, w: usize, d: usize) -> String {
+    let body = if x.is_nan() {
+        "NaN".to_string()
+    } else if x.is_infinite() {
+        if x > 0.0 { "Infinity" } else { "-Infinity" }.to_string()
+    } else if x == 0.0 {
+        format!("0.{}E+00", "0".repeat(d))
+    } else {
+        // Rust's d.ddde±x (mantissa in [1, 10)) is Fortran's 0.dddd (in [0.1, 1)) times 10^(x+1).
+        let s = format!("{:.*e}", d.max(1) - 1, x.abs());
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+        let digits: String = mantissa.chars().filter(char::is_ascii_digit).collect();
+        let e = exponent.parse::<i32>().unwrap_or(0) + 1;
+        let sign = if e < 0 { '-' } else { '+' };
+        let exponent = if e.abs() <= 99 {
+            format!("E{sign}{:02}", e.abs())
+        } else {
+            format!("{sign}{:03}", e.abs())
+        };
+        format!("{}0.{digits}{exponent}", if x < 0.0 { "-" } else { "" })
+    };
+    format!("{body:>w$}")
+}
+
+/// Where each needed column sits in the rows.
+#[derive(Debug, Clone, Copy)]
+struct Indices {
+    t: usize,
+    theta: usize,
+    v: usize,
+    stress: usize,
+    slip: usize,
+}
+
+/// Writes QDYN's three files in a directory as rows arrive; nothing is kept but the last row
+/// (for the final snapshot).
+pub struct QdynOutputSink {
+    columns: QdynColumns,
+    ot: BufWriter<File>,
+    vmax: BufWriter<File>,
+    ox: BufWriter<File>,
+    indices: Option<Indices>,
+    last: Option<[f64; 9]>,
+    rows: u64,
+}
+
+impl QdynOutputSink {
+    /// Creates `dir` (if needed) and its files `output_ot_0`, `output_vmax`, `output_ox`.
+    pub fn create(dir: &Path, columns: QdynColumns) -> io::Result<Self> {
+        std::fs::create_dir_all(dir)?;
+        let file = |name: &str| File::create(dir.join(name)).map(BufWriter::new);
+        Ok(Self {
+            columns,
+            ot: file("output_ot_0")?,
+            vmax: file("output_vmax")?,
+            ox: file("output_ox")?,
+            indices: None,
+            last: None,
+            rows: 0,
+        })
+    }
+
+    fn snapshot(&mut self, q: &[f64; 9]) -> io::Result<()> {
+        self.ox.write_all(OX_HEADER.as_bytes())?;
+        let mut line = fortran_e(q[0], 24, 14) + &fortran_e(0.0, 24, 14);
+        for x in [0.0, 0.0, q[3], q[4], q[5], q[6], q[7], q[8]] {
+            line += &fortran_e(x, 15, 7);
+        }
+        writeln!(self.ox, "{line}")
+    }
+}
+
+impl SeriesSink for QdynOutputSink {
+    fn begin(&mut self, columns: &[&'static str]) -> io::Result<()> {
+        let find = |name: &str| {
+            columns.iter().position(|c| *c == name).ok_or_else(|| {
+                io::Error::new(io::ErrorKind::InvalidData, format!("no column {name}"))
+            })
+        };
+        self.indices = Some(Indices {
+            t: find("t")?,
+            theta: find("theta")?,
+            v: find("v")?,
+            stress: find("stress")?,
+            slip: find("slip")?,
+        });
+        self.ot.write_all(OT_HEADER.as_bytes())?;
+        self.vmax.write_all(VMAX_HEADER.as_bytes())
+    }
+
+    fn row(&mut self, values: &[f64]) -> io::Result<()> {
+        let invalid = |m: &str| io::Error::new(io::ErrorKind::InvalidData, m.to_string());
+        let i = self.indices.ok_or_else(|| invalid("a row before the columns"))?;
+        let q = self
+            .columns
+            .values(values[i.t], values[i.theta], values[i.v], values[i.stress], values[i.slip])
+            .ok_or_else(|| invalid("QDYN's τ = σμ needs μ's absolute level"))?;
+        let mut ot = fortran_e(q[0], 24, 14);
+        let mut vmax = ot.clone() + &format!("{:>15}", 1);
+        for (k, x) in q.iter().enumerate().skip(1) {
+            let field = fortran_e(*x, 15, 7);
+            if k >= 3 {
+                vmax += &field;
+            }
+            ot += &field;
+        }
+        writeln!(self.ot, "{ot}")?;
+        writeln!(self.vmax, "{vmax}")?;
+        if self.rows == 0 {
+            self.snapshot(&q)?;
+        }
+        self.rows += 1;
+        self.last = Some(q);
+        Ok(())
+    }
+
+    fn finish(&mut self) -> io::Result<()> {
+        if let (Some(q), true) = (self.last, self.rows > 1) {
+            self.snapshot(&q)?;
+        }
+        self.ot.flush()?;
+        self.vmax.flush()?;
+        self.ox.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fortran_e;
+
+    #[test]
+    fn fortran_e_matches_qdyns_fields() {
+        // Fields copied from QDYN's own output_ot_0.
+        assert_eq!(fortran_e(0.0, 24, 14), "    0.00000000000000E+00");
+        assert_eq!(fortran_e(0.076174138036644, 24, 14), "    0.76174138036644E-01");
+        assert_eq!(fortran_e(5e-10, 15, 7), "  0.5000000E-09");
+        assert_eq!(fortran_e(5932128.0, 15, 7), "  0.5932128E+07");
+        assert_eq!(fortran_e(1e7, 15, 7), "  0.1000000E+08");
+        assert_eq!(fortran_e(-1.5, 15, 7), " -0.1500000E+01");
+        assert_eq!(fortran_e(0.99999999, 15, 7), "  0.1000000E+01");
+        assert_eq!(fortran_e(1.5e-120, 15, 7), "  0.1500000-119");
+        assert_eq!(fortran_e(f64::INFINITY, 15, 7), "       Infinity");
+    }
+}
