@@ -186,3 +186,90 @@ fn bad_requests_name_the_fix() {
     assert!(fit(&["a", "a"]).unwrap_err().contains("twice"));
     assert!(fit(&["mu0", "trend"]).unwrap_err().contains("at least one of"));
 }
+
+/// The real basalt step b819 fitted under the slip and the ageing law (a, b, D_c, k, μ0,
+/// trend) agrees with scipy's least_squares over an independent Radau model
+/// (data/reference/lab/fit_reference.json, made by benches/lab_fit_scipy.py): values within
+/// 1 % of a standard error, standard errors within 2 %.
+#[test]
+fn basalt_step_fits_agree_with_an_independent_scipy_fit() {
+    let reference: serde_json::Value =
+        serde_json::from_str(include_str!("../data/reference/lab/fit_reference.json")).unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/data/scenes/lab-basalt-b819.json")).unwrap();
+    let data =
+        std::path::PathBuf::from(format!("{root}/data/lab/velstep4_BRAVA_expb819_basalt.txt"));
+    for law in ["slip", "ageing"] {
+        let text = text.replace("\"law\": \"slip\"", &format!("\"law\": \"{law}\""));
+        let stickslip::scene::AnyScene::Lab(scene) =
+            stickslip::scene::parse_any(&text, "b819").unwrap()
+        else {
+            panic!("a lab scene")
+        };
+        let report = stickslip::engine::lab::fit_file(
+            &scene,
+            &data,
+            "a,b_1,d_c_1,k,mu0,trend",
+            "t=Time(s),x_lp=Displ(microns),mu=Friction",
+            stickslip::engine::lab::FitLoading::Scene,
+        )
+        .unwrap();
+        assert!(report.outcome.converged, "{law}: {}", report.outcome.termination);
+        let scipy = &reference["cases"][format!("basalt_{law}")]["scipy"];
+        for p in &report.outcome.parameters {
+            let value = scipy["values"][&p.name].as_f64().unwrap();
+            let se = scipy["standard_errors"][&p.name].as_f64().unwrap();
+            let off = (p.value - value) / se;
+            eprintln!(
+                "{law} {}: {} ± {:.3e}; scipy {value} ± {se:.3e} ({off:+.1e} σ)",
+                p.name, p.value, p.standard_error
+            );
+            assert!(off.abs() < 0.01, "{law} {}: {off} standard errors from scipy's", p.name);
+            assert!((p.standard_error / se - 1.0).abs() < 0.02, "{law} {}: standard error", p.name);
+        }
+        assert!(report.outcome.warnings.iter().any(|w| w.contains("autocorrelated")));
+    }
+}
+
+/// `stickslip fit` on the command line: the real record with its figure and report; a bad
+/// request exits 2 naming the fix, and writes nothing.
+#[test]
+fn the_cli_fits_the_basalt_step_and_refuses_bad_requests() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!("stickslip-fit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (svg, json) = (dir.join("b819.svg"), dir.join("b819.json"));
+    let fit = |params: &str, columns: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .current_dir(root)
+            .args(["fit", "data/scenes/lab-basalt-b819.json", "--data"])
+            .arg("data/lab/velstep4_BRAVA_expb819_basalt.txt")
+            .args(["--params", params, "--columns", columns, "--figure"])
+            .arg(&svg)
+            .arg("--out")
+            .arg(&json)
+            .output()
+            .unwrap()
+    };
+    let columns = "t=Time(s),x_lp=Displ(microns),mu=Friction";
+    let ok = fit("a,b_1,d_c_1,k,mu0,trend", columns);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["parameters"].as_array().unwrap().len(), 6);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    std::fs::remove_file(&svg).unwrap();
+    std::fs::remove_file(&json).unwrap();
+    for (params, columns, says) in [
+        ("a,b_2", columns, "state variables 1 to 1"),
+        ("a", "t=Time,mu=Friction", "no column \"Time\""),
+        ("a", "t=Time(s),mu=Friction,x_lp=Displ(microns),v=V", "unknown key \"v\""),
+    ] {
+        let out = fit(params, columns);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(says), "{stderr}");
+        assert!(!svg.exists() && !json.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

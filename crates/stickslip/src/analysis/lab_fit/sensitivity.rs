@@ -63,18 +63,25 @@ pub fn friction_sensitivities(
         }
     };
     let options = Options::new(solver.rtol, Tolerance::Scalar(solver.atol));
+    let system = LabParametric {
+        params: params.clone(),
+        v_lp: loading.segments[0].velocity,
+        varied: dynamic.clone(),
+    };
+    let mut cvodes =
+        SensitivitySolver::new(system, &SensitivitySettings::default(), 0.0, &y, &s, &options)
+            .map_err(|e| (0, e))?;
     let mut next = 0;
     for (j, seg) in loading.segments.iter().enumerate() {
+        let fail = |e| (j, e);
+        if j > 0 {
+            // A jump of V_lp: CVODE and the sensitivities restart from the carried state.
+            cvodes.reinit_with(0.0, &y, &s, |system| system.v_lp = seg.velocity).map_err(fail)?;
+        }
         let t0 = seg.t_start;
         let t1 = loading.segment_end(j);
         let last = j + 1 == loading.segments.len();
         let in_segment = |t: f64| t >= t0 && (t < t1 || (last && t <= t1));
-        let system =
-            LabParametric { params: params.clone(), v_lp: seg.velocity, varied: dynamic.clone() };
-        let settings = SensitivitySettings::default();
-        let fail = |e| (j, e);
-        let mut cvodes =
-            SensitivitySolver::new(system, &settings, 0.0, &y, &s, &options).map_err(fail)?;
         cvodes.set_stop_time(t1 - t0).map_err(fail)?;
         while next < times.len() && in_segment(times[next]) {
             let local = times[next] - t0;
@@ -91,7 +98,7 @@ pub fn friction_sensitivities(
         }
         y.copy_from_slice(cvodes.state());
         s.copy_from_slice(cvodes.sensitivities());
-        out.steps += cvodes.stats().steps as u64;
     }
+    out.steps = cvodes.stats().steps as u64;
     Ok(out)
 }

@@ -29,14 +29,14 @@ pub fn uncertainty(
     }
     let sigma2 = residuals.norm_squared() / (m - p) as f64;
     let norms: Vec<f64> = jac.column_iter().map(|c| c.norm()).collect();
-    if let Some(j) = norms.iter().position(|n| !(*n > 0.0 && n.is_finite())) {
+    if let Some(j) = norms.iter().position(|n| n.is_nan() || *n <= 0.0 || n.is_infinite()) {
         return Err(format!("the friction does not depend on {} at these samples: it cannot be fitted (leave it out of --params)", names[j]));
     }
     let scaled = DMatrix::from_fn(m, p, |i, j| jac[(i, j)] / norms[j]);
     let normal = scaled.transpose() * &scaled;
     let svd = normal.clone().svd(true, true);
     let (largest, smallest) = (svd.singular_values.max(), svd.singular_values.min());
-    if !(smallest > 1e-14 * largest) {
+    if smallest.is_nan() || smallest <= 1e-14 * largest {
         let v = svd.v_t.as_ref().map(|vt| vt.row(p - 1).transpose());
         let involved = v
             .map(|v| {
