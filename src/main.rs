@@ -14,7 +14,7 @@ use stickslip_cli::robertson_examples::{self as robertson, ExampleRun};
 use stickslip_cli::stress;
 
 use stickslip_cli::cli::progress::Progress;
-use stickslip_cli::cli::qdyn;
+use stickslip_cli::cli::{self, qdyn, Failure};
 
 #[derive(Parser)]
 #[command(
@@ -171,6 +171,9 @@ enum Command {
         /// Reports written by `stickslip run SCENE --out REPORT`.
         reports: Vec<PathBuf>,
     },
+    /// Fit a lab scene's model to a friction record (a, b_i, D_c,i, k, μ0 and a trend), by
+    /// Levenberg–Marquardt with CVODES' sensitivities (docs/lab.md).
+    Fit(cli::fit::FitArgs),
     /// Print the SUNDIALS version linked at run time.
     Version,
 }
@@ -218,10 +221,6 @@ fn robertson_command() -> Result<(), Failure> {
     print_stats(&arkode);
     Ok(())
 }
-
-/// A failure and its exit code: 2 for bad input, 1 for a failed computation, 4 for a cycle
-/// analysis that did not converge.
-struct Failure(u8, String);
 
 /// A failed run of the scene `name`: exit code 2 when an option does not fit the computed
 /// orbit (bad input, the field named), 1 otherwise.
@@ -862,6 +861,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Run(args) => run_command(args),
+        Command::Fit(args) => cli::fit::command(args),
         Command::Robertson => robertson_command(),
         Command::Stress { quick, grid, json, threads, table, known, methods } => {
             let grid = if quick { stress::Grid::Quick } else { grid.unwrap_or(stress::Grid::Full) };

@@ -58,7 +58,7 @@ const CRATES: &[(&str, Table)] = &[
             ("robertson_examples", &[]),
             ("stress", &[]),
             ("reproduce", &["figure"]),
-            ("cli", &["reproduce"]),
+            ("cli", &["figure", "reproduce"]),
         ],
     ),
 ];

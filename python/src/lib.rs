@@ -344,6 +344,54 @@ fn solve_ivp<'py>(
 }
 
 /// The SUNDIALS version the package runs with.
+/// Fits the lab scene (JSON text) to the record in `data` (`stickslip fit`); returns the report
+/// as JSON and the columns t, x_lp, mu_data, mu_fit. `loading` is "scene" or "data".
+#[pyfunction(name = "fit")]
+#[pyo3(signature = (text, source, data, params, columns, loading))]
+fn fit_scene(
+    py: Python<'_>,
+    text: String,
+    source: String,
+    data: String,
+    params: String,
+    columns: String,
+    loading: String,
+) -> PyResult<(String, Columns<'_>)> {
+    let AnyScene::Lab(scene) = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?
+    else {
+        return Err(PyValueError::new_err(format!(
+            "scene {source}: fit takes a lab scene (\"model\": {{\"kind\": \"lab\", ...}}, docs/lab.md)"
+        )));
+    };
+    let loading = match loading.as_str() {
+        "scene" => engine::lab::FitLoading::Scene,
+        "data" => engine::lab::FitLoading::Data,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "loading = {other:?}: choose \"scene\" (the scene's loading) or \"data\" (the record's x_lp column)"
+            )))
+        }
+    };
+    let cancel = Cancel::new();
+    let name = scene.name.clone();
+    let outcome = off_the_gil(py, &cancel, move || {
+        engine::lab::fit_file(&scene, std::path::Path::new(&data), &params, &columns, loading)
+            .map_err(Box::new)
+    })?;
+    let report = outcome.map_err(|e| match *e {
+        stickslip::analysis::lab_fit::FitError::BadInput(m) => PyValueError::new_err(m),
+        other => {
+            python_error(py, "RunError", format!("fit of scene {name}: {other}"), PyDict::new(py))
+        }
+    })?;
+    let s = &report.outcome.series;
+    let columns = [("t", &s.t), ("x_lp", &s.x_lp), ("mu_data", &s.mu_data), ("mu_fit", &s.mu_fit)]
+        .into_iter()
+        .map(|(n, c)| (n.to_string(), numpy::PyArray1::from_slice(py, c)))
+        .collect();
+    Ok((report.to_json(), columns))
+}
+
 #[pyfunction]
 fn sundials_version() -> String {
     stickslip::sundials::version()
@@ -354,6 +402,7 @@ fn sundials_version() -> String {
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_scene, m)?)?;
     m.add_function(wrap_pyfunction!(solve_ivp, m)?)?;
     m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
     m.add("DENSE_NODES", solve::DENSE_NODES)?;

@@ -24,7 +24,7 @@ from ._ivp import METHODS, SCIPY_METHODS, OdeResult, solve_ivp
 from ._solution import OdeSolution
 from .errors import RunError, SceneError, SolverError, StickslipError
 
-__all__ = ["run", "sweep", "solve_ivp", "OdeResult", "OdeSolution", "METHODS", "SCIPY_METHODS",
+__all__ = ["run", "sweep", "fit", "solve_ivp", "OdeResult", "OdeSolution", "METHODS", "SCIPY_METHODS",
            "SceneError", "RunError", "SolverError", "StickslipError", "sundials_version"]
 # Single-sourced: the workspace version in the root Cargo.toml, which maturin writes into the
 # package metadata (pyproject.toml's `dynamic = ["version"]`).
@@ -89,6 +89,33 @@ def run(scene: Scene, threads: Optional[int] = None, arrays: bool = True) -> Dic
     if series:
         report["series"] = dict(series)
     return _arrays(report) if arrays else report
+
+
+def fit(scene: Scene, data: Union[str, os.PathLike], params: Union[str, Sequence[str]],
+        columns: Optional[Mapping[str, str]] = None, loading: str = "scene") -> Dict[str, Any]:
+    """Fit a lab scene's model to a friction record, as ``stickslip fit`` does (docs/lab.md).
+
+    ``scene`` is a lab scene (dict or path): starting values, tolerances and the load-point
+    history in the record's time origin. ``data`` is the record (a header line of column names,
+    then rows). ``params`` names what to fit: ``["a", "b_1", "d_c_1", "k", "mu0", "trend"]`` or
+    the same comma-separated. ``columns`` maps ``t``, ``mu`` and ``x_lp`` to the record's header
+    names, e.g. ``{"t": "Time(s)", "mu": "Friction", "x_lp": "Displ(microns)"}``. ``loading``
+    is ``"scene"`` or ``"data"`` (the record's x_lp column).
+
+    Returns the report of ``stickslip fit --json`` as a dict: ``parameters`` (name, value,
+    standard_error, initial), ``correlation``, ``residual_rms``, ``evaluations``,
+    ``converged``, ``lag1_autocorrelation``, ``warnings``, ``model``; and ``"series"``, numpy
+    arrays ``t``, ``x_lp``, ``mu_data`` and ``mu_fit``. Raises :class:`SceneError` for a bad
+    scene, ValueError for a bad request, :class:`RunError` when the model cannot be
+    integrated.
+    """
+    text, source = _scene_text(scene)
+    names = params if isinstance(params, str) else ",".join(params)
+    spec = ",".join(f"{k}={v}" for k, v in (columns or {}).items())
+    report_json, series = _core.fit(text, source, os.fspath(data), names, spec, loading)
+    report = json.loads(report_json)
+    report["series"] = dict(series)
+    return report
 
 
 def sweep(scene: Scene, params: Union[Mapping[str, Any], Sequence[str]],

@@ -7,6 +7,9 @@ DENSE_NODES: int
 def run(text: str, source: str, threads: Optional[int] = None) -> tuple[str, list[tuple[str, Any]]]:
     """Runs a scene (JSON text): the report as JSON text and the time series' columns (name, numpy array)."""
 
+def fit(text: str, source: str, data: str, params: str, columns: str, loading: str) -> tuple[str, list[tuple[str, Any]]]:
+    """Fits a lab scene (JSON text) to the record in `data`: the report as JSON text and the columns t, x_lp, mu_data, mu_fit."""
+
 def sweep(text: str, source: str, axes: Sequence[tuple[str, Any]], threads: Optional[int] = None) -> str:
     """Runs a sweep of the scene over the axes and returns the rows as a JSON array."""
 

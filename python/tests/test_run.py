@@ -207,3 +207,20 @@ def test_the_version_is_the_workspace_version():
     with open(os.path.join(REPO, "Cargo.toml"), "rb") as f:
         version = tomllib.load(f)["workspace"]["package"]["version"]
     assert stickslip.__version__ == version
+
+
+def test_fit_equals_the_cli_report():
+    scene = scene_path("lab-basalt-b819")
+    data = os.path.join(REPO, "data", "lab", "velstep4_BRAVA_expb819_basalt.txt")
+    columns = {"t": "Time(s)", "x_lp": "Displ(microns)", "mu": "Friction"}
+    expected = json.loads(cli("fit", scene, "--data", data, "--params", "a,b_1,d_c_1,k,mu0,trend",
+                              "--columns", ",".join(f"{k}={v}" for k, v in columns.items()), "--json"))
+    got = stickslip.fit(scene, data, ["a", "b_1", "d_c_1", "k", "mu0", "trend"], columns=columns)
+    assert got["parameters"] == expected["parameters"]
+    assert got["correlation"] == expected["correlation"]
+    series = got["series"]
+    assert series["t"].shape == series["mu_fit"].shape == (5849,)
+    residual = series["mu_data"] - series["mu_fit"]
+    assert abs(np.sqrt(np.mean(residual ** 2)) - got["residual_rms"]) < 1e-12
+    with pytest.raises(ValueError, match="choose from"):
+        stickslip.fit(scene, data, "a,alpha", columns=columns)

@@ -17,6 +17,7 @@
 //! non-finite value, a value ≤ 0 on a log axis, x and y of different lengths, an empty panel
 //! or an axis without a unit is a [`FigureError`] naming the panel and the series.
 
+pub mod fit;
 pub mod lab;
 pub mod layout;
 pub mod panel;

@@ -108,6 +108,12 @@ impl Style {
         self.marker = Some(marker);
         self
     }
+
+    /// Replaces the marker size (diameter, px).
+    pub fn marker_size(mut self, px: f64) -> Self {
+        self.marker_size = px;
+        self
+    }
 }
 
 /// A named set of (x, y) points drawn in one style. Points are joined in order; a line breaks

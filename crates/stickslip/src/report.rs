@@ -17,6 +17,7 @@ use std::io::Write;
 use std::path::Path;
 
 pub mod lab;
+pub mod lab_fit;
 mod summary;
 
 /// Model parameters as used (dimensionless).

@@ -11,6 +11,7 @@ pub mod finite;
 pub mod fit;
 pub mod hopf;
 pub mod lab;
+pub mod lab_fit;
 pub mod lyapunov;
 pub mod noise;
 pub mod paper;

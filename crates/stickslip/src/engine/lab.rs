@@ -1,8 +1,14 @@
-//! Runs a lab scene: the lab analysis, its rows to a sink and into the report.
+//! Runs a lab scene: the lab analysis, its rows to a sink and into the report; or fits the
+//! scene's model to a friction record.
 
 use crate::analysis::lab::{self, LabRunError};
+use crate::analysis::lab_fit::{
+    self, ColumnNames, FitError, FitParameter, FitSettings, FrictionRecord,
+};
 use crate::analysis::time_series::SeriesSink;
+use crate::model::Loading;
 use crate::report::lab::{LabReport, LabSeries};
+use crate::report::lab_fit::FitReport;
 use crate::scene::lab::LabScene;
 use crate::sundials;
 
@@ -58,4 +64,79 @@ pub fn run(
         outcome,
         series: LabSeries { columns, rows },
     })
+}
+
+/// Where a fit takes the load-point history from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FitLoading {
+    /// The scene's `loading`.
+    Scene,
+    /// The record's load-point displacement column (chords between samples).
+    Data,
+}
+
+/// Fits `scene`'s lab model to `record` (`stickslip fit`): the scene gives the starting
+/// values, the tolerances and (with [`FitLoading::Scene`]) the loading; `data` names the record
+/// in the report.
+pub fn fit(
+    scene: &LabScene,
+    record: &FrictionRecord,
+    data: &str,
+    params: Vec<FitParameter>,
+    loading: FitLoading,
+) -> Result<FitReport, FitError> {
+    let history = match loading {
+        FitLoading::Scene => scene.loading.clone(),
+        FitLoading::Data => {
+            let x = record.x_lp.as_ref().ok_or_else(|| {
+                FitError::BadInput("--loading data needs the record's load-point displacement: name its column with --columns x_lp=NAME".into())
+            })?;
+            let samples: Vec<(f64, f64)> =
+                record.t.iter().copied().zip(x.iter().copied()).collect();
+            Loading::from_displacement(&samples)
+                .map_err(|e| FitError::BadInput(format!("the record's x_lp column: {e}")))?
+        }
+    };
+    let steady = scene.params.steady_state(history.segments[0].velocity);
+    if scene.initial.iter().zip(&steady).any(|(a, b)| (a - b).abs() > 1e-12 * (1.0 + b.abs())) {
+        return Err(FitError::BadInput(
+            "a fit starts at steady sliding at the first segment's velocity: give \"initial\": \"steady\" in the scene".into(),
+        ));
+    }
+    let settings = FitSettings { params, solver: scene.solver.clone(), patience: 100 };
+    let outcome = lab_fit::fit(&scene.params, &history, record, &settings)?;
+    Ok(FitReport {
+        stickslip_version: env!("CARGO_PKG_VERSION"),
+        sundials_version: sundials::version(),
+        scene: scene.name.clone(),
+        data: data.to_string(),
+        loading: match loading {
+            FitLoading::Scene => "scene",
+            FitLoading::Data => "data",
+        },
+        solver: scene.solver.clone(),
+        outcome,
+    })
+}
+
+/// [`fit`] from what a user types: `params` as `a,b_1,d_c_1,…`, `columns` as
+/// `t=NAME,mu=NAME,x_lp=NAME` (empty: the names t, mu, x_lp), the record read from `data`.
+/// Used by `stickslip fit` and Python's `stickslip.fit`.
+pub fn fit_file(
+    scene: &LabScene,
+    data: &std::path::Path,
+    params: &str,
+    columns: &str,
+    loading: FitLoading,
+) -> Result<FitReport, FitError> {
+    let n = scene.params.states.len();
+    let params = params
+        .split(',')
+        .map(|p| FitParameter::parse(p.trim(), n))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(FitError::BadInput)?;
+    let names = ColumnNames::parse(columns).map_err(FitError::BadInput)?;
+    let record = FrictionRecord::read(data, &names, loading == FitLoading::Data)
+        .map_err(|e| FitError::BadInput(format!("--data: {e}")))?;
+    fit(scene, &record, &data.display().to_string(), params, loading)
 }

@@ -17,7 +17,7 @@
 //! history: the run restarts at every jump). It is a pure function of (t, y, [`LabParams`],
 //! V_lp), with an analytic Jacobian.
 
-use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem};
+use crate::integrate::{ImexSystem, JacobianMatrix, OdeSystem, ParametricSystem};
 use serde::Serialize;
 
 /// An evolution law of one state variable.
@@ -360,6 +360,73 @@ impl ImexSystem for LabSystem<'_> {
 
     fn implicit_jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
         self.jacobian(t, y, jac)
+    }
+}
+
+/// The lab model at a constant load-point velocity with some of its parameters varied: an
+/// owned [`LabSystem`] that supplies ∂f/∂p for forward sensitivities (CVODES).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabParametric {
+    /// The parameters (those in `varied` are the sensitivity parameters).
+    pub params: LabParams,
+    /// The load-point velocity of the segment.
+    pub v_lp: f64,
+    /// The parameters varied, in the order of the sensitivities. μ0 has none (it enters μ
+    /// only): leave it out and add ∂μ/∂μ0 = 1 where μ is formed.
+    pub varied: Vec<LabParameter>,
+}
+
+impl LabParametric {
+    fn system(&self) -> LabSystem<'_> {
+        LabSystem { params: &self.params, v_lp: self.v_lp }
+    }
+}
+
+impl OdeSystem for LabParametric {
+    fn dim(&self) -> usize {
+        self.params.dim()
+    }
+
+    fn rhs(&self, t: f64, y: &[f64], dydt: &mut [f64]) {
+        self.system().rhs(t, y, dydt)
+    }
+
+    fn has_jacobian(&self) -> bool {
+        true
+    }
+
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut JacobianMatrix<'_>) {
+        self.system().jacobian(t, y, jac)
+    }
+
+    fn has_linear_invariants(&self) -> bool {
+        false
+    }
+}
+
+impl ParametricSystem for LabParametric {
+    fn n_params(&self) -> usize {
+        self.varied.len()
+    }
+
+    fn params(&self) -> Vec<f64> {
+        self.varied.iter().map(|p| self.params.get(*p)).collect()
+    }
+
+    fn set_params(&mut self, p: &[f64]) {
+        for (which, value) in self.varied.iter().zip(p) {
+            self.params.set(*which, *value);
+        }
+    }
+
+    fn param_jacobian(&self, _t: f64, y: &[f64], dfdp: &mut JacobianMatrix<'_>) {
+        let mut column = vec![0.0; self.dim()];
+        for (j, p) in self.varied.iter().enumerate() {
+            self.system().parameter_derivative(y, *p, &mut column);
+            for (i, value) in column.iter().enumerate() {
+                dfdp.set(i, j, *value);
+            }
+        }
     }
 }
 

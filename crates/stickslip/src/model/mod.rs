@@ -18,7 +18,7 @@ pub mod variational;
 pub use deep_stick::DeepStick;
 pub use drr::{Drr, DrrParams};
 pub use friction::Friction;
-pub use lab::{LabLaw, LabParams, LabState, LabSystem};
+pub use lab::{LabLaw, LabParameter, LabParametric, LabParams, LabState, LabSystem};
 pub use loading::{Loading, Segment};
 pub use saddle_node::{SaddleNode, SaddleNodeParams};
 pub use scales::{FrictionReference, PhysicalScales};

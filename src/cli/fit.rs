@@ -1,0 +1,88 @@
+//! `stickslip fit SCENE --data FILE --params a,b_1,d_c_1[,k,mu0,trend]`: the lab model fitted
+//! to a friction record.
+
+use super::Failure;
+use std::path::PathBuf;
+use stickslip::analysis::lab_fit::FitError;
+use stickslip::engine::lab::{self, FitLoading};
+use stickslip::report;
+use stickslip::scene::{self, AnyScene};
+
+/// `stickslip fit`'s arguments.
+#[derive(clap::Args)]
+pub struct FitArgs {
+    /// A lab scene (`"model": {"kind": "lab"}`): the starting values, the tolerances and the
+    /// load-point history, in the record's time origin.
+    pub scene: PathBuf,
+    /// The friction record: a header line of column names, then rows (tab, comma or blank
+    /// separated).
+    #[arg(long, value_name = "FILE")]
+    pub data: PathBuf,
+    /// The parameters to fit, comma-separated: a, b_1 … b_n, d_c_1 … d_c_n, k, mu0, trend.
+    #[arg(long, value_name = "LIST")]
+    pub params: String,
+    /// The record's columns by header name, e.g. t=Time(s),x_lp=Displ(microns),mu=Friction
+    /// (default names t, mu, x_lp).
+    #[arg(long, value_name = "KEY=NAME,...", default_value = "")]
+    pub columns: String,
+    /// Where the load-point history comes from: the scene's "loading", or the record's x_lp
+    /// column (the chords between samples).
+    #[arg(long, value_enum, default_value_t = LoadingSource::Scene)]
+    pub loading: LoadingSource,
+    /// Print the JSON report instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the JSON report to FILE (atomically).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Draw the record, the fit and the residuals to FILE (SVG).
+    #[arg(long, value_name = "FILE.svg")]
+    pub figure: Option<PathBuf>,
+}
+
+/// The `--loading` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LoadingSource {
+    /// The scene's loading.
+    Scene,
+    /// The record's load-point displacement.
+    Data,
+}
+
+/// Runs `stickslip fit`.
+pub fn command(args: FitArgs) -> Result<(), Failure> {
+    let bad = |m: String| Failure(2, m);
+    let source = args.scene.display().to_string();
+    let text = std::fs::read_to_string(&args.scene)
+        .map_err(|e| bad(format!("cannot read scene {source}: {e}")))?;
+    let AnyScene::Lab(scene) = scene::parse_any(&text, &source).map_err(|e| bad(e.to_string()))?
+    else {
+        return Err(bad(format!("scene {source}: fit takes a lab scene (\"model\": {{\"kind\": \"lab\", ...}}, docs/lab.md)")));
+    };
+    let loading = match args.loading {
+        LoadingSource::Scene => FitLoading::Scene,
+        LoadingSource::Data => FitLoading::Data,
+    };
+    let report = lab::fit_file(&scene, &args.data, &args.params, &args.columns, loading).map_err(
+        |e| match e {
+            FitError::BadInput(m) => bad(m),
+            other => Failure(1, format!("fit of scene {}: {other}", scene.name)),
+        },
+    )?;
+    if let Some(file) = &args.figure {
+        crate::figure::fit::data_fit_and_residuals(&scene.name, &report.outcome)
+            .write(file)
+            .map_err(|e| Failure(1, format!("--figure: {e}")))?;
+    }
+    let json = report.to_json();
+    if let Some(file) = &args.out {
+        report::write_atomic(file, &json)
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{}", report.summary());
+    }
+    Ok(())
+}
