@@ -169,6 +169,59 @@ fn synthetic_fits_recover_the_parameters_within_three_standard_errors() {
     }
 }
 
+/// The load-point history taken from the record's displacement (`--loading data`) gives the
+/// fit that the scene's loading gives when the displacement is exact.
+#[test]
+fn loading_from_the_records_displacement() {
+    let truth = params(vec![state(LabLaw::Ageing, 0.015, 5.0)]);
+    let mut record = synthetic(&truth, 1e-4, 11);
+    let loading = step_loading();
+    let starts = loading.start_displacements();
+    record.x_lp = Some(
+        record
+            .t
+            .iter()
+            .map(|&t| {
+                let j = loading.segments.iter().rposition(|s| s.t_start <= t).unwrap();
+                starts[j] + loading.segments[j].velocity * (t - loading.segments[j].t_start)
+            })
+            .collect(),
+    );
+    let scene_text = serde_json::json!({
+        "name": "from-data",
+        "model": {"kind": "lab", "mu0": 0.6, "a": 0.012, "v0": 1.0, "k": 3e-3,
+                  "states": [{"law": "ageing", "b": 0.014, "d_c": 8.0}]},
+        "loading": {"segments": [{"t_start": 0.0, "velocity": 1.0}, {"t_start": 10.0, "velocity": 10.0},
+                                 {"t_start": 40.0, "velocity": 3.0}], "t_end": 80.0},
+        "solver": {"method": "cvode-bdf", "rtol": 1e-12}
+    })
+    .to_string();
+    let stickslip::scene::AnyScene::Lab(scene) =
+        stickslip::scene::parse_any(&scene_text, "from-data").unwrap()
+    else {
+        panic!("a lab scene")
+    };
+    let params: Vec<FitParameter> =
+        ["a", "b_1", "d_c_1"].iter().map(|n| FitParameter::parse(n, 1).unwrap()).collect();
+    let fit = |loading| {
+        stickslip::engine::lab::fit(&scene, &record, "synthetic", params.clone(), loading).unwrap()
+    };
+    let (from_scene, from_data) = (
+        fit(stickslip::engine::lab::FitLoading::Scene),
+        fit(stickslip::engine::lab::FitLoading::Data),
+    );
+    assert_eq!(from_data.loading, "data");
+    for (a, b) in from_scene.outcome.parameters.iter().zip(&from_data.outcome.parameters) {
+        assert!(
+            (a.value - b.value).abs() < 1e-3 * a.standard_error,
+            "{}: {} vs {}",
+            a.name,
+            a.value,
+            b.value
+        );
+    }
+}
+
 #[test]
 fn autocorrelated_residuals_are_warned_about() {
     // Fit the ageing law to a record made by the slip law: the misfit is systematic.
