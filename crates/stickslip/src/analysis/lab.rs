@@ -456,7 +456,9 @@ fn blow_up(params: &LabParams, v_lp: f64, t: f64, y: &[f64], solver: &LabSolver)
     z[0] = t;
     let system = InLnV { system: LabSystem { params, v_lp } };
     let options = Options::new(solver.rtol, Tolerance::Scalar(solver.atol));
-    let method = if solver.method == Method::ArkodeImex { Method::Radau5 } else { solver.method };
+    // InLnV has no explicit/implicit split: a method that needs one runs radau5 here.
+    let method =
+        if solver.method.capabilities().needs_imex { Method::Radau5 } else { solver.method };
     let mut integ = solver::build_default(method, system, w0, &z, &options).ok()?;
     integ.set_stop_time(w0 + BLOW_UP_SPAN).ok()?;
     let step = integ.advance(w0 + BLOW_UP_SPAN, Task::Normal).ok()?;
