@@ -99,3 +99,30 @@ fn cvode_bdf_matches_the_reference() {
 fn radau5_matches_the_reference() {
     check("radau5", 1e-12, true);
 }
+
+/// As the inertia M → 0 the inertial model becomes the quasi-static one: the difference in μ
+/// falls in proportion to M (the ageing-law step of the reference).
+#[test]
+fn vanishing_inertia_gives_the_quasi_static_model() {
+    let doc: Value = serde_json::from_str(REFERENCE).unwrap();
+    let case = &doc["cases"]["step_up_ageing"];
+    let run = |mass: Option<f64>| {
+        let mut s = scene("inertia-limit", case, "radau5", 1e-12);
+        if let Some(m) = mass {
+            s["model"]["mass"] = json!(m);
+        }
+        let scene = parse(&s.to_string(), "inertia-limit").unwrap();
+        engine::lab::run(&scene, json!(null), &mut DiscardSink).unwrap().series.rows
+    };
+    let quasi_static = run(None);
+    let gap = |m: f64| {
+        run(Some(m))
+            .iter()
+            .zip(&quasi_static)
+            .map(|(a, b)| (a[3] - b[3]).abs())
+            .fold(0.0f64, f64::max)
+    };
+    let (g1, g2) = (gap(1e-6), gap(1e-7));
+    eprintln!("max |mu(M) - mu(0)|: M = 1e-6: {g1:.2e}, M = 1e-7: {g2:.2e}");
+    assert!(g1 < 1e-4 && (g1 / g2 - 10.0).abs() < 1.0, "{g1:e} {g2:e}");
+}

@@ -41,7 +41,14 @@ fn cases() -> Vec<Case> {
                 .collect();
             Case {
                 name: c["class"].as_str().unwrap().into(),
-                params: LabParams { mu0: f("mu0"), a: f("a"), v0: f("vref"), k: f("k"), states },
+                params: LabParams {
+                    mu0: f("mu0"),
+                    a: f("a"),
+                    v0: f("vref"),
+                    k: f("k"),
+                    states,
+                    mass: None,
+                },
                 columns: c["columns"].as_object().unwrap().clone(),
             }
         })

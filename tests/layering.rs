@@ -58,7 +58,7 @@ const CRATES: &[(&str, Table)] = &[
             ("robertson_examples", &[]),
             ("stress", &[]),
             ("reproduce", &["figure"]),
-            ("cli", &["figure", "reproduce"]),
+            ("cli", &["figure", "reproduce", "robertson_examples", "stress"]),
         ],
     ),
 ];

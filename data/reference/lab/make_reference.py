@@ -118,6 +118,36 @@ def run(case, method):
     return res
 
 
+def run_inertial(case, method):
+    """With inertia M: state (tau, V, theta) in linear variables (tau = k (x_lp - delta), the
+    spring's load), M dV/dt = tau - mu(V, theta), dtau/dt = k (V_lp - V); rows (t, tau, V, theta)."""
+    p, segs, t_end, times = case["params"], case["segments"], case["t_end"], case["times"]
+    st = p["states"][0]
+    M, k, a, b, dc = p["mass"], p["k"], p["a"], st["b"], st["d_c"]
+    mu = lambda V, th: p["mu0"] + a * math.log(V / p["v0"]) + b * math.log(p["v0"] * th / dc)
+    v1 = segs[0]["velocity"]
+    z = np.array([mu(v1, dc / v1), v1, dc / v1])
+    rows = {}
+    for j, sg in enumerate(segs):
+        t0 = sg["t_start"]
+        t1 = segs[j + 1]["t_start"] if j + 1 < len(segs) else t_end
+        vlp = sg["velocity"]
+        def f(t, y):
+            tau, V, th = y
+            if st["law"] == "ageing":
+                d = 1 - V * th / dc
+            else:
+                d = -(V * th / dc) * math.log(V * th / dc)
+            return [k * (vlp - V), (tau - mu(V, th)) / M, d]
+        sol = solve_ivp(f, (t0, t1), z, method=method, rtol=RTOL, atol=[1e-15, 1e-14 * v1, 1e-14 * dc / v1], dense_output=True)
+        assert sol.status >= 0, sol.message
+        for t in times:
+            if t0 <= t <= t1:
+                rows[t] = sol.sol(t)
+        z = sol.y[:, -1]
+    return {"rows": [[t, float(rows[t][0]), float(rows[t][1]), float(rows[t][2])] for t in times]}
+
+
 def blow_up(p, vlp, t_e, z_e):
     """Time of V -> infinity: integrate (t, mu, ln theta) in the slip delta."""
     f = rhs_factory(p, vlp)
@@ -171,6 +201,9 @@ CASES = {
     # (t = 133.76 s): a slide-hold-slide needs a stiffer machine under the slip law.
     "shs_slip": shs("slip", 1e-2),
     "prz_step": {"params": P(0.011, 3e-3, [S("prz", 0.01, 5.0)]), "segments": seg((0, 1), (10, 10)), "t_end": 60, "times": list(range(0, 61, 2))},
+    # Inertia M (friction s^2/um): the inertial period 2 pi sqrt(M/k) is 2 s against D_c/V = 1 s.
+    "inertia_step_ageing": {"params": dict(P(0.005, 1e-3, ag()), mass=1e-3 / (math.pi ** 2)), "segments": seg((0, 1), (10, 10)), "t_end": 40, "times": list(range(0, 41, 1))},
+    "inertia_step_slip": {"params": dict(P(0.005, 1e-3, [S("slip", 0.01, 10.0)]), mass=1e-4), "segments": seg((0, 1), (10, 10)), "t_end": 40, "times": list(range(0, 41, 1))},
     "nagata_step": {"params": P(0.027, 0.01, [S("nagata", 0.029, 3.33, c=2.0)]), "segments": seg((0, 1), (10, 10)), "t_end": 40, "times": list(range(0, 41, 1))},
 }
 
@@ -191,10 +224,11 @@ for name, case in CASES.items():
         continue
     # The first two of these methods that finish: the first is the reference, the second its check.
     done = []
+    runner = run_inertial if "mass" in case["params"] else run
     for method in ["Radau", "LSODA" if name.startswith(("stiff", "shs", "blow")) else "DOP853", "LSODA", "DOP853"]:
         if len(done) < 2 and method not in [m for m, _ in done]:
             try:
-                done.append((method, run(case, method)))
+                done.append((method, runner(case, method)))
             except (AssertionError, ValueError) as e:
                 print(name, method, "failed:", e, file=sys.stderr)
     (m_ref, ref), (m_other, other) = done

@@ -190,7 +190,7 @@ pub fn run(
     if let Output::Times(times) = output {
         check_times(times, loading)?;
     }
-    let mu_init = params.friction(y0);
+    let mu_init = params.measured_friction(y0);
     let x_starts = loading.start_displacements();
     let v_fast = loading.segments.iter().map(|s| s.velocity).fold(y0[LN_V].exp(), f64::max);
     let w_blow = (v_fast * BLOW_UP_FACTOR).ln();
@@ -218,7 +218,7 @@ pub fn run(
         let fail =
             |source| LabRunError::Solver { segment: j, v_lp: seg.velocity, t_start: t0, source };
         let emit = |t: f64, y: &[f64], buf: &mut Vec<f64>, row: &mut dyn FnMut(&[f64])| {
-            let mu = params.friction(y);
+            let mu = params.measured_friction(y);
             let x_lp = x_starts[j] + seg.velocity * (t - t0);
             buf[0] = t;
             buf[1] = x_lp;
@@ -244,7 +244,7 @@ pub fn run(
             .integrator;
         let after_hold = j > 0 && loading.segments[j - 1].velocity == 0.0 && seg.velocity > 0.0;
         let mut peak_found = !after_hold;
-        let mut f = vec![0.0; 1 + n];
+        let mut f = vec![0.0; params.dim()];
         system.rhs(0.0, &y, &mut f);
         let (mut t_prev, mut dw_prev, mut w_prev) = (0.0, f[LN_V], y[LN_V]);
         loop {
@@ -279,7 +279,7 @@ pub fn run(
                     out.v_maxima.push(VelocityMaximum {
                         t: t0 + tm,
                         v: ym[LN_V].exp(),
-                        mu: params.friction(&ym),
+                        mu: params.measured_friction(&ym),
                     });
                     w_low = ym[LN_V];
                 }
@@ -291,7 +291,7 @@ pub fn run(
                 let tp = bisect_state(&mut *integ, t_prev, t, |y| y[LN_V] - lv).map_err(fail)?;
                 let yp = integ.dense(tp, 0).map_err(fail)?.to_vec();
                 let hold = out.holds.last_mut().expect("a hold precedes a reload");
-                let mu_peak = params.friction(&yp);
+                let mu_peak = params.measured_friction(&yp);
                 hold.t_peak = Some(t0 + tp);
                 hold.mu_peak = Some(mu_peak);
                 hold.delta_mu_peak = Some(mu_peak - hold.mu_pre_hold);
@@ -316,7 +316,7 @@ pub fn run(
         let stats = integ.stats();
         out.steps += stats.steps as u64;
         out.rhs_evaluations += stats.rhs_evals as u64;
-        let mu_end = params.friction(&y);
+        let mu_end = params.measured_friction(&y);
         if seg.velocity == 0.0 {
             let mu_pre_hold = segment_end_mu.last().copied().unwrap_or(mu_init);
             out.holds.push(Hold {
@@ -456,7 +456,9 @@ fn blow_up(params: &LabParams, v_lp: f64, t: f64, y: &[f64], solver: &LabSolver)
     z[0] = t;
     let system = InLnV { system: LabSystem { params, v_lp } };
     let options = Options::new(solver.rtol, Tolerance::Scalar(solver.atol));
-    let method = if solver.method == Method::ArkodeImex { Method::Radau5 } else { solver.method };
+    // InLnV has no explicit/implicit split: a method that needs one runs radau5 here.
+    let method =
+        if solver.method.capabilities().needs_imex { Method::Radau5 } else { solver.method };
     let mut integ = solver::build_default(method, system, w0, &z, &options).ok()?;
     integ.set_stop_time(w0 + BLOW_UP_SPAN).ok()?;
     let step = integ.advance(w0 + BLOW_UP_SPAN, Task::Normal).ok()?;

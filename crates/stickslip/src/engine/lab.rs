@@ -93,8 +93,9 @@ pub fn fit(
             })?;
             let samples: Vec<(f64, f64)> =
                 record.t.iter().copied().zip(x.iter().copied()).collect();
-            Loading::from_displacement(&samples)
-                .map_err(|e| FitError::BadInput(format!("the record's x_lp column: {e}")))?
+            Loading::from_displacement(&samples).map_err(|e| {
+                FitError::BadInput(format!("the record's x_lp column: {e}; a measured displacement is noisy: give the scene a loading with the record's velocities (e.g. from a line fitted to each part, as data/scenes/lab-basalt-b819.json does) and use --loading scene"))
+            })?
         }
     };
     let steady = scene.params.steady_state(history.segments[0].velocity);

@@ -13,6 +13,12 @@
 //!
 //!   d ln V/dt = (k (V_lp − V) − Σ_i b_i g_i) / a.
 //!
+//! With inertia ([`LabParams::mass`] M = m/(σA), friction·s²/µm) the slider obeys
+//! M dV/dt = τ − μ(V, θ), where τ = k (x_lp − δ) is the spring's load in friction units (what
+//! the machine's load cell measures), and the state gains τ last: y = (ln V, ln θ_i…, τ) with
+//!
+//!   d ln V/dt = (τ − μ)/(M V),   dτ/dt = k (V_lp − V).
+//!
 //! [`LabSystem`] is the right-hand side at a fixed V_lp (one segment of the load-point
 //! history: the run restarts at every jump). It is a pure function of (t, y, [`LabParams`],
 //! V_lp), with an analytic Jacobian.
@@ -143,18 +149,36 @@ pub struct LabParams {
     pub k: f64,
     /// The state variables.
     pub states: Vec<LabState>,
+    /// The slider's inertia M = m/(σA) (friction·s²/µm): None for the quasi-static model
+    /// (dμ/dt = k (V_lp − V)), as in rsfmodel.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
 }
 
 /// Index of ln V in the state.
 pub const LN_V: usize = 0;
 
 impl LabParams {
-    /// Dimension of the state (ln V, ln θ_1, …, ln θ_n).
+    /// Dimension of the state (ln V, ln θ_1, …, ln θ_n, and τ with inertia).
     pub fn dim(&self) -> usize {
-        1 + self.states.len()
+        1 + self.states.len() + usize::from(self.mass.is_some())
     }
 
-    /// μ at the state y = (ln V, ln θ_i…).
+    /// Index of the spring's load τ in the state (with inertia only).
+    pub fn tau_index(&self) -> Option<usize> {
+        self.mass.map(|_| 1 + self.states.len())
+    }
+
+    /// The friction the machine measures at y: the spring's load τ with inertia, μ(V, θ)
+    /// without (the two are equal in the quasi-static model).
+    pub fn measured_friction(&self, y: &[f64]) -> f64 {
+        match self.tau_index() {
+            Some(i) => y[i],
+            None => self.friction(y),
+        }
+    }
+
+    /// μ(V, θ) at the state y = (ln V, ln θ_i…): the interface's friction.
     pub fn friction(&self, y: &[f64]) -> f64 {
         let mut mu = self.mu0 + self.a * (y[LN_V] - self.v0.ln());
         for (s, psi) in self.states.iter().zip(&y[1..]) {
@@ -163,16 +187,26 @@ impl LabParams {
         mu
     }
 
-    /// The state at steady sliding at V: (ln V, ln θ_ss,i(V)…).
+    /// The state at steady sliding at V: (ln V, ln θ_ss,i(V)…, and τ = μ_ss with inertia).
     pub fn steady_state(&self, v: f64) -> Vec<f64> {
-        std::iter::once(v.ln()).chain(self.states.iter().map(|s| s.steady_theta(v).ln())).collect()
+        let mut y: Vec<f64> = std::iter::once(v.ln())
+            .chain(self.states.iter().map(|s| s.steady_theta(v).ln()))
+            .collect();
+        if self.mass.is_some() {
+            y.push(self.friction(&y));
+        }
+        y
     }
 
-    /// The state with friction `mu` and state variables `theta`: ln V solved from μ.
+    /// The state with friction `mu` and state variables `theta`: ln V solved from μ (with
+    /// inertia the spring's load τ = μ too: the slider starts in force balance).
     pub fn state_from(&self, mu: f64, theta: &[f64]) -> Vec<f64> {
         let mut y: Vec<f64> = std::iter::once(0.0).chain(theta.iter().map(|t| t.ln())).collect();
         let mu_at_v1 = self.friction(&y);
         y[LN_V] = (mu - mu_at_v1) / self.a;
+        if self.mass.is_some() {
+            y.push(mu);
+        }
         y
     }
 
@@ -223,11 +257,21 @@ impl LabParams {
     }
 
     /// ∂y_ss/∂p of the steady state at V ([`LabParams::steady_state`]): ln V does not depend
-    /// on the parameters; ln θ_ss,i = ln D_c,i − ln V (+ ln 2 for PRZ).
-    pub fn steady_state_parameter_derivative(&self, p: LabParameter, out: &mut [f64]) {
+    /// on the parameters; ln θ_ss,i = ln D_c,i − ln V (+ ln 2 for PRZ); with inertia
+    /// τ_ss = μ0 + (a − Σ b_i) ln(V/V0).
+    pub fn steady_state_parameter_derivative(&self, v: f64, p: LabParameter, out: &mut [f64]) {
         out.fill(0.0);
         if let LabParameter::LnDc(i) = p {
             out[1 + i] = 1.0;
+        }
+        if let Some(it) = self.tau_index() {
+            let l = (v / self.v0).ln();
+            out[it] = match p {
+                LabParameter::A => l,
+                LabParameter::B(_) => -l,
+                LabParameter::Mu0 => 1.0,
+                LabParameter::LnDc(_) | LabParameter::K => 0.0,
+            };
         }
     }
 
@@ -284,6 +328,12 @@ impl LabSystem<'_> {
             out[1 + i] = dg;
             numerator -= s.b * dg;
         }
+        if let (Some(m), Some(it)) = (params.mass, params.tau_index()) {
+            // d ln V/dt = (τ − μ)/(M V): only μ's explicit dependence enters; dτ/dt = k (V_lp − V).
+            out[LN_V] = -params.friction_parameter_derivative(y, p) / (m * w.exp());
+            out[it] = if p == LabParameter::K { dmu_dk } else { 0.0 };
+            return;
+        }
         match p {
             LabParameter::A => {
                 let mut f = vec![0.0; params.dim()];
@@ -317,7 +367,13 @@ impl OdeSystem for LabSystem<'_> {
             dydt[1 + i] = g;
             state_part += s.b * g;
         }
-        dydt[LN_V] = (dmu - state_part) / p.a;
+        match (p.mass, p.tau_index()) {
+            (Some(m), Some(it)) => {
+                dydt[LN_V] = (y[it] - p.friction(y)) / (m * w.exp());
+                dydt[it] = dmu;
+            }
+            _ => dydt[LN_V] = (dmu - state_part) / p.a,
+        }
     }
 
     fn has_jacobian(&self) -> bool {
@@ -328,6 +384,20 @@ impl OdeSystem for LabSystem<'_> {
         let p = self.params;
         let w = y[LN_V];
         let dmu = self.friction_rate(w);
+        if let (Some(m), Some(it)) = (p.mass, p.tau_index()) {
+            let inv = 1.0 / (m * w.exp());
+            let f = (y[it] - p.friction(y)) * inv;
+            for (i, s) in p.states.iter().enumerate() {
+                let (_, g_w, g_psi) = s.rate(w, y[1 + i], dmu, p.k);
+                jac.set(1 + i, LN_V, g_w);
+                jac.set(1 + i, 1 + i, g_psi);
+                jac.set(LN_V, 1 + i, -s.b * inv);
+            }
+            jac.set(LN_V, LN_V, -p.a * inv - f);
+            jac.set(LN_V, it, inv);
+            jac.set(it, LN_V, -p.k * w.exp());
+            return;
+        }
         let mut d_w = -p.k * w.exp();
         for (i, s) in p.states.iter().enumerate() {
             let (_, g_w, g_psi) = s.rate(w, y[1 + i], dmu, p.k);
@@ -371,8 +441,8 @@ pub struct LabParametric {
     pub params: LabParams,
     /// The load-point velocity of the segment.
     pub v_lp: f64,
-    /// The parameters varied, in the order of the sensitivities. μ0 has none (it enters μ
-    /// only): leave it out and add ∂μ/∂μ0 = 1 where μ is formed.
+    /// The parameters varied, in the order of the sensitivities. In the quasi-static model μ0
+    /// has none (it enters μ only): leave it out and add ∂μ/∂μ0 = 1 where μ is formed.
     pub varied: Vec<LabParameter>,
 }
 
@@ -435,9 +505,26 @@ mod tests {
     use super::*;
     use crate::integrate::jacobian_against_differences;
 
+    /// The quasi-static model and the same with inertia.
+    fn both() -> [LabParams; 2] {
+        let p = params();
+        let inertial = LabParams { mass: Some(2e-3), ..p.clone() };
+        [p, inertial]
+    }
+
+    /// A state of `p`'s dimension (τ last with inertia).
+    fn state(p: &LabParams, y: [f64; 5]) -> Vec<f64> {
+        let mut y = y.to_vec();
+        if p.mass.is_some() {
+            y.push(0.57);
+        }
+        y
+    }
+
     fn params() -> LabParams {
         let st = |law, b, d_c| LabState { law, b, d_c };
         LabParams {
+            mass: None,
             mu0: 0.6,
             a: 0.011,
             v0: 1.0,
@@ -453,21 +540,33 @@ mod tests {
 
     #[test]
     fn jacobian_matches_central_differences() {
-        let p = params();
-        let m = LabSystem { params: &p, v_lp: 3.0 };
-        for y in
-            [[0.3, 1.2, 2.0, 0.7, 1.9], [-4.0, 6.0, 1.0, 3.0, -0.5], [2.5, -2.0, 0.1, 0.2, 0.3]]
-        {
-            for (row, col, exact, fd) in jacobian_against_differences(&m, &y, |_| 1e-6) {
-                assert!((fd - exact).abs() < 1e-6 * (1.0 + fd.abs()), "({row},{col})");
+        for p in both() {
+            let m = LabSystem { params: &p, v_lp: 3.0 };
+            for y in
+                [[0.3, 1.2, 2.0, 0.7, 1.9], [-4.0, 6.0, 1.0, 3.0, -0.5], [2.5, -2.0, 0.1, 0.2, 0.3]]
+            {
+                let y = state(&p, y);
+                for (row, col, exact, fd) in jacobian_against_differences(&m, &y, |_| 1e-6) {
+                    assert!(
+                        (fd - exact).abs() < 1e-6 * (1.0 + fd.abs()),
+                        "({row},{col}) {:?}",
+                        p.mass
+                    );
+                }
             }
         }
     }
 
     #[test]
     fn parameter_derivatives_match_central_differences() {
-        let p = params();
-        let y = [0.3, 1.2, 2.0, 0.7, 1.9];
+        for p in both() {
+            parameter_derivatives_of(&p);
+        }
+    }
+
+    fn parameter_derivatives_of(p: &LabParams) {
+        let p = p.clone();
+        let y = state(&p, [0.3, 1.2, 2.0, 0.7, 1.9]);
         let rhs = |q: &LabParams| {
             let mut f = vec![0.0; q.dim()];
             LabSystem { params: q, v_lp: 3.0 }.rhs(0.0, &y, &mut f);
@@ -492,20 +591,39 @@ mod tests {
             let mu_diff = (up.friction(&y) - down.friction(&y)) / (2.0 * h);
             let mu_exact = p.friction_parameter_derivative(&y, par);
             assert!((mu_diff - mu_exact).abs() < 1e-8 * (1.0 + mu_diff.abs()), "{par:?}: mu");
+            let v = 3.0;
+            let ss_diff: Vec<f64> = up
+                .steady_state(v)
+                .iter()
+                .zip(down.steady_state(v))
+                .map(|(u, d)| (u - d) / (2.0 * h))
+                .collect();
+            let mut ss_exact = vec![0.0; p.dim()];
+            p.steady_state_parameter_derivative(v, par, &mut ss_exact);
+            for (a, b) in ss_diff.iter().zip(&ss_exact) {
+                assert!((a - b).abs() < 1e-8 * (1.0 + a.abs()), "{par:?}: steady state");
+            }
         }
     }
 
     #[test]
     fn steady_state_is_a_fixed_point_with_steady_friction() {
-        let p = params();
+        for p in both() {
+            steady_state_of(&p);
+        }
+    }
+
+    fn steady_state_of(p: &LabParams) {
         let v = 7.0;
         let y = p.steady_state(v);
         let mut f = vec![0.0; p.dim()];
-        LabSystem { params: &p, v_lp: v }.rhs(0.0, &y, &mut f);
+        LabSystem { params: p, v_lp: v }.rhs(0.0, &y, &mut f);
         assert!(f.iter().all(|x| x.abs() < 1e-15), "{f:?}");
         let mu = p.friction(&y);
         assert!((mu - (0.6 + p.a_minus_b() * v.ln())).abs() < 1e-15);
-        let back = p.state_from(mu, &y[1..].iter().map(|l| l.exp()).collect::<Vec<_>>());
+        assert_eq!(p.measured_friction(&y), mu);
+        let theta: Vec<f64> = y[1..=p.states.len()].iter().map(|l| l.exp()).collect();
+        let back = p.state_from(mu, &theta);
         assert!((back[LN_V] - v.ln()).abs() < 1e-12);
     }
 }

@@ -54,6 +54,8 @@ struct RawModel {
     v0: Option<f64>,
     k: f64,
     states: Vec<RawState>,
+    #[serde(default)]
+    mass: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -264,7 +266,16 @@ fn params(
         }
         states.push(LabState { law, b, d_c });
     }
-    Ok(LabParams { mu0, a, v0, k, states })
+    let mass = match m.mass {
+        None => None,
+        Some(mass) => Some(positive(
+            "model.mass",
+            mass,
+            "the slider's inertia m/(σA) in friction·s²/µm (leave it out for the quasi-static model)",
+            err,
+        )?),
+    };
+    Ok(LabParams { mu0, a, v0, k, states, mass })
 }
 
 fn loading(

@@ -18,7 +18,7 @@ pub struct FrictionSensitivities {
     pub steps: u64,
 }
 
-/// Integrates the lab model from steady sliding at the first segment's velocity through
+/// Integrates the lab model (quasi-static or with inertia) from steady sliding at the first segment's velocity through
 /// `loading` with the sensitivities to `varied` (any of a, b_i, ln D_c,i, k, μ0), and returns
 /// μ and ∂μ/∂p at `times` (non-decreasing, inside the loading). At least one varied parameter
 /// other than μ0 is required (μ0 alone has no sensitivity equation). Every segment is integrated
@@ -32,14 +32,17 @@ pub fn friction_sensitivities(
 ) -> Result<FrictionSensitivities, (usize, SolverError)> {
     let n = params.dim();
     let m = varied.len();
-    // μ0 has no sensitivity equation: ∂μ/∂μ0 = 1 is added where μ is formed.
+    // Quasi-static, μ0 has no sensitivity equation: ∂μ/∂μ0 = 1 is added where μ is formed.
+    // With inertia the measured friction is the state τ and μ0 moves the slider.
+    let inertial = params.mass.is_some();
     let dynamic: Vec<LabParameter> =
-        varied.iter().copied().filter(|p| *p != LabParameter::Mu0).collect();
+        varied.iter().copied().filter(|p| inertial || *p != LabParameter::Mu0).collect();
     let md = dynamic.len();
-    let mut y = params.steady_state(loading.segments[0].velocity);
+    let v_first = loading.segments[0].velocity;
+    let mut y = params.steady_state(v_first);
     let mut s = vec![0.0; n * md];
     for (j, p) in dynamic.iter().enumerate() {
-        params.steady_state_parameter_derivative(*p, &mut s[j * n..(j + 1) * n]);
+        params.steady_state_parameter_derivative(v_first, *p, &mut s[j * n..(j + 1) * n]);
     }
     let mut out = FrictionSensitivities {
         mu: Vec::with_capacity(times.len()),
@@ -47,7 +50,11 @@ pub fn friction_sensitivities(
         steps: 0,
     };
     let record = |y: &[f64], s: &[f64], out: &mut FrictionSensitivities| {
-        out.mu.push(params.friction(y));
+        out.mu.push(params.measured_friction(y));
+        if let Some(it) = params.tau_index() {
+            out.dmu.extend((0..md).map(|j| s[j * n + it]));
+            return;
+        }
         let mut jd = 0;
         for p in varied {
             let mut d = params.friction_parameter_derivative(y, *p);
