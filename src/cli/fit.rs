@@ -5,7 +5,6 @@ use super::Failure;
 use std::path::PathBuf;
 use stickslip::analysis::lab_fit::FitError;
 use stickslip::engine::lab::{self, FitLoading};
-use stickslip::report;
 use stickslip::scene::{self, AnyScene};
 
 /// `stickslip fit`'s arguments.
@@ -74,15 +73,5 @@ pub fn command(args: FitArgs) -> Result<(), Failure> {
             .write(file)
             .map_err(|e| Failure(1, format!("--figure: {e}")))?;
     }
-    let json = report.to_json();
-    if let Some(file) = &args.out {
-        report::write_atomic(file, &json)
-            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
-    }
-    if args.json {
-        println!("{json}");
-    } else {
-        print!("{}", report.summary());
-    }
-    Ok(())
+    super::deliver_report(&report.to_json(), &report.summary(), args.json, args.out.as_deref())
 }

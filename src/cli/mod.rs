@@ -52,3 +52,26 @@ pub fn print_json(value: &impl serde::Serialize) {
 pub fn worker_threads(threads: Option<usize>) -> usize {
     threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
+
+/// Writes a command's JSON report to `out` (atomically) if given, then prints it (`json`) or
+/// the summary, naming the file written.
+pub fn deliver_report(
+    report_json: &str,
+    summary: &str,
+    json: bool,
+    out: Option<&std::path::Path>,
+) -> Result<(), Failure> {
+    if let Some(file) = out {
+        stickslip::report::write_atomic(file, report_json)
+            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
+    }
+    if json {
+        println!("{report_json}");
+    } else {
+        print!("{summary}");
+        if let Some(file) = out {
+            println!("report written to {}", file.display());
+        }
+    }
+    Ok(())
+}

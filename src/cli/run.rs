@@ -3,7 +3,7 @@
 
 use super::progress::Progress;
 use super::qdyn;
-use super::{failed, read_scene_text, worker_threads, Failure};
+use super::{deliver_report, failed, read_scene_text, worker_threads, Failure};
 use std::path::{Path, PathBuf};
 use stickslip::analysis::time_series::{SeriesSink, TeeSink};
 use stickslip::{engine, report, scene};
@@ -103,18 +103,7 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
     if ensembles {
         progress.finish();
     }
-    if let Some(file) = &out {
-        report::write_atomic(file, &report_json)
-            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
-    }
-    if json {
-        println!("{report_json}");
-    } else {
-        print!("{summary}");
-        if let Some(file) = &out {
-            println!("report written to {}", file.display());
-        }
-    }
+    deliver_report(&report_json, &summary, json, out.as_deref())?;
     match not_converged {
         Some(message) => Err(Failure(4, message)),
         None => Ok(()),
@@ -140,17 +129,7 @@ fn run_lab(
             .write(file)
             .map_err(|e| Failure(1, format!("--figure: {e}")))?;
     }
-    let report_json = report.to_json();
-    if let Some(file) = &out {
-        report::write_atomic(file, &report_json)
-            .map_err(|e| Failure(1, format!("cannot write {}: {e}", file.display())))?;
-    }
-    if json {
-        println!("{report_json}");
-    } else {
-        print!("{}", report.summary());
-    }
-    Ok(())
+    deliver_report(&report.to_json(), &report.summary(), json, out.as_deref())
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
