@@ -200,6 +200,8 @@ impl Method {
             absolute_ln_v: None,
             max_conv_fails: None,
             stop_when_u_freezes: false,
+            variational_newton_jacobian: false,
+            damping_rtol_floor: None,
         };
         // A fresh Jacobian at every step, see `engine`.
         let fresh = EngineSettings { jacobian_max_age: Some(1), ..plain };
@@ -237,6 +239,7 @@ impl Method {
                     dirk_newton: true,
                     absolute_ln_v: Some(1.0),
                     max_conv_fails: Some(20),
+                    damping_rtol_floor: Some(1e-8),
                     ..fresh
                 },
                 physical_region: true,
@@ -275,7 +278,11 @@ impl Method {
                 "Radau5",
                 3,
                 newton,
-                EngineSettings { absolute_ln_v: Some(0.1), ..fresh },
+                EngineSettings {
+                    absolute_ln_v: Some(0.1),
+                    variational_newton_jacobian: true,
+                    ..fresh
+                },
             ),
             Method::Rodas5p => Capabilities::own_stiff(
                 "Rodas5P",
@@ -409,6 +416,17 @@ pub struct EngineSettings {
     /// du/dt ≠ 0 (ARKStep IMEX deep on a stick, where the round-off of its explicit first stage
     /// holds its steps below u's spacing; see `engine`).
     pub stop_when_u_freezes: bool,
+    /// Uses the Jacobian of the variational equations only in its Newton iteration, so the
+    /// engine gives it the simplified one without the coupling block ∂(JΦ)/∂y (Radau5: its
+    /// Newton iteration failed with that block, entries ~1e29, in the ageing and PRZ laws'
+    /// sticks at γ = 1e8; Rodas5P and extrapolation need the exact one, and CVODE measured no
+    /// difference; see `engine` and src/model/variational.rs).
+    pub variational_newton_jacobian: bool,
+    /// With radiation damping, the rtol below which its default table falls to order 2 on
+    /// the quasi-static slip that damping creates (ARKStep's SDIRK-5-3-4 has stage order 1),
+    /// so that a cycle costs ~rtol^(-1/2) steps: the stress grid's known limit
+    /// (docs/robustness.md).
+    pub damping_rtol_floor: Option<f64>,
 }
 
 /// Validated solver settings of a scene.

@@ -18,7 +18,7 @@ use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{
     CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report, SolverSection,
 };
-use crate::scene::{Method, OtherModel, OtherScene, Scene, SolverSpec};
+use crate::scene::{OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -737,15 +737,14 @@ fn variational_integrator_with_tables(
     let mut atol = spec.atol.to_vec();
     atol.extend([spec.rtol; 9]);
     let z0 = Variational::<Drr, 3>::initial(y0);
-    // Radau5 uses the Jacobian only in its Newton iteration, which failed in the ageing and
-    // PRZ laws' sticks at γ = 1e8 with the coupling block ∂(JΦ)/∂y (entries ~1e29) and
-    // converges without it (src/model/variational.rs). The others keep the exact Jacobian:
-    // Rodas5P and extrapolation need it, and CVODE measured no difference.
-    let system: Variational<Drr, 3> = if spec.method == Method::Radau5 {
-        Variational::for_newton(drr)
-    } else {
-        Variational::new(drr)
-    };
+    // The method table says which methods take the simplified Jacobian (Radau5, whose Newton
+    // iteration failed with the coupling block; EngineSettings::variational_newton_jacobian).
+    let system: Variational<Drr, 3> =
+        if spec.method.capabilities().engine.variational_newton_jacobian {
+            Variational::for_newton(drr)
+        } else {
+            Variational::new(drr)
+        };
     integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 
