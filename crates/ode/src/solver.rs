@@ -153,6 +153,13 @@ pub enum MethodError {
         /// The method.
         method: Method,
     },
+    /// An implicit table for an IMEX method, without explicit_table, that has no explicit
+    /// partner of the same pair.
+    #[error("table: \"{table}\" has no explicit partner; use an ARK pair (e.g. ARK436L2SA_DIRK_6_3_4) or give explicit_table")]
+    NoExplicitPartner {
+        /// The implicit table's name.
+        table: String,
+    },
     /// tolerance_transform for a method other than radau5.
     #[error(
         "tolerance_transform applies to radau5 only, not {method}: leave it unset (None); \
@@ -162,6 +169,24 @@ pub enum MethodError {
         /// The method.
         method: Method,
     },
+}
+
+impl MethodError {
+    /// The settings field a table error is about ("table" or "explicit_table"), and the
+    /// message without it; None for the other errors.
+    pub fn setting(&self) -> Option<(&'static str, String)> {
+        let field = match self {
+            Self::UnknownImplicitTable { field, .. } | Self::UnknownExplicitTable { field, .. } => {
+                *field
+            }
+            Self::NoExplicitTable { .. } => "explicit_table",
+            Self::NoTable { .. } | Self::NoExplicitPartner { .. } => "table",
+            _ => return None,
+        };
+        let text = self.to_string();
+        let message = text.strip_prefix(&format!("{field}: ")).unwrap_or(&text).to_string();
+        Some((field, message))
+    }
 }
 
 impl Method {
@@ -708,6 +733,22 @@ struct Tables {
     explicit: Option<ErkTable>,
 }
 
+/// Checks the Butcher table names of `table` and `explicit_table` for `method`, as [`build`]
+/// does: the one check of table names, used by scenes too. The error names the setting
+/// ([`MethodError::setting`]).
+pub fn check_table_names(
+    method: Method,
+    table: Option<&str>,
+    explicit_table: Option<&str>,
+) -> Result<(), MethodError> {
+    let settings = MethodSettings {
+        table: table.map(str::to_string),
+        explicit_table: explicit_table.map(str::to_string),
+        ..MethodSettings::default()
+    };
+    check_tables(method, &settings).map(|_| ())
+}
+
 /// Resolves the table names of `settings` for `method`; an unknown name, or a table for a
 /// method that takes none, is an error naming the field (made an
 /// [`ErrorKind::InvalidInput`] by [`build`]).
@@ -734,9 +775,12 @@ fn check_tables(method: Method, settings: &MethodSettings) -> Result<Tables, Met
         Some(TableKind::Implicit) if accepts.explicit_table => {
             let implicit = table.map(|n| dirk("table", n)).transpose()?;
             let paired = table.and_then(|n| ErkTable::from_name(&n.replace("_DIRK_", "_ERK_")));
-            let explicit = match explicit_table {
-                Some(n) => Some(erk("explicit_table", n)?),
-                None => paired,
+            let explicit = match (explicit_table, table) {
+                (Some(n), _) => Some(erk("explicit_table", n)?),
+                (None, Some(n)) if paired.is_none() => {
+                    return Err(MethodError::NoExplicitPartner { table: n.into() })
+                }
+                (None, _) => paired,
             };
             Ok(Tables { implicit, explicit })
         }

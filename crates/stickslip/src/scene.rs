@@ -1201,41 +1201,11 @@ fn solver_spec(
     }
     let table = raw.and_then(|r| r.table.clone());
     let explicit_table = raw.and_then(|r| r.explicit_table.clone());
-    let check_table = |field: &str,
-                       name: &Option<String>,
-                       known: &mut dyn Iterator<Item = &'static str>| {
-        let list: Vec<&str> = known.collect();
-        match name {
-            Some(n) if !list.contains(&n.as_str()) => {
-                Err(err(field, format!("unknown table \"{n}\"; available: {}", list.join(", "))))
-            }
-            _ => Ok(()),
-        }
-    };
-    use crate::sundials::{DirkTable, ErkTable};
-    match method {
-        Method::ArkodeDirk | Method::ArkodeImex => {
-            check_table("solver.table", &table, &mut DirkTable::names())?
-        }
-        Method::ArkodeErk => check_table("solver.table", &table, &mut ErkTable::names())?,
-        _ if table.is_some() => {
-            return Err(err("solver.table", format!("{} takes no Butcher table", method.name())))
-        }
-        _ => {}
-    }
-    if explicit_table.is_some() && method != Method::ArkodeImex {
-        return Err(err(
-            "solver.explicit_table",
-            "only \"arkode-imex\" takes an explicit table".into(),
-        ));
-    }
-    check_table("solver.explicit_table", &explicit_table, &mut ErkTable::names())?;
-    if method == Method::ArkodeImex && explicit_table.is_none() {
-        if let Some(t) = &table {
-            if ErkTable::from_name(&t.replace("_DIRK_", "_ERK_")).is_none() {
-                return Err(err("solver.table", format!("\"{t}\" has no explicit partner; use an ARK pair (e.g. ARK436L2SA_DIRK_6_3_4) or give solver.explicit_table")));
-            }
-        }
+    if let Err(e) =
+        crate::solver::check_table_names(method, table.as_deref(), explicit_table.as_deref())
+    {
+        let (field, message) = e.setting().unwrap_or(("table", e.to_string()));
+        return Err(err(&format!("solver.{field}"), message));
     }
     if raw.and_then(|r| r.max_steps).is_some() {
         return Err(err(
