@@ -56,7 +56,7 @@ fn cases() -> Vec<Case> {
 }
 
 /// The tables' scenario: 1 µm/s, 10 µm/s from t = 10 s, rows at t = 0, 1, …, 40 s.
-fn run(params: &LabParams, method: Method, rtol: f64) -> Vec<Vec<f64>> {
+fn rsfmodel_scenario(params: &LabParams, method: Method, rtol: f64) -> Vec<Vec<f64>> {
     let seg = |t_start, velocity| Segment { t_start, velocity };
     let loading = Loading::new(vec![seg(0.0, 1.0), seg(10.0, 10.0)], 40.0).unwrap();
     let times: Vec<f64> = (0..=40).map(f64::from).collect();
@@ -85,7 +85,7 @@ fn ours(name: &str) -> usize {
 fn worst_error(method: Method, rtol: f64) -> f64 {
     let mut worst = 0.0f64;
     for case in cases() {
-        let rows = run(&case.params, method, rtol);
+        let rows = rsfmodel_scenario(&case.params, method, rtol);
         assert_eq!(rows.len(), 41, "{}", case.name);
         for (name, expected) in &case.columns {
             for (i, e) in expected.as_array().unwrap().iter().enumerate() {

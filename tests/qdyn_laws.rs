@@ -3,14 +3,12 @@
 //! agree on their own cycles, the scene fields are validated, and QDYN's own runs of the same
 //! spring-block agree (data/reference/qdyn_spring_block.json).
 
+mod common;
+
+use common::run_scene as run;
 use stickslip::analysis::cycle::CycleStatus;
 use stickslip::report::Report;
-use stickslip::{engine, scene};
-
-fn run(text: &str) -> Report {
-    let s = scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    engine::run(&s, serde_json::from_str(text).unwrap()).unwrap_or_else(|e| panic!("{e}"))
-}
+use stickslip::scene;
 
 /// A quasi-dynamic dimensionless spring-block (QDYN's crustal case: ξ = 0.25, ε = 0.5,
 /// η = 5e-8) with the given friction, state law, method and rtol.
