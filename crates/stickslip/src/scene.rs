@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 mod analyses;
 pub mod lab;
 pub mod qdyn_input;
-pub use analyses::analysis_names;
+pub use analyses::{analysis_names, AnalysisKind};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -1022,10 +1022,14 @@ fn papers_model_only(
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<(), SceneError> {
     let inertial_only = [
-        (a.noise.is_some(), "noise", "its forcing enters the inertial equation of motion"),
+        (
+            a.noise.is_some(),
+            AnalysisKind::Noise,
+            "its forcing enters the inertial equation of motion",
+        ),
         (
             a.lyapunov.is_some(),
-            "lyapunov",
+            AnalysisKind::Lyapunov,
             "its eigenvalues are those of the inertial Jacobian in (u, v, θ)",
         ),
     ];
@@ -1038,9 +1042,9 @@ fn papers_model_only(
     }
     if !params.friction.is_classic() {
         let derived = [
-            (a.paper, "paper"),
-            (a.asymptotics.is_some(), "asymptotics"),
-            (a.lyapunov.is_some(), "lyapunov"),
+            (a.paper, AnalysisKind::Paper),
+            (a.asymptotics.is_some(), AnalysisKind::Asymptotics),
+            (a.lyapunov.is_some(), AnalysisKind::Lyapunov),
         ];
         if let Some((_, name)) = derived.iter().find(|(asked, _)| *asked) {
             return Err(err("model.friction", format!("the \"{name}\" analysis is derived for friction θ + f(v) (log, asinh, power); QDYN's {} law is not of that form: drop \"{name}\" (hopf, cycle, trajectory, time_series, shooting, continuation and noise run with it)", params.friction.label())));
@@ -1050,10 +1054,10 @@ fn papers_model_only(
         return Ok(());
     }
     let slip_only = [
-        (a.paper, "paper", "the paper's values are for its model"),
+        (a.paper, AnalysisKind::Paper, "the paper's values are for its model"),
         (
             a.asymptotics.is_some(),
-            "asymptotics",
+            AnalysisKind::Asymptotics,
             "the slow flow, matching and slip scaling are derived for the slip law",
         ),
     ];
