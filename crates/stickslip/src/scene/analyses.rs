@@ -11,6 +11,7 @@ use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::analysis::InvalidOption;
+use crate::model::ModelKind;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -30,7 +31,7 @@ struct Entry<'a> {
     /// `analyses[i]`.
     field: String,
     /// (kind, dimension, γ² for the DRR), for the noise options.
-    model: (&'a str, usize, Option<f64>),
+    model: (ModelKind, usize, Option<f64>),
     /// The scene's error constructor.
     err: &'a dyn Fn(&str, String) -> SceneError,
 }
@@ -173,7 +174,7 @@ fn forms() -> String {
 /// noise options.
 pub(super) fn parse(
     raw: &[RawAnalysis],
-    model: (&str, usize, Option<f64>),
+    model: (ModelKind, usize, Option<f64>),
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<Analyses, SceneError> {
     let mut out = Analyses::default();
