@@ -48,7 +48,7 @@ enum Command {
         /// The reference's method for a report given to --against (default: the scene's),
         /// e.g. radau5; it runs at min(the scene's rtol, tolerance/100).
         #[arg(long, value_name = "METHOD", requires = "against")]
-        reference_method: Option<String>,
+        reference_method: Option<scene::Method>,
         /// Print JSON.
         #[arg(long)]
         json: bool,

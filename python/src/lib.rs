@@ -25,6 +25,7 @@ use stickslip::analysis::AnalysisError;
 use stickslip::engine::{self, Cancel, EngineError, RunError};
 use stickslip::integrate::ToleranceTransform;
 use stickslip::scene::{self, AnyScene, SceneError};
+use stickslip::solver::{Capabilities, Method, TableKind};
 use stickslip::{parallel, sweep};
 
 /// Instantiates `stickslip.errors.<class>` with `message` and keyword attributes.
@@ -398,6 +399,13 @@ fn sundials_version() -> String {
 }
 
 /// The compiled part of the `stickslip` package.
+/// The scene names of the method table's methods whose row satisfies `keep`, in the table's
+/// order: `_core.METHODS` (all) and `_core.EXPLICIT_METHODS` (those run by an explicit Butcher
+/// table, which use no Jacobian), read by python/stickslip/_ivp.py.
+fn method_names(keep: impl Fn(&Capabilities) -> bool) -> Vec<&'static str> {
+    Method::ALL.iter().filter(|(_, m)| keep(&m.capabilities())).map(|(name, _)| *name).collect()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
@@ -406,5 +414,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_ivp, m)?)?;
     m.add_function(wrap_pyfunction!(sundials_version, m)?)?;
     m.add("DENSE_NODES", solve::DENSE_NODES)?;
+    m.add("METHODS", method_names(|_| true))?;
+    m.add("EXPLICIT_METHODS", method_names(|c| c.accepts.table == Some(TableKind::Explicit)))?;
     Ok(())
 }

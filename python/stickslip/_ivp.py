@@ -12,9 +12,8 @@ from . import _core
 from ._solution import OdeSolution
 from .errors import SolverError
 
-#: stickslip's own methods (every one takes the analytic ``jac`` or differences ``fun``).
-METHODS = ("cvode-bdf", "cvode-adams", "arkode-dirk", "arkode-imex", "arkode-erk", "radau5",
-           "rodas5p", "extrapolation")
+#: stickslip's own methods, read from the Rust method table (``stickslip::solver::Method``).
+METHODS = tuple(_core.METHODS)
 
 #: scipy's method names and what they run here: (stickslip method, ARKODE Butcher table,
 #: radau5's reading of the tolerances). Radau reads rtol and atol as scipy's Radau does (as
@@ -34,8 +33,10 @@ SCIPY_METHODS = {
 OPTIONS = ("first_step", "max_step", "min_step", "max_steps", "max_order", "jacobian_max_age",
            "table", "raise_on_failure")
 
-#: The methods without a Jacobian: a ``jac`` given to them warns, as scipy's explicit methods do.
-EXPLICIT = ("arkode-erk",)
+#: The methods without a Jacobian (those run by an explicit Butcher table, from the Rust method
+#: table): a ``jac`` given to them warns, as scipy's explicit methods do. Every other method takes
+#: the analytic ``jac`` or differences ``fun``.
+EXPLICIT = tuple(_core.EXPLICIT_METHODS)
 
 _EPS = np.finfo(float).eps
 

@@ -335,3 +335,16 @@ def test_complex_system_with_a_constant_jacobian_and_args():
     w, v = np.linalg.eig(a)
     exact = v @ (np.exp(2 * w) * np.linalg.solve(v, [1.0 + 1j, 2.0]))
     assert res.success and np.max(np.abs(res.y[:, -1] - exact)) < 1e-8
+
+
+def test_methods_are_the_rust_method_table():
+    """METHODS is the Rust table's list (the scene parser names the same, in its order), and a
+    jac given to the one explicit method warns."""
+    scene = {"name": "m", "model": {"gamma": 1e4, "xi": 0.5, "epsilon": 0.7},
+             "solver": {"method": "nope"}, "analyses": ["hopf"]}
+    with pytest.raises(stickslip.SceneError) as e:
+        stickslip.run(scene)
+    assert str(e.value).endswith("use one of " + ", ".join(stickslip.METHODS))
+    assert "arkode-erk" in stickslip.METHODS and "radau5" in stickslip.METHODS
+    with pytest.warns(UserWarning, match="`jac`"):
+        solve_ivp(lambda t, y: -y, (0, 1), [1.0], method="arkode-erk", jac=lambda t, y: -1.0)

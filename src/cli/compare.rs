@@ -11,18 +11,13 @@ pub fn compare_command(
     methods: Vec<scene::Method>,
     against: Option<PathBuf>,
     tolerance: f64,
-    reference_method: Option<String>,
+    reference_method: Option<scene::Method>,
     json: bool,
 ) -> Result<(), Failure> {
     let scene = read_scene(&path)?;
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }
-    let reference_method = reference_method
-        .map(|m| {
-            m.parse::<scene::Method>().map_err(|e| Failure(2, format!("--reference-method: {e}")))
-        })
-        .transpose()?;
     match against {
         Some(file) => compare_against(&scene, &file, tolerance, reference_method, json),
         None => compare_methods(&scene, &methods, json),

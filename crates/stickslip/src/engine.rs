@@ -18,7 +18,7 @@ use crate::model::{SaddleNode, VanDerPol};
 use crate::report::{
     CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report, SolverSection,
 };
-use crate::scene::{OtherModel, OtherScene, Scene, SolverSpec};
+use crate::scene::{AnalysisKind, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -202,8 +202,8 @@ fn max_step(linear: &HopfReport) -> f64 {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{analysis}: {message}")]
 pub struct EngineError {
-    /// The analysis that failed ("cycle", "shooting", "asymptotics", "lyapunov", "noise"), or
-    /// the report section refused for a non-finite number.
+    /// The analysis that failed ([`AnalysisKind::name`], e.g. "cycle"), or the report section
+    /// refused for a non-finite number.
     pub analysis: &'static str,
     /// The analysis's error (boxed: it is large); an integration failure carries the physical
     /// cause in its message where the engine knows one (see `diagnose`).
@@ -217,7 +217,13 @@ pub struct EngineError {
 
 impl EngineError {
     /// The error of `analysis`.
-    pub fn new(analysis: &'static str, kind: AnalysisError) -> Self {
+    pub fn new(analysis: AnalysisKind, kind: AnalysisError) -> Self {
+        Self::in_section(analysis.name(), kind)
+    }
+
+    /// The error under the report section `section`: an analysis's name, or the section refused
+    /// for a non-finite number.
+    fn in_section(analysis: &'static str, kind: AnalysisError) -> Self {
         Self {
             analysis,
             state: kind.state().to_vec(),
@@ -243,13 +249,13 @@ impl EngineError {
 /// physical cause added (see `diagnose`).
 fn failed<'a, E: Into<AnalysisError>>(
     drr: &'a Drr,
-    analysis: &'static str,
+    analysis: AnalysisKind,
 ) -> impl Fn(E) -> EngineError + 'a {
     move |e| EngineError::new(analysis, diagnose(drr, e))
 }
 
 fn non_finite(path: &str, section: &'static str) -> EngineError {
-    EngineError::new(section, AnalysisError::NonFinite { path: path.to_string() })
+    EngineError::in_section(section, AnalysisError::NonFinite { path: path.to_string() })
 }
 
 /// Adds the physical cause to a failure at a state where one is known, and only where it is
@@ -470,7 +476,7 @@ fn run_inner(
             let stop = || cancel::is_set(cancel);
             Some(
                 noise::run_stoppable(&model, &scene.initial, options, threads, progress, &stop)
-                    .map_err(failed(&drr, "noise"))?,
+                    .map_err(failed(&drr, AnalysisKind::Noise))?,
             )
         }
         None => None,
@@ -547,7 +553,7 @@ fn cycle_step(
     // cycle_with has added the physical cause already (once: not `failed`, which adds it again).
     let (report, name, tables, stats) =
         cycle_cancellable(scene, drr, options, keep, linear, cancel)
-            .map_err(|e| EngineError::new("cycle", e))?;
+            .map_err(|e| EngineError::new(AnalysisKind::Cycle, e))?;
     Ok((Some(report), Integration { name, tables, stats }))
 }
 
@@ -568,9 +574,9 @@ fn shooting_step(
         a.shooting.clone().unwrap_or_default().settings(scene.solver.rtol, scene.solver.atol[1]);
     let (mut integ, tables) =
         variational_integrator_with_tables(*drr, &scene.solver, &scene.initial, cancel)
-            .map_err(failed(drr, "shooting"))?;
+            .map_err(failed(drr, AnalysisKind::Shooting))?;
     let report = shooting::analyse(integ.as_mut(), drr, scene.initial, &settings)
-        .map_err(failed(drr, "shooting"))?;
+        .map_err(failed(drr, AnalysisKind::Shooting))?;
     if !cycle_ran {
         let family = scene.solver.method.capabilities().family.to_string();
         (integration.name, integration.tables) = (family, tables);
@@ -619,7 +625,7 @@ fn time_series_step(
                 o.t_max
             ),
         );
-        return Err(EngineError::new("time_series", option.into()));
+        return Err(EngineError::new(AnalysisKind::TimeSeries, option.into()));
     }
     let settings = TimeSeriesSettings {
         t_max,
@@ -631,9 +637,9 @@ fn time_series_step(
     let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
     let (mut integ, tables) =
         integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
-            .map_err(failed(drr, "time_series"))?;
+            .map_err(failed(drr, AnalysisKind::TimeSeries))?;
     let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
-        .map_err(failed(drr, "time_series"))?;
+        .map_err(failed(drr, AnalysisKind::TimeSeries))?;
     if !integrated {
         let family = scene.solver.method.capabilities().family.to_string();
         (integration.name, integration.tables) = (family, tables);
@@ -664,7 +670,7 @@ fn asymptotics_step(
     };
     asymptotics::analyse(&scene.params, scene.initial, &mut cycle_at, cycle, o)
         .map(Some)
-        .map_err(failed(drr, "asymptotics"))
+        .map_err(failed(drr, AnalysisKind::Asymptotics))
 }
 
 /// "lyapunov", with the variational equations integrated by the scene's method.
@@ -680,7 +686,7 @@ fn lyapunov_step(
     };
     lyapunov::analyse(&scene.params, &scene.solver, &mut variational, cycle, o)
         .map(Some)
-        .map_err(failed(drr, "lyapunov"))
+        .map_err(failed(drr, AnalysisKind::Lyapunov))
 }
 
 /// The one check that every number in the analyses' sections is finite (serde_json would
@@ -688,16 +694,16 @@ fn lyapunov_step(
 /// is not checked: its γ is +∞ for the quasi-dynamic model, written as null by design.
 fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
     let sections = [
-        first_non_finite_in("hopf", r.hopf.as_ref()),
-        first_non_finite_in("cycle", r.cycle.as_ref()),
-        first_non_finite_in("shooting", r.shooting.as_ref()),
-        first_non_finite_in("continuation", r.continuation.as_ref()),
-        first_non_finite_in("asymptotics", r.asymptotics.as_ref()),
-        first_non_finite_in("lyapunov", r.lyapunov.as_ref()),
+        first_non_finite_in(AnalysisKind::Hopf.name(), r.hopf.as_ref()),
+        first_non_finite_in(AnalysisKind::Cycle.name(), r.cycle.as_ref()),
+        first_non_finite_in(AnalysisKind::Shooting.name(), r.shooting.as_ref()),
+        first_non_finite_in(AnalysisKind::Continuation.name(), r.continuation.as_ref()),
+        first_non_finite_in(AnalysisKind::Asymptotics.name(), r.asymptotics.as_ref()),
+        first_non_finite_in(AnalysisKind::Lyapunov.name(), r.lyapunov.as_ref()),
         first_non_finite_in("physical", r.physical.as_ref()),
-        first_non_finite_in("paper", r.paper.as_ref()),
-        first_non_finite_in("noise", r.noise.as_ref()),
-        first_non_finite_in("time_series", r.time_series.as_ref()),
+        first_non_finite_in(AnalysisKind::Paper.name(), r.paper.as_ref()),
+        first_non_finite_in(AnalysisKind::Noise.name(), r.noise.as_ref()),
+        first_non_finite_in(AnalysisKind::TimeSeries.name(), r.time_series.as_ref()),
         first_non_finite_in("events", r.events.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
@@ -769,9 +775,10 @@ pub fn run_other(
         ),
     };
     let noise = noise::run(&model, &initial, &scene.noise, threads, progress)
-        .map_err(|e| EngineError::new("noise", e))?;
-    if let Some(path) = finite::first_non_finite(&noise, "noise") {
-        return Err(non_finite(&path, "noise"));
+        .map_err(|e| EngineError::new(AnalysisKind::Noise, e))?;
+    let section = AnalysisKind::Noise.name();
+    if let Some(path) = finite::first_non_finite(&noise, section) {
+        return Err(non_finite(&path, section));
     }
     Ok(ModelReport {
         stickslip_version: env!("CARGO_PKG_VERSION"),

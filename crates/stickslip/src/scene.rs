@@ -7,8 +7,8 @@ use crate::analysis::noise::options::NoiseOptions;
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::model::{
-    Drr, DrrParams, Friction, FrictionReference, PhysicalScales, SaddleNodeParams, StateLaw,
-    VanDerPolParams,
+    Drr, DrrParams, Friction, FrictionReference, ModelKind, PhysicalScales, SaddleNodeParams,
+    StateLaw, VanDerPolParams,
 };
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 mod analyses;
 pub mod lab;
 pub mod qdyn_input;
-pub use analyses::analysis_names;
+pub use analyses::{analysis_names, AnalysisKind};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -328,6 +328,16 @@ pub enum OtherModel {
     },
 }
 
+impl OtherModel {
+    /// Its kind (the report's "kind").
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            OtherModel::SaddleNode { .. } => ModelKind::SaddleNode,
+            OtherModel::VanDerPol { .. } => ModelKind::VanDerPol,
+        }
+    }
+}
+
 /// A validated scene of a model other than the DRR.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct OtherScene {
@@ -363,8 +373,10 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         return lab::parse(text, source_name).map(|s| AnyScene::Lab(Box::new(s)));
     }
     let raw = parse_raw(text, &err)?;
-    match raw.model.kind.as_deref() {
-        None | Some("drr") => validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s))),
+    match raw.model.kind.as_deref().map(ModelKind::from_name) {
+        None | Some(Some(ModelKind::Drr)) => {
+            validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s)))
+        }
         Some(_) => validate_other(raw, &err).map(|s| AnyScene::Other(Box::new(s))),
     }
 }
@@ -426,17 +438,18 @@ fn validate_other(
         return Err(err("name", "must not be empty".into()));
     }
     let m = &raw.model;
-    let kind = m.kind.as_deref().unwrap_or("drr");
+    let name = m.kind.as_deref().unwrap_or(ModelKind::Drr.name());
+    let kind = ModelKind::from_name(name);
     let model = match kind {
-        "saddle_node" => {
-            only_model_keys(m, kind, &["mu0", "r", "x0"], err)?;
+        Some(ModelKind::SaddleNode) => {
+            only_model_keys(m, name, &["mu0", "r", "x0"], err)?;
             let mu0 = positive("model.mu0", m.mu0.ok_or_else(|| err("model.mu0", "missing: μ at t = 0, > 0, e.g. 1".into()))?, "μ(0), e.g. 1", err)?;
             let r = positive("model.r", m.r.ok_or_else(|| err("model.r", "missing: the tilting rate r > 0 of μ = μ0 − r t, e.g. 0.01".into()))?, "e.g. 0.01", err)?;
             let x0 = positive("model.x0", m.x0.unwrap_or(mu0.sqrt()), "the start on the stable branch x = √μ0 (default)", err)?;
             OtherModel::SaddleNode { params: SaddleNodeParams { mu0, r }, x0 }
         }
-        "van_der_pol" => {
-            only_model_keys(m, kind, &["beta", "a", "x0", "y0"], err)?;
+        Some(ModelKind::VanDerPol) => {
+            only_model_keys(m, name, &["beta", "a", "x0", "y0"], err)?;
             let beta = positive("model.beta", m.beta.ok_or_else(|| err("model.beta", "missing: β > 0 (β² is the fast rate), e.g. 30".into()))?, "e.g. 30", err)?;
             let a = finite("model.a", m.a.unwrap_or(0.0), err)?;
             if a.abs() >= 1.0 {
@@ -446,19 +459,19 @@ fn validate_other(
             let y0 = finite("model.y0", m.y0.unwrap_or(-2.0 / 3.0), err)?;
             OtherModel::VanDerPol { params: VanDerPolParams { beta, a }, initial: [x0, y0] }
         }
-        other => return Err(err("model.kind", format!("unknown kind \"{other}\"; use \"drr\" (default), \"saddle_node\" or \"van_der_pol\""))),
+        Some(ModelKind::Drr) | None => return Err(err("model.kind", format!("unknown kind \"{name}\"; use \"drr\" (default), \"saddle_node\" or \"van_der_pol\""))),
     };
+    let kind = model.kind();
     for (field, present) in [
         ("initial", raw.initial.is_some()),
         ("units", raw.units.is_some()),
         ("solver", raw.solver.is_some()),
     ] {
         if present {
-            return Err(err(field, format!("the {kind} model takes no \"{field}\" (its start is model.x0{}; the noise analysis sets its own solver)", if kind == "van_der_pol" { "/y0" } else { "" })));
+            return Err(err(field, format!("the {kind} model takes no \"{field}\" (its start is model.x0{}; the noise analysis sets its own solver)", if kind == ModelKind::VanDerPol { "/y0" } else { "" })));
         }
     }
-    let dim = if kind == "saddle_node" { 1 } else { 2 };
-    let analyses = analyses::parse(&raw.analyses, (kind, dim, None), err)?;
+    let analyses = analyses::parse(&raw.analyses, (kind, kind.dimension(), None), err)?;
     if analyses.hopf
         || analyses.cycle.is_some()
         || analyses.paper
@@ -483,7 +496,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
         message,
     };
     let raw = parse_raw(text, &err)?;
-    if let Some(kind) = raw.model.kind.as_deref().filter(|k| *k != "drr") {
+    if let Some(kind) = raw.model.kind.as_deref().filter(|k| *k != ModelKind::Drr.name()) {
         return Err(err("model.kind", format!("\"{kind}\": this command needs a DRR scene; `stickslip run` runs {kind} scenes (noise analysis)")));
     }
     validate(raw, &err)
@@ -522,7 +535,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let m = &raw.model;
     only_model_keys(
         m,
-        "drr",
+        ModelKind::Drr.name(),
         &[
             "gamma",
             "xi",
@@ -652,7 +665,11 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         raw.initial.as_ref().map(|r| field_start(r, scales.as_ref(), &params, err)).transpose()?;
     let initial = initial_state(&drr, field_initial.as_ref().or(raw.initial.as_ref()), err)?;
     let solver = solver_spec(raw.solver.as_ref(), err)?;
-    let analyses = analyses::parse(&raw.analyses, ("drr", 3, Some(gamma * gamma)), err)?;
+    let analyses = analyses::parse(
+        &raw.analyses,
+        (ModelKind::Drr, ModelKind::Drr.dimension(), Some(gamma * gamma)),
+        err,
+    )?;
     papers_model_only(&params, &analyses, err)?;
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
@@ -1022,10 +1039,14 @@ fn papers_model_only(
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<(), SceneError> {
     let inertial_only = [
-        (a.noise.is_some(), "noise", "its forcing enters the inertial equation of motion"),
+        (
+            a.noise.is_some(),
+            AnalysisKind::Noise,
+            "its forcing enters the inertial equation of motion",
+        ),
         (
             a.lyapunov.is_some(),
-            "lyapunov",
+            AnalysisKind::Lyapunov,
             "its eigenvalues are those of the inertial Jacobian in (u, v, θ)",
         ),
     ];
@@ -1038,9 +1059,9 @@ fn papers_model_only(
     }
     if !params.friction.is_classic() {
         let derived = [
-            (a.paper, "paper"),
-            (a.asymptotics.is_some(), "asymptotics"),
-            (a.lyapunov.is_some(), "lyapunov"),
+            (a.paper, AnalysisKind::Paper),
+            (a.asymptotics.is_some(), AnalysisKind::Asymptotics),
+            (a.lyapunov.is_some(), AnalysisKind::Lyapunov),
         ];
         if let Some((_, name)) = derived.iter().find(|(asked, _)| *asked) {
             return Err(err("model.friction", format!("the \"{name}\" analysis is derived for friction θ + f(v) (log, asinh, power); QDYN's {} law is not of that form: drop \"{name}\" (hopf, cycle, trajectory, time_series, shooting, continuation and noise run with it)", params.friction.label())));
@@ -1050,10 +1071,10 @@ fn papers_model_only(
         return Ok(());
     }
     let slip_only = [
-        (a.paper, "paper", "the paper's values are for its model"),
+        (a.paper, AnalysisKind::Paper, "the paper's values are for its model"),
         (
             a.asymptotics.is_some(),
-            "asymptotics",
+            AnalysisKind::Asymptotics,
             "the slow flow, matching and slip scaling are derived for the slip law",
         ),
     ];

@@ -7,7 +7,7 @@
 //! of an uninterrupted one. Rows are appended as points finish (one write per line); `merge`
 //! sorts them by index and checks that none is missing.
 
-use crate::scene;
+use crate::scene::{self, AnalysisKind};
 use crate::{engine, parallel};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -247,7 +247,7 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepEr
         return Err(SweepError::AlphaWithoutPower);
     }
     let analyses = base["analyses"].as_array().map(Vec::as_slice).unwrap_or_default();
-    if analyses.iter().any(|a| a.get("noise").is_some()) {
+    if analyses.iter().any(|a| a.get(AnalysisKind::Noise.name()).is_some()) {
         return Err(SweepError::Noise);
     }
     Ok(())
@@ -300,18 +300,19 @@ fn row(
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");
+            // The analyses' sections, and the cycle's values in physical units.
             let sections: serde_json::Map<String, serde_json::Value> = [
-                "hopf",
-                "cycle",
-                "paper",
+                AnalysisKind::Hopf.name(),
+                AnalysisKind::Cycle.name(),
+                AnalysisKind::Paper.name(),
                 "physical",
-                "shooting",
-                "continuation",
-                "asymptotics",
-                "lyapunov",
+                AnalysisKind::Shooting.name(),
+                AnalysisKind::Continuation.name(),
+                AnalysisKind::Asymptotics.name(),
+                AnalysisKind::Lyapunov.name(),
             ]
-            .iter()
-            .filter_map(|k| json.get_mut(*k).map(|v| (k.to_string(), v.take())))
+            .into_iter()
+            .filter_map(|k| json.get_mut(k).map(|v| (k.to_string(), v.take())))
             .collect();
             Row {
                 index,

@@ -25,3 +25,50 @@ pub use scales::{FrictionReference, PhysicalScales};
 pub use state_law::StateLaw;
 pub use van_der_pol::{VanDerPol, VanDerPolParams};
 pub use variational::Variational;
+
+/// The kind of a scene's model (`"model": {"kind": ...}`); [`ModelKind::name`] is its name in
+/// the scene and the messages. Laboratory scenes are told apart by their form instead
+/// (`scene::parse_any`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// "drr": the spring-slider (the default).
+    Drr,
+    /// "saddle_node": the tilted saddle-node normal form ([`SaddleNode`]).
+    SaddleNode,
+    /// "van_der_pol": the relaxation oscillator ([`VanDerPol`]).
+    VanDerPol,
+}
+
+impl ModelKind {
+    /// Every kind, in the order the messages list them.
+    pub const ALL: [ModelKind; 3] = [ModelKind::Drr, ModelKind::SaddleNode, ModelKind::VanDerPol];
+
+    /// Its name in the scene, e.g. "saddle_node".
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Drr => "drr",
+            ModelKind::SaddleNode => "saddle_node",
+            ModelKind::VanDerPol => "van_der_pol",
+        }
+    }
+
+    /// The kind named `name` in a scene, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// The number of state components (and of noise amplitudes).
+    pub fn dimension(self) -> usize {
+        match self {
+            ModelKind::Drr => 3,
+            ModelKind::SaddleNode => 1,
+            ModelKind::VanDerPol => 2,
+        }
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

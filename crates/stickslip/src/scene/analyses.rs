@@ -11,6 +11,7 @@ use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::analysis::InvalidOption;
+use crate::model::ModelKind;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -30,7 +31,7 @@ struct Entry<'a> {
     /// `analyses[i]`.
     field: String,
     /// (kind, dimension, γ² for the DRR), for the noise options.
-    model: (&'a str, usize, Option<f64>),
+    model: (ModelKind, usize, Option<f64>),
     /// The scene's error constructor.
     err: &'a dyn Fn(&str, String) -> SceneError,
 }
@@ -47,10 +48,60 @@ impl Entry<'_> {
     }
 }
 
+/// The kind of an analysis a scene can ask for; [`AnalysisKind::name`] is its name in the scene,
+/// the report and error messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum AnalysisKind {
+    /// "hopf": the linear stability of the steady state.
+    Hopf,
+    /// "paper": the paper's values against hopf and cycle.
+    Paper,
+    /// "cycle": the limit cycle.
+    Cycle,
+    /// "trajectory": the cycles found by "cycle", sampled.
+    Trajectory,
+    /// "asymptotics": matched asymptotics against the numerics.
+    Asymptotics,
+    /// "lyapunov": Lyapunov exponents along the cycle.
+    Lyapunov,
+    /// "shooting": the periodic orbit by shooting.
+    Shooting,
+    /// "continuation": the periodic orbit followed in a parameter.
+    Continuation,
+    /// "noise": an ensemble of noisy runs.
+    Noise,
+    /// "time_series": a run from t = 0 to t_max.
+    TimeSeries,
+}
+
+impl AnalysisKind {
+    /// Its name in the scene, the report and the messages, e.g. "time_series".
+    pub fn name(self) -> &'static str {
+        match self {
+            AnalysisKind::Hopf => "hopf",
+            AnalysisKind::Paper => "paper",
+            AnalysisKind::Cycle => "cycle",
+            AnalysisKind::Trajectory => "trajectory",
+            AnalysisKind::Asymptotics => "asymptotics",
+            AnalysisKind::Lyapunov => "lyapunov",
+            AnalysisKind::Shooting => "shooting",
+            AnalysisKind::Continuation => "continuation",
+            AnalysisKind::Noise => "noise",
+            AnalysisKind::TimeSeries => "time_series",
+        }
+    }
+}
+
+impl std::fmt::Display for AnalysisKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// One analysis a scene can ask for.
 struct Analysis {
-    /// The scene name.
-    name: &'static str,
+    /// Its kind (and so its scene name).
+    kind: AnalysisKind,
     /// What follows the name.
     takes: Takes,
     /// Records the analysis and its options (`Value::Null` when it takes none; an object
@@ -60,22 +111,22 @@ struct Analysis {
 
 /// Every analysis, in the order the messages list them.
 const TABLE: [Analysis; 10] = [
-    Analysis { name: "hopf", takes: Takes::Nothing, parse: hopf },
-    Analysis { name: "paper", takes: Takes::Nothing, parse: paper },
-    Analysis { name: "cycle", takes: Takes::Optional, parse: cycle },
+    Analysis { kind: AnalysisKind::Hopf, takes: Takes::Nothing, parse: hopf },
+    Analysis { kind: AnalysisKind::Paper, takes: Takes::Nothing, parse: paper },
+    Analysis { kind: AnalysisKind::Cycle, takes: Takes::Optional, parse: cycle },
     Analysis {
-        name: "trajectory",
+        kind: AnalysisKind::Trajectory,
         takes: Takes::Required {
             form: "{\"cycles\": N}",
             missing: "\"trajectory\" needs a sampling spec: {\"trajectory\": {\"cycles\": N}}",
         },
         parse: trajectory,
     },
-    Analysis { name: "asymptotics", takes: Takes::Optional, parse: asymptotics },
-    Analysis { name: "lyapunov", takes: Takes::Optional, parse: lyapunov },
-    Analysis { name: "shooting", takes: Takes::Optional, parse: shooting },
+    Analysis { kind: AnalysisKind::Asymptotics, takes: Takes::Optional, parse: asymptotics },
+    Analysis { kind: AnalysisKind::Lyapunov, takes: Takes::Optional, parse: lyapunov },
+    Analysis { kind: AnalysisKind::Shooting, takes: Takes::Optional, parse: shooting },
     Analysis {
-        name: "continuation",
+        kind: AnalysisKind::Continuation,
         takes: Takes::Required {
             form: "{\"parameter\": \"epsilon\"|\"xi\"|\"gamma\"|\"radiation_damping\", \
                    \"to\": X, \"points\": N}",
@@ -85,7 +136,7 @@ const TABLE: [Analysis; 10] = [
         parse: continuation,
     },
     Analysis {
-        name: "noise",
+        kind: AnalysisKind::Noise,
         takes: Takes::Required {
             form: "{\"amplitudes\": [...]}",
             missing: "\"noise\" needs its amplitudes: {\"noise\": {\"amplitudes\": [...]}} \
@@ -94,7 +145,7 @@ const TABLE: [Analysis; 10] = [
         parse: noise,
     },
     Analysis {
-        name: "time_series",
+        kind: AnalysisKind::TimeSeries,
         takes: Takes::Required {
             form: "{\"t_max\": T}",
             missing: "\"time_series\" needs its length: {\"time_series\": {\"t_max\": T}} \
@@ -106,15 +157,15 @@ const TABLE: [Analysis; 10] = [
 
 /// The name of every analysis a scene can ask for.
 pub fn analysis_names() -> impl Iterator<Item = &'static str> {
-    TABLE.iter().map(|a| a.name)
+    TABLE.iter().map(|a| a.kind.name())
 }
 
 /// How each analysis is written, for the messages: `"hopf", "cycle", {"cycle": {...}}, …`.
 fn forms() -> String {
     let form = |a: &Analysis| match a.takes {
-        Takes::Nothing => format!("\"{}\"", a.name),
-        Takes::Optional => format!("\"{0}\", {{\"{0}\": {{...}}}}", a.name),
-        Takes::Required { form, .. } => format!("{{\"{}\": {form}}}", a.name),
+        Takes::Nothing => format!("\"{}\"", a.kind.name()),
+        Takes::Optional => format!("\"{0}\", {{\"{0}\": {{...}}}}", a.kind.name()),
+        Takes::Required { form, .. } => format!("{{\"{}\": {form}}}", a.kind.name()),
     };
     TABLE.iter().map(form).collect::<Vec<_>>().join(", ")
 }
@@ -123,7 +174,7 @@ fn forms() -> String {
 /// noise options.
 pub(super) fn parse(
     raw: &[RawAnalysis],
-    model: (&str, usize, Option<f64>),
+    model: (ModelKind, usize, Option<f64>),
     err: &impl Fn(&str, String) -> SceneError,
 ) -> Result<Analyses, SceneError> {
     let mut out = Analyses::default();
@@ -133,7 +184,7 @@ pub(super) fn parse(
     for (i, raw_entry) in raw.iter().enumerate() {
         let entry = Entry { field: format!("analyses[{i}]"), model, err };
         let (name, options) = name_and_options(raw_entry, &entry)?;
-        let Some(analysis) = TABLE.iter().find(|a| a.name == name) else {
+        let Some(analysis) = TABLE.iter().find(|a| a.kind.name() == name) else {
             return Err(err(
                 &entry.field,
                 format!("unknown analysis \"{name}\"; use one of {}", forms()),
@@ -170,7 +221,7 @@ fn options_for(
     options: Option<Value>,
     entry: &Entry,
 ) -> Result<Value, SceneError> {
-    let name = analysis.name;
+    let name = analysis.kind.name();
     match (&analysis.takes, options) {
         (Takes::Nothing, None) => Ok(Value::Null),
         (Takes::Nothing, Some(_)) => {
@@ -197,9 +248,10 @@ fn requirements(
             "\"trajectory\" records the cycles found by \"cycle\"; add \"cycle\"".into(),
         ));
     }
-    for (asked, name) in
-        [(out.asymptotics.is_some(), "asymptotics"), (out.lyapunov.is_some(), "lyapunov")]
-    {
+    for (asked, name) in [
+        (out.asymptotics.is_some(), AnalysisKind::Asymptotics),
+        (out.lyapunov.is_some(), AnalysisKind::Lyapunov),
+    ] {
         if asked && out.cycle.is_none() {
             return Err(err(
                 "analyses",
@@ -227,18 +279,23 @@ fn paper(out: &mut Analyses, _: Value, _: &Entry) -> Result<(), SceneError> {
 }
 
 fn cycle(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> {
-    out.cycle = Some(CycleOptions::from_json(v).map_err(|e| entry.invalid("cycle", e))?);
+    out.cycle =
+        Some(CycleOptions::from_json(v).map_err(|e| entry.invalid(AnalysisKind::Cycle.name(), e))?);
     Ok(())
 }
 
 fn asymptotics(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> {
-    let o = AsymptoticsOptions::from_json(v).map_err(|e| entry.invalid("asymptotics", e))?;
+    let o = AsymptoticsOptions::from_json(v)
+        .map_err(|e| entry.invalid(AnalysisKind::Asymptotics.name(), e))?;
     out.asymptotics = Some(o);
     Ok(())
 }
 
 fn lyapunov(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> {
-    out.lyapunov = Some(LyapunovOptions::from_json(v).map_err(|e| entry.invalid("lyapunov", e))?);
+    out.lyapunov = Some(
+        LyapunovOptions::from_json(v)
+            .map_err(|e| entry.invalid(AnalysisKind::Lyapunov.name(), e))?,
+    );
     Ok(())
 }
 
@@ -338,18 +395,21 @@ fn noise(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> 
         entry.error(&format!("noise{sub}"), e.into_inner().to_string())
     })?;
     let (kind, dim, gamma2) = entry.model;
-    noise_options::validate(&o, dim, kind, gamma2).map_err(|e| entry.invalid("noise", e))?;
+    noise_options::validate(&o, dim, kind, gamma2)
+        .map_err(|e| entry.invalid(AnalysisKind::Noise.name(), e))?;
     out.noise = Some(o);
     Ok(())
 }
 
 fn time_series(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> {
     if !v.is_object() {
-        return Err(
-            entry.error("time_series", "options must be an object, e.g. {\"t_max\": 1000}".into())
-        );
+        return Err(entry.error(
+            AnalysisKind::TimeSeries.name(),
+            "options must be an object, e.g. {\"t_max\": 1000}".into(),
+        ));
     }
-    let o = TimeSeriesOptions::from_json(v).map_err(|e| entry.invalid("time_series", e))?;
+    let o = TimeSeriesOptions::from_json(v)
+        .map_err(|e| entry.invalid(AnalysisKind::TimeSeries.name(), e))?;
     out.time_series = Some(o);
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! the fix). Defaults that depend on the model are resolved in [`super::run`].
 
 use crate::analysis::InvalidOption;
+use crate::model::ModelKind;
 use serde::{Deserialize, Serialize};
 
 /// How ensemble statistics are aligned in time.
@@ -78,14 +79,14 @@ pub struct NoiseOptions {
 pub fn validate(
     o: &NoiseOptions,
     dim: usize,
-    kind: &str,
+    kind: ModelKind,
     gamma2: Option<f64>,
 ) -> Result<(), InvalidOption> {
     let bad = |field: &str, message: String| Err(InvalidOption::new(field, message));
     let names = match kind {
-        "drr" => "(η_u, η_v, η_θ)",
-        "saddle_node" => "(η_x)",
-        _ => "(η_x, η_y)",
+        ModelKind::Drr => "(η_u, η_v, η_θ)",
+        ModelKind::SaddleNode => "(η_x)",
+        ModelKind::VanDerPol => "(η_x, η_y)",
     };
     if o.amplitudes.len() != dim {
         return bad(
@@ -166,10 +167,10 @@ pub fn validate(
         }
     }
     match (kind, o.event_level) {
-        ("saddle_node", Some(l)) if !(l.is_finite() && l < 0.0) => {
+        (ModelKind::SaddleNode, Some(l)) if !(l.is_finite() && l < 0.0) => {
             bad("event_level", format!("{l} must be < 0: the escape is a downward crossing below the stable branch x = √μ > 0"))
         }
-        ("saddle_node", _) | (_, None) => Ok(()),
+        (ModelKind::SaddleNode, _) | (_, None) => Ok(()),
         (_, Some(_)) => bad("event_level", "only the saddle-node model takes an event level".into()),
     }
 }
