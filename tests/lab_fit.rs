@@ -176,17 +176,7 @@ fn loading_from_the_records_displacement() {
     let truth = params(vec![state(LabLaw::Ageing, 0.015, 5.0)]);
     let mut record = synthetic(&truth, 1e-4, 11);
     let loading = step_loading();
-    let starts = loading.start_displacements();
-    record.x_lp = Some(
-        record
-            .t
-            .iter()
-            .map(|&t| {
-                let j = loading.segments.iter().rposition(|s| s.t_start <= t).unwrap();
-                starts[j] + loading.segments[j].velocity * (t - loading.segments[j].t_start)
-            })
-            .collect(),
-    );
+    record.x_lp = Some(loading.displacements_at(&record.t));
     let scene_text = serde_json::json!({
         "name": "from-data",
         "model": {"kind": "lab", "mu0": 0.6, "a": 0.012, "v0": 1.0, "k": 3e-3,

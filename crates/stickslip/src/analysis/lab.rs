@@ -272,7 +272,7 @@ pub fn run(
             }
             // A maximum of V inside the step.
             if dw_prev > 0.0 && dw <= 0.0 && t > t_prev {
-                let tm = bisect_rate(&mut *integ, t_prev, t).map_err(fail)?;
+                let tm = bisect(&mut *integ, t_prev, t, 1, |dy| dy[LN_V] > 0.0).map_err(fail)?;
                 let ym = integ.dense(tm, 0).map_err(fail)?.to_vec();
                 let noise = solver.atol + solver.rtol * ym[LN_V].abs();
                 if ym[LN_V] - w_low > MAXIMUM_PROMINENCE * noise {
@@ -288,7 +288,7 @@ pub fn run(
             // The friction peak of a reload: V rises through V_lp.
             let lv = seg.velocity.ln();
             if !peak_found && w_prev < lv && y[LN_V] >= lv {
-                let tp = bisect_state(&mut *integ, t_prev, t, |y| y[LN_V] - lv).map_err(fail)?;
+                let tp = bisect(&mut *integ, t_prev, t, 0, |y| y[LN_V] < lv).map_err(fail)?;
                 let yp = integ.dense(tp, 0).map_err(fail)?.to_vec();
                 let hold = out.holds.last_mut().expect("a hold precedes a reload");
                 let mu_peak = params.measured_friction(&yp);
@@ -367,30 +367,14 @@ pub fn check_times(times: &[f64], loading: &Loading) -> Result<(), LabRunError> 
     Ok(())
 }
 
-/// The root of d ln V/dt (its dense first derivative) in [a, b], where it falls from > 0 to
-/// ≤ 0, by bisection to the spacing of t.
-fn bisect_rate(integ: &mut dyn Integrator, a: f64, b: f64) -> Result<f64, SolverError> {
-    let (mut lo, mut hi) = (a, b);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if integ.dense(mid, 1)?[LN_V] > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(0.5 * (lo + hi))
-}
-
-/// The root of `g(y)` in [a, b] (rising from < 0 to ≥ 0) on the dense output, by bisection.
-fn bisect_state(
+/// Where `before` (true at `a`, false at `b`) of the dense output's derivative of order
+/// `order` turns false in [a, b], by bisection to the spacing of t.
+fn bisect(
     integ: &mut dyn Integrator,
     a: f64,
     b: f64,
-    g: impl Fn(&[f64]) -> f64,
+    order: u32,
+    before: impl Fn(&[f64]) -> bool,
 ) -> Result<f64, SolverError> {
     let (mut lo, mut hi) = (a, b);
     for _ in 0..200 {
@@ -398,7 +382,7 @@ fn bisect_state(
         if mid <= lo || mid >= hi {
             break;
         }
-        if g(integ.dense(mid, 0)?) < 0.0 {
+        if before(integ.dense(mid, order)?) {
             lo = mid;
         } else {
             hi = mid;

@@ -129,6 +129,23 @@ impl Loading {
         }
         x
     }
+
+    /// Load-point displacement x_lp at each of `times` (non-decreasing; 0 at the first
+    /// segment's start; times before it are taken in the first segment).
+    pub fn displacements_at(&self, times: &[f64]) -> Vec<f64> {
+        let starts = self.start_displacements();
+        let mut j = 0;
+        times
+            .iter()
+            .map(|&t| {
+                while j + 1 < self.segments.len() && self.segments[j + 1].t_start <= t {
+                    j += 1;
+                }
+                let s = &self.segments[j];
+                starts[j] + s.velocity * (t - s.t_start)
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]

@@ -186,16 +186,7 @@ pub fn fit(
     settings: &FitSettings,
 ) -> Result<FitOutcome, FitError> {
     check(start, loading, record, settings)?;
-    let x_starts = loading.start_displacements();
-    let x_lp: Vec<f64> = record
-        .t
-        .iter()
-        .map(|&t| {
-            let j = loading.segments.iter().rposition(|s| s.t_start <= t).unwrap_or(0);
-            let s = &loading.segments[j];
-            x_starts[j] + s.velocity * (t - s.t_start)
-        })
-        .collect();
+    let x_lp = loading.displacements_at(&record.t);
     let model: Vec<LabParameter> = settings
         .params
         .iter()

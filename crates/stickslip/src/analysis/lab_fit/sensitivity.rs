@@ -14,8 +14,6 @@ pub struct FrictionSensitivities {
     pub mu: Vec<f64>,
     /// ∂μ(t_i)/∂p_j, row-major.
     pub dmu: Vec<f64>,
-    /// Internal steps taken.
-    pub steps: u64,
 }
 
 /// Integrates the lab model (quasi-static or with inertia) from steady sliding at the first segment's velocity through
@@ -47,7 +45,6 @@ pub fn friction_sensitivities(
     let mut out = FrictionSensitivities {
         mu: Vec::with_capacity(times.len()),
         dmu: Vec::with_capacity(times.len() * m),
-        steps: 0,
     };
     let record = |y: &[f64], s: &[f64], out: &mut FrictionSensitivities| {
         out.mu.push(params.measured_friction(y));
@@ -106,6 +103,5 @@ pub fn friction_sensitivities(
         y.copy_from_slice(cvodes.state());
         s.copy_from_slice(cvodes.sensitivities());
     }
-    out.steps = cvodes.stats().steps as u64;
     Ok(out)
 }
