@@ -129,6 +129,7 @@ fn an_accurate_ten_cycle_trajectory_agrees_and_a_one_percent_period_error_disagr
         t: times.clone(),
         y: shifted.iter().map(|y| [y[0], y[1].exp(), y[2]]).collect(),
         origin: (0..times.len()).map(|i| format!("index {i}")).collect(),
+        u_from_force_balance: false,
     };
     let c = compare::against_trajectory(&fig1(), &user, 1e-4).unwrap();
     assert_eq!(c.verdict, compare::Verdict::Disagrees);
@@ -227,7 +228,7 @@ fn reference_error_by_cycle() {
         former.push([y[0], y[1], y[2]]);
     }
     let w: Vec<f64> = truth.iter().map(|y| y[1]).collect();
-    let origin: Vec<String> = times.iter().map(|t| format!("t = {t}")).collect();
+    let origin = |i: usize| format!("t = {}", times[i]);
     let u: Vec<f64> = truth.iter().map(|y| y[0]).collect();
     let events = compare::sampled::sampled_events(&times, &w, &u, &origin).unwrap();
     // A cycle: from one event's start (upward crossing of v = 1) to the next's.

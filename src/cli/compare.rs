@@ -33,33 +33,25 @@ fn compare_against(
     reference_method: Option<scene::Method>,
     json: bool,
 ) -> Result<(), Failure> {
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| Failure(2, format!("cannot read {}: {e}", file.display())))?;
-    let data = compare::read_user_data(&text)
-        .map_err(|e| Failure(2, format!("{}: {e}", file.display())))?;
+    let cannot = |e: std::io::Error| Failure(2, format!("cannot read {}: {e}", file.display()));
+    let size = std::fs::metadata(file).map_err(cannot)?.len();
+    if size > compare::input::MAX_FILE_BYTES {
+        return Err(Failure(2, format!("{}: {size} bytes; at most {} are compared at once: compare a shorter stretch, or every k-th sample", file.display(), compare::input::MAX_FILE_BYTES)));
+    }
+    let text = std::fs::read_to_string(file).map_err(cannot)?;
+    let named = |e: &dyn std::fmt::Display| Failure(2, format!("{}: {e}", file.display()));
+    let data = compare::read_user_data(&text).map_err(|e| named(&e))?;
+    drop(text);
     let verdict = match data {
         compare::UserData::Trajectory(t) => {
-            if reference_method.is_some() {
-                return Err(Failure(
-                    2,
-                    "--reference-method applies to a report; a trajectory's reference is \
-                     radau5 checked by rodas5p (docs/compare.md)"
-                        .into(),
-                ));
+            trajectory_verdict(scene, &t, tolerance, reference_method, json, &named)?
+        }
+        compare::UserData::Qdyn(q) => {
+            if let Some(line) = &q.repeated_last {
+                eprintln!("note: {}: {line}, the last row, repeats the row before it at a later time (QDYN writes its last state again at TMAX when its solver stops); it is left out", file.display());
             }
-            let c = compare::against_trajectory(scene, &t, tolerance).map_err(|e| match e {
-                e @ (compare::CompareError::Input(_)
-                | compare::CompareError::UnresolvedReference(_)) => {
-                    Failure(2, format!("{}: {e}", file.display()))
-                }
-                other => Failure(1, other.to_string()),
-            })?;
-            if json {
-                print_json(&c);
-            } else {
-                print_trajectory_comparison(&c);
-            }
-            c.verdict
+            let t = compare::qdyn::to_trajectory(scene, &q).map_err(|e| named(&e))?;
+            trajectory_verdict(scene, &t, tolerance, reference_method, json, &named)?
         }
         compare::UserData::Report(r) => {
             let c = compare::against_report(scene, &r, tolerance, reference_method)
@@ -105,6 +97,37 @@ fn compare_against(
     }
 }
 
+/// A trajectory against the reference: prints the comparison and returns its verdict.
+fn trajectory_verdict(
+    scene: &scene::Scene,
+    t: &compare::Trajectory,
+    tolerance: f64,
+    reference_method: Option<scene::Method>,
+    json: bool,
+    named: &dyn Fn(&dyn std::fmt::Display) -> Failure,
+) -> Result<compare::Verdict, Failure> {
+    if reference_method.is_some() {
+        return Err(Failure(
+            2,
+            "--reference-method applies to a report; a trajectory's reference is radau5 \
+             checked by rodas5p (docs/compare.md)"
+                .into(),
+        ));
+    }
+    let c = compare::against_trajectory(scene, t, tolerance).map_err(|e| match e {
+        e @ (compare::CompareError::Input(_)
+        | compare::CompareError::UnresolvedReference(_)
+        | compare::CompareError::Mismatch(_)) => named(&e),
+        other => Failure(1, other.to_string()),
+    })?;
+    if json {
+        print_json(&c);
+    } else {
+        print_trajectory_comparison(&c);
+    }
+    Ok(c.verdict)
+}
+
 /// The summary of a trajectory comparison.
 fn print_trajectory_comparison(c: &compare::TrajectoryComparison) {
     println!(
@@ -127,9 +150,10 @@ fn print_trajectory_comparison(c: &compare::TrajectoryComparison) {
         );
     }
     let m = &c.max_state_deviation;
+    let u = m.u.map_or("- (from the force balance)".into(), |u| format!("{u:.2e}"));
     println!(
-        "state between events ({} samples, in phase): max deviation u {:.2e}, ln v {:.2e}, θ {:.2e}",
-        c.state_samples, m.u, m.ln_v, m.theta
+        "state between events ({} samples, in phase): max deviation u {u}, ln v {:.2e}, θ {:.2e}",
+        c.state_samples, m.ln_v, m.theta
     );
     if let Some(w) = &c.worst_state {
         println!(

@@ -37,9 +37,10 @@ pub fn read_scene_text(path: &std::path::Path) -> Result<String, Failure> {
     std::fs::read_to_string(path).map_err(cannot)
 }
 
-/// A DRR scene file, parsed and validated (exit 2 naming the field).
+/// A DRR scene file (or a QDYN input file, mapped: [`qdyn::scene_text`]), parsed and
+/// validated (exit 2 naming the field).
 pub fn read_scene(path: &std::path::Path) -> Result<scene::Scene, Failure> {
-    let text = read_scene_text(path)?;
+    let text = qdyn::scene_text(Some(path), read_scene_text(path)?).map_err(|e| Failure(2, e))?;
     scene::parse(&text, &path.display().to_string()).map_err(|e| Failure(2, e.to_string()))
 }
 

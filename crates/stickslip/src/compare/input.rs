@@ -13,6 +13,9 @@ pub struct Trajectory {
     pub y: Vec<[f64; 3]>,
     /// Where each sample comes from, for messages: "line 17" (CSV) or "index 16" (JSON).
     pub origin: Vec<String>,
+    /// Whether u was computed from the scene's force balance (a QDYN file) rather than given:
+    /// it is then not compared between events, since it only repeats v and θ.
+    pub u_from_force_balance: bool,
 }
 
 /// The `cycle` keys of a user's report: the keys of our own report's `cycle` section
@@ -112,11 +115,21 @@ struct UserReport {
     cycle: UserCycle,
 }
 
+/// The largest user file read (bytes): with [`MAX_SAMPLES`], it bounds the comparison's
+/// memory whatever the file.
+pub const MAX_FILE_BYTES: u64 = 256 << 20;
+
+/// The most samples a trajectory may have.
+pub const MAX_SAMPLES: usize = 2_000_000;
+
 /// A user's file: a trajectory or a report.
 #[derive(Debug, Clone, PartialEq)]
 pub enum UserData {
     /// t, u, v, θ samples.
     Trajectory(Trajectory),
+    /// QDYN's `output_ot_*`, in SI units ([`super::qdyn::to_trajectory`] turns it into the
+    /// scene's variables).
+    Qdyn(super::qdyn::QdynOutput),
     /// The `cycle` object of a report.
     Report(UserCycle),
 }
@@ -197,6 +210,22 @@ pub enum InputError {
     /// Fewer than two samples.
     #[error("a trajectory needs at least two samples (it has {0})")]
     TooFewSamples(usize),
+    /// More than [`MAX_SAMPLES`] samples.
+    #[error("line {line}: more than {max} samples; compare a shorter stretch, or every k-th sample (the events need |Δ ln v| ≤ 0.5 at their start and samples within 0.1 of ln v_max)", max = MAX_SAMPLES)]
+    TooManySamples {
+        /// The file line of the first sample beyond the limit.
+        line: usize,
+    },
+    /// A QDYN column that must be positive.
+    #[error("{at}: column {column} = {value} must be finite and > 0")]
+    NotPositive {
+        /// Where the sample is.
+        at: String,
+        /// The column (QDYN's name).
+        column: &'static str,
+        /// The value.
+        value: f64,
+    },
     /// A time that is not finite.
     #[error("{at}: column t = {t} must be finite")]
     TimeNotFinite {
@@ -238,6 +267,9 @@ pub enum InputError {
 /// Reads a user's CSV or JSON file; errors say what is wrong and where (file lines for CSV,
 /// JSON paths for JSON), naming the column and the value.
 pub fn read_user_data(text: &str) -> Result<UserData, InputError> {
+    if super::qdyn::is_qdyn_output(text) {
+        return super::qdyn::read_qdyn_output(text).map(UserData::Qdyn);
+    }
     if text.trim_start().starts_with('{') {
         let json: serde_json::Value =
             serde_json::from_str(text).map_err(|e| InputError::Json(e.to_string()))?;
@@ -278,8 +310,12 @@ fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputErr
             lengths: [t.len(), u.len(), v.len(), theta.len()],
         });
     }
+    if t.len() > MAX_SAMPLES {
+        return Err(InputError::TooManySamples { line: 1 });
+    }
     let y = (0..t.len()).map(|i| [u[i], v[i], theta[i]]).collect();
-    Ok(Trajectory { t, y, origin: (0..u.len()).map(|i| format!("index {i}")).collect() })
+    let origin = (0..u.len()).map(|i| format!("index {i}")).collect();
+    Ok(Trajectory { t, y, origin, u_from_force_balance: false })
 }
 
 fn read_csv(text: &str) -> Result<Trajectory, InputError> {
@@ -297,8 +333,16 @@ fn read_csv(text: &str) -> Result<Trajectory, InputError> {
     };
     let cols =
         [("t", index("t")?), ("u", index("u")?), ("v", index("v")?), ("theta", index("theta")?)];
-    let mut trajectory = Trajectory { t: Vec::new(), y: Vec::new(), origin: Vec::new() };
+    let mut trajectory = Trajectory {
+        t: Vec::new(),
+        y: Vec::new(),
+        origin: Vec::new(),
+        u_from_force_balance: false,
+    };
     for (n, line) in lines {
+        if trajectory.t.len() == MAX_SAMPLES {
+            return Err(InputError::TooManySamples { line: n + 1 });
+        }
         let cells: Vec<&str> = line.split(',').collect();
         let value = |(column, c): (&'static str, usize)| -> Result<f64, InputError> {
             let cell = cells.get(c).ok_or(InputError::MissingCell {
@@ -320,23 +364,31 @@ fn read_csv(text: &str) -> Result<Trajectory, InputError> {
     Ok(trajectory)
 }
 
-fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
-    if trajectory.t.len() < 2 {
-        return Err(InputError::TooFewSamples(trajectory.t.len()));
+/// At least two samples, times finite and increasing.
+pub(super) fn check_times(t: &[f64], origin: &[String]) -> Result<(), InputError> {
+    if t.len() < 2 {
+        return Err(InputError::TooFewSamples(t.len()));
     }
-    let names = ["u", "v", "theta"];
-    for (i, (&t, y)) in trajectory.t.iter().zip(&trajectory.y).enumerate() {
-        let at = &trajectory.origin[i];
-        if !t.is_finite() {
-            return Err(InputError::TimeNotFinite { at: at.clone(), t });
+    for (i, &ti) in t.iter().enumerate() {
+        if !ti.is_finite() {
+            return Err(InputError::TimeNotFinite { at: origin[i].clone(), t: ti });
         }
-        if i > 0 && t <= trajectory.t[i - 1] {
+        if i > 0 && ti <= t[i - 1] {
             return Err(InputError::TimeNotIncreasing {
-                at: at.clone(),
-                t,
-                previous: trajectory.t[i - 1],
+                at: origin[i].clone(),
+                t: ti,
+                previous: t[i - 1],
             });
         }
+    }
+    Ok(())
+}
+
+fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
+    check_times(&trajectory.t, &trajectory.origin)?;
+    let names = ["u", "v", "theta"];
+    for (i, y) in trajectory.y.iter().enumerate() {
+        let at = &trajectory.origin[i];
         for k in [0, 2] {
             if !y[k].is_finite() {
                 return Err(InputError::NotFinite {

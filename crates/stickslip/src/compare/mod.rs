@@ -9,12 +9,15 @@
 //! docs/compare.md.
 
 pub mod input;
+pub mod qdyn;
 pub mod reference;
 pub mod sampled;
+pub mod scale;
 pub mod trajectory;
 
 pub use input::{read_user_data, InputError, Trajectory, UserCycle, UserData};
 pub use sampled::SamplingError;
+pub use scale::SceneMismatch;
 pub use trajectory::{against_trajectory, CompareError, TrajectoryComparison, Verdict};
 
 use crate::engine;

@@ -3,6 +3,8 @@
 //! local clock, global time kept as a double-double), so it does not drift from clock
 //! rounding at any length.
 
+use super::scale::{event_budget, SceneMismatch, MAX_REFERENCE_STEPS};
+use super::trajectory::CompareError;
 use crate::engine;
 use crate::integrate::{Clock, SolverError, Time};
 use crate::model::Drr;
@@ -48,8 +50,33 @@ pub fn reference_states(
     Ok((out, clock.rebases()))
 }
 
+/// Steps `method` from (start, y0) through a [`Clock`], handing each step end (global time,
+/// (u, w, θ)) to `each` until it returns false. Returns None when `each` stopped it, or the
+/// time reached when [`MAX_REFERENCE_STEPS`] ran out first.
+fn march(
+    drr: Drr,
+    method: Method,
+    rtol: f64,
+    start: f64,
+    y0: [f64; 3],
+    mut each: impl FnMut(f64, [f64; 3]) -> bool,
+) -> Result<Option<f64>, SolverError> {
+    let (mut integ, _) = engine::integrator(drr, &spec(method, rtol), &y0)?;
+    let mut clock = Clock::new(integ.as_mut(), Time::new(start));
+    for _ in 0..MAX_REFERENCE_STEPS {
+        clock.step().map_err(|e| clock.at_global(e))?;
+        let y = clock.state();
+        if !each(clock.now().to_f64(), [y[0], y[1], y[2]]) {
+            return Ok(None);
+        }
+    }
+    Ok(Some(clock.now().to_f64()))
+}
+
 /// The step ends (global time, (u, w, θ)) of `method` from (start, y0) to past `end`,
-/// through a [`Clock`].
+/// through a [`Clock`]. A file with `user_events` events over the span lets the reference
+/// have at most [`event_budget`] (v ≥ 1) and [`MAX_REFERENCE_STEPS`] steps
+/// ([`SceneMismatch`], see [`super::scale`]).
 pub fn reference_steps(
     drr: Drr,
     method: Method,
@@ -57,15 +84,55 @@ pub fn reference_steps(
     start: f64,
     y0: [f64; 3],
     end: f64,
-) -> Result<(Vec<f64>, Vec<[f64; 3]>), SolverError> {
-    let (mut integ, _) = engine::integrator(drr, &spec(method, rtol), &y0)?;
-    let mut clock = Clock::new(integ.as_mut(), Time::new(start));
+    user_events: usize,
+) -> Result<(Vec<f64>, Vec<[f64; 3]>), CompareError> {
     let (mut times, mut states) = (vec![start], vec![y0]);
-    while clock.now().to_f64() < end {
-        clock.step().map_err(|e| clock.at_global(e))?;
-        let y = clock.state();
-        times.push(clock.now().to_f64());
-        states.push([y[0], y[1], y[2]]);
+    let (budget, mut events) = (event_budget(user_events), 0);
+    let mut beyond = None;
+    let exhausted = march(drr, method, rtol, start, y0, |t, y| {
+        if states.last().is_some_and(|p| p[1] < 0.0) && y[1] >= 0.0 {
+            events += 1;
+        }
+        if events > budget {
+            beyond = Some(t);
+            return false;
+        }
+        times.push(t);
+        states.push(y);
+        t < end
+    })?;
+    if let Some(at) = beyond {
+        let (start, end, events) = (start, end, budget);
+        return Err(SceneMismatch::TooManyEvents { start, end, user_events, events, at }.into());
+    }
+    if let Some(at) = exhausted {
+        return Err(
+            SceneMismatch::TooManySteps { start, end, steps: MAX_REFERENCE_STEPS, at }.into()
+        );
     }
     Ok((times, states))
+}
+
+/// The reference's mean time between upward crossings of v = 1 (located linearly in ln v)
+/// over its first `crossings` of them from (start, y0); None if it has fewer than two within
+/// [`MAX_REFERENCE_STEPS`] steps.
+pub fn reference_recurrence(
+    drr: Drr,
+    method: Method,
+    rtol: f64,
+    start: f64,
+    y0: [f64; 3],
+    crossings: usize,
+) -> Result<Option<f64>, SolverError> {
+    let mut found: Vec<f64> = Vec::new();
+    let mut previous = (start, y0[1]);
+    march(drr, method, rtol, start, y0, |t, y| {
+        let (t0, w0) = previous;
+        if w0 < 0.0 && y[1] >= 0.0 {
+            found.push(t0 + (t - t0) * (-w0) / (y[1] - w0));
+        }
+        previous = (t, y[1]);
+        found.len() < crossings
+    })?;
+    Ok((found.len() >= 2).then(|| (found[found.len() - 1] - found[0]) / (found.len() - 1) as f64))
 }

@@ -74,14 +74,14 @@ fn fraction(w: &[f64], i: usize, level: f64) -> f64 {
 }
 
 /// The complete events (v ≥ 1 from an upward to a downward crossing of v = 1, both inside
-/// the samples) of a sampled trajectory: times `t`, w = ln v, u. `origin` names the samples
+/// the samples) of a sampled trajectory: times `t`, w = ln v, u. `origin(i)` names sample i
 /// for messages. The end of an event may be sampled coarsely (the slip Δ(u + t) barely
 /// changes across it); its start and its maximum may not.
 pub fn sampled_events(
     t: &[f64],
     w: &[f64],
     u: &[f64],
-    origin: &[String],
+    origin: &dyn Fn(usize) -> String,
 ) -> Result<Vec<SampledEvent>, SamplingError> {
     let n = t.len();
     let mut events = Vec::new();
@@ -96,8 +96,8 @@ pub fn sampled_events(
         };
         if (w[i + 1] - w[i]).abs() > MAX_EVENT_JUMP {
             return Err(SamplingError::Event {
-                from: origin[i].clone(),
-                to: origin[i + 1].clone(),
+                from: origin(i),
+                to: origin(i + 1),
                 ln_v: [w[i], w[i + 1]],
                 event: "upward crossing of v = 1",
             });
@@ -106,11 +106,7 @@ pub fn sampled_events(
         let start = t[i] + a * (t[i + 1] - t[i]);
         let j = (i + 1..=down).max_by(|&x, &y| w[x].total_cmp(&w[y])).expect("a non-empty range");
         if w[j] - w[j - 1] > MAX_PEAK_DROP || w[j] - w[j + 1] > MAX_PEAK_DROP {
-            return Err(SamplingError::Peak {
-                at: origin[j].clone(),
-                event: events.len() + 1,
-                ln_v: w[j],
-            });
+            return Err(SamplingError::Peak { at: origin(j), event: events.len() + 1, ln_v: w[j] });
         }
         // The parabola through the three samples around the maximum.
         let (t1, t2, t3, w1, w2, w3) = (t[j - 1], t[j], t[j + 1], w[j - 1], w[j], w[j + 1]);
@@ -158,7 +154,7 @@ mod tests {
                     .sum::<f64>();
         }
         let u: Vec<f64> = t.iter().zip(&integral).map(|(t, i)| i - t).collect();
-        let origin: Vec<String> = (0..t.len()).map(|i| format!("index {i}")).collect();
+        let origin = |i: usize| format!("index {i}");
         let e = sampled_events(&t, &w, &u, &origin).unwrap();
         assert_eq!(e.len(), 1);
         let r3 = 3f64.sqrt();

@@ -17,8 +17,9 @@
 //! slip's steepness can swamp it) is compared at the same time from the same event's peak.
 
 use super::input::Trajectory;
-use super::reference::{reference_states, reference_steps};
+use super::reference::{reference_recurrence, reference_states, reference_steps};
 use super::sampled::{sampled_events, SampledEvent, SamplingError};
+use super::scale::{first_sample_fits, SceneMismatch};
 use crate::integrate::SolverError;
 use crate::model::Drr;
 use crate::scene::{Method, Scene};
@@ -110,6 +111,10 @@ pub struct TrajectoryComparison {
     pub events: [usize; 3],
     /// The reference and its accuracy.
     pub reference: ReferenceInfo,
+    /// Where the event counts differ: the mean recurrence of the file's events and of the
+    /// reference's (integrated past the file's end if needed; null if either has fewer than
+    /// two events).
+    pub recurrence: Option<MeanRecurrence>,
     /// The event with the largest relative recurrence (period) deviation (null with fewer
     /// than two events).
     pub period_error: Option<QuantityDeviation>,
@@ -127,11 +132,41 @@ pub struct TrajectoryComparison {
     pub reasons: Vec<String>,
 }
 
+/// The mean time between events, the file's and the reference's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeanRecurrence {
+    /// The file's: (last peak − first peak)/(events − 1).
+    pub user: f64,
+    /// The reference's: over its events in the file's span, or its first three upward
+    /// crossings of v = 1 where the span holds fewer than two.
+    pub reference: f64,
+}
+
+/// The mean recurrences where the file has two events or more (see [`MeanRecurrence`]).
+fn mean_recurrence(
+    drr: Drr,
+    start: f64,
+    y0: [f64; 3],
+    user: &[SampledEvent],
+    own: &[SampledEvent],
+    rtol: f64,
+) -> Result<Option<MeanRecurrence>, CompareError> {
+    let mean = |e: &[SampledEvent]| {
+        (e.len() >= 2).then(|| (e[e.len() - 1].peak - e[0].peak) / (e.len() - 1) as f64)
+    };
+    let Some(user) = mean(user) else { return Ok(None) };
+    let reference = match mean(own) {
+        Some(r) => Some(r),
+        None => reference_recurrence(drr, Method::Radau5, rtol, start, y0, 3)?,
+    };
+    Ok(reference.map(|reference| MeanRecurrence { user, reference }))
+}
+
 /// Largest state deviation per component.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StateMaxima {
-    /// |Δu|/max(|u|, 1).
-    pub u: f64,
+    /// |Δu|/max(|u|, 1) (null where u is computed from the force balance: not compared).
+    pub u: Option<f64>,
     /// |Δ ln v|.
     pub ln_v: f64,
     /// |Δθ|/max(|θ|, 1).
@@ -163,6 +198,9 @@ pub enum CompareError {
     /// The reference run of a report comparison failed.
     #[error("reference run failed: {0}")]
     ReferenceRun(crate::engine::EngineError),
+    /// The file does not fit the scene (other units, an offset u, too long a span).
+    #[error("{0}")]
+    Mismatch(#[from] SceneMismatch),
     /// The reference's own accuracy is not below tolerance/10 for some quantities.
     #[error(
         "the reference's own accuracy is not below tolerance/10 = {:.1e} for {}, so no verdict; \
@@ -223,10 +261,10 @@ fn side(
     user_events: &[SampledEvent],
 ) -> Result<Side, CompareError> {
     let (start, last) = (user.t[0], *user.t.last().expect("two samples"));
-    let (fine, states) = reference_steps(drr, method, rtol, start, y0, last)?;
+    let (fine, states) = reference_steps(drr, method, rtol, start, y0, last, user_events.len())?;
     let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
     let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
-    let origin: Vec<String> = fine.iter().map(|t| format!("reference at t = {t}")).collect();
+    let origin = |i: usize| format!("reference at t = {}", fine[i]);
     let own = sampled_events(&fine, &w, &u, &origin).map_err(CompareError::UnresolvedReference)?;
     let n = own.len().min(user_events.len());
     let anchor = anchors(&user.t, user_events, n);
@@ -245,7 +283,7 @@ fn side(
                 &pick(&|i| targets[i]),
                 &pick(&|i| in_phase[i][1]),
                 &pick(&|i| in_phase[i][0]),
-                &window.iter().map(|&i| user.origin[i].clone()).collect::<Vec<_>>(),
+                &|k| user.origin[window[k]].clone(),
             );
             // Where the reference cannot be located on the user's times (far off the user's
             // event), on its own steps.
@@ -304,6 +342,7 @@ pub fn against_trajectory(
     user: &Trajectory,
     tolerance: f64,
 ) -> Result<TrajectoryComparison, CompareError> {
+    first_sample_fits(scene, user, tolerance)?;
     let drr = Drr::new(scene.params);
     let rtol = (tolerance / 100.0).min(1e-12);
     let check_rtol = rtol / 10.0;
@@ -312,8 +351,8 @@ pub fn against_trajectory(
     let y0 = uw[0];
     let w_user: Vec<f64> = uw.iter().map(|y| y[1]).collect();
     let u_user: Vec<f64> = uw.iter().map(|y| y[0]).collect();
-    let user_events =
-        sampled_events(&user.t, &w_user, &u_user, &user.origin).map_err(CompareError::Input)?;
+    let user_events = sampled_events(&user.t, &w_user, &u_user, &|i| user.origin[i].clone())
+        .map_err(CompareError::Input)?;
     let reference = side(drr, Method::Radau5, rtol, user, y0, &user_events)?;
     let check = side(drr, Method::Rodas5p, check_rtol, user, y0, &user_events)?;
     let n = reference.aligned.len();
@@ -338,11 +377,14 @@ pub fn against_trajectory(
             tolerance,
         });
     }
+    // A u computed from the scene's own force balance (a QDYN file) is not compared: it only
+    // repeats v and θ, their rounding amplified by 1/ξ.
+    let compared = if user.u_from_force_balance { 1..3 } else { 0..3 };
     for &i in &between {
         let d = state_deviation(&check.in_phase[i], &reference.in_phase[i]);
-        for (name, d) in STATE_QUANTITIES.iter().zip(d) {
-            let a = accuracy.entry((*name).into()).or_insert(0.0);
-            *a = a.max(d);
+        for k in compared.clone() {
+            let a = accuracy.entry(STATE_QUANTITIES[k].into()).or_insert(0.0);
+            *a = a.max(d[k]);
         }
     }
     let inaccurate: Vec<(String, f64)> = accuracy
@@ -369,6 +411,7 @@ pub fn against_trajectory(
     let mut reasons = Vec::new();
     let span = user.t.last().expect("two samples") - start;
     let own_count = reference.own.len();
+    let mut recurrence = None;
     if user_events.len() != own_count {
         // One event more in one of them is only an edge effect if it ends within the
         // tolerance (of the span) of the file's end.
@@ -382,6 +425,13 @@ pub fn against_trajectory(
                 user_events.len(),
                 own_count
             ));
+            recurrence = mean_recurrence(drr, start, y0, &user_events, &reference.own, rtol)?;
+            if let Some(r) = &recurrence {
+                reasons.push(format!(
+                    "period: your events recur every {} (mean peak to peak), the reference's every {}: {:.3e} times its period (the t column in other units?)",
+                    r.user, r.reference, r.user / r.reference
+                ));
+            }
         }
     }
     let mut per_event = Vec::new();
@@ -428,7 +478,7 @@ pub fn against_trajectory(
     let mut worst_state: Option<StateDeviation> = None;
     for &i in &between {
         let d = state_deviation(&uw[i], &reference.in_phase[i]);
-        for k in 0..3 {
+        for k in compared.clone() {
             maxima[k] = maxima[k].max(d[k]);
             if !resolved(STATE_QUANTITIES[k]) {
                 continue;
@@ -462,12 +512,17 @@ pub fn against_trajectory(
         samples: user.t.len(),
         events: [user_events.len(), own_count, n],
         reference: reference_info,
+        recurrence,
         period_error: worst("recurrence"),
         worst_per_quantity,
         per_event,
         state_samples: between.len(),
         worst_state,
-        max_state_deviation: StateMaxima { u: maxima[0], ln_v: maxima[1], theta: maxima[2] },
+        max_state_deviation: StateMaxima {
+            u: (!user.u_from_force_balance).then_some(maxima[0]),
+            ln_v: maxima[1],
+            theta: maxima[2],
+        },
         reasons,
     })
 }
