@@ -419,14 +419,8 @@ impl<S: OdeSystem> Radau5<S> {
         transform: ToleranceTransform,
     ) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(
-            METHOD.name(),
-            n,
-            t0,
-            y0,
-            options,
-            Stats { last_order: 5, ..Stats::default() },
-        )?;
+        let core =
+            Core::new(METHOD, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
         core.reject_unsupported(&[(
             "max_order",
             options.max_order.is_some(),

@@ -248,14 +248,8 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(
-            METHOD.name(),
-            n,
-            t0,
-            y0,
-            options,
-            Stats { last_order: 5, ..Stats::default() },
-        )?;
+        let core =
+            Core::new(METHOD, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
         let no_newton = "a Rosenbrock method has no nonlinear iteration";
         core.reject_unsupported(&[
             ("max_order", options.max_order.is_some(), "the order is fixed at 5"),

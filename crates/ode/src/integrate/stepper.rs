@@ -183,15 +183,17 @@ impl Core {
         self.stats.last_step = h;
     }
 
-    /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0).
+    /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0) of
+    /// `method`.
     pub fn new(
-        name: &'static str,
+        method: Method,
         n: usize,
         t0: f64,
         y0: &[f64],
         options: &Options,
         stats: Stats,
     ) -> Result<Self, SolverError> {
+        let name = method.name();
         let invalid = |message: String| SolverError {
             solver: name,
             kind: ErrorKind::InvalidInput,

@@ -225,7 +225,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// non-finite, non-finite t0, invalid options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(METHOD.name(), n, t0, y0, options, Stats::default())?;
+        let core = Core::new(METHOD, n, t0, y0, options, Stats::default())?;
         let no_newton = "linearly implicit extrapolation has no Newton iteration";
         core.reject_unsupported(&[
             ("max_nonlin_iters", options.max_nonlin_iters.is_some(), no_newton),
