@@ -82,7 +82,8 @@ fn a_run_never_cancelled_is_the_plain_run() {
 #[test]
 fn a_cancelled_sweep_point_has_no_row() {
     let base: serde_json::Value = serde_json::from_str(SERIES).unwrap();
-    let params = [("epsilon".to_string(), 0.8)].into_iter().collect();
+    let epsilon = sweep::SweepParameter::from_name("epsilon").unwrap();
+    let params = [(epsilon, 0.8)].into_iter().collect();
     let cancel = Cancel::new();
     let row = sweep::run_point_cancellable(&base, 0, &params, &cancel);
     assert_eq!(row, Some(sweep::run_point(&base, 0, &params)));

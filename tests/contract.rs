@@ -246,7 +246,7 @@ fn tout_at_the_stop_time_is_reached_then_the_stop_time_is_disabled() {
 }
 
 /// Each integrator names its method, and `max_dense_order` is the bound `dense` keeps: 1
-/// before the first step, then the method's (`Capabilities::dense_order`; CVODE the order of
+/// before the first step, then the method's (`Method::dense_order`; CVODE the order of
 /// its last step).
 #[test]
 fn integrators_name_their_method_and_their_dense_order() {
@@ -258,7 +258,7 @@ fn integrators_name_their_method_and_their_dense_order() {
         assert!(integ.dense(0.0, 1).is_ok() && integ.dense(0.0, 2).is_err(), "{method}");
         integ.advance(1.0, Task::Normal).unwrap();
         let max = integ.max_dense_order();
-        let bound = method.capabilities().dense_order;
+        let bound = method.dense_order();
         assert!(max >= 1 && max <= bound, "{method}: {max} against {bound}");
         if !method.name().starts_with("cvode") {
             assert_eq!(max, bound, "{method}");

@@ -20,7 +20,13 @@ type Table = &'static [(&'static str, &'static [&'static str])];
 const CRATES: &[(&str, Table)] = &[
     (
         "crates/ode/src",
-        &[("integrate", &[]), ("sundials", &["integrate"]), ("solver", &["integrate", "sundials"])],
+        &[
+            // The methods' names and dense-output orders, which the integrators report.
+            ("method", &[]),
+            ("integrate", &["method"]),
+            ("sundials", &["integrate", "method"]),
+            ("solver", &["integrate", "method", "sundials"]),
+        ],
     ),
     (
         // integrate, solver and sundials are stickslip-ode's, re-exported at the crate root.
@@ -48,7 +54,7 @@ const CRATES: &[(&str, Table)] = &[
                 ],
             ),
             ("compare", &["engine", "integrate", "model", "report", "scene"]),
-            ("sweep", &["engine", "parallel", "report", "scene"]),
+            ("sweep", &["analysis", "engine", "parallel", "report", "scene"]),
         ],
     ),
     (

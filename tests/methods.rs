@@ -823,7 +823,7 @@ fn against_tight_run(
 /// Dense output matches a tight run and the right-hand side, and its derivatives are those of
 /// one polynomial.
 fn dense_output(method: Method) {
-    let order = method.capabilities().dense_order;
+    let order = method.dense_order();
     for case in row(method).dense {
         let rtol = case.rtol;
         let scale = move |y: f64| rtol * y.abs() + rtol;
@@ -846,7 +846,7 @@ fn dense_output(method: Method) {
             walk.fd.iter().map(|m| format!("{m:.1e}")).collect::<Vec<_>>().join(", "),
             walk.start_gap
         );
-        assert_eq!(subject.integ().max_dense_order(), order, "the capability table's order");
+        assert_eq!(subject.integ().max_dense_order(), order, "the method table's order");
         assert_eq!(walk.fd.len(), order as usize);
         let (bound, ratio) = case.inside;
         assert!(

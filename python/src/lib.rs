@@ -17,7 +17,6 @@ use numpy::PyReadonlyArrayDyn;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use std::collections::BTreeMap;
 use std::sync::mpsc;
 use std::time::Duration;
 use stickslip::analysis::time_series::SeriesCollector;
@@ -240,7 +239,7 @@ fn sweep_scene(
     }
     sweep::check_base(&base, &parsed)
         .map_err(|e| PyValueError::new_err(format!("{source}: {e}")))?;
-    let points: Vec<BTreeMap<String, f64>> = sweep::points(&parsed);
+    let points = sweep::points(&parsed);
     let cancel = Cancel::new();
     let stop = cancel.clone();
     let rows = off_the_gil(py, &cancel, move || {

@@ -3,14 +3,16 @@
 //! [`integrate`] holds the contract every integrator keeps (what a problem provides, the
 //! options, the statistics, the typed errors) and the homemade methods (Radau5, Rodas5P,
 //! extrapolation); [`sundials`] drives Debian's SUNDIALS (CVODE, ARKODE) through the same
-//! contract; [`solver`] is the method table: each method by name, what it can do
-//! ([`solver::Method::capabilities`]) and one constructor for all. A user who wants a stiff
-//! solver depends on this crate alone: it has no scenes, no command line and no figures.
+//! contract; [`solver`] is the method table: each method by name with its dense-output order
+//! (rows the integrators read too), what it can do ([`solver::Method::capabilities`]) and one
+//! constructor for all. A user who wants a stiff solver depends on this crate alone: it has
+//! no scenes, no command line and no figures.
 //!
 //! All FFI lives in [`sundials`]; everywhere else the crate denies it (`deny(unsafe_code)`).
 
 #![deny(unsafe_code)]
 
 pub mod integrate;
+mod method;
 pub mod solver;
 pub mod sundials;

@@ -1,5 +1,6 @@
-//! Solver selection: the methods by name ([`Method`]), a scene's solver settings
-//! ([`SolverSpec`]) and one constructor for every method ([`build`]).
+//! Solver selection: the methods ([`Method`]: their names and dense-output orders, defined
+//! below the integrators, which read them; what each can do, [`Method::capabilities`]), a
+//! scene's solver settings ([`SolverSpec`]) and one constructor for every method ([`build`]).
 //!
 //! It sits between the integrators ([`crate::integrate`], [`crate::sundials`]) and their users
 //! (analyses, the engine, library users): whoever needs an integrator names a method and gets
@@ -14,65 +15,7 @@ use crate::sundials::{
 };
 use serde::Serialize;
 
-/// Defines [`Method`] and its scene names from one list of `Variant = "name"` rows, so that
-/// [`Method::ALL`] and [`Method::name`] cannot miss a variant: a method is added by adding its
-/// row (and its [`Method::capabilities`] arm, which the compiler asks for).
-macro_rules! methods {
-    ($($(#[$doc:meta])* $variant:ident = $name:literal,)*) => {
-        /// Integration methods a scene can ask for.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-        pub enum Method {
-            $($(#[$doc])* $variant,)*
-        }
-
-        impl Method {
-            /// Every method with its scene name, in the order of the definition.
-            pub const ALL: [(&'static str, Method); [$($name),*].len()] =
-                [$(($name, Method::$variant)),*];
-
-            /// The scene name, e.g. "cvode-bdf".
-            pub fn name(self) -> &'static str {
-                match self {
-                    $(Method::$variant => $name,)*
-                }
-            }
-        }
-    };
-}
-
-methods! {
-    /// CVODE, variable-order BDF (stiff).
-    CvodeBdf = "cvode-bdf",
-    /// CVODE, Adams–Moulton (non-stiff).
-    CvodeAdams = "cvode-adams",
-    /// ARKStep, diagonally implicit Runge–Kutta (stiff).
-    ArkodeDirk = "arkode-dirk",
-    /// ARKStep, implicit–explicit: drive explicit, friction implicit (stiff).
-    ArkodeImex = "arkode-imex",
-    /// ARKStep, explicit Runge–Kutta (non-stiff).
-    ArkodeErk = "arkode-erk",
-    /// stickslip's own Radau IIA of order 5 (stiff, pure Rust).
-    Radau5 = "radau5",
-    /// stickslip's own Rosenbrock method Rodas5P (stiff, pure Rust).
-    Rodas5p = "rodas5p",
-    /// stickslip's own extrapolation with stiffness switching (linearly implicit Euler /
-    /// modified midpoint, the family the paper used; pure Rust).
-    Extrapolation = "extrapolation",
-}
-
-impl Serialize for Method {
-    /// The scene name, e.g. "cvode-bdf".
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.serialize_str(self.name())
-    }
-}
-
-impl std::fmt::Display for Method {
-    /// The scene name (padded to a width if one is given).
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.pad(self.name())
-    }
-}
+pub use crate::method::Method;
 
 impl std::str::FromStr for Method {
     type Err = MethodError;
@@ -234,7 +177,6 @@ impl Method {
             Method::CvodeBdf => Capabilities {
                 stiff: true,
                 needs_imex: false,
-                dense_order: 5,
                 family: "CVODE",
                 accepts: cvode,
                 engine: EngineSettings {
@@ -247,7 +189,6 @@ impl Method {
             Method::CvodeAdams => Capabilities {
                 stiff: false,
                 needs_imex: false,
-                dense_order: 12,
                 family: "CVODE",
                 accepts: cvode,
                 engine: plain,
@@ -256,7 +197,6 @@ impl Method {
             Method::ArkodeDirk => Capabilities {
                 stiff: true,
                 needs_imex: false,
-                dense_order: 5,
                 family: "ARKStep",
                 accepts: dirk,
                 engine: EngineSettings {
@@ -272,7 +212,6 @@ impl Method {
             Method::ArkodeImex => Capabilities {
                 stiff: true,
                 needs_imex: true,
-                dense_order: 3,
                 family: "ARKStep",
                 accepts: Accepts { explicit_table: true, ..dirk },
                 engine: EngineSettings {
@@ -285,7 +224,6 @@ impl Method {
             Method::ArkodeErk => Capabilities {
                 stiff: false,
                 needs_imex: false,
-                dense_order: 5,
                 family: "ARKStep",
                 accepts: Accepts {
                     max_nonlin_iters: false,
@@ -301,7 +239,6 @@ impl Method {
             },
             Method::Radau5 => Capabilities::own_stiff(
                 "Radau5",
-                3,
                 newton,
                 EngineSettings {
                     absolute_ln_v: Some(0.1),
@@ -311,13 +248,11 @@ impl Method {
             ),
             Method::Rodas5p => Capabilities::own_stiff(
                 "Rodas5P",
-                4,
                 Accepts { max_conv_fails: false, ..linearly_implicit },
                 EngineSettings { absolute_ln_v: Some(0.1), ..plain },
             ),
             Method::Extrapolation => Capabilities::own_stiff(
                 "Extrapolation",
-                3,
                 Accepts { max_order: true, jacobian_max_age: false, ..linearly_implicit },
                 EngineSettings { absolute_ln_v: Some(1.0), ..plain },
             ),
@@ -333,10 +268,6 @@ pub struct Capabilities {
     /// Needs a system split into explicit and implicit parts ([`ImexSystem`], built by
     /// [`build`]; [`build_ode`] refuses it).
     pub needs_imex: bool,
-    /// The largest k that `dense(t, k)` can accept after a step (CVODE: up to the order of
-    /// the last step, at most this; before the first step every method takes k ≤ 1 only).
-    /// [`Integrator::max_dense_order`] gives the bound in force.
-    pub dense_order: u32,
     /// The integrator family that runs it, as the report's `solver.integrator` names it.
     pub family: &'static str,
     /// The optional [`Options`] it accepts; [`build`] refuses the others.
@@ -351,17 +282,11 @@ pub struct Capabilities {
 
 impl Capabilities {
     /// The row of one of stickslip's own stiff methods (pure Rust, no IMEX split, inside the
-    /// physical-region guarantee): its `family`, `dense_order`, `accepts` and `engine`.
-    fn own_stiff(
-        family: &'static str,
-        dense_order: u32,
-        accepts: Accepts,
-        engine: EngineSettings,
-    ) -> Self {
+    /// physical-region guarantee): its `family`, `accepts` and `engine`.
+    fn own_stiff(family: &'static str, accepts: Accepts, engine: EngineSettings) -> Self {
         Capabilities {
             stiff: true,
             needs_imex: false,
-            dense_order,
             family,
             accepts,
             engine,

@@ -1025,7 +1025,11 @@ fn quasi_dynamic_continuation(
         .unwrap_or(0);
     let field = format!("analyses[{index}].continuation");
     match c.parameter {
-        Parameter::Gamma => Err(err(&format!("{field}.parameter"), "the quasi-dynamic model (\"inertia\": false) has no γ to continue; use \"epsilon\", \"xi\" or \"radiation_damping\"".into())),
+        Parameter::Gamma => {
+            let others =
+                Parameter::quoted_names(Parameter::ALL.into_iter().filter(|p| *p != Parameter::Gamma));
+            Err(err(&format!("{field}.parameter"), format!("the quasi-dynamic model (\"inertia\": false) has no γ to continue; use one of {others}")))
+        }
         Parameter::Eta if c.to <= 0.0 => Err(err(&format!("{field}.to"), format!("{}: the quasi-dynamic model needs radiation damping η > 0 (at η = 0 v blows up in finite time)", c.to))),
         _ => Ok(()),
     }

@@ -7,6 +7,7 @@
 //! of an uninterrupted one. Rows are appended as points finish (one write per line); `merge`
 //! sorts them by index and checks that none is missing.
 
+use crate::analysis::continuation::Parameter;
 use crate::scene::{self, AnalysisKind};
 use crate::{engine, parallel};
 use serde::{Deserialize, Serialize};
@@ -15,11 +16,54 @@ use std::io::Write;
 use std::path::Path;
 use std::sync::Mutex;
 
+/// A scene parameter a sweep can set: one that continuation follows too, or the power-law
+/// exponent α, which only sweeps set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum SweepParameter {
+    /// ε, ξ, γ or η ([`Parameter`]): the scene field `model.NAME`.
+    Continued(Parameter),
+    /// The power-law friction exponent α: the scene field `model.friction.power.alpha`.
+    Alpha,
+}
+
+impl SweepParameter {
+    /// Every parameter a sweep can set, in the order the errors list them.
+    pub fn all() -> impl Iterator<Item = Self> {
+        Parameter::ALL.into_iter().map(Self::Continued).chain([Self::Alpha])
+    }
+
+    /// The parameter by its scene name (`--param NAME=…`, the rows' `params`).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::all().find(|p| p.name() == name)
+    }
+
+    /// The scene name: [`Parameter::name`], or "alpha".
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Continued(p) => p.name(),
+            Self::Alpha => "alpha",
+        }
+    }
+
+    /// The keys of its scene field, from the scene's root.
+    pub fn path(self) -> Vec<&'static str> {
+        match self {
+            Self::Continued(_) => vec!["model", self.name()],
+            Self::Alpha => vec!["model", "friction", "power", self.name()],
+        }
+    }
+}
+
+/// The scene names of every [`SweepParameter`], as the errors list them.
+fn parameter_names() -> String {
+    SweepParameter::all().map(SweepParameter::name).collect::<Vec<_>>().join(", ")
+}
+
 /// One swept parameter: `NAME=START:STOP:COUNT[:log]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Axis {
-    /// Scene field: gamma, xi, epsilon, radiation_damping (η) or alpha (power-law exponent).
-    pub name: String,
+    /// The parameter.
+    pub parameter: SweepParameter,
     /// The values, in order.
     pub values: Vec<f64>,
 }
@@ -39,7 +83,7 @@ pub enum SweepError {
         spec: String,
     },
     /// `--param` names a parameter that cannot be swept.
-    #[error("--param {spec:?}: unknown parameter {name:?}; use gamma, xi, epsilon, radiation_damping or alpha")]
+    #[error("--param {spec:?}: unknown parameter {name:?}; use one of {}", parameter_names())]
     UnknownParameter {
         /// The argument as given.
         spec: String,
@@ -97,7 +141,7 @@ pub enum SweepError {
         spec: String,
     },
     /// The base scene's model is dimensional.
-    #[error("sweeps set gamma/xi/epsilon/radiation_damping: give the scene's model as gamma, xi, epsilon, not dimensional")]
+    #[error("sweeps set {}: give the scene's model as gamma, xi, epsilon, not dimensional", Parameter::ALL.map(Parameter::name).join("/"))]
     Dimensional,
     /// `--param alpha` on a scene without power-law friction.
     #[error("--param alpha needs a scene with \"friction\": {{\"power\": {{\"alpha\": ...}}}}")]
@@ -111,9 +155,8 @@ pub enum SweepError {
 pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
     let (name, range) =
         spec.split_once('=').ok_or_else(|| SweepError::AxisSyntax { spec: spec.into() })?;
-    if !["gamma", "xi", "epsilon", "radiation_damping", "alpha"].contains(&name) {
-        return Err(SweepError::UnknownParameter { spec: spec.into(), name: name.into() });
-    }
+    let parameter = SweepParameter::from_name(name)
+        .ok_or_else(|| SweepError::UnknownParameter { spec: spec.into(), name: name.into() })?;
     let parts: Vec<&str> = range.split(':').collect();
     let log = match parts.get(3) {
         None => false,
@@ -148,7 +191,7 @@ pub fn parse_axis(spec: &str) -> Result<Axis, SweepError> {
             }
         })
         .collect();
-    Ok(Axis { name: name.into(), values })
+    Ok(Axis { parameter, values })
 }
 
 impl std::str::FromStr for Axis {
@@ -160,8 +203,11 @@ impl std::str::FromStr for Axis {
     }
 }
 
+/// One point of a sweep: the value of each swept parameter.
+pub type Point = BTreeMap<SweepParameter, f64>;
+
 /// The points of the grid (the cartesian product of the axes, first axis slowest).
-pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
+pub fn points(axes: &[Axis]) -> Vec<Point> {
     let mut points = vec![BTreeMap::new()];
     for axis in axes {
         points = points
@@ -169,7 +215,7 @@ pub fn points(axes: &[Axis]) -> Vec<BTreeMap<String, f64>> {
             .flat_map(|p| {
                 axis.values.iter().map(move |&v| {
                     let mut q = p.clone();
-                    q.insert(axis.name.clone(), v);
+                    q.insert(axis.parameter, v);
                     q
                 })
             })
@@ -223,16 +269,13 @@ impl std::str::FromStr for Shard {
     }
 }
 
-/// The scene JSON with the point's parameters set (model.gamma, model.xi, model.epsilon,
-/// model.radiation_damping, model.friction.power.alpha); parsing it again re-validates everything and recomputes the
-/// default start on the slow manifold.
-fn scene_at(base: &serde_json::Value, params: &BTreeMap<String, f64>) -> serde_json::Value {
+/// The scene JSON with the point's parameters set (each at its [`SweepParameter::path`]);
+/// parsing it again re-validates everything and recomputes the default start on the slow
+/// manifold.
+fn scene_at(base: &serde_json::Value, point: &Point) -> serde_json::Value {
     let mut s = base.clone();
-    for (name, &v) in params {
-        let slot = match name.as_str() {
-            "alpha" => &mut s["model"]["friction"]["power"]["alpha"],
-            other => &mut s["model"][other],
-        };
+    for (parameter, &v) in point {
+        let slot = parameter.path().into_iter().fold(&mut s, |node, key| &mut node[key]);
         *slot = serde_json::json!(v);
     }
     s
@@ -243,7 +286,8 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepEr
     if base["model"].get("dimensional").is_some() {
         return Err(SweepError::Dimensional);
     }
-    if axes.iter().any(|a| a.name == "alpha") && base["model"]["friction"].get("power").is_none() {
+    let alpha = axes.iter().any(|a| a.parameter == SweepParameter::Alpha);
+    if alpha && base["model"]["friction"].get("power").is_none() {
         return Err(SweepError::AlphaWithoutPower);
     }
     let analyses = base["analyses"].as_array().map(Vec::as_slice).unwrap_or_default();
@@ -255,10 +299,10 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepEr
 
 /// Runs one point: the scene with its parameters (validated as `stickslip run` would), the
 /// requested report sections kept and the wall time dropped.
-pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<String, f64>) -> Row {
-    let outcome = point_scene(base, params)
+pub fn run_point(base: &serde_json::Value, index: usize, point: &Point) -> Row {
+    let outcome = point_scene(base, point)
         .and_then(|s| engine::run(&s, serde_json::Value::Null).map_err(|e| e.to_string()));
-    row(index, params, outcome)
+    row(index, point, outcome)
 }
 
 /// [`run_point`] that the caller can stop with `cancel` ([`engine::run_cancellable`]): `None`
@@ -266,11 +310,11 @@ pub fn run_point(base: &serde_json::Value, index: usize, params: &BTreeMap<Strin
 pub fn run_point_cancellable(
     base: &serde_json::Value,
     index: usize,
-    params: &BTreeMap<String, f64>,
+    point: &Point,
     cancel: &engine::Cancel,
 ) -> Option<Row> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let outcome = match point_scene(base, params) {
+    let outcome = match point_scene(base, point) {
         Err(e) => Err(e),
         Ok(s) => {
             let null = serde_json::Value::Null;
@@ -280,23 +324,17 @@ pub fn run_point_cancellable(
             }
         }
     };
-    Some(row(index, params, outcome))
+    Some(row(index, point, outcome))
 }
 
 /// The scene of one point, validated as `stickslip run` would.
-fn point_scene(
-    base: &serde_json::Value,
-    params: &BTreeMap<String, f64>,
-) -> Result<crate::scene::Scene, String> {
-    scene::parse(&scene_at(base, params).to_string(), "sweep point").map_err(|e| e.to_string())
+fn point_scene(base: &serde_json::Value, point: &Point) -> Result<crate::scene::Scene, String> {
+    scene::parse(&scene_at(base, point).to_string(), "sweep point").map_err(|e| e.to_string())
 }
 
 /// The row of point `index`: the requested sections of its report, or its error.
-fn row(
-    index: usize,
-    params: &BTreeMap<String, f64>,
-    outcome: Result<crate::report::Report, String>,
-) -> Row {
+fn row(index: usize, point: &Point, outcome: Result<crate::report::Report, String>) -> Row {
+    let params = point.iter().map(|(p, &v)| (p.name().to_string(), v)).collect();
     match outcome {
         Ok(report) => {
             let mut json = serde_json::to_value(&report).expect("a report serialises");
@@ -314,14 +352,9 @@ fn row(
             .into_iter()
             .filter_map(|k| json.get_mut(k).map(|v| (k.to_string(), v.take())))
             .collect();
-            Row {
-                index,
-                params: params.clone(),
-                report: Some(serde_json::Value::Object(sections)),
-                error: None,
-            }
+            Row { index, params, report: Some(serde_json::Value::Object(sections)), error: None }
         }
-        Err(e) => Row { index, params: params.clone(), report: None, error: Some(e) },
+        Err(e) => Row { index, params, report: None, error: Some(e) },
     }
 }
 
@@ -374,7 +407,7 @@ pub fn run(
         std::fs::write(out, "")?;
         Default::default()
     };
-    let todo: Vec<(usize, BTreeMap<String, f64>)> = points(axes)
+    let todo: Vec<(usize, Point)> = points(axes)
         .into_iter()
         .enumerate()
         .filter(|(i, _)| shard.is_none_or(|s| i % s.n == s.k - 1) && !done.contains(i))
@@ -382,8 +415,8 @@ pub fn run(
     let file = Mutex::new(std::fs::OpenOptions::new().append(true).create(true).open(out)?);
     // Each row is written as soon as its point finishes (what --resume reads back).
     parallel::try_map(todo.len(), threads, progress, |i| {
-        let (index, params) = &todo[i];
-        let row = run_point(base, *index, params);
+        let (index, point) = &todo[i];
+        let row = run_point(base, *index, point);
         let line = serde_json::to_string(&row).expect("a row serialises") + "\n";
         let mut f = file.lock().unwrap_or_else(|e| e.into_inner());
         f.write_all(line.as_bytes()).and_then(|_| f.flush())
@@ -405,4 +438,35 @@ pub fn merge(inputs: &[&Path], total: Option<usize>) -> std::io::Result<(Vec<Str
     let missing =
         total.map_or_else(Vec::new, |n| (0..n).filter(|i| !lines.contains_key(i)).collect());
     Ok((lines.into_values().collect(), missing))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each parameter's name parses back to it, and a point sets its scene field: α inside the
+    /// power law, the others in the model.
+    #[test]
+    fn axes_set_their_scene_fields() {
+        let base =
+            serde_json::json!({"model": {"gamma": 10.0, "friction": {"power": {"alpha": 0.3}}}});
+        for parameter in SweepParameter::all() {
+            let axis = parse_axis(&format!("{}=0.5:0.6:2", parameter.name())).unwrap();
+            assert_eq!(axis.parameter, parameter);
+            assert_eq!(axis.values, [0.5, 0.6]);
+            let scene = scene_at(&base, &points(&[axis])[1]);
+            let path = format!("/{}", parameter.path().join("/"));
+            assert_eq!(scene.pointer(&path), Some(&serde_json::json!(0.6)), "{path}");
+        }
+        let alpha = parse_axis("alpha=0.5:0.6:2").unwrap();
+        assert_eq!(alpha.parameter, SweepParameter::Alpha);
+        let no_power = serde_json::json!({"model": {"gamma": 10.0}});
+        assert_eq!(check_base(&no_power, &[alpha]), Err(SweepError::AlphaWithoutPower));
+        let e = parse_axis("mass=1:2:2").unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.contains("unknown parameter \"mass\"; use one of epsilon, xi, gamma, radiation_damping, alpha"),
+            "{text}"
+        );
+    }
 }

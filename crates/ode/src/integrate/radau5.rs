@@ -42,8 +42,10 @@ use super::stepper::{
     UROUND,
 };
 use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use crate::method::Method;
 
-const NAME: &str = "radau5";
+/// This method's row of the method table (its name and dense-output order).
+const METHOD: Method = Method::Radau5;
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// Jacobian reuse threshold on the Newton contraction θ.
@@ -418,7 +420,7 @@ impl<S: OdeSystem> Radau5<S> {
     ) -> Result<Self, SolverError> {
         let n = system.dim();
         let core =
-            Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+            Core::new(METHOD, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
         core.reject_unsupported(&[(
             "max_order",
             options.max_order.is_some(),
@@ -839,7 +841,7 @@ impl<S: OdeSystem> Radau5<S> {
     }
 }
 
-stepper::integrator_via_stepper!(Radau5, dense_order = 3, {
+stepper::integrator_via_stepper!(Radau5, METHOD, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed_h
     }

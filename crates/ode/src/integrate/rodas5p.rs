@@ -55,8 +55,10 @@ use super::stepper::{
     UROUND,
 };
 use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use crate::method::Method;
 
-const NAME: &str = "rodas5p";
+/// This method's row of the method table (its name and dense-output order).
+const METHOD: Method = Method::Rodas5p;
 /// Safety factor of the step-size control.
 const SAFE: f64 = 0.9;
 /// 1/FAC1 ≤ h_new/h ≤ 1/FAC2 (RODAS's WORK(3) = 0.2, WORK(4) = 6).
@@ -247,7 +249,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
         let core =
-            Core::new(NAME, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
+            Core::new(METHOD, n, t0, y0, options, Stats { last_order: 5, ..Stats::default() })?;
         let no_newton = "a Rosenbrock method has no nonlinear iteration";
         core.reject_unsupported(&[
             ("max_order", options.max_order.is_some(), "the order is fixed at 5"),
@@ -606,7 +608,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     }
 }
 
-stepper::integrator_via_stepper!(Rodas5p, dense_order = 4, {
+stepper::integrator_via_stepper!(Rodas5p, METHOD, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed_h
     }

@@ -12,6 +12,7 @@ use super::{
     panic_message, ErrorKind, ErrorScale, JacobianMatrix, OdeSystem, Options, SolverError, Stats,
     Step, StepEvent, Task, DEFAULT_MAX_STEPS,
 };
+use crate::method::Method;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The unit roundoff of RADAU5, RODAS, SEULEX and ODEX (step-underflow test, difference
@@ -182,15 +183,17 @@ impl Core {
         self.stats.last_step = h;
     }
 
-    /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0).
+    /// Checks (system dimension `n`, t0, y0, options) and the common state at (t0, y0) of
+    /// `method`.
     pub fn new(
-        name: &'static str,
+        method: Method,
         n: usize,
         t0: f64,
         y0: &[f64],
         options: &Options,
         stats: Stats,
     ) -> Result<Self, SolverError> {
+        let name = method.name();
         let invalid = |message: String| SolverError {
             solver: name,
             kind: ErrorKind::InvalidInput,
@@ -627,8 +630,9 @@ pub(super) enum FixedStepError {
 
 /// What a method provides to the shared driver.
 pub(super) trait Stepper {
-    /// Highest derivative [`dense`] gives.
-    const MAX_DENSE_ORDER: u32;
+    /// The method: its row of the method table gives the highest derivative [`dense`] gives
+    /// ([`Method::dense_order`]).
+    const METHOD: Method;
     fn core(&self) -> &Core;
     fn core_mut(&mut self) -> &mut Core;
     /// Evaluates f at the current point into `core.f0` if needed (see [`Core::ensure_f0`]).
@@ -812,10 +816,10 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
 }
 
 /// [`Integrator::dense`](super::Integrator::dense) of a method: the k-th derivative
-/// (k ≤ `M::MAX_DENSE_ORDER`) of the continuous output at t inside the last step; before the
+/// (k ≤ the dense order of `M::METHOD`) of the continuous output at t inside the last step; before the
 /// first step, only t = t0 and k ≤ 1.
 pub(super) fn dense<M: Stepper>(m: &mut M, t: f64, k: u32) -> Result<&[f64], SolverError> {
-    let max = M::MAX_DENSE_ORDER;
+    let max = M::METHOD.dense_order();
     if !t.is_finite() || k > max {
         return Err(m.core().invalid(format!(
             "dense output needs a finite t and k ≤ {max}, got t = {t}, k = {k}"
@@ -890,14 +894,14 @@ pub(super) fn jacobian<S: OdeSystem>(
     all_finite(jac)
 }
 
-/// `impl Stepper` and `impl Integrator` for a method `$T<S>` with the fields `core: Core` and
-/// `system: S` and the inherent `estimate_initial_step`, `step` and `reinit`; the [`Stepper`]
+/// `impl Stepper` and `impl Integrator` for the method `$method` ([`Method`]), implemented by
+/// `$T<S>` with the fields `core: Core` and `system: S` and the inherent `estimate_initial_step`, `step` and `reinit`; the [`Stepper`]
 /// items that differ between methods (`fixed_h`, `interpolate`, and `check_fixed` where the
 /// default does not fit) are given in braces.
 macro_rules! integrator_via_stepper {
-    ($T:ident, dense_order = $order:expr, { $($items:tt)* }) => {
+    ($T:ident, $method:expr, { $($items:tt)* }) => {
         impl<S: OdeSystem> stepper::Stepper for $T<S> {
-            const MAX_DENSE_ORDER: u32 = $order;
+            const METHOD: $crate::method::Method = $method;
             fn core(&self) -> &stepper::Core {
                 &self.core
             }
@@ -1024,7 +1028,7 @@ macro_rules! integrator_via_stepper {
             }
             fn max_dense_order(&self) -> u32 {
                 if self.core().have_step {
-                    <Self as stepper::Stepper>::MAX_DENSE_ORDER
+                    <Self as stepper::Stepper>::METHOD.dense_order()
                 } else {
                     1
                 }

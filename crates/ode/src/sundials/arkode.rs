@@ -5,6 +5,7 @@ use super::callbacks;
 use super::ffi;
 use super::solver::{check_dimension, counter, Api, Creation, Solver, StatGetters};
 use crate::integrate::{ErrorKind, ImexSystem, OdeSystem, Options, SolverError, Stats};
+use crate::method::Method;
 use std::ffi::{c_int, c_long, c_void};
 
 /// Declares `mod ark` with one name per ARKStep operation, from rows
@@ -438,18 +439,18 @@ impl<S: OdeSystem> Solver<S> {
         options: &Options,
     ) -> Result<Self, SolverError> {
         let implicit = matches!(method, ArkMethod::Dirk(_));
-        let name = if implicit { "arkode-dirk" } else { "arkode-erk" };
-        check_dimension(name, system.dim(), t0, y0)?;
+        // The method-table row of this ArkMethod (its name and dense-output order).
+        let row = if implicit { Method::ArkodeDirk } else { Method::ArkodeErk };
+        check_dimension(row.name(), system.dim(), t0, y0)?;
         if !implicit {
-            no_newton(name, options, t0, y0)?;
+            no_newton(row.name(), options, t0, y0)?;
         }
         let jacobian_hint: fn(&S, SolverError) -> SolverError =
             if implicit { crate::integrate::jacobian_hint::<S> } else { |_, e| e };
         let jacobian: ffi::CVLsJacFn =
             if implicit && system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {
-            name,
-            max_dense_order: 5,
+            method: row,
             jacobian_hint,
             system,
             t0,
@@ -488,16 +489,17 @@ impl<S: ImexSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        check_dimension("arkode-imex", system.dim(), t0, y0)?;
+        let method = Method::ArkodeImex;
+        check_dimension(method.name(), system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn = if system.has_implicit_jacobian() {
             Some(callbacks::implicit_jacobian::<S>)
         } else {
             None
         };
-        // The Lagrange interpolant (below) of ARKODE's default degree 3.
+        // Its dense order is that of the Lagrange interpolant (below) of ARKODE's default
+        // degree 3.
         let creation = Creation {
-            name: "arkode-imex",
-            max_dense_order: 3,
+            method,
             jacobian_hint: crate::integrate::implicit_jacobian_hint::<S>,
             system,
             t0,

@@ -4,6 +4,7 @@ use super::callbacks;
 use super::ffi;
 use super::solver::{check_dimension, counter, Api, Creation, Getter, Solver, StatGetters};
 use crate::integrate::{ErrorKind, OdeSystem, Options, SolverError, Stats};
+use crate::method::Method;
 use std::ffi::{c_int, c_long, c_void};
 
 /// CVODE's linear multistep family.
@@ -149,16 +150,15 @@ impl<S: OdeSystem> Solver<S> {
         y0: &[f64],
         options: &Options,
     ) -> Result<Self, SolverError> {
-        let (name, max_dense_order) = match settings.method {
-            CvodeMethod::Bdf => ("cvode-bdf", 5),
-            CvodeMethod::Adams => ("cvode-adams", 12),
+        let method = match settings.method {
+            CvodeMethod::Bdf => Method::CvodeBdf,
+            CvodeMethod::Adams => Method::CvodeAdams,
         };
-        check_dimension(name, system.dim(), t0, y0)?;
+        check_dimension(method.name(), system.dim(), t0, y0)?;
         let jacobian: ffi::CVLsJacFn =
             if system.has_jacobian() { Some(callbacks::jacobian::<S>) } else { None };
         let creation = Creation {
-            name,
-            max_dense_order,
+            method,
             jacobian_hint: crate::integrate::jacobian_hint::<S>,
             system,
             t0,

@@ -10,6 +10,7 @@ use crate::integrate::{
     panic_message, ErrorKind, ErrorWeights, Integrator, Options, Roots, SolverError, Stats, Step,
     StepEvent, Task, Tolerance,
 };
+use crate::method::Method;
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr::NonNull;
 
@@ -61,7 +62,7 @@ pub(crate) struct Api {
     pub explain: fn(c_int) -> Option<&'static str>,
     /// Whether the order of the last step bounds the dense output's derivatives (CVODE, whose
     /// `GetDky` refuses a higher k itself); otherwise the interpolant's degree does
-    /// ([`Creation::max_dense_order`], checked by the wrapper: ARKODE answers zero above it).
+    /// ([`Solver::max_dense_order`], checked by the wrapper: ARKODE answers zero above it).
     pub dense_order_is_last_order: bool,
 }
 
@@ -177,9 +178,10 @@ pub(crate) struct Attached {
 pub struct Solver<S> {
     mem: NonNull<c_void>,
     api: &'static Api,
-    /// The method's scene name (see [`Creation::name`]).
+    /// The method's scene name ([`Method::name`] of [`Creation::method`]).
     name: &'static str,
-    /// See [`Creation::max_dense_order`].
+    /// The largest k of dense output after a step ([`Method::dense_order`] of
+    /// [`Creation::method`]; CVODE: further limited by the order of the last step).
     max_dense_order: u32,
     /// See [`Creation::jacobian_hint`].
     jacobian_hint: fn(&S, SolverError) -> SolverError,
@@ -218,11 +220,9 @@ pub struct Solver<S> {
 
 /// Which right-hand side(s) a new solver memory is created with; used by the constructors.
 pub(crate) struct Creation<S> {
-    /// The method's scene name, e.g. "cvode-bdf" (errors and `Integrator::name`).
-    pub name: &'static str,
-    /// The largest k of dense output after a step (CVODE: further limited by the order of
-    /// the last step).
-    pub max_dense_order: u32,
+    /// The method: its row of the method table gives the name (errors and
+    /// `Integrator::name`) and the dense-output order.
+    pub method: Method,
     /// Appends to an error the Jacobian's disagreement with differences at the failure point
     /// (`integrate::jacobian_hint`), or leaves it.
     pub jacobian_hint: fn(&S, SolverError) -> SolverError,
@@ -246,17 +246,9 @@ impl<S> Solver<S> {
         options: &Options,
         create: impl FnOnce(&SerialVector, &Context) -> Mem,
     ) -> Result<Self, SolverError> {
-        let Creation {
-            name,
-            max_dense_order,
-            jacobian_hint,
-            system,
-            t0,
-            y0,
-            needs_linear_solver,
-            jacobian,
-            rhs,
-        } = creation;
+        let Creation { method, jacobian_hint, system, t0, y0, needs_linear_solver, jacobian, rhs } =
+            creation;
+        let (name, max_dense_order) = (method.name(), method.dense_order());
         let dim = y0.len();
         let invalid = |message: String| SolverError {
             solver: name,

@@ -21,7 +21,7 @@ use crate::model::{Drr, DrrParams};
 use serde::Serialize;
 
 /// The parameter being continued.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Parameter {
     /// ε = (B − A)/A.
@@ -35,7 +35,23 @@ pub enum Parameter {
 }
 
 impl Parameter {
-    /// The scene name.
+    /// Every parameter, in the order the errors list them.
+    pub const ALL: [Parameter; 4] =
+        [Parameter::Epsilon, Parameter::Xi, Parameter::Gamma, Parameter::Eta];
+
+    /// The parameter by its scene name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The scene names of `parameters`, quoted and comma-separated, as errors list them.
+    pub fn quoted_names(parameters: impl IntoIterator<Item = Parameter>) -> String {
+        let names: Vec<String> =
+            parameters.into_iter().map(|p| format!("\"{}\"", p.name())).collect();
+        names.join(", ")
+    }
+
+    /// The scene name (the one place it is written: scenes, sweeps and errors read it here).
     pub fn name(self) -> &'static str {
         match self {
             Parameter::Epsilon => "epsilon",

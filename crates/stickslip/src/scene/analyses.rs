@@ -335,21 +335,13 @@ struct RawContinuation {
 fn continuation(out: &mut Analyses, v: Value, entry: &Entry) -> Result<(), SceneError> {
     let c: RawContinuation =
         serde_json::from_value(v).map_err(|e| entry.error("continuation", e.to_string()))?;
-    let parameter = match c.parameter.as_str() {
-        "epsilon" => Parameter::Epsilon,
-        "xi" => Parameter::Xi,
-        "gamma" => Parameter::Gamma,
-        "radiation_damping" => Parameter::Eta,
-        other => {
-            return Err(entry.error(
-                "continuation.parameter",
-                format!(
-                    "\"{other}\" cannot be continued; use \"epsilon\", \"xi\", \"gamma\" or \
-                     \"radiation_damping\""
-                ),
-            ))
-        }
-    };
+    let parameter = Parameter::from_name(&c.parameter).ok_or_else(|| {
+        let names = Parameter::quoted_names(Parameter::ALL);
+        entry.error(
+            "continuation.parameter",
+            format!("\"{}\" cannot be continued; use one of {names}", c.parameter),
+        )
+    })?;
     let to = continuation_end(parameter, c.to, entry)?;
     if !(2..=100_000).contains(&c.points) {
         return Err(entry

@@ -105,10 +105,12 @@ use super::stepper::{
     MAX_SINGULAR,
 };
 use super::{ErrorWeights, Integrator, OdeSystem, Options, SolverError, Stats, Step, Task};
+use crate::method::Method;
 use explicit::stability_boundaries;
 use tableau::{Control, Failure, Work, DEFAULT_FIRST, KM_EXPLICIT, KM_IMPLICIT};
 
-const NAME: &str = "extrapolation";
+/// This method's row of the method table (its name and dense-output order).
+const METHOD: Method = Method::Extrapolation;
 const DEFAULT_MAX_ROW_FAILS: u32 = 50;
 
 /// Failures counted within one step, each against its own limit.
@@ -223,7 +225,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// non-finite, non-finite t0, invalid options.
     pub fn new(system: S, t0: f64, y0: &[f64], options: &Options) -> Result<Self, SolverError> {
         let n = system.dim();
-        let core = Core::new(NAME, n, t0, y0, options, Stats::default())?;
+        let core = Core::new(METHOD, n, t0, y0, options, Stats::default())?;
         let no_newton = "linearly implicit extrapolation has no Newton iteration";
         core.reject_unsupported(&[
             ("max_nonlin_iters", options.max_nonlin_iters.is_some(), no_newton),
@@ -651,7 +653,7 @@ impl<S: OdeSystem> Extrapolation<S> {
     }
 }
 
-stepper::integrator_via_stepper!(Extrapolation, dense_order = 3, {
+stepper::integrator_via_stepper!(Extrapolation, METHOD, {
     fn fixed_h(&self) -> Option<f64> {
         self.fixed.map(|(h, _)| h)
     }
