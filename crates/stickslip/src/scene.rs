@@ -670,10 +670,10 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         (ModelKind::Drr, ModelKind::Drr.dimension(), Some(gamma * gamma)),
         err,
     )?;
-    papers_model_only(&params, &analyses, err)?;
     if !state_law.heals() {
         no_healing_analyses(&analyses, &raw.analyses, err)?;
     }
+    papers_model_only(&params, &analyses, err)?;
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
     }
