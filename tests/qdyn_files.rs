@@ -105,8 +105,8 @@ fn a_no_healing_file_reports_its_runaway_time_as_qdyn_reaches_it() {
     assert!((threshold - qdyn_input::NO_HEALING_RUNAWAY_VELOCITY).abs() < 1e-15);
     // ξ = 0.25, ε = 0.5, η = 5e-8, v from 0.5 to 1e9, time unit D_c/V_pl = 1e5 s.
     let (xi, c, eta) = (0.25f64, 1.25f64, 5e-8);
-    let exact = 1e5
-        * ((2e9f64).ln() / xi + (eta - c / xi) / c * ((c * 1e9 + xi) / (c * 0.5 + xi)).ln());
+    let exact =
+        1e5 * ((2e9f64).ln() / xi + (eta - c / xi) / c * ((c * 1e9 + xi) / (c * 0.5 + xi)).ln());
     let t = runaway["physical"]["t"].as_f64().unwrap();
     assert!((t - exact).abs() < 1e-11 * exact, "{t} vs the closed form {exact}");
     // QDYN's crossings of 1e-3, 1e-2 and 1 m/s, the first two by a scene kept from the file with

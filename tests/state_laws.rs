@@ -299,7 +299,9 @@ fn no_healing_quasi_dynamic_runaway_time_is_the_closed_form() {
         (0.8, 1.0, 0.05, 1.0, 1e3),
         (1.2, 0.5, 1e-3, 1e-3, 1e6), // ξ > 1: the start creeps, then runs away
     ] {
-        let model = format!(r#""xi": {xi}, "epsilon": {eps}, "radiation_damping": {eta}, "inertia": false"#);
+        let model = format!(
+            r#""xi": {xi}, "epsilon": {eps}, "radiation_damping": {eta}, "inertia": false"#
+        );
         let exact = closed_form(xi, eps, eta, v0, v1);
         for method in ["radau5", "cvode-bdf", "rodas5p"] {
             let report = run_scene(&no_healing(&model, v0, v1, 1e3, method, 1e-11));
@@ -307,7 +309,10 @@ fn no_healing_quasi_dynamic_runaway_time_is_the_closed_form() {
             assert!((t - exact).abs() < 1e-9 * exact, "{method} ξ={xi}: {t} vs {exact}");
             // The run ends there: its last state is the runaway's.
             let series = report.time_series.as_ref().unwrap();
-            assert_eq!(series.final_state[1], report.runaway.as_ref().unwrap().at.unwrap().v_reached);
+            assert_eq!(
+                series.final_state[1],
+                report.runaway.as_ref().unwrap().at.unwrap().v_reached
+            );
             assert!(report.cycle.is_none() && report.hopf.is_none());
         }
     }
@@ -368,7 +373,8 @@ fn no_healing_scenes_refuse_what_needs_a_steady_state_or_a_cycle() {
     let e = parse_error(model, r#"[{"time_series": {"t_max": 10, "runaway_velocity": -1}}]"#);
     assert_eq!(e.field, "analyses[0].time_series.runaway_velocity", "{e}");
     // A threshold below the start is bad input (exit 2), not a failed run.
-    let text = no_healing(r#""gamma": 100, "xi": 0.5, "epsilon": 0.5"#, 5.0, 2.0, 10.0, "radau5", 1e-8);
+    let text =
+        no_healing(r#""gamma": 100, "xi": 0.5, "epsilon": 0.5"#, 5.0, 2.0, 10.0, "radau5", 1e-8);
     let s = scene::parse(&text, "t").unwrap();
     let e = stickslip::engine::run(&s, serde_json::Value::Null).unwrap_err();
     assert!(e.is_bad_input() && e.message.contains("runaway_velocity"), "{e}");

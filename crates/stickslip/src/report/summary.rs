@@ -193,7 +193,10 @@ fn runaway(r: &Runaway, series: Option<&TimeSeriesReport>) -> String {
     let threshold = format!(
         "v = {:e}{}",
         r.v_threshold,
-        physical.map_or(String::new(), |p| format!(" (V = {:e} in the input's unit)", p.velocity_threshold))
+        physical.map_or(String::new(), |p| format!(
+            " (V = {:e} in the input's unit)",
+            p.velocity_threshold
+        ))
     );
     match &r.at {
         Some(a) => format!(

@@ -405,7 +405,8 @@ impl Run<'_, '_> {
             // The end of this step, or t_max or the runaway inside it (local time).
             let end = self.clock.global(next.t);
             let mut last = (end.since(t_max) >= 0.0).then_some(t_max);
-            let mut until = if last.is_some() { t_max.since(self.clock.global(0.0)) } else { next.t };
+            let mut until =
+                if last.is_some() { t_max.since(self.clock.global(0.0)) } else { next.t };
             let runaway = match self.settings.runaway_v.map(f64::ln) {
                 Some(level) if self.prev.y[W] < level && next.y[W] >= level => {
                     let span = (self.prev.t, next.t);
