@@ -729,6 +729,7 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
         first_non_finite_in(AnalysisKind::Noise.name(), r.noise.as_ref()),
         first_non_finite_in(AnalysisKind::TimeSeries.name(), r.time_series.as_ref()),
         first_non_finite_in("events", r.events.as_ref()),
+        first_non_finite_in("runaway", r.runaway.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
     match sections.into_iter().flatten().next() {

@@ -52,7 +52,8 @@ pub struct RunawayPhysical {
     /// The slip since the start (length units).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub slip: Option<f64>,
-    /// The state Θ there (time units; logarithmic and QDYN friction laws only).
+    /// The state Θ there (time units; logarithmic and QDYN friction laws only, where it is a
+    /// finite double).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub state: Option<f64>,
     /// The shear stress relative to steady sliding at v0, aσ·φ (stress units).
@@ -87,7 +88,11 @@ impl Runaway {
             velocity_threshold: s.velocity(v_threshold),
             t: at.map(|a| s.time(a.t)),
             slip: at.map(|a| s.slip(a.slip)),
-            state: at.filter(|_| has_state).map(|a| s.state_from_theta(a.theta)),
+            // Absent where Θ = (D_c/v0)·e^{θa/b} is not a double (θ far above 0).
+            state: at
+                .filter(|_| has_state)
+                .map(|a| s.state_from_theta(a.theta))
+                .filter(|x| x.is_finite()),
             shear_stress_change: at.map(|a| s.shear_stress_change(a.stress)),
         });
         Self { v_threshold, reached: at.is_some(), at, physical }
