@@ -89,6 +89,44 @@ fn pyqdyn_written_files_run_directly_and_agree_with_qdyns_runs() {
     }
 }
 
+/// `THETA_LAW = 0` (no healing) has no cycle: the run stops where V reaches 1 m/s and reports
+/// the time (exit 0), where QDYN runs on until its solver fails. Against QDYN's run of the same
+/// file (data/reference/qdyn_no_healing.json: its output interpolated in ln V, so good to
+/// ~1e-11 at its sample spacing there) and the quasi-dynamic closed form
+/// (docs/state-laws.md; tests/state_laws.rs).
+#[test]
+fn a_no_healing_file_reports_its_runaway_time_as_qdyn_reaches_it() {
+    let file = data("qdyn/classic_no_healing.in");
+    let report = json_of(&stickslip(&["run", file.to_str().unwrap(), "--json"]));
+    assert_eq!(report["model"]["state_law"], "no_healing");
+    assert!(report.get("cycle").is_none(), "no cycle analysis");
+    let runaway = &report["runaway"];
+    assert_eq!(runaway["reached"], true, "{runaway}");
+    let threshold = runaway["physical"]["velocity_threshold"].as_f64().unwrap();
+    assert!((threshold - qdyn_input::NO_HEALING_RUNAWAY_VELOCITY).abs() < 1e-15);
+    // ξ = 0.25, ε = 0.5, η = 5e-8, v from 0.5 to 1e9, time unit D_c/V_pl = 1e5 s.
+    let (xi, c, eta) = (0.25f64, 1.25f64, 5e-8);
+    let exact =
+        1e5 * ((2e9f64).ln() / xi + (eta - c / xi) / c * ((c * 1e9 + xi) / (c * 0.5 + xi)).ln());
+    let t = runaway["physical"]["t"].as_f64().unwrap();
+    assert!((t - exact).abs() < 1e-11 * exact, "{t} vs the closed form {exact}");
+    // QDYN's crossings of 1e-3, 1e-2 and 1 m/s, the first two by a scene kept from the file with
+    // its threshold changed.
+    let text = std::fs::read_to_string(data("reference/qdyn_no_healing.json")).unwrap();
+    let reference: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mapped = qdyn_input::to_scene(&std::fs::read_to_string(&file).unwrap(), "f", "f").unwrap();
+    for crossing in reference["crossings"].as_array().unwrap() {
+        let velocity = crossing["velocity_m_per_s"].as_f64().unwrap();
+        let theirs = crossing["t_s"].as_f64().unwrap();
+        let mut scene: serde_json::Value = serde_json::from_str(&mapped).unwrap();
+        scene["analyses"][0]["time_series"]["runaway_velocity"] = velocity.into();
+        let s = scene::parse(&scene.to_string(), "kept").unwrap();
+        let r = stickslip::engine::run(&s, scene).unwrap();
+        let ours = r.runaway.unwrap().physical.unwrap().t.unwrap();
+        assert!((ours - theirs).abs() < 1e-10 * theirs, "V = {velocity}: {ours} vs QDYN {theirs}");
+    }
+}
+
 #[test]
 fn printed_scene_runs_to_the_identical_report() {
     let file = data("qdyn/cut_a_slip.in");
@@ -139,7 +177,7 @@ fn unsupported_or_bad_files_exit_2_naming_the_line_and_field() {
     };
     let cases = [
         (with_line(1, "1 meshdim"), 1, "MESHDIM", "MESHDIM = 0"),
-        (with_line(4, "0 itheta_law"), 4, "THETA_LAW", "not supported"),
+        (with_line(4, "3 itheta_law"), 4, "THETA_LAW", "not a QDYN state law"),
         (with_line(5, "3 i_rns_law"), 5, "RNS_LAW", "CNS"),
         (with_line(6, "1 i_sigma_law"), 6, "SIGMA_CPL", "not supported"),
         (with_line(7, "1 0 0"), 7, "FEAT_STRESS_COUPL", "not supported"),

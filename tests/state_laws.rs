@@ -263,3 +263,135 @@ fn a_deep_ageing_stick_reports_its_true_lowest_ln_v_and_the_cycle_converges_at_r
     }
     assert!(spread(&periods) < 1e-7, "{periods:?}");
 }
+
+/// A no-healing scene (docs/state-laws.md): `model` fields, the start v, θ = 0 and a
+/// time_series to `t_max` with the runaway threshold `v1`.
+fn no_healing(model: &str, v0: f64, v1: f64, t_max: f64, method: &str, rtol: f64) -> String {
+    format!(
+        r#"{{"name": "no_healing", "model": {{{model}, "state_law": "no_healing"}},
+            "initial": {{"v": {v0}, "theta": 0.0}}, "solver": {{"method": "{method}", "rtol": {rtol}}},
+            "analyses": [{{"time_series": {{"t_max": {t_max}, "runaway_velocity": {v1}}}}}]}}"#
+    )
+}
+
+/// The runaway's time and state, asserting it was reached.
+fn runaway_time(report: &Report) -> f64 {
+    let r = report.runaway.as_ref().expect("a runaway section");
+    let at = r.at.expect("the threshold reached");
+    assert!(r.reached);
+    // ln v is located to what the time's doubles resolve: |dw/dt|·ulp(t), e.g.
+    // 2.5e7 × 2.2e-16 = 5.5e-9 at v = 1e9 in QDYN's spring-block.
+    assert!((at.v_reached / r.v_threshold - 1.0).abs() < 1e-7, "{r:?}");
+    at.t
+}
+
+#[test]
+fn no_healing_quasi_dynamic_runaway_time_is_the_closed_form() {
+    // On the force balance ξu + θ + ln v + ηv = 0 with dθ/dt = −(1+ε)v:
+    // dv/dt = v((1+ε−ξ)v + ξ)/(1 + ηv), so from v0 to v1
+    // t = ln(v1/v0)/ξ + ((η − c/ξ)/c) ln((c v1 + ξ)/(c v0 + ξ)), c = 1 + ε − ξ.
+    let closed_form = |xi: f64, eps: f64, eta: f64, v0: f64, v1: f64| {
+        let c = 1.0 + eps - xi;
+        (v1 / v0).ln() / xi + (eta - c / xi) / c * ((c * v1 + xi) / (c * v0 + xi)).ln()
+    };
+    for (xi, eps, eta, v0, v1) in [
+        (0.25, 0.5, 5e-8, 0.5, 1e9), // QDYN's spring-block (tests/qdyn_files.rs)
+        (0.8, 1.0, 0.05, 1.0, 1e3),
+        (1.2, 0.5, 1e-3, 1e-3, 1e6), // ξ > 1: the start creeps, then runs away
+    ] {
+        let model = format!(
+            r#""xi": {xi}, "epsilon": {eps}, "radiation_damping": {eta}, "inertia": false"#
+        );
+        let exact = closed_form(xi, eps, eta, v0, v1);
+        for method in ["radau5", "cvode-bdf", "rodas5p"] {
+            let report = run_scene(&no_healing(&model, v0, v1, 1e3, method, 1e-11));
+            let t = runaway_time(&report);
+            assert!((t - exact).abs() < 1e-9 * exact, "{method} ξ={xi}: {t} vs {exact}");
+            // The run ends there: its last state is the runaway's.
+            let series = report.time_series.as_ref().unwrap();
+            assert_eq!(
+                series.final_state[1],
+                report.runaway.as_ref().unwrap().at.unwrap().v_reached
+            );
+            assert!(report.cycle.is_none() && report.hopf.is_none());
+        }
+    }
+}
+
+#[test]
+fn no_healing_with_a_stiff_spring_does_not_run_away_and_says_so() {
+    // ξ > 1 + ε: v tends to ξ/(ξ − 1 − ε) = 2 while θ keeps falling; the threshold 10 is
+    // never reached, which the report states (not a failure).
+    let model = r#""xi": 3.0, "epsilon": 0.5, "radiation_damping": 0.05, "inertia": false"#;
+    let report = run_scene(&no_healing(model, 0.5, 10.0, 200.0, "radau5", 1e-10));
+    let r = report.runaway.as_ref().unwrap();
+    assert!(!r.reached && r.at.is_none(), "{r:?}");
+    let v_end = report.time_series.as_ref().unwrap().final_state[1];
+    assert!((v_end - 2.0).abs() < 1e-9, "{v_end}");
+}
+
+#[test]
+fn no_healing_inertial_runaway_time_agrees_across_methods() {
+    // No closed form with inertia: three methods at rtol 1e-12 (measured: within 3e-11).
+    // Measured against the closed form above: radau5 within 6e-14, rodas5p 8e-13, cvode-bdf
+    // 2.5e-10 (rtol 1e-11).
+    let model = r#""gamma": 100, "xi": 0.5, "epsilon": 0.5"#;
+    let times: Vec<f64> = ["cvode-bdf", "radau5", "rodas5p"]
+        .iter()
+        .map(|m| runaway_time(&run_scene(&no_healing(model, 0.5, 1e6, 100.0, m, 1e-12))))
+        .collect();
+    assert!(spread(&times) < 1e-9, "{times:?}");
+    assert!((times[1] - 1.4570177347).abs() < 1e-9, "{times:?}");
+    // The events still work: the run crossed v = 1 upward and stopped inside that event.
+    let report = run_scene(&no_healing(model, 0.5, 1e6, 100.0, "radau5", 1e-12));
+    let series = report.time_series.as_ref().unwrap();
+    assert!(series.in_event_at_end && series.event_count == 0, "{series:?}");
+}
+
+#[test]
+fn no_healing_scenes_refuse_what_needs_a_steady_state_or_a_cycle() {
+    let model = r#"{"gamma": 100, "xi": 0.5, "epsilon": 0.5, "state_law": "no_healing"}"#;
+    for (analyses, named) in [
+        (r#"["hopf"]"#, "hopf"),
+        (r#"["hopf", "cycle", "paper"]"#, "hopf"),
+        (r#"["cycle"]"#, "cycle"),
+        (r#"["cycle", {"trajectory": {"cycles": 1}}]"#, "cycle"),
+        (r#"["cycle", "asymptotics"]"#, "cycle"),
+        (r#"["cycle", "lyapunov"]"#, "cycle"),
+        (r#"["shooting"]"#, "shooting"),
+        (r#"[{"noise": {"amplitudes": [0, 0, 1e-3]}}]"#, "noise"),
+    ] {
+        let e = parse_error(model, analyses);
+        assert_eq!(e.field, "analyses", "{analyses}: {e}");
+        assert!(e.message.contains(&format!("\"{named}\" analysis")), "{e}");
+        assert!(e.message.contains("no_healing") && e.message.contains("runaway_velocity"), "{e}");
+    }
+    let e = parse_error(model, r#"["hopf"]"#);
+    assert!(e.message.contains("\"hopf\" analysis needs a steady state"), "{e}");
+    let e = parse_error(model, r#"[{"time_series": {"t_max": 10}}]"#);
+    assert_eq!(e.field, "analyses[0].time_series.runaway_velocity", "{e}");
+    let e = parse_error(model, r#"[{"time_series": {"t_max": 10, "runaway_velocity": -1}}]"#);
+    assert_eq!(e.field, "analyses[0].time_series.runaway_velocity", "{e}");
+    // A threshold below the start is bad input (exit 2), not a failed run.
+    let text =
+        no_healing(r#""gamma": 100, "xi": 0.5, "epsilon": 0.5"#, 5.0, 2.0, 10.0, "radau5", 1e-8);
+    let s = scene::parse(&text, "t").unwrap();
+    let e = stickslip::engine::run(&s, serde_json::Value::Null).unwrap_err();
+    assert!(e.is_bad_input() && e.message.contains("runaway_velocity"), "{e}");
+}
+
+#[test]
+fn no_healing_dimensional_threshold_is_in_the_inputs_velocity_unit() {
+    // The inertial field form: the threshold 1e-3 m/s is v = 1e6 with v0 = 1e-9 m/s, and the
+    // runaway's physical time is its dimensionless time × D_c/v0.
+    let text = r#"{"name": "t", "model": {"state_law": "no_healing", "dimensional": {"unit_system": "SI",
+        "a": 0.01, "b": 0.015, "sigma": 1e7, "d_c": 1e-4, "v0": 1e-9, "k": 5e8, "mass": 1e-9}},
+        "initial": {"velocity": 5e-10, "state": 1e5}, "solver": {"method": "radau5", "rtol": 1e-11},
+        "analyses": [{"time_series": {"t_max": 1e7, "runaway_velocity": 1e-3}}]}"#;
+    let report = run_scene(text);
+    let r = report.runaway.as_ref().unwrap();
+    assert!((r.v_threshold - 1e6).abs() < 1e-9 * 1e6, "{r:?}");
+    let p = r.physical.unwrap();
+    assert!((p.velocity_threshold - 1e-3).abs() < 1e-18, "{p:?}");
+    assert!((p.t.unwrap() - r.at.unwrap().t * 1e5).abs() < 1e-12 * p.t.unwrap(), "{p:?}");
+}

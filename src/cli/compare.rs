@@ -15,6 +15,9 @@ pub fn compare_command(
     json: bool,
 ) -> Result<(), Failure> {
     let scene = read_scene(&path)?;
+    if !scene.params.state_law.heals() {
+        return Err(Failure(2, format!("scene {}: model.state_law: compare compares cycles and their events; the no-healing law (\"no_healing\") has none, its block runs away: run the scene (its report's runaway section gives the time v reaches the threshold), once per solver.method to compare methods", path.display())));
+    }
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }

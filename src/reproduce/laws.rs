@@ -66,7 +66,8 @@ fn reference_period(table: &Value, gamma: f64) -> Option<f64> {
 pub fn make(ctx: &Context) -> Result<Output, ReproduceError> {
     let mut out = Output::default();
     let gammas = gammas(ctx.reduced);
-    let laws: Vec<StateLaw> = StateLaw::ALL.iter().map(|(_, l)| *l).collect();
+    // The laws with a cycle (the no-healing law has none).
+    let laws: Vec<StateLaw> = StateLaw::ALL.iter().map(|(_, l)| *l).filter(|l| l.heals()).collect();
     let points: Vec<(StateLaw, f64)> =
         laws.iter().flat_map(|&l| gammas.iter().map(move |&g| (l, g))).collect();
     let scenes: Vec<Value> = points.iter().map(|&(l, g)| scene(l, g)).collect();

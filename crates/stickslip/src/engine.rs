@@ -60,15 +60,18 @@ fn integrator_cancellable<S: ImexSystem + 'static>(
     atol: Tolerance,
     cancel: Option<&Cancel>,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    integrator_with_max_step(system, drr, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
+    // The no-healing law has no fixed point, so no linear period to bound the steps by.
+    let max_step = drr.params().state_law.heals().then(|| max_step(&hopf::analyse(drr)));
+    integrator_with_max_step(system, drr, max_step, spec, y0, atol, cancel)
 }
 
-/// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
+/// [`integrator_for`] with the largest step `max_step` (None: unbounded), failing once
+/// `cancel` is set.
 /// The run's guards ([`guard::guarded`]) wrap it.
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
     drr: &Drr,
-    max_step: f64,
+    max_step: Option<f64>,
     spec: &SolverSpec,
     y0: &[f64],
     atol: Tolerance,
@@ -170,7 +173,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     let dirk = engine.dirk_newton;
     let dirk_conv_coef = (1e3 * f64::EPSILON / spec.rtol).clamp(1e-3, 0.1);
     let options = &Options {
-        max_step: Some(max_step),
+        max_step,
         max_err_test_fails: Some(20),
         initial_step,
         jacobian_max_age: engine.jacobian_max_age,
@@ -338,7 +341,7 @@ fn cycle_cancellable(
     let (mut integ, tables) = integrator_with_max_step(
         *drr,
         drr,
-        max_step(linear),
+        Some(max_step(linear)),
         &scene.solver,
         &scene.initial,
         atol,
@@ -517,6 +520,7 @@ fn run_inner(
         continuation,
         noise,
         time_series: series.as_ref().map(|s| s.report.clone()),
+        runaway: series.as_ref().and_then(|s| s.runaway.clone()),
         events: series.map(|s| s.events),
         warnings: scene.warnings.clone(),
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -627,7 +631,27 @@ fn time_series_step(
         );
         return Err(EngineError::new(AnalysisKind::TimeSeries, option.into()));
     }
+    let runaway_v = match o.runaway_velocity {
+        None => None,
+        Some(velocity) => {
+            let v = velocity / scales.map_or(1.0, |s| s.v0);
+            let start = scene.initial[W].exp();
+            if !(v.is_finite() && v > start) {
+                let option = crate::analysis::InvalidOption::new(
+                    "time_series.runaway_velocity",
+                    format!(
+                        "{velocity} in the scene's velocity unit is v = {v:e} (units of v0), \
+                         not above the start's v = {start:e}: give a threshold above the initial \
+                         slip rate"
+                    ),
+                );
+                return Err(EngineError::new(AnalysisKind::TimeSeries, option.into()));
+            }
+            Some(v)
+        }
+    };
     let settings = TimeSeriesSettings {
+        runaway_v,
         t_max,
         sampling: o.sampling(),
         event_threshold: o.event_threshold.unwrap_or(1.0),
@@ -705,6 +729,7 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
         first_non_finite_in(AnalysisKind::Noise.name(), r.noise.as_ref()),
         first_non_finite_in(AnalysisKind::TimeSeries.name(), r.time_series.as_ref()),
         first_non_finite_in("events", r.events.as_ref()),
+        first_non_finite_in("runaway", r.runaway.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
     match sections.into_iter().flatten().next() {

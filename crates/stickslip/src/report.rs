@@ -8,7 +8,7 @@ use crate::analysis::cycle::{CycleReport, CycleValues};
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::ShootingReport;
-use crate::analysis::time_series::{Event, TimeSeriesReport};
+use crate::analysis::time_series::{Event, Runaway, TimeSeriesReport};
 use crate::integrate::Stats;
 use crate::model::{DrrParams, Friction, PhysicalScales, StateLaw};
 use crate::scene::{Dimensional, Method, OtherModel, Units};
@@ -262,6 +262,10 @@ pub struct Report {
     /// The event catalogue of the "time_series" run: one entry per slip episode.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub events: Option<Vec<Event>>,
+    /// Where the "time_series" run stopped at its runaway threshold
+    /// (`time_series.runaway_velocity`): the time v reached it, or that it did not by t_max.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runaway: Option<Runaway>,
     /// Derived parameters far outside the physical range (dimensional input), each naming its
     /// input fields; absent when there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]

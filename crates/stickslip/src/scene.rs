@@ -55,7 +55,7 @@ struct RawModel {
     dimensional: Option<Dimensional>,
     #[serde(default)]
     friction: Option<RawFriction>,
-    /// "slip" (default), "ageing" or "prz".
+    /// "slip" (default), "ageing", "prz" or "no_healing".
     #[serde(default)]
     state_law: Option<String>,
     /// Radiation damping η (dimensionless, ≥ 0).
@@ -670,6 +670,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         (ModelKind::Drr, ModelKind::Drr.dimension(), Some(gamma * gamma)),
         err,
     )?;
+    if !state_law.heals() {
+        no_healing_analyses(&analyses, &raw.analyses, err)?;
+    }
     papers_model_only(&params, &analyses, err)?;
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
@@ -1033,6 +1036,48 @@ fn quasi_dynamic_continuation(
         Parameter::Eta if c.to <= 0.0 => Err(err(&format!("{field}.to"), format!("{}: the quasi-dynamic model needs radiation damping η > 0 (at η = 0 v blows up in finite time)", c.to))),
         _ => Ok(()),
     }
+}
+
+/// The analyses a scene under the no-healing law can run: its state only falls and the block
+/// runs away, so there is no steady state and no cycle, and only a "time_series" with a runaway
+/// threshold (`runaway_velocity`), which ends where v reaches it, makes sense.
+fn no_healing_analyses(
+    a: &Analyses,
+    raw: &[RawAnalysis],
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<(), SceneError> {
+    let run = "run {\"time_series\": {\"t_max\": T, \"runaway_velocity\": V}} instead (the report's runaway section gives the time v reaches V)";
+    let needs = [
+        (a.hopf, AnalysisKind::Hopf, "a steady state"),
+        (a.paper, AnalysisKind::Paper, "the paper's model"),
+        (a.cycle.is_some(), AnalysisKind::Cycle, "a cycle"),
+        (a.trajectory_cycles.is_some(), AnalysisKind::Trajectory, "a cycle"),
+        (a.asymptotics.is_some(), AnalysisKind::Asymptotics, "a cycle"),
+        (a.lyapunov.is_some(), AnalysisKind::Lyapunov, "a cycle"),
+        (a.shooting.is_some(), AnalysisKind::Shooting, "a periodic orbit"),
+        (a.continuation.is_some(), AnalysisKind::Continuation, "a periodic orbit"),
+        (a.noise.is_some(), AnalysisKind::Noise, "a cycle or a steady state to perturb"),
+    ];
+    if let Some((_, name, what)) = needs.iter().find(|(asked, ..)| *asked) {
+        return Err(err(
+            "analyses",
+            format!("the \"{name}\" analysis needs {what}; the no-healing law (state_law \"no_healing\") has no steady state and no cycle: its state only falls and the block runs away. Drop \"{name}\" and {run}"),
+        ));
+    }
+    let Some(series) = &a.time_series else {
+        return Err(err("analyses", format!("the no-healing law (state_law \"no_healing\") has no steady state and no cycle: {run}")));
+    };
+    if series.runaway_velocity.is_none() {
+        let index = raw
+            .iter()
+            .position(|a| matches!(a, RawAnalysis::WithOptions(m) if m.contains_key("time_series")))
+            .unwrap_or(0);
+        return Err(err(
+            &format!("analyses[{index}].time_series.runaway_velocity"),
+            "missing: under the no-healing law (state_law \"no_healing\") the slip rate runs away, so the run needs a threshold to stop at, in the scene's velocity unit (v0 for a dimensionless model, e.g. 1e9; the input's with model.dimensional, e.g. 1 m/s)".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Rejects the analyses derived for the paper's model (slip law, no radiation damping) when

@@ -340,7 +340,8 @@ mod tests {
     #[test]
     fn eigenvalues_agree_with_a_matrix_eigensolver_for_every_law_at_moderate_gamma() {
         for friction in frictions() {
-            for (_, state_law) in StateLaw::ALL {
+            // The no-healing law has no fixed point to linearise at.
+            for (_, state_law) in StateLaw::ALL.into_iter().filter(|(_, l)| l.heals()) {
                 for eta in [0.0, 0.05, 0.8] {
                     for gamma in [1.0, 3.0, 10.0, 100.0] {
                         let d = Drr::new(DrrParams {
@@ -390,7 +391,8 @@ mod tests {
     #[test]
     fn threshold_and_frequency_match_the_jacobians_eigenvalues_for_every_law_and_damping() {
         for friction in frictions() {
-            for (_, state_law) in StateLaw::ALL {
+            // The no-healing law has no fixed point to linearise at.
+            for (_, state_law) in StateLaw::ALL.into_iter().filter(|(_, l)| l.heals()) {
                 for eta in [0.0, 0.1, 1.0] {
                     for gamma in [2.0, 10.0, 50.0] {
                         assert_threshold_matches_the_eigenvalues(DrrParams {
@@ -444,7 +446,8 @@ mod tests {
     fn quasi_dynamic_threshold_matches_the_eigenvalues_of_its_linearisation() {
         use crate::model::quasi_dynamic::CONSTRAINT_RELAXATION_RATE;
         for friction in frictions() {
-            for (_, state_law) in StateLaw::ALL {
+            // The no-healing law has no fixed point to linearise at.
+            for (_, state_law) in StateLaw::ALL.into_iter().filter(|(_, l)| l.heals()) {
                 for eta in [0.01, 0.1, 1.0] {
                     let base = DrrParams {
                         state_law,

@@ -116,8 +116,8 @@ impl Drr {
 /// θ after `t` at rest (v = 0 in double precision) from θ0, with c = 1 + ε.
 fn at_rest(law: StateLaw, theta0: f64, c: f64, t: f64) -> f64 {
     match law {
-        // dθ/dt = −c v x → 0.
-        StateLaw::Slip => theta0,
+        // dθ/dt = −c v x → 0, and without healing −c v → 0.
+        StateLaw::Slip | StateLaw::NoHealing => theta0,
         // dθ/dt = c e^(−θ/c) (PRZ's v²-term vanishes too): e^(θ/c) grows by t, i.e.
         // θ = θ0 + c ln(1 + t e^(−θ0/c)) = θ0 + c softplus(ln t − θ0/c), which stays finite
         // where e^(−θ0/c) overflows.

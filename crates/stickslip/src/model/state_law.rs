@@ -13,6 +13,7 @@
 //! slip (Ruina):          dΘ/dt = −(VΘ/D_c) ln(VΘ/D_c)   F(x) = −x
 //! ageing (Dieterich):    dΘ/dt = 1 − VΘ/D_c             F(x) = e^{−x} − 1
 //! PRZ (Perrin–Rice–Zheng): dΘ/dt = 1 − (VΘ/(2D_c))²     F(x) = e^{−x} − e^{x}/4
+//! no healing (QDYN's THETA_LAW = 0): dΘ/dt = −VΘ/D_c   F(x) = −1
 //! ```
 //!
 //! For f = ln v the ageing law is dθ/dt = (1+ε)(e^{−θ/(1+ε)} − v). Other friction laws replace
@@ -21,6 +22,11 @@
 //!
 //! Steady sliding is F(x*) = 0: x* = 0 (slip, ageing), x* = ln 2 (PRZ), and the relaxation rate
 //! there, κ = −F'(x*), is 1 for all three, so their linearisations at steady sliding coincide.
+//!
+//! The ageing law without healing is the ageing law without its healing term 1: F = −1 has no
+//! zero, so the state only falls (dθ/dt = −(1+ε)v), friction only weakens, and there is no
+//! steady sliding, no stability threshold and no cycle ([`StateLaw::heals`]); the block runs
+//! away (docs/state-laws.md).
 
 use serde::{Deserialize, Serialize};
 
@@ -35,6 +41,9 @@ pub enum StateLaw {
     Ageing,
     /// The Perrin–Rice–Zheng (1995) law.
     Prz,
+    /// The ageing law without healing, dΘ/dt = −VΘ/D_c (QDYN's `THETA_LAW = 0`; scene name
+    /// "no_healing"): no steady state, the block runs away.
+    NoHealing,
 }
 
 /// v·F(x), v·F'(x) and v·F''(x) at (w = ln v, x).
@@ -50,10 +59,14 @@ pub struct LawTerms {
 
 impl StateLaw {
     /// Every law with its scene name.
-    pub const ALL: [(&'static str, StateLaw); 3] =
-        [("slip", StateLaw::Slip), ("ageing", StateLaw::Ageing), ("prz", StateLaw::Prz)];
+    pub const ALL: [(&'static str, StateLaw); 4] = [
+        ("slip", StateLaw::Slip),
+        ("ageing", StateLaw::Ageing),
+        ("prz", StateLaw::Prz),
+        ("no_healing", StateLaw::NoHealing),
+    ];
 
-    /// The scene name: "slip", "ageing" or "prz".
+    /// The scene name: "slip", "ageing", "prz" or "no_healing".
     pub fn name(self) -> &'static str {
         Self::ALL.iter().find(|(_, l)| *l == self).map_or("?", |(n, _)| n)
     }
@@ -71,7 +84,14 @@ impl StateLaw {
             StateLaw::Slip => -v * x,
             StateLaw::Ageing => (w - x).exp() - v,
             StateLaw::Prz => (w - x).exp() - 0.25 * (w + x).exp(),
+            StateLaw::NoHealing => -v,
         }
+    }
+
+    /// Whether the law heals (F has a zero): false only for [`StateLaw::NoHealing`], which
+    /// has no steady sliding, so no fixed point, stability threshold or cycle.
+    pub fn heals(self) -> bool {
+        self != StateLaw::NoHealing
     }
 
     /// v·F(x) and its first two x-derivatives times v, at w = ln v, given v = e^w (see
@@ -88,18 +108,22 @@ impl StateLaw {
                 let (a, b) = ((w - x).exp(), 0.25 * (w + x).exp());
                 LawTerms { f, d1: -a - b, d2: a - b }
             }
+            StateLaw::NoHealing => LawTerms { f, d1: 0.0, d2: 0.0 },
         }
     }
 
-    /// x* with F(x*) = 0: the value of ln(VΘ/D_c) at steady sliding.
+    /// x* with F(x*) = 0: the value of ln(VΘ/D_c) at steady sliding. The no-healing law has
+    /// none (see [`StateLaw::heals`]); for it this is x = 0 (Θ = D_c/V, where the ageing law
+    /// heals no more), the reference state its scenes start from by default.
     pub fn steady_x(self) -> f64 {
         match self {
-            StateLaw::Slip | StateLaw::Ageing => 0.0,
+            StateLaw::Slip | StateLaw::Ageing | StateLaw::NoHealing => 0.0,
             StateLaw::Prz => std::f64::consts::LN_2,
         }
     }
 
-    /// κ = −F'(x*), the relaxation rate of the state at steady sliding (per unit v).
+    /// κ = −F'(x*), the relaxation rate of the state at steady sliding (per unit v); 0 for the
+    /// no-healing law, which does not relax.
     pub fn steady_rate(self) -> f64 {
         -self.terms(0.0, 1.0, self.steady_x()).d1
     }
@@ -127,9 +151,27 @@ mod tests {
                     "{law:?} x={x}"
                 );
             }
+            if !law.heals() {
+                continue;
+            }
             assert!(law.terms(0.3, 0.3f64.exp(), law.steady_x()).f.abs() < 1e-15, "{law:?}");
             assert!((law.steady_rate() - 1.0).abs() < 1e-15, "{law:?}: κ = {}", law.steady_rate());
         }
+    }
+
+    #[test]
+    fn no_healing_is_the_ageing_law_without_its_healing_term() {
+        // dΘ/dt = −VΘ/D_c: dθ/dt = −(1+ε) v whatever θ; the ageing law's rate minus its
+        // healing term (1+ε) e^{−θ/(1+ε)}.
+        let (eps, theta, w) = (0.5f64, -3.7, 2.2f64);
+        let c = 1.0 + eps;
+        let x = theta / c + w;
+        let ours = c * StateLaw::NoHealing.rate(w, w.exp(), x);
+        assert_eq!(ours, -c * w.exp());
+        let ageing = c * StateLaw::Ageing.rate(w, w.exp(), x);
+        assert!((ageing - c * (-theta / c).exp() - ours).abs() < 1e-13 * ours.abs());
+        assert!(!StateLaw::NoHealing.heals() && StateLaw::Ageing.heals());
+        assert_eq!(StateLaw::from_name("no_healing"), Some(StateLaw::NoHealing));
     }
 
     #[test]

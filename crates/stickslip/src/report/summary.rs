@@ -7,7 +7,7 @@ use crate::analysis::cycle::{CycleStatus, CycleValues};
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::{PeriodDoubling, PeriodicOrbit, ShootingReport};
-use crate::analysis::time_series::{Event, TimeSeriesReport};
+use crate::analysis::time_series::{Event, Runaway, TimeSeriesReport};
 use crate::analysis::{asymptotics, lyapunov};
 use crate::scene::OtherModel;
 
@@ -21,6 +21,7 @@ impl Report {
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
             self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
+            self.runaway.as_ref().map(|r| runaway(r, self.time_series.as_ref())),
             self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
                 cycle_physical(p, self.scene["model"]["dimensional"]["unit_system"] == "SI")
             }),
@@ -186,6 +187,32 @@ fn physical(p: &Physical) -> String {
     format!("  in {}: period {:.6}, t0 {:.6}\n", p.time_unit, p.period, p.t0)
 }
 
+/// Where the time series stopped at its runaway threshold, or that it did not reach it.
+fn runaway(r: &Runaway, series: Option<&TimeSeriesReport>) -> String {
+    let physical = r.physical.as_ref();
+    let threshold = format!(
+        "v = {:e}{}",
+        r.v_threshold,
+        physical.map_or(String::new(), |p| format!(
+            " (V = {:e} in the input's unit)",
+            p.velocity_threshold
+        ))
+    );
+    match &r.at {
+        Some(a) => format!(
+            "runaway: {threshold} reached at t = {:.12e}{}, slip {:.6e}, θ {:.6e} (the run stops there)\n",
+            a.t,
+            physical.and_then(|p| p.t).map_or(String::new(), |t| format!(" ({t:.12e} in the input's time unit)")),
+            a.slip,
+            a.theta
+        ),
+        None => format!(
+            "runaway: {threshold} not reached by t_max{}\n",
+            series.map_or(String::new(), |s| format!(" (v = {:e} there)", s.final_state[1]))
+        ),
+    }
+}
+
 /// The time series's extent and event count, then its last event.
 fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>) -> String {
     let mut s = format!(
@@ -196,7 +223,7 @@ fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>) -> String {
         t.steps,
         t.event_count,
         t.event_threshold,
-        if t.in_event_at_end { " (one more under way at t_max)" } else { "" }
+        if t.in_event_at_end { " (one more under way at the end)" } else { "" }
     );
     if let Some(last) = events.and_then(|e| e.last()) {
         let e = &last.values;

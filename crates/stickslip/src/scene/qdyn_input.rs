@@ -38,7 +38,9 @@ pub fn is_qdyn_input(path: &Path, text: &str) -> bool {
 }
 
 /// The scene (pretty JSON text) equivalent to a QDYN spring-block input file: quasi-dynamic,
-/// SI units, radau5 at rtol = `ACC`, the "cycle" analysis and a "time_series" run to `TMAX`.
+/// SI units, radau5 at rtol = `ACC`, the "cycle" analysis and a "time_series" run to `TMAX`
+/// (without healing, `THETA_LAW = 0`: the run to `TMAX` or to the runaway at
+/// [`NO_HEALING_RUNAWAY_VELOCITY`]).
 /// `name` names the scene (e.g. the file's stem).
 pub fn to_scene(text: &str, source_name: &str, name: &str) -> Result<String, QdynInputError> {
     let mut scene = map(&mut Lines::new(text, source_name))?;
@@ -160,8 +162,8 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
     let state_law = match l.integer(0)? {
         1 => "ageing",
         2 => "slip",
-        0 => return Err(l.error(0, "0 (the ageing law without healing) is not supported yet; stickslip runs THETA_LAW = 1 (ageing) and 2 (slip)".into())),
-        other => return Err(l.error(0, format!("{other} is not a QDYN state law; stickslip runs THETA_LAW = 1 (ageing) and 2 (slip)"))),
+        0 => "no_healing",
+        other => return Err(l.error(0, format!("{other} is not a QDYN state law; stickslip runs THETA_LAW = 0 (no healing), 1 (ageing) and 2 (slip)"))),
     };
     let l = lines.next(&["RNS_LAW"])?;
     let rns_law = l.integer(0)?;
@@ -284,6 +286,21 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
         },
         "initial": {"velocity": v_0, "state": th_0},
         "solver": {"method": "radau5", "rtol": acc},
-        "analyses": ["cycle", {"time_series": {"t_max": t_max}}],
+        "analyses": analyses(state_law, t_max),
     }))
+}
+
+/// The slip rate (m/s) at which a no-healing run (`THETA_LAW = 0`) stops: 1 m/s, a seismic
+/// slip rate. QDYN itself runs on until its solver fails (exit 0).
+pub const NO_HEALING_RUNAWAY_VELOCITY: f64 = 1.0;
+
+/// The analyses of a mapped file: the cycle and the events to `TMAX`; without healing, which
+/// has no cycle, the run to `TMAX` that stops where V reaches
+/// [`NO_HEALING_RUNAWAY_VELOCITY`] (the report's `runaway`).
+fn analyses(state_law: &str, t_max: f64) -> Value {
+    if state_law == "no_healing" {
+        json!([{"time_series": {"t_max": t_max, "runaway_velocity": NO_HEALING_RUNAWAY_VELOCITY}}])
+    } else {
+        json!(["cycle", {"time_series": {"t_max": t_max}}])
+    }
 }

@@ -327,6 +327,7 @@ mod tests {
                             StateLaw::Prz => {
                                 c * ((-theta / c).exp() - v * v * (theta / c).exp() / 4.0)
                             }
+                            StateLaw::NoHealing => -c * v,
                         };
                         let expected = [
                             v - 1.0 + amplitudes[0] * noise[0],

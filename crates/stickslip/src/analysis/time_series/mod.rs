@@ -22,11 +22,18 @@
 //! maximum of w inside it (where the dense output's dw/dt changes sign). A run that starts
 //! with v above the threshold does not count that first partial episode, and an event still
 //! open at t_max is not catalogued (`in_event_at_end`).
+//!
+//! With a runaway threshold (`runaway_v`) the run ends where ln v rises through it,
+//! located like the events' crossings (root finding on w in the dense output), and the
+//! outcome's [`Runaway`] gives the time: the result under the no-healing law, whose slip rate
+//! runs away.
 
 pub mod options;
+pub mod runaway;
 pub mod sink;
 
 pub use options::{Sampling, TimeSeriesOptions};
+pub use runaway::Runaway;
 pub use sink::{DiscardSink, SeriesCollector, SeriesSink, TeeSink};
 
 use super::events;
@@ -49,6 +56,9 @@ pub struct TimeSeriesSettings {
     pub max_steps: u64,
     /// The integrator's (rtol, atol) on w = ln v, to judge where a re-base is safe.
     pub w_tolerance: (f64, f64),
+    /// The slip rate v (units of v0) at which the run stops before t_max (the runaway
+    /// threshold), if any.
+    pub runaway_v: Option<f64>,
 }
 
 /// The dimensionless columns, in order: the first four are what `compare --against` reads.
@@ -132,6 +142,15 @@ pub struct TimeSeriesOutcome {
     pub report: TimeSeriesReport,
     /// The event catalogue.
     pub events: Vec<Event>,
+    /// Where v reached the runaway threshold (with `runaway_v`).
+    pub runaway: Option<Runaway>,
+}
+
+/// Where a run ended: at t_max, or earlier where v reached the runaway threshold.
+struct End {
+    t: Time,
+    y: [f64; 3],
+    runaway: bool,
 }
 
 /// One step end: local time, state and the interpolant's derivative.
@@ -261,10 +280,11 @@ pub fn run(
             buffer: Vec::with_capacity(columns.len()),
         },
     };
-    let final_state = match run.integrate() {
-        Ok(y) => y,
+    let end = match run.integrate() {
+        Ok(end) => end,
         Err(e) => return Err(e.at_global(&run.clock)),
     };
+    let final_state = end.y;
     let Run { rows, events, open, steps, clock, .. } = run;
     let rebases = clock.rebases();
     rows.sink.finish().map_err(|e| io(e, settings.t_max, &final_state))?;
@@ -282,7 +302,11 @@ pub fn run(
         in_event_at_end: open.is_some(),
         final_state: [final_state[U], final_state[W].exp(), final_state[THETA]],
     };
-    Ok(TimeSeriesOutcome { report, events })
+    let runaway = settings.runaway_v.map(|v| {
+        let reached = end.runaway.then_some((end.t.to_f64(), end.y));
+        Runaway::new(drr, scales.as_ref(), v, reached, y0[U])
+    });
+    Ok(TimeSeriesOutcome { report, events, runaway })
 }
 
 /// The state of a run.
@@ -334,8 +358,9 @@ impl Run<'_, '_> {
         }
     }
 
-    /// Integrates to t_max; returns the state there.
-    fn integrate(&mut self) -> Result<[f64; 3], AnalysisError> {
+    /// Integrates to t_max, or to where v reaches the runaway threshold; returns where it
+    /// ended.
+    fn integrate(&mut self) -> Result<End, AnalysisError> {
         let t_max = Time::new(self.settings.t_max);
         let y0 = self.prev.y;
         self.write(Time::new(0.0), &y0)?;
@@ -377,18 +402,30 @@ impl Run<'_, '_> {
                     next.d
                 )));
             }
-            // The end of this step, or t_max inside it (local time).
+            // The end of this step, or t_max or the runaway inside it (local time).
             let end = self.clock.global(next.t);
-            let last = end.since(t_max) >= 0.0;
-            let until = if last { t_max.since(self.clock.global(0.0)) } else { next.t };
+            let mut last = (end.since(t_max) >= 0.0).then_some(t_max);
+            let mut until =
+                if last.is_some() { t_max.since(self.clock.global(0.0)) } else { next.t };
+            let runaway = match self.settings.runaway_v.map(f64::ln) {
+                Some(level) if self.prev.y[W] < level && next.y[W] >= level => {
+                    let span = (self.prev.t, next.t);
+                    let t = events::refine(self.clock.integrator(), span, 0, W, level)?;
+                    (t <= until).then_some(t)
+                }
+                _ => None,
+            };
+            if let Some(t) = runaway {
+                (until, last) = (t, Some(self.clock.global(t)));
+            }
             let peaked = self.events(&next, until)?;
             self.sample_rows(&next, until)?;
-            if last {
+            if let Some(t) = last {
                 let y = self.state_at(until)?;
-                if !matches!(self.settings.sampling, Sampling::Points(_)) {
-                    self.write(t_max, &y)?;
+                if runaway.is_some() || !matches!(self.settings.sampling, Sampling::Points(_)) {
+                    self.write(t, &y)?;
                 }
-                return Ok(y);
+                return Ok(End { t, y, runaway: runaway.is_some() });
             }
             if matches!(self.settings.sampling, Sampling::Steps)
                 || matches!(self.settings.sampling, Sampling::Every(n) if self.steps.is_multiple_of(n))

@@ -25,6 +25,13 @@ pub struct TimeSeriesOptions {
     /// Fail after this many integrator steps (default 1e9).
     #[serde(default)]
     pub max_steps: Option<u64>,
+    /// Stop where the slip rate rises to this value, in the scene's velocity unit (units of
+    /// v0 for a dimensionless model, the input's, e.g. m/s, with `model.dimensional`): the
+    /// run ends there and the report's `runaway` section gives the time it was reached
+    /// (located on ln v by root finding). Required under the no-healing law, whose slip rate
+    /// runs away.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub runaway_velocity: Option<f64>,
 }
 
 /// Which rows a run writes.
@@ -52,7 +59,10 @@ impl TimeSeriesOptions {
         let o: Self = serde_json::from_value(value).map_err(|e| {
             InvalidOption::new(
                 "",
-                format!("{e} (fields: t_max, every, points, event_threshold, max_steps)"),
+                format!(
+                    "{e} (fields: t_max, every, points, event_threshold, max_steps, \
+                     runaway_velocity)"
+                ),
             )
         })?;
         if !(o.t_max.is_finite() && o.t_max > 0.0) {
@@ -93,6 +103,18 @@ impl TimeSeriesOptions {
                 ));
             }
         }
+        if let Some(v) = o.runaway_velocity {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(InvalidOption::new(
+                    "runaway_velocity",
+                    format!(
+                        "{v} must be a slip rate > 0 in the scene's velocity unit (v0 for a \
+                         dimensionless model, e.g. 1e9; the input's with model.dimensional, \
+                         e.g. 1 m/s)"
+                    ),
+                ));
+            }
+        }
         if o.max_steps == Some(0) {
             return Err(InvalidOption::new("max_steps", "0 must be ≥ 1, e.g. 1e8"));
         }
@@ -127,6 +149,7 @@ mod tests {
         assert_eq!(field_of(json!({"t_max": 10.0, "points": 10, "every": 2})), "points");
         assert_eq!(field_of(json!({"t_max": 10.0, "event_threshold": 0.0})), "event_threshold");
         assert_eq!(field_of(json!({"t_max": 10.0, "max_steps": 0})), "max_steps");
+        assert_eq!(field_of(json!({"t_max": 10.0, "runaway_velocity": 0.0})), "runaway_velocity");
         let unknown = TimeSeriesOptions::from_json(json!({"t_max": 1.0, "tmax": 2})).unwrap_err();
         assert!(unknown.message.contains("tmax"), "{unknown}");
         let missing = TimeSeriesOptions::from_json(json!({})).unwrap_err();
