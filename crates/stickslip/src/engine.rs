@@ -23,6 +23,7 @@ use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
 mod cancel;
+mod forced;
 mod guard;
 mod imex_stick;
 pub mod lab;
@@ -60,11 +61,14 @@ fn integrator_cancellable<S: ImexSystem + 'static>(
     atol: Tolerance,
     cancel: Option<&Cancel>,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
-    integrator_with_max_step(system, drr, max_step(&hopf::analyse(drr)), spec, y0, atol, cancel)
+    let max_step = max_step(&hopf::analyse(drr));
+    integrator_with_max_step(system, drr, max_step, spec, y0, atol, cancel, true)
 }
 
-/// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set.
-/// The run's guards ([`guard::guarded`]) wrap it.
+/// [`integrator_for`] with the largest step `max_step`, failing once `cancel` is set, for an
+/// `autonomous` system or not (a periodically loaded one, [`forced`]). The run's guards
+/// ([`guard::guarded`]) wrap it.
+#[allow(clippy::too_many_arguments)]
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
     drr: &Drr,
@@ -73,6 +77,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     y0: &[f64],
     atol: Tolerance,
     cancel: Option<&Cancel>,
+    autonomous: bool,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
@@ -182,7 +187,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     };
     let settings = MethodSettings {
         deduce_implicit_rhs: engine.deduce_implicit_rhs,
-        ..MethodSettings::of(spec, true)
+        ..MethodSettings::of(spec, autonomous)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
     let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0));
@@ -343,6 +348,7 @@ fn cycle_cancellable(
         &scene.initial,
         atol,
         cancel,
+        true,
     )?;
     let stable = linear.max_real_part < 0.0;
     let report =
@@ -517,6 +523,9 @@ fn run_inner(
         continuation,
         noise,
         time_series: series.as_ref().map(|s| s.report.clone()),
+        forcing: scene.loading.as_ref().zip(series.as_ref()).map(|(loading, s)| {
+            crate::analysis::locking::analyse(&s.events, loading, scene.scales.as_ref())
+        }),
         events: series.map(|s| s.events),
         warnings: scene.warnings.clone(),
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -634,17 +643,29 @@ fn time_series_step(
         max_steps: o.max_steps.unwrap_or(time_series::options::DEFAULT_MAX_STEPS),
         w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
     };
-    let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
-    let (mut integ, tables) =
-        integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
-            .map_err(failed(drr, AnalysisKind::TimeSeries))?;
-    let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
-        .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+    let outcome = match scene.loading {
+        None => {
+            let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
+            let (mut integ, tables) =
+                integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
+                    .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+            time_series::run(integ.as_mut(), drr, drr, &settings, scales, series)
+                .map(|o| (o, integ.stats(), tables))
+        }
+        Some(loading) => {
+            let (mut integ, system, tables) =
+                forced::integrator(drr, loading, &scene.solver, &scene.initial, cancel)
+                    .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+            time_series::run(integ.as_mut(), drr, &system, &settings, scales, series)
+                .map(|o| (o, integ.stats(), tables))
+        }
+    };
+    let (outcome, stats, tables) = outcome.map_err(failed(drr, AnalysisKind::TimeSeries))?;
     if !integrated {
         let family = scene.solver.method.capabilities().family.to_string();
         (integration.name, integration.tables) = (family, tables);
     }
-    integration.stats.accumulate(&integ.stats());
+    integration.stats.accumulate(&stats);
     Ok(Some(outcome))
 }
 
@@ -705,6 +726,7 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
         first_non_finite_in(AnalysisKind::Noise.name(), r.noise.as_ref()),
         first_non_finite_in(AnalysisKind::TimeSeries.name(), r.time_series.as_ref()),
         first_non_finite_in("events", r.events.as_ref()),
+        first_non_finite_in("forcing", r.forcing.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
     match sections.into_iter().flatten().next() {

@@ -262,6 +262,10 @@ pub struct Report {
     /// The event catalogue of the "time_series" run: one entry per slip episode.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub events: Option<Vec<Event>>,
+    /// A forced scene's response to its periodic loading: the locking judged from `events`
+    /// ([`crate::analysis::locking`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forcing: Option<crate::analysis::locking::ForcingReport>,
     /// Derived parameters far outside the physical range (dimensional input), each naming its
     /// input fields; absent when there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]

@@ -21,6 +21,12 @@ impl Report {
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
             self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
+            self.forcing.as_ref().map(|f| {
+                format!(
+                    "forcing: amplitude {:e} A, period {:e} (units of D_c/v0); {}\n",
+                    f.amplitude, f.period, f.statement
+                )
+            }),
             self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
                 cycle_physical(p, self.scene["model"]["dimensional"]["unit_system"] == "SI")
             }),
