@@ -15,6 +15,9 @@ pub fn compare_command(
     json: bool,
 ) -> Result<(), Failure> {
     let scene = read_scene(&path)?;
+    if scene.loading.is_some() {
+        return Err(Failure(2, format!("{}: compare runs the unforced model (its methods' cycles, or a reference trajectory), and this scene is periodically loaded (model.periodic_loading or model.dimensional.periodic_loading); run it with `stickslip run` (time_series: the event catalogue and the locking to the forcing), or drop the loading", path.display())));
+    }
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }

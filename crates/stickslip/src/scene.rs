@@ -755,7 +755,12 @@ fn periodic_loading(
         period: period / to_dimensionless.1,
     };
     if !(loading.amplitude.is_finite() && loading.period.is_finite() && loading.period > 0.0) {
-        return Err(err(field, format!("{input:?} is {loading:?} in units of A and D_c/v0: out of the range of doubles")));
+        return Err(err(
+            field,
+            format!(
+                "{input:?} is {loading:?} in units of A and D_c/v0: out of the range of doubles"
+            ),
+        ));
     }
     let autonomous_only = [
         (analyses.hopf, AnalysisKind::Hopf),

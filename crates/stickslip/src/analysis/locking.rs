@@ -78,9 +78,8 @@ pub fn analyse(
     let period = loading.period;
     let peaks: Vec<f64> = events.iter().map(|e| e.values.t_peak).collect();
     let window = &peaks[peaks.len() / 2..];
-    let events_per_period = (window.len() >= 2).then(|| {
-        (window.len() - 1) as f64 * period / (window[window.len() - 1] - window[0])
-    });
+    let events_per_period = (window.len() >= 2)
+        .then(|| (window.len() - 1) as f64 * period / (window[window.len() - 1] - window[0]));
     let mut best: Option<(usize, u64, f64)> = None;
     let mut found = None;
     for p in 1..=MAX_EVENTS_PER_REPETITION {

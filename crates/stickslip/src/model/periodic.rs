@@ -211,12 +211,12 @@ mod tests {
     fn systems() -> Vec<ForcedDrr> {
         let loading = PeriodicLoading { amplitude: 0.4, period: 3.7 };
         let mut out = Vec::new();
-        for friction in
-            [Friction::Log, Friction::CutOff { v1: 3.0, v2: 0.5 }, Friction::Asinh]
-        {
+        for friction in [Friction::Log, Friction::CutOff { v1: 3.0, v2: 0.5 }, Friction::Asinh] {
             for (_, state_law) in StateLaw::ALL {
-                let inertial = DrrParams { state_law, eta: 0.2, ..DrrParams::new(30.0, 0.7, 0.72, friction) };
-                let quasi = DrrParams { state_law, ..DrrParams::quasi_dynamic(0.7, 0.72, 0.37, friction) };
+                let inertial =
+                    DrrParams { state_law, eta: 0.2, ..DrrParams::new(30.0, 0.7, 0.72, friction) };
+                let quasi =
+                    DrrParams { state_law, ..DrrParams::quasi_dynamic(0.7, 0.72, 0.37, friction) };
                 for p in [inertial, quasi] {
                     let origin = TimeOrigin::new();
                     origin.advance(1.3);
@@ -300,8 +300,7 @@ mod tests {
                 let mut d = [0.0; 3];
                 f.rhs(t, &y, &mut d);
                 let h = 1e-6;
-                let along =
-                    |s: f64| g(t + s, &[y[0] + s * d[0], y[1] + s * d[1], y[2] + s * d[2]]);
+                let along = |s: f64| g(t + s, &[y[0] + s * d[0], y[1] + s * d[1], y[2] + s * d[2]]);
                 let dg = (along(h) - along(-h)) / (2.0 * h);
                 let kappa = crate::model::quasi_dynamic::CONSTRAINT_RELAXATION_RATE;
                 assert!(

@@ -212,7 +212,10 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
     let tper = l.number(0)?;
     let aper = l.number(1)?;
     if aper != 0.0 && tper <= 0.0 {
-        return Err(l.error(0, format!("{tper} must be > 0 with APER ≠ 0 (the period of the periodic loading, in s)")));
+        return Err(l.error(
+            0,
+            format!("{tper} must be > 0 with APER ≠ 0 (the period of the periodic loading, in s)"),
+        ));
     }
     let l = lines.next(&["DTTRY", "DTMAX", "TMAX", "ACC"])?;
     l.number(0)?; // DTTRY, DTMAX: stickslip's integrators choose their own steps.
