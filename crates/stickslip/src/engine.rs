@@ -653,11 +653,10 @@ fn time_series_step(
                 .map(|o| (o, integ.stats(), tables))
         }
         Some(loading) => {
-            let (mut integ, system, tables) =
-                forced::integrator(drr, loading, &scene.solver, &scene.initial, cancel)
-                    .map_err(failed(drr, AnalysisKind::TimeSeries))?;
-            time_series::run(integ.as_mut(), drr, &system, &settings, scales, series)
-                .map(|o| (o, integ.stats(), tables))
+            let mut f = forced::integrator(drr, loading, &scene.solver, &scene.initial, cancel)
+                .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+            time_series::run(f.integrator.as_mut(), drr, &f.system, &settings, scales, series)
+                .map(|o| (o, f.integrator.stats(), f.tables))
         }
     };
     let (outcome, stats, tables) = outcome.map_err(failed(drr, AnalysisKind::TimeSeries))?;

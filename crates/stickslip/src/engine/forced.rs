@@ -10,15 +10,24 @@ use crate::integrate::{Integrator, SolverError, Stats, Step, Task, Tolerance};
 use crate::model::{Drr, ForcedDrr, PeriodicLoading, TimeOrigin};
 use crate::scene::SolverSpec;
 
-/// The scene's integrator on `drr` under `loading`, starting at global time 0 with `y0`;
-/// also the forced system (for its right-hand side at the start) and the Butcher tables.
+/// A forced integration's pieces ([`integrator`]).
+pub(super) struct Forced {
+    /// The integrator, whose re-bases move the system's time origin.
+    pub integrator: Box<dyn Integrator>,
+    /// The forced system (for its right-hand side at the start).
+    pub system: ForcedDrr,
+    /// The Butcher tables used (ARKStep).
+    pub tables: Vec<String>,
+}
+
+/// The scene's integrator on `drr` under `loading`, starting at global time 0 with `y0`.
 pub(super) fn integrator(
     drr: &Drr,
     loading: PeriodicLoading,
     spec: &SolverSpec,
     y0: &[f64; 3],
     cancel: Option<&Cancel>,
-) -> Result<(Box<dyn Integrator>, ForcedDrr, Vec<String>), SolverError> {
+) -> Result<Forced, SolverError> {
     let origin = TimeOrigin::new();
     let system = ForcedDrr::new(*drr, loading, origin.clone());
     let max_step = super::max_step(&hopf::analyse(drr)).min(loading.period / 8.0);
@@ -33,7 +42,7 @@ pub(super) fn integrator(
         cancel,
         false,
     )?;
-    Ok((Box::new(Rebasing { inner, origin }), system, tables))
+    Ok(Forced { integrator: Box::new(Rebasing { inner, origin }), system, tables })
 }
 
 /// An integrator whose re-base also moves the forced system's time origin.

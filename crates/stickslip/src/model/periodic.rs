@@ -15,8 +15,9 @@
 //! dθ/dt do not change. Both are the unforced right-hand side at the shifted state
 //! y_s = (u − s(t)/ξ, w, θ), plus s'(t)/S in the quasi-dynamic dw/dt: so [`ForcedDrr`] is
 //! [`Drr`] at y_s, its Jacobian in y is [`Drr`]'s at y_s (∂y_s/∂y = I) plus the derivative of
-//! s'/S, and ∂f/∂t is J·∂y_s/∂t = −(s'/ξ)·J[·][u] plus s''/S. QDYN (its derivs_all.f90) adds
-//! dτ_per/dt = Ω_per A_per cos(Ω_per t) to the stress rate: the same term, t from QDYN's start.
+//! s'/S, and ∂f/∂t is J·∂y_s/∂t = −(s'/ξ) times J's u column, plus s''/S. QDYN (its
+//! derivs_all.f90) adds dτ_per/dt = Ω_per A_per cos(Ω_per t) to the stress rate: the same
+//! term, t from QDYN's start.
 //!
 //! The system is not autonomous. The integrations re-base their local clock (a restart or an
 //! exact time shift, see [`crate::integrate::Clock`]); the forced system reads the global time
