@@ -99,3 +99,18 @@ fn restarts_and_time_shifts_agree_under_crustal_damping() {
     assert!(bdf.time_series.unwrap().rebases > 0 && rodas.time_series.unwrap().rebases > 0);
     assert_same_events(&b, &r, 1e-7, "cvode-bdf vs rodas5p");
 }
+
+/// A forced scene built in code (not through `scene::parse`, which refuses it) with an
+/// analysis that assumes an autonomous system: the engine refuses it as bad input.
+#[test]
+fn the_engine_refuses_autonomous_analyses_of_a_forced_scene() {
+    let text = inertial("radau5", LOADING);
+    let mut scene = stickslip::scene::parse(&text, "forced").unwrap();
+    scene.analyses.cycle = Some(Default::default());
+    let e = stickslip::engine::run(&scene, serde_json::from_str(&text).unwrap()).unwrap_err();
+    assert!(e.is_bad_input() && e.message.contains("autonomous"), "{e}");
+    let mut scene = stickslip::scene::parse(&text, "forced").unwrap();
+    scene.analyses.hopf = true;
+    let e = stickslip::engine::run(&scene, serde_json::from_str(&text).unwrap()).unwrap_err();
+    assert!(e.is_bad_input() && e.message.contains("autonomous"), "{e}");
+}

@@ -70,6 +70,28 @@ fn first_20_events_agree_with_qdyn_within_1e_6() {
     assert!(short["statement"].as_str().unwrap().starts_with("not locked"));
 }
 
+/// `APER`, `TPER` map to `dimensional.periodic_loading`, and the analyses to the time series
+/// alone; `--print-scene` shows them.
+#[test]
+fn aper_and_tper_map_to_the_scenes_periodic_loading() {
+    let file = data("qdyn/classic_slip_per3.in");
+    let out =
+        Command::new(EXE).args(["run", file.to_str().unwrap(), "--print-scene"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let scene: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let loading = &scene["model"]["dimensional"]["periodic_loading"];
+    assert_eq!(loading["amplitude"], 4e4);
+    assert_eq!(loading["period"], 14337603.1780457);
+    assert_eq!(
+        scene["analyses"],
+        serde_json::json!([{"time_series": {"t_max": 143376031.780457}}])
+    );
+    let parsed = stickslip::scene::parse(&scene.to_string(), "per3").unwrap();
+    let l = parsed.loading.unwrap();
+    // a_per = A_per/(aσ) = 0.4, T = T_per·V_pl/D_c.
+    assert!((l.amplitude - 0.4).abs() < 1e-15 && (l.period - 143.376031780457).abs() < 1e-12);
+}
+
 /// A forced scene asks only for what a forced system has: the unforced analyses exit 2
 /// naming the field.
 #[test]

@@ -334,6 +334,7 @@ fn cycle_cancellable(
     linear: &HopfReport,
     cancel: Option<&Cancel>,
 ) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
+    unforced(scene, "cycle")?;
     let settings = cycle::CycleSettings {
         trajectory_cycles,
         escape: cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step(linear))),
@@ -437,6 +438,16 @@ fn run_inner(
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
+    let autonomous_only = a.hopf
+        || a.paper
+        || a.shooting.is_some()
+        || a.continuation.is_some()
+        || a.asymptotics.is_some()
+        || a.lyapunov.is_some()
+        || a.noise.is_some();
+    if autonomous_only {
+        unforced(scene, "analyses").map_err(|e| EngineError::in_section("analyses", e))?;
+    }
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
     let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref(), cancel)?;
     let (shooting, continuation) =
@@ -532,6 +543,20 @@ fn run_inner(
     };
     refuse_non_finite(&report)?;
     Ok(report)
+}
+
+/// Refuses a periodically loaded scene for an analysis that assumes an autonomous system
+/// (scene::parse refuses such scenes already; this guards scenes built in code).
+fn unforced(scene: &Scene, what: &str) -> Result<(), AnalysisError> {
+    match scene.loading {
+        None => Ok(()),
+        Some(_) => Err(crate::analysis::InvalidOption::new(
+            what,
+            "this analysis assumes an autonomous system and the scene is periodically loaded \
+             (Scene::loading): a forced scene runs time_series alone (docs/periodic-loading.md)",
+        )
+        .into()),
+    }
 }
 
 /// The integrator a report names: the one of the first integrating analysis.
