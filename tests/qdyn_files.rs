@@ -183,7 +183,7 @@ fn unsupported_or_bad_files_exit_2_naming_the_line_and_field() {
         (with_line(7, "1 0 0"), 7, "FEAT_STRESS_COUPL", "not supported"),
         (with_line(7, "0 1 0"), 7, "FEAT_TP", "thermal pressurisation"),
         (with_line(9, "0 3e10 3e10 0 0 0.01"), 9, "VS", "radiation damping"),
-        (with_line(10, "31536000 40000"), 10, "APER", "periodic loading"),
+        (with_line(10, "0 40000"), 10, "TPER", "periodic loading"),
         (with_line(11, "0.1 0 1e8 0"), 11, "ACC", "> 0"),
         (with_line(12, "3 nstop"), 12, "NSTOP", "TMAX"),
         (with_line(13, "1 0"), 13, "DYN_FLAG", "not supported"),
@@ -218,7 +218,7 @@ fn unsupported_or_bad_files_exit_2_naming_the_line_and_field() {
     let out = stickslip(&["run", file.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("line 10: APER") && stderr.contains("periodic loading"), "{stderr}");
+    assert!(stderr.contains("line 10: TPER") && stderr.contains("periodic loading"), "{stderr}");
 }
 
 /// The fields of a QDYN output line (blank-separated).

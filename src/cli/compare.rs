@@ -18,6 +18,9 @@ pub fn compare_command(
     if !scene.params.state_law.heals() {
         return Err(Failure(2, format!("scene {}: model.state_law: compare compares cycles and their events; the no-healing law (\"no_healing\") has none, its block runs away: run the scene (its report's runaway section gives the time v reaches the threshold), once per solver.method to compare methods", path.display())));
     }
+    if scene.loading.is_some() {
+        return Err(Failure(2, format!("{}: compare runs the unforced model (its methods' cycles, or a reference trajectory), and this scene is periodically loaded (model.periodic_loading or model.dimensional.periodic_loading); run it with `stickslip run` (time_series: the event catalogue and the locking to the forcing), or drop the loading", path.display())));
+    }
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(Failure(2, format!("--tolerance {tolerance} must be a finite number > 0")));
     }

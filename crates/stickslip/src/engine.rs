@@ -23,6 +23,7 @@ use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
 mod cancel;
+mod forced;
 mod guard;
 mod imex_stick;
 pub mod lab;
@@ -62,12 +63,13 @@ fn integrator_cancellable<S: ImexSystem + 'static>(
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // The no-healing law has no fixed point, so no linear period to bound the steps by.
     let max_step = drr.params().state_law.heals().then(|| max_step(&hopf::analyse(drr)));
-    integrator_with_max_step(system, drr, max_step, spec, y0, atol, cancel)
+    integrator_with_max_step(system, drr, max_step, spec, y0, atol, cancel, true)
 }
 
 /// [`integrator_for`] with the largest step `max_step` (None: unbounded), failing once
-/// `cancel` is set.
-/// The run's guards ([`guard::guarded`]) wrap it.
+/// `cancel` is set, for an `autonomous` system or not (a periodically loaded one,
+/// [`forced`]). The run's guards ([`guard::guarded`]) wrap it.
+#[allow(clippy::too_many_arguments)]
 fn integrator_with_max_step<S: ImexSystem + 'static>(
     system: S,
     drr: &Drr,
@@ -76,6 +78,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     y0: &[f64],
     atol: Tolerance,
     cancel: Option<&Cancel>,
+    autonomous: bool,
 ) -> Result<(Box<dyn Integrator>, Vec<String>), SolverError> {
     // Up to 20 error-test failures per step (as SUNDIALS' ark_robertson_root allows): the
     // default 7 fails in the rise at γ = 1e8, rtol 1e-6 (CVODE) and on the stick at γ = 1e4,
@@ -185,7 +188,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     };
     let settings = MethodSettings {
         deduce_implicit_rhs: engine.deduce_implicit_rhs,
-        ..MethodSettings::of(spec, true)
+        ..MethodSettings::of(spec, autonomous)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
     let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0));
@@ -332,6 +335,7 @@ fn cycle_cancellable(
     linear: &HopfReport,
     cancel: Option<&Cancel>,
 ) -> Result<(cycle::CycleReport, String, Vec<String>, Stats), AnalysisError> {
+    unforced(scene, "cycle")?;
     let settings = cycle::CycleSettings {
         trajectory_cycles,
         escape: cycle::EscapeStep::for_eigenvalues(&linear.eigenvalues, Some(max_step(linear))),
@@ -346,6 +350,7 @@ fn cycle_cancellable(
         &scene.initial,
         atol,
         cancel,
+        true,
     )?;
     let stable = linear.max_real_part < 0.0;
     let report =
@@ -434,6 +439,16 @@ fn run_inner(
     let started = std::time::Instant::now();
     let drr = Drr::new(scene.params);
     let a = &scene.analyses;
+    let autonomous_only = a.hopf
+        || a.paper
+        || a.shooting.is_some()
+        || a.continuation.is_some()
+        || a.asymptotics.is_some()
+        || a.lyapunov.is_some()
+        || a.noise.is_some();
+    if autonomous_only {
+        unforced(scene, "analyses").map_err(|e| EngineError::in_section("analyses", e))?;
+    }
     let linear = (a.hopf || a.cycle.is_some()).then(|| hopf::analyse(&drr));
     let (mut cycle, mut integration) = cycle_step(scene, &drr, linear.as_ref(), cancel)?;
     let (shooting, continuation) =
@@ -521,12 +536,29 @@ fn run_inner(
         noise,
         time_series: series.as_ref().map(|s| s.report.clone()),
         runaway: series.as_ref().and_then(|s| s.runaway.clone()),
+        forcing: scene.loading.as_ref().zip(series.as_ref()).map(|(loading, s)| {
+            crate::analysis::locking::analyse(&s.events, loading, scene.scales.as_ref())
+        }),
         events: series.map(|s| s.events),
         warnings: scene.warnings.clone(),
         wall_time_s: started.elapsed().as_secs_f64(),
     };
     refuse_non_finite(&report)?;
     Ok(report)
+}
+
+/// Refuses a periodically loaded scene for an analysis that assumes an autonomous system
+/// (scene::parse refuses such scenes already; this guards scenes built in code).
+fn unforced(scene: &Scene, what: &str) -> Result<(), AnalysisError> {
+    match scene.loading {
+        None => Ok(()),
+        Some(_) => Err(crate::analysis::InvalidOption::new(
+            what,
+            "this analysis assumes an autonomous system and the scene is periodically loaded \
+             (Scene::loading): a forced scene runs time_series alone (docs/periodic-loading.md)",
+        )
+        .into()),
+    }
 }
 
 /// The integrator a report names: the one of the first integrating analysis.
@@ -658,17 +690,28 @@ fn time_series_step(
         max_steps: o.max_steps.unwrap_or(time_series::options::DEFAULT_MAX_STEPS),
         w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
     };
-    let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
-    let (mut integ, tables) =
-        integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
-            .map_err(failed(drr, AnalysisKind::TimeSeries))?;
-    let outcome = time_series::run(integ.as_mut(), drr, &settings, scales, series)
-        .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+    let outcome = match scene.loading {
+        None => {
+            let atol = Tolerance::PerComponent(scene.solver.atol.to_vec());
+            let (mut integ, tables) =
+                integrator_cancellable(*drr, drr, &scene.solver, &scene.initial, atol, cancel)
+                    .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+            time_series::run(integ.as_mut(), drr, drr, &settings, scales, series)
+                .map(|o| (o, integ.stats(), tables))
+        }
+        Some(loading) => {
+            let mut f = forced::integrator(drr, loading, &scene.solver, &scene.initial, cancel)
+                .map_err(failed(drr, AnalysisKind::TimeSeries))?;
+            time_series::run(f.integrator.as_mut(), drr, &f.system, &settings, scales, series)
+                .map(|o| (o, f.integrator.stats(), f.tables))
+        }
+    };
+    let (outcome, stats, tables) = outcome.map_err(failed(drr, AnalysisKind::TimeSeries))?;
     if !integrated {
         let family = scene.solver.method.capabilities().family.to_string();
         (integration.name, integration.tables) = (family, tables);
     }
-    integration.stats.accumulate(&integ.stats());
+    integration.stats.accumulate(&stats);
     Ok(Some(outcome))
 }
 
@@ -730,6 +773,7 @@ fn refuse_non_finite(r: &Report) -> Result<(), EngineError> {
         first_non_finite_in(AnalysisKind::TimeSeries.name(), r.time_series.as_ref()),
         first_non_finite_in("events", r.events.as_ref()),
         first_non_finite_in("runaway", r.runaway.as_ref()),
+        first_non_finite_in("forcing", r.forcing.as_ref()),
         first_non_finite_in("solver", Some(&r.solver)),
     ];
     match sections.into_iter().flatten().next() {

@@ -266,6 +266,10 @@ pub struct Report {
     /// (`time_series.runaway_velocity`): the time v reached it, or that it did not by t_max.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub runaway: Option<Runaway>,
+    /// A forced scene's response to its periodic loading: the locking judged from `events`
+    /// ([`crate::analysis::locking`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forcing: Option<crate::analysis::locking::ForcingReport>,
     /// Derived parameters far outside the physical range (dimensional input), each naming its
     /// input fields; absent when there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]

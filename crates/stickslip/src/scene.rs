@@ -7,8 +7,8 @@ use crate::analysis::noise::options::NoiseOptions;
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::model::{
-    Drr, DrrParams, Friction, FrictionReference, ModelKind, PhysicalScales, SaddleNodeParams,
-    StateLaw, VanDerPolParams,
+    Drr, DrrParams, Friction, FrictionReference, ModelKind, PeriodicLoading, PhysicalScales,
+    SaddleNodeParams, StateLaw, VanDerPolParams,
 };
 pub use crate::solver::{Method, SolverSpec};
 use serde::{Deserialize, Serialize};
@@ -64,6 +64,9 @@ struct RawModel {
     /// false: the quasi-dynamic model (no inertia; needs η > 0, takes no γ). Default true.
     #[serde(default)]
     inertia: Option<bool>,
+    /// Periodic loading, dimensionless (amplitude in A = aσ, period in D_c/v0).
+    #[serde(default)]
+    periodic_loading: Option<PeriodicLoadingInput>,
     /// "drr" (default), "saddle_node" or "van_der_pol".
     #[serde(default)]
     kind: Option<String>,
@@ -142,6 +145,23 @@ pub struct Dimensional {
     /// V_ref, the velocity at which the steady-state friction is `mu0`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub v_ref: Option<f64>,
+    /// Periodic loading (QDYN's APER, TPER): the amplitude A_per in stress units, the period
+    /// T_per in time units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub periodic_loading: Option<PeriodicLoadingInput>,
+}
+
+/// A shear stress amplitude·sin(2πt/period) added to the spring's load (QDYN's APER, TPER),
+/// t from the start of the run: dimensionless under `model.periodic_loading` (amplitude in
+/// A = aσ, period in D_c/v0), in the input's units under `model.dimensional.periodic_loading`
+/// (A_per in stress units, e.g. Pa, T_per in time units, e.g. s).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PeriodicLoadingInput {
+    /// The stress amplitude (a_per or A_per).
+    pub amplitude: f64,
+    /// The period (T or T_per), > 0.
+    pub period: f64,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -306,6 +326,9 @@ pub struct Scene {
     pub solver: SolverSpec,
     /// Requested analyses.
     pub analyses: Analyses,
+    /// Periodic loading (dimensionless), when given with a non-zero amplitude: the system is
+    /// then forced and only the "time_series" analysis runs (see docs/scenes.md).
+    pub loading: Option<PeriodicLoading>,
 }
 
 /// A model other than the DRR: only the "noise" analysis runs on it.
@@ -409,6 +432,7 @@ fn only_model_keys(
         ("state_law", m.state_law.is_some()),
         ("radiation_damping", m.radiation_damping.is_some()),
         ("inertia", m.inertia.is_some()),
+        ("periodic_loading", m.periodic_loading.is_some()),
         ("mu0", m.mu0.is_some()),
         ("r", m.r.is_some()),
         ("x0", m.x0.is_some()),
@@ -545,6 +569,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             "state_law",
             "radiation_damping",
             "inertia",
+            "periodic_loading",
         ],
         err,
     )?;
@@ -674,6 +699,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         no_healing_analyses(&analyses, &raw.analyses, err)?;
     }
     papers_model_only(&params, &analyses, err)?;
+    let loading = periodic_loading(m, scales.as_ref(), &analyses, err)?;
     if !inertia {
         quasi_dynamic_continuation(analyses.continuation.as_ref(), &raw.analyses, err)?;
     }
@@ -691,7 +717,71 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         initial,
         solver,
         analyses,
+        loading,
     })
+}
+
+/// The dimensionless periodic loading from `model.periodic_loading` (dimensionless scenes) or
+/// `model.dimensional.periodic_loading` (a_per = A_per/(aσ), T = T_per·v0/D_c); None when
+/// absent or of zero amplitude. A forced system runs only "time_series" (with its event
+/// catalogue and the locking to the forcing): the other analyses assume an autonomous system
+/// (a fixed point, a limit cycle, its period and Floquet multipliers).
+fn periodic_loading(
+    m: &RawModel,
+    scales: Option<&PhysicalScales>,
+    analyses: &Analyses,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<Option<PeriodicLoading>, SceneError> {
+    let dimensional = m.dimensional.and_then(|d| d.periodic_loading);
+    let (input, field, to_dimensionless) = match (m.periodic_loading, dimensional, scales) {
+        (Some(_), _, Some(_)) => {
+            return Err(err("model.periodic_loading", "a dimensional scene gives its periodic loading in its own units, as model.dimensional.periodic_loading {\"amplitude\": A_per (stress), \"period\": T_per (time)}".into()));
+        }
+        (Some(p), None, None) => (p, "model.periodic_loading", (1.0, 1.0)),
+        (None, Some(p), Some(s)) => {
+            (p, "model.dimensional.periodic_loading", (s.a_sigma, s.time_scale()))
+        }
+        _ => return Ok(None),
+    };
+    let amplitude = finite(&format!("{field}.amplitude"), input.amplitude, err)?;
+    let period = positive(
+        &format!("{field}.period"),
+        input.period,
+        "the forcing period, e.g. 3 times the unforced cycle's",
+        err,
+    )?;
+    if amplitude == 0.0 {
+        return Ok(None);
+    }
+    let loading = PeriodicLoading {
+        amplitude: amplitude / to_dimensionless.0,
+        period: period / to_dimensionless.1,
+    };
+    if !(loading.amplitude.is_finite() && loading.period.is_finite() && loading.period > 0.0) {
+        return Err(err(
+            field,
+            format!(
+                "{input:?} is {loading:?} in units of A and D_c/v0: out of the range of doubles"
+            ),
+        ));
+    }
+    let autonomous_only = [
+        (analyses.hopf, AnalysisKind::Hopf),
+        (analyses.cycle.is_some(), AnalysisKind::Cycle),
+        (analyses.paper, AnalysisKind::Paper),
+        (analyses.shooting.is_some(), AnalysisKind::Shooting),
+        (analyses.continuation.is_some(), AnalysisKind::Continuation),
+        (analyses.asymptotics.is_some(), AnalysisKind::Asymptotics),
+        (analyses.lyapunov.is_some(), AnalysisKind::Lyapunov),
+        (analyses.noise.is_some(), AnalysisKind::Noise),
+    ];
+    if let Some((_, name)) = autonomous_only.iter().find(|(asked, _)| *asked) {
+        return Err(err("analyses", format!("the \"{name}\" analysis assumes an autonomous system (a fixed point, a limit cycle and its period), and {field} forces this one; a forced scene runs \"time_series\", whose report gives the event catalogue and the locking to the forcing (drop \"{name}\", or the periodic loading)")));
+    }
+    if analyses.time_series.is_none() {
+        return Err(err("analyses", format!("a forced scene ({field}) runs the \"time_series\" analysis (its event catalogue and the locking to the forcing); add {{\"time_series\": {{\"t_max\": ...}}}}")));
+    }
+    Ok(Some(loading))
 }
 
 /// The friction law from `model.friction`: QDYN's laws take dimensionless velocities (v1, v2,

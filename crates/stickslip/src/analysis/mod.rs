@@ -12,6 +12,7 @@ pub mod fit;
 pub mod hopf;
 pub mod lab;
 pub mod lab_fit;
+pub mod locking;
 pub mod lyapunov;
 pub mod noise;
 pub mod paper;

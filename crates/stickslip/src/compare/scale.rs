@@ -34,6 +34,9 @@ pub enum SceneMismatch {
     /// A QDYN output (SI units) against a scene without physical scales.
     #[error("a QDYN output file is in SI units: compare it against the qdyn.in that made it, or a scene with model.dimensional (docs/from-qdyn.md)")]
     NotPhysical,
+    /// A periodically loaded scene: the reference runs the unforced model.
+    #[error("the scene is periodically loaded (model.periodic_loading): the reference trajectory runs the unforced model; compare its events with `stickslip run` (time_series) instead")]
+    Forced,
     /// A QDYN output against an inertial scene.
     #[error("QDYN's spring-block is quasi-dynamic, so u is known only from its force balance: compare its output against a scene with \"inertia\": false (a qdyn.in maps to one)")]
     Inertial,
@@ -117,7 +120,7 @@ pub enum SceneMismatch {
 /// the end of double precision's range (e^±708).
 pub const MAX_IMBALANCE: f64 = 700.0;
 
-/// Checks the first sample against the scene's force balance G = u + (Φ(v, θ) + η v)/ξ: a
+/// Refuses a periodically loaded scene, then checks the first sample against the scene's force balance G = u + (Φ(v, θ) + η v)/ξ: a
 /// quasi-dynamic scene must be on it (within the tolerance, relative to max(|u|, 1)); an
 /// inertial scene's start may be off it, by at most [`MAX_IMBALANCE`] in ξG.
 pub fn first_sample_fits(
@@ -125,6 +128,9 @@ pub fn first_sample_fits(
     user: &Trajectory,
     tolerance: f64,
 ) -> Result<(), SceneMismatch> {
+    if scene.loading.is_some() {
+        return Err(SceneMismatch::Forced);
+    }
     let params = scene.params;
     let [u, v, theta] = user.y[0];
     let balanced = -Drr::new(params).strength(&[0.0, v.ln(), theta]).value / params.xi;

@@ -15,15 +15,22 @@ impl Report {
     /// A readable summary for the terminal: each section the scene asked for, in a fixed
     /// order.
     pub fn summary(&self) -> String {
+        let si = self.scene["model"]["dimensional"]["unit_system"] == "SI";
         let sections = [
             Some(self.model_and_solver()),
             self.hopf.as_ref().map(|h| hopf(h, self.model.epsilon)),
             self.cycle.as_ref().map(|c| cycle(c, &self.model)),
             self.physical.as_ref().map(physical),
-            self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref())),
-            self.runaway.as_ref().map(|r| runaway(r, self.time_series.as_ref())),
+            self.time_series.as_ref().map(|t| time_series(t, self.events.as_deref(), si)),
+            self.runaway.as_ref().map(|r| runaway(r, self.time_series.as_ref(), si)),
+            self.forcing.as_ref().map(|f| {
+                format!(
+                    "forcing: amplitude {:e} A, period {:e} (units of D_c/v0); {}\n",
+                    f.amplitude, f.period, f.statement
+                )
+            }),
             self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
-                cycle_physical(p, self.scene["model"]["dimensional"]["unit_system"] == "SI")
+                cycle_physical(p, si)
             }),
             Some(self.warnings.iter().map(|w| format!("warning: {w}\n")).collect()),
             self.asymptotics.as_ref().map(asymptotics::summary),
@@ -188,21 +195,22 @@ fn physical(p: &Physical) -> String {
 }
 
 /// Where the time series stopped at its runaway threshold, or that it did not reach it.
-fn runaway(r: &Runaway, series: Option<&TimeSeriesReport>) -> String {
+fn runaway(r: &Runaway, series: Option<&TimeSeriesReport>, si: bool) -> String {
     let physical = r.physical.as_ref();
     let threshold = format!(
         "v = {:e}{}",
         r.v_threshold,
         physical.map_or(String::new(), |p| format!(
-            " (V = {:e} in the input's unit)",
-            p.velocity_threshold
+            " (V = {:e}{})",
+            p.velocity_threshold,
+            unit(si, "m/s", "velocity")
         ))
     );
     match &r.at {
         Some(a) => format!(
             "runaway: {threshold} reached at t = {:.12e}{}, slip {:.6e}, θ {:.6e} (the run stops there)\n",
             a.t,
-            physical.and_then(|p| p.t).map_or(String::new(), |t| format!(" ({t:.12e} in the input's time unit)")),
+            physical.and_then(|p| p.t).map_or(String::new(), |t| format!(" ({t:.12e}{})", unit(si, "s", "time"))),
             a.slip,
             a.theta
         ),
@@ -214,11 +222,21 @@ fn runaway(r: &Runaway, series: Option<&TimeSeriesReport>) -> String {
 }
 
 /// The time series's extent and event count, then its last event.
-fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>) -> String {
+/// A dimensional value's unit: its SI name where the scene declares SI units, "in the
+/// input's … unit" otherwise.
+fn unit(si: bool, si_name: &str, quantity: &str) -> String {
+    if si {
+        format!(" {si_name}")
+    } else {
+        format!(" in the input's {quantity} unit")
+    }
+}
+
+fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>, si: bool) -> String {
     let mut s = format!(
         "time series: t = 0 … {:e}{}, {} rows ({} steps), {} events above v = {}{}\n",
         t.t_max,
-        t.t_max_physical.map_or(String::new(), |p| format!(" ({p:e} in the input's time unit)")),
+        t.t_max_physical.map_or(String::new(), |p| format!(" ({p:e}{})", unit(si, "s", "time"))),
         t.rows,
         t.steps,
         t.event_count,

@@ -38,9 +38,10 @@ pub fn is_qdyn_input(path: &Path, text: &str) -> bool {
 }
 
 /// The scene (pretty JSON text) equivalent to a QDYN spring-block input file: quasi-dynamic,
-/// SI units, radau5 at rtol = `ACC`, the "cycle" analysis and a "time_series" run to `TMAX`
-/// (without healing, `THETA_LAW = 0`: the run to `TMAX` or to the runaway at
-/// [`NO_HEALING_RUNAWAY_VELOCITY`]).
+/// SI units, radau5 at rtol = `ACC`, the "cycle" analysis (not under periodic loading,
+/// `APER` ≠ 0, which forces the system) and a "time_series" run to `TMAX` (without healing,
+/// `THETA_LAW = 0`: the run to `TMAX` or to the runaway at [`NO_HEALING_RUNAWAY_VELOCITY`],
+/// and no cycle).
 /// `name` names the scene (e.g. the file's stem).
 pub fn to_scene(text: &str, source_name: &str, name: &str) -> Result<String, QdynInputError> {
     let mut scene = map(&mut Lines::new(text, source_name))?;
@@ -210,10 +211,13 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
         l.number(i)?; // LAM, D, HD: 2D/3D kernels only; V_TH: QDYN's event output only.
     }
     let l = lines.next(&["TPER", "APER"])?;
-    l.number(0)?;
+    let tper = l.number(0)?;
     let aper = l.number(1)?;
-    if aper != 0.0 {
-        return Err(l.error(1, format!("{aper}: periodic loading is not supported yet; stickslip runs a constant loading rate (APER = 0)")));
+    if aper != 0.0 && tper <= 0.0 {
+        return Err(l.error(
+            0,
+            format!("{tper} must be > 0 with APER ≠ 0 (the period of the periodic loading, in s)"),
+        ));
     }
     let l = lines.next(&["DTTRY", "DTMAX", "TMAX", "ACC"])?;
     l.number(0)?; // DTTRY, DTMAX: stickslip's integrators choose their own steps.
@@ -269,6 +273,9 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
         "sigma": sigma, "a": a, "b": b, "d_c": d_c, "v0": v_pl,
         "shear_modulus": mu, "length": length, "shear_wave_speed": vs,
     });
+    if aper != 0.0 {
+        dimensional["periodic_loading"] = json!({"amplitude": aper, "period": tper});
+    }
     if rns_law == 0 {
         let mu_ss = l.positive(8, "the reference friction coefficient μ*, e.g. 0.6")?;
         let v_ss = l.positive(9, "the reference velocity V*, e.g. 1e-6 (m/s)")?;
@@ -286,7 +293,7 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
         },
         "initial": {"velocity": v_0, "state": th_0},
         "solver": {"method": "radau5", "rtol": acc},
-        "analyses": analyses(state_law, t_max),
+        "analyses": analyses(state_law, aper != 0.0, t_max),
     }))
 }
 
@@ -294,12 +301,15 @@ fn map(lines: &mut Lines) -> Result<Value, QdynInputError> {
 /// slip rate. QDYN itself runs on until its solver fails (exit 0).
 pub const NO_HEALING_RUNAWAY_VELOCITY: f64 = 1.0;
 
-/// The analyses of a mapped file: the cycle and the events to `TMAX`; without healing, which
-/// has no cycle, the run to `TMAX` that stops where V reaches
-/// [`NO_HEALING_RUNAWAY_VELOCITY`] (the report's `runaway`).
-fn analyses(state_law: &str, t_max: f64) -> Value {
+/// The analyses of a mapped file: the cycle and the events to `TMAX`; under periodic loading
+/// (`forced`), which has no cycle of its own, the events alone (and their locking to the
+/// forcing); without healing, which has no cycle, the run to `TMAX` that stops where V
+/// reaches [`NO_HEALING_RUNAWAY_VELOCITY`] (the report's `runaway`).
+fn analyses(state_law: &str, forced: bool, t_max: f64) -> Value {
     if state_law == "no_healing" {
         json!([{"time_series": {"t_max": t_max, "runaway_velocity": NO_HEALING_RUNAWAY_VELOCITY}}])
+    } else if forced {
+        json!([{"time_series": {"t_max": t_max}}])
     } else {
         json!(["cycle", {"time_series": {"t_max": t_max}}])
     }

@@ -88,7 +88,8 @@ pub struct EventValues {
     /// t_end − t_start.
     pub duration: f64,
     /// Drop of the spring stress from t_start to t_end, ξ·(u(t_end) − u(t_start)) in units
-    /// of A = aσ (k·D_c·Δu physical, [`PhysicalScales::stress_drop`]).
+    /// of A = aσ (k·D_c·Δu physical, [`PhysicalScales::stress_drop`]); under periodic loading
+    /// the spring's alone, without the change of the periodic load.
     pub stress_drop: f64,
     /// Time since the previous event's peak (null for the first event).
     pub recurrence: Option<f64>,
@@ -227,11 +228,13 @@ impl Rows<'_> {
 }
 
 /// Runs the integrator (at local time 0 with the scene's initial state, absolute time 0) to
-/// `settings.t_max`, writing rows to `sink` and cataloguing events. `scales` adds the physical
-/// columns and event quantities.
+/// `settings.t_max`, writing rows to `sink` and cataloguing events. `system` is the system
+/// integrated: `drr` itself, or `drr` under periodic loading ([`crate::model::ForcedDrr`]).
+/// `scales` adds the physical columns and event quantities.
 pub fn run(
     integ: &mut dyn Integrator,
     drr: &Drr,
+    system: &dyn OdeSystem,
     settings: &TimeSeriesSettings,
     scales: Option<PhysicalScales>,
     sink: &mut dyn SeriesSink,
@@ -239,7 +242,7 @@ pub fn run(
     let y0 = integ.state();
     let y0 = [y0[0], y0[1], y0[2]];
     let mut d0 = [0.0; 3];
-    drr.rhs(integ.t(), &y0, &mut d0);
+    system.rhs(integ.t(), &y0, &mut d0);
     let prev = Sample { t: integ.t(), y: y0, d: d0 };
     let mut columns: Vec<&'static str> = COLUMNS.to_vec();
     let absolute = scales.is_some_and(|s| s.shear_stress(&drr.params().friction, 0.0).is_some());
