@@ -29,9 +29,7 @@ impl Report {
                     f.amplitude, f.period, f.statement
                 )
             }),
-            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| {
-                cycle_physical(p, si)
-            }),
+            self.cycle.as_ref().and_then(|c| c.physical.as_ref()).map(|p| cycle_physical(p, si)),
             Some(self.warnings.iter().map(|w| format!("warning: {w}\n")).collect()),
             self.asymptotics.as_ref().map(asymptotics::summary),
             self.lyapunov.as_ref().map(lyapunov::summary),

@@ -141,7 +141,8 @@ mod tests {
         assert!(why.ends_with("with the default rtol 1e-10 (docs/scenes.md, \"solver\")"), "{why}");
         let (spec, why) = chosen(r#"{"atol": 1e-14}"#);
         assert_eq!((spec.method, spec.rtol, spec.atol), (Method::Radau5, 1e-10, [1e-14; 3]));
-        let both = format!("the default method {} and rtol {DEFAULT_RTOL:e}", DEFAULT_METHOD.name());
+        let both =
+            format!("the default method {} and rtol {DEFAULT_RTOL:e}", DEFAULT_METHOD.name());
         assert!(why.contains(&both), "{why}");
     }
 }
