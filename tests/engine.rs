@@ -90,7 +90,12 @@ fn every_stiff_method_succeeds_at_gamma_1e8_with_scene_defaults() {
         let c = r.cycle.unwrap();
         assert_eq!(c.status, CycleStatus::Periodic, "{method}");
         let p = c.values.unwrap().main.period;
-        assert!((p - 56.4124662).abs() < 1e-5 * p, "{method}: period {p} at default rtol 1e-8");
+        let rtol = r.solver.rtol;
+        assert_eq!(rtol, stickslip::scene::DEFAULT_RTOL, "{method}: {}", r.solver.chosen_by);
+        assert!(
+            (p - 56.4124662).abs() < 1e-5 * p,
+            "{method}: period {p} at the default rtol {rtol:e}"
+        );
     }
 }
 

@@ -167,3 +167,69 @@ fn qdyn_spring_block_cycles_agree_with_qdyns_runs() {
         }
     }
 }
+
+/// Issue #36: a scene without a `solver` block meets period 1e-9 and v_max 1e-8 on the 12
+/// QDYN spring-block cases written in the field's units as docs/from-qdyn.md writes them (σ =
+/// 10 MPa, a = 0.01, b = 0.015, D_c = 0.1 mm, V_pl = 1 nm/s, k = k/k_c · 5e8 Pa/m, G = 30 GPa,
+/// c_s = 3 km/s (η = 5e-8) or 0.15 m/s (η = 1e-3), from V = 0.5·V_pl, Θ = D_c/V_pl) against
+/// their converged values (data/reference/quasi_dynamic_cycles.json: Rodas5P and Radau5 at
+/// rtol 1e-13), and on QDYN's two classic cases against QDYN's converged runs
+/// (data/reference/qdyn_spring_block.json, ACC = 1.01e-12). Measured with the default
+/// (radau5, rtol 1e-10): period within 9.6e-12, v_max within 3.4e-10 (the former default,
+/// cvode-bdf at rtol 1e-8: 1.2e-7 and 8e-7).
+#[test]
+fn a_scene_without_a_solver_block_meets_the_accuracy_on_the_qdyn_cases() {
+    let field = |law: &str, k: f64, c_s: f64| {
+        serde_json::json!({
+            "name": "default",
+            "model": {"inertia": false, "state_law": law, "dimensional": {
+                "sigma": 1e7, "a": 0.01, "b": 0.015, "d_c": 1e-4, "v0": 1e-9, "mu0": 0.6,
+                "v_ref": 1e-6, "k": k, "shear_modulus": 3e10, "shear_wave_speed": c_s}},
+            "initial": {"velocity": 5e-10, "state": 1e5},
+            "analyses": ["cycle"]
+        })
+        .to_string()
+    };
+    let ran_the_default = |report: &Report, case: &str| {
+        assert_eq!(report.solver.chosen_by, scene::CHOSEN_BY_DEFAULT, "{case}");
+        assert_eq!((report.solver.method, report.solver.rtol), (scene::DEFAULT_METHOD, 1e-10));
+    };
+    let within = |[p, v]: [f64; 2], [period, v_max]: [f64; 2], case: &str| {
+        assert!((p - period).abs() <= 1e-9 * period, "{case}: period {p} vs {period}");
+        assert!((v - v_max).abs() <= 1e-8 * v_max, "{case}: v_max {v} vs {v_max}");
+    };
+    let table: serde_json::Value =
+        serde_json::from_str(include_str!("../data/reference/quasi_dynamic_cycles.json")).unwrap();
+    let rows = table["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 12);
+    for row in rows {
+        let f = |k: &str| row[k].as_f64().unwrap();
+        let law = row["state_law"].as_str().unwrap();
+        let c_s = if f("radiation_damping") == 5e-8 { 3e3 } else { 0.15 };
+        let report = run(&field(law, f("k_over_kc") * 5e8, c_s));
+        let case = format!("{law} k/k_c = {} c_s = {c_s}", f("k_over_kc"));
+        // The field's units map to this row's dimensionless model.
+        assert!((report.model.xi - f("xi")).abs() < 1e-15, "{case}: ξ = {}", report.model.xi);
+        let eta = report.model.radiation_damping;
+        assert!((eta - f("radiation_damping")).abs() < 1e-12 * eta, "{case}: η = {eta}");
+        ran_the_default(&report, &case);
+        let [period, v_max, _] = cycle(&report);
+        within([period, v_max], [f("period"), f("v_max")], &case);
+    }
+    let qdyn: serde_json::Value =
+        serde_json::from_str(include_str!("../data/reference/qdyn_spring_block.json")).unwrap();
+    for name in ["classic_ageing", "classic_slip"] {
+        let case = qdyn["cases"].as_array().unwrap().iter().find(|c| c["case"] == name).unwrap();
+        let text = serde_json::json!({
+            "name": name, "model": case["model"],
+            "initial": {"velocity": 5e-10, "state": 1e5}, "analyses": ["cycle"]
+        })
+        .to_string();
+        let report = run(&text);
+        ran_the_default(&report, name);
+        let ours = report.cycle.as_ref().unwrap().physical.as_ref().unwrap();
+        let converged = |k: &str| case["converged"][k].as_f64().unwrap();
+        let qdyn = [converged("period_s"), converged("v_max_m_per_s")];
+        within([ours.period, ours.v_max], qdyn, &format!("{name} (SI, against QDYN)"));
+    }
+}

@@ -521,6 +521,7 @@ fn run_inner(
             integrator: integration.name,
             rtol: scene.solver.rtol,
             atol: scene.solver.atol,
+            chosen_by: scene.solver_chosen_by.clone(),
             tables: integration.tables,
             stats: integration.stats,
         },

@@ -55,6 +55,9 @@ pub struct SolverSection {
     pub rtol: f64,
     /// Absolute tolerances of (u, ln v, θ).
     pub atol: [f64; 3],
+    /// Why this method and rtol ran: the scene's `solver` block, or the defaults and why
+    /// (`Scene::solver_chosen_by`).
+    pub chosen_by: String,
     /// Butcher table(s) for ARKStep.
     pub tables: Vec<String>,
     /// Statistics of the whole run.

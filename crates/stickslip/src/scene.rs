@@ -16,7 +16,9 @@ use serde::{Deserialize, Serialize};
 mod analyses;
 pub mod lab;
 pub mod qdyn_input;
+mod solver_block;
 pub use analyses::{analysis_names, AnalysisKind};
+pub use solver_block::{CHOSEN_BY_DEFAULT, CHOSEN_BY_SCENE, DEFAULT_METHOD, DEFAULT_RTOL};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -324,6 +326,9 @@ pub struct Scene {
     pub initial: [f64; 3],
     /// Solver settings.
     pub solver: SolverSpec,
+    /// Why this solver runs: the scene's block, or the defaults and why (the report's
+    /// `solver.chosen_by`; [`DEFAULT_METHOD`]).
+    pub solver_chosen_by: String,
     /// Requested analyses.
     pub analyses: Analyses,
     /// Periodic loading (dimensionless), when given with a non-zero amplitude: the system is
@@ -689,7 +694,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let field_initial =
         raw.initial.as_ref().map(|r| field_start(r, scales.as_ref(), &params, err)).transpose()?;
     let initial = initial_state(&drr, field_initial.as_ref().or(raw.initial.as_ref()), err)?;
-    let solver = solver_spec(raw.solver.as_ref(), err)?;
+    let (solver, solver_chosen_by) = solver_block::parse(raw.solver.as_ref(), err)?;
     let analyses = analyses::parse(
         &raw.analyses,
         (ModelKind::Drr, ModelKind::Drr.dimension(), Some(gamma * gamma)),
@@ -716,6 +721,7 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
             .map_or_else(Vec::new, |(d, s)| field_warnings(&d, &s, &params)),
         initial,
         solver,
+        solver_chosen_by,
         analyses,
         loading,
     })
@@ -1326,52 +1332,4 @@ fn initial_state(
         return Err(err("initial", format!("the start (u, ln v, θ) = ({u}, {w}, {theta}) is not representable; keep |u|, |θ| and |ln v| well below 700")));
     }
     Ok([u, w, theta])
-}
-
-fn solver_spec(
-    raw: Option<&RawSolver>,
-    err: &impl Fn(&str, String) -> SceneError,
-) -> Result<SolverSpec, SceneError> {
-    let method = match raw.and_then(|r| r.method.as_deref()) {
-        None => Method::CvodeBdf,
-        Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
-    };
-    let rtol = positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-8), "e.g. 1e-8", err)?;
-    let atol = match raw.and_then(|r| r.atol.clone()) {
-        None => [rtol * 1e-2; 3],
-        Some(RawAtol::Scalar(a)) => [a; 3],
-        Some(RawAtol::PerComponent(v)) => {
-            let arr: [f64; 3] = v.clone().try_into().map_err(|_| {
-                err(
-                    "solver.atol",
-                    format!(
-                        "{v:?} has {} values; give one number or three (for u, ln v, θ)",
-                        v.len()
-                    ),
-                )
-            })?;
-            arr
-        }
-    };
-    for (i, a) in atol.iter().enumerate() {
-        let a = finite(&format!("solver.atol[{i}]"), *a, err)?;
-        if a < 0.0 {
-            return Err(err(&format!("solver.atol[{i}]"), format!("{a} must be ≥ 0")));
-        }
-    }
-    let table = raw.and_then(|r| r.table.clone());
-    let explicit_table = raw.and_then(|r| r.explicit_table.clone());
-    if let Err(e) =
-        crate::solver::check_table_names(method, table.as_deref(), explicit_table.as_deref())
-    {
-        let (field, message) = e.setting().unwrap_or(("table", e.to_string()));
-        return Err(err(&format!("solver.{field}"), message));
-    }
-    if raw.and_then(|r| r.max_steps).is_some() {
-        return Err(err(
-            "solver.max_steps",
-            "set the step budget with {\"cycle\": {\"max_steps\": N}}".into(),
-        ));
-    }
-    Ok(SolverSpec { method, rtol, atol, table, explicit_table })
 }

@@ -9,7 +9,7 @@ use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::{PeriodDoubling, PeriodicOrbit, ShootingReport};
 use crate::analysis::time_series::{Event, Runaway, TimeSeriesReport};
 use crate::analysis::{asymptotics, lyapunov};
-use crate::scene::OtherModel;
+use crate::scene::{OtherModel, CHOSEN_BY_SCENE};
 
 impl Report {
     /// A readable summary for the terminal: each section the scene asked for, in a fixed
@@ -41,11 +41,16 @@ impl Report {
         sections.into_iter().flatten().collect()
     }
 
-    /// The scene's model, then the solver and its statistics.
+    /// The scene's model, then the solver (with why it runs, where the scene did not choose it
+    /// all) and its statistics.
     fn model_and_solver(&self) -> String {
         let (solver, stats) = (&self.solver, &self.solver.stats);
+        let why = match solver.chosen_by.as_str() {
+            CHOSEN_BY_SCENE => String::new(),
+            why => format!(" ({why})"),
+        };
         format!(
-            "{}solver {} ({}), rtol {:e}, SUNDIALS {}; {} steps, {} RHS, {} Jacobians, {:.3} s\n",
+            "{}solver {} ({}), rtol {:e}{why}, SUNDIALS {}; {} steps, {} RHS, {} Jacobians, {:.3} s\n",
             model(&self.name, &self.model),
             solver.method.name(),
             solver.integrator,
