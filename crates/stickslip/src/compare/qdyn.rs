@@ -102,10 +102,10 @@ pub fn read_qdyn_output(text: &str) -> Result<QdynOutput, InputError> {
         out.state.push(positive(4)?);
         out.tau.push(value(5)?);
         out.origin.push(at);
-        rows = [rows[1].take(), Some(cells[1..].to_vec())];
+        rows = [rows[1].take(), Some(cells)];
     }
     if let [Some(before), Some(last)] = &rows {
-        if before == last && out.t.len() > 2 {
+        if before[1..] == last[1..] && out.t.len() > 2 {
             out.repeated_last = out.origin.pop();
             for column in [&mut out.t, &mut out.v, &mut out.state, &mut out.tau] {
                 column.pop();

@@ -102,7 +102,7 @@ pub fn reference_steps(
         t < end
     })?;
     if let Some(at) = beyond {
-        let (start, end, events) = (start, end, budget);
+        let events = budget;
         return Err(SceneMismatch::TooManyEvents { start, end, user_events, events, at }.into());
     }
     if let Some(at) = exhausted {
