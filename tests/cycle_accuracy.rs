@@ -118,7 +118,7 @@ fn an_unconverged_run_exits_4_naming_the_limit() {
     let scene: serde_json::Value =
         serde_json::from_str(include_str!("../data/scenes/earthquake.json")).unwrap();
     let mut scene = scene;
-    scene["analyses"] = serde_json::json!(["hopf", {"cycle": {"max_cycles": 3}}, "paper"]);
+    scene["analyses"] = serde_json::json!(["hopf", {"cycle": {"max_cycles": 2}}, "paper"]);
     let (path, out) = (dir.join("scene.json"), dir.join("report.json"));
     std::fs::write(&path, scene.to_string()).unwrap();
     let run = Command::new(env!("CARGO_BIN_EXE_stickslip"))

@@ -23,12 +23,17 @@
 //! (measured: the DIRK period spread grows from 2e-8 to 1e-7 at γ = 1e8 with one extra
 //! restart per cycle), so none is made unless needed. None happens inside the arrest layer.
 //!
-//! Convergence rule: the orbit is periodic (period 1) when, for `settle` consecutive pairs of
-//! cycles, the period, ln v_max and the ln v range change by less than `tolerance` (relative;
-//! absolute for ln v_max below 1); the first cycle, from the start, is never used. If instead cycle k matches cycle k−n (n = 2..4) for `settle`
-//! consecutive cycles, the orbit has period n and its n distinct cycles are reported. At a
-//! linearly stable fixed point, a cycle whose w range falls below 1e-9 (or shrinks steadily)
-//! means the oscillation died out.
+//! Convergence rule: two cycles agree when the period, v_max and the ln v range differ by
+//! less than `tolerance` (relative); the first cycle, from the start, is never averaged. The
+//! orbit is periodic (period 1) as soon as a window of the last cycles (at most 2·`settle`)
+//! is settled: its consecutive cycles agree, and the transient left in it, estimated from the
+//! contraction between successive cycles (the leading Floquet multiplier), is below the noise
+//! of the integration (see the `settled` module). A super-stable orbit, such as the
+//! relaxation cycle at large γ, thus stops after its third cycle; a slowly contracting one
+//! runs until its transient has decayed. If instead cycle k matches cycle k−n (n = 2..4) for
+//! `settle` consecutive cycles, the orbit has period n and its n distinct cycles are
+//! reported. At a linearly stable fixed point, a cycle whose w range falls below 1e-9 (or
+//! shrinks steadily) means the oscillation died out.
 
 mod options;
 mod settled;
@@ -48,7 +53,9 @@ pub struct CycleSettings {
     /// Relative tolerance of the convergence rule (default 1000·rtol within [1e-7, 1e-2]; see
     /// [`CycleSettings::defaults`]).
     pub tolerance: f64,
-    /// Consecutive agreeing cycle pairs required (default 3).
+    /// Consecutive agreeing cycle pairs that make a period-n orbit (n = 2..4), or a period-1
+    /// orbit stopped by a limit before it settled; 2·settle (at least 4) is the longest window
+    /// a period-1 orbit's values average (default 3).
     pub settle: usize,
     /// Give up after this many cycles (default 1000).
     pub max_cycles: usize,
@@ -740,9 +747,7 @@ const DISTINCT_CYCLES: f64 = 0.1;
 fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
     let k = closed.len();
     // An "orbit" whose ln v range is within the integration noise is not one (found by the
-    // stress grid: L-stable methods at rtol 1e-4 settle on such a wiggle at an unstable
-    // fixed point, while the true orbit is a relaxation cycle).
-    if closed.last().is_none_or(|c| c.main.ln_v_max - c.main.ln_v_min < noise_floor(settings)) {
+    if !is_orbit(closed, settings) {
         return None;
     }
     let lagged = |n: usize, tol: f64| {
@@ -756,6 +761,14 @@ fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize
                 || (0..settings.settle)
                     .all(|j| !agree(&closed[k - 1 - j], &closed[k - 2 - j], distinct)))
     })
+}
+
+/// Whether the last cycle is one of an orbit: an "orbit" whose ln v range is within the
+/// integration noise ([`noise_floor`]) is not one (found by the stress grid: L-stable methods
+/// at rtol 1e-4 settle on such a wiggle at an unstable fixed point, while the true orbit is a
+/// relaxation cycle).
+fn is_orbit(closed: &[CycleValues], settings: &CycleSettings) -> bool {
+    closed.last().is_some_and(|c| c.main.ln_v_max - c.main.ln_v_min >= noise_floor(settings))
 }
 
 /// The ln v range below which an oscillation is integration noise: max(1e-9, 1e3 × the
@@ -784,10 +797,15 @@ fn decaying(closed: &[CycleValues], settings: &CycleSettings, linearly_stable: b
             .all(|w| amplitude(&w[1]) < (1.0 - settings.tolerance) * amplitude(&w[0]))
 }
 
-/// The number of cycles averaged into the reported values: 2·settle (at least 4), all after
-/// the first cycle and settled ([`settled::settled`]).
+/// The most cycles averaged into the reported values: 2·settle (at least 4), all after the
+/// first cycle and settled ([`settled::settled_start`]).
 fn settled_window(settings: &CycleSettings) -> usize {
     settings.settle.saturating_mul(2).max(4)
+}
+
+/// The first cycle of the last `window` cycles, never the first cycle (from the start).
+fn last_window(closed: &[CycleValues], window: usize) -> usize {
+    closed.len().saturating_sub(window).max(1)
 }
 
 /// Applies `f` to every real-valued field of a set of cycles, building one CycleValues.
@@ -873,6 +891,8 @@ pub fn analyse(
     let mut seen = 0;
     let window = settled_window(settings);
     let mut stopped_by = None;
+    // The first cycle averaged into a period-1 orbit's values.
+    let mut used_from = 1;
     let outcome = loop {
         if let Err(e) = tracker.step() {
             return Err(e.at_global(&tracker.clock));
@@ -905,24 +925,29 @@ pub fn analyse(
             if decaying(&tracker.closed, settings, linearly_stable) {
                 break CycleStatus::FixedPoint;
             }
-            match periodicity(&tracker.closed, settings) {
-                Some(1) => {
-                    let start = tracker.closed.len().saturating_sub(window).max(1);
-                    // Settled, or out of limits with the rule met: the estimate says how far
-                    // the window is from settled.
-                    if settled::settled(
+            let settled_from = is_orbit(&tracker.closed, settings)
+                .then(|| {
+                    settled::settled_start(
                         &tracker.closed,
-                        start,
+                        window,
                         settings.w_tolerance,
                         settings.tolerance,
-                    ) || out_of_cycles
-                        || out_of_time
-                    {
-                        break CycleStatus::Periodic;
-                    }
+                    )
+                })
+                .flatten();
+            if let Some(start) = settled_from {
+                used_from = start;
+                break CycleStatus::Periodic;
+            }
+            match periodicity(&tracker.closed, settings) {
+                // Out of limits with the rule met but not settled: the estimate says how far
+                // the window is from settled.
+                Some(1) if out_of_cycles || out_of_time => {
+                    used_from = last_window(&tracker.closed, window);
+                    break CycleStatus::Periodic;
                 }
-                Some(_) => break CycleStatus::PeriodN,
-                None => {}
+                Some(n) if n > 1 => break CycleStatus::PeriodN,
+                _ => {}
             }
             if out_of_cycles {
                 stopped_by = Some("max_cycles");
@@ -938,6 +963,7 @@ pub fn analyse(
         }
         if out_of_time {
             if periodicity(&tracker.closed, settings) == Some(1) {
+                used_from = last_window(&tracker.closed, window);
                 break CycleStatus::Periodic;
             }
             stopped_by = Some("max_time");
@@ -947,11 +973,14 @@ pub fn analyse(
     let time_integrated = tracker.clock.now().since(t_start);
     let (deep_sticks, fixed_point_escapes) = (tracker.deep_sticks, tracker.escapes);
     let closed = tracker.closed;
-    let n = periodicity(&closed, settings)
-        .filter(|_| matches!(outcome, CycleStatus::Periodic | CycleStatus::PeriodN));
+    let n = match outcome {
+        CycleStatus::Periodic => Some(1),
+        CycleStatus::PeriodN => periodicity(&closed, settings),
+        _ => None,
+    };
     let (values, spread, orbit, used) = match (outcome, n) {
         (CycleStatus::Periodic, _) => {
-            let used = &closed[closed.len().saturating_sub(window).max(1)..];
+            let used = &closed[used_from..];
             let values = combine(used, mean);
             (Some(values), Some(combine(used, relative_spread)), vec![values], used.len())
         }
@@ -988,15 +1017,17 @@ pub fn analyse(
         deep_sticks,
         fixed_point_escapes,
         convergence_rule: format!(
-            "periodic when period, v_max and the ln v range agree within {:e} (relative) over {} consecutive cycle \
-             pairs (lag n = 1..4 for period-n orbits), the first cycle never used and the ln v range above \
-             max(1e-9, 1e3 (rtol + atol)), then the values are the mean of the last {} cycles once the transient \
-             left in them (geometric, from the per-cycle differences) is below 0.3 of their noise; fixed point, only when \
-             linearly stable, when the w range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks \
-             over {} consecutive cycles, or the state is within 1e-10 of the fixed point",
+            "periodic (period 1) once a window of the last cycles (at most {}, the first cycle never used) is \
+             settled: consecutive cycles, from the one before the window, agree in period, v_max and the ln v range \
+             within {:e} (relative), the ln v range is above max(1e-9, 1e3 (rtol + atol)), and the transient left \
+             in the window (geometric, its contraction from the per-cycle differences) is below 0.3 of their noise \
+             (scatter plus the integration's floor); the values are the window's mean. Period n = 2..4 when cycle \
+             k matches cycle k−n over {} consecutive cycles; fixed point, only when linearly stable, when the w \
+             range of a cycle is below max(1e-9, 1e3 (rtol + atol)), shrinks over {} consecutive cycles, or the \
+             state is within 1e-10 of the fixed point",
+            window,
             settings.tolerance,
             settings.settle,
-            window,
             settings.settle.saturating_mul(2).saturating_add(1)
         ),
         tolerance: settings.tolerance,
@@ -1035,6 +1066,37 @@ mod tests {
 
     fn settings() -> CycleSettings {
         CycleSettings { tolerance: 1e-7, ..CycleSettings::defaults(1e-10, 1e-12) }
+    }
+
+    #[test]
+    fn a_super_stable_orbit_settles_on_its_third_cycle_and_a_slow_one_once_its_transient_is_below_the_floor(
+    ) {
+        let s = settings();
+        let start =
+            |closed: &[CycleValues]| settled::settled_start(closed, 6, s.w_tolerance, s.tolerance);
+        // The earthquake scene's first three periods (cvode-bdf, rtol 1e-10): d_1 = 1.5,
+        // d_2 = −4e-9, so the contraction is below 1e-7 and the third cycle is the orbit's.
+        let quake = [
+            (54.90010233495869, 2175980555.0909066, 50.49111592437824),
+            (56.41246865127145, 2351520050.969695, 52.47595245516101),
+            (56.412468647084324, 2351520050.759, 52.47595245167535),
+        ]
+        .map(|(period, v_max, slip): (f64, f64, f64)| {
+            let mut c = cycle(period, v_max.ln(), -3.94);
+            (c.main.v_max, c.main.slip) = (v_max, slip);
+            c
+        });
+        assert_eq!(start(&quake), Some(2));
+        assert_eq!(start(&quake[..2]), None, "two cycles give one difference, no contraction");
+        // A contraction of 0.18 per cycle (the ageing law at k/k_c = 0.9): settled once the
+        // transient is below 0.3 of the floor, 10·rtol, and not long after.
+        let x = |k: usize| 16.0 * (1.0 - 0.3 * 0.18f64.powi(k as i32));
+        let slow: Vec<CycleValues> = (0..40).map(|k| cycle(x(k), 6.46, -3.0)).collect();
+        let n = (3..=40).find(|&n| start(&slow[..n]).is_some()).unwrap();
+        let first = start(&slow[..n]).unwrap();
+        let mean = slow[first..n].iter().map(|c| c.main.period).sum::<f64>() / (n - first) as f64;
+        assert!((mean - 16.0).abs() <= 0.3 * 10.0 * 1e-10 * 16.0, "{n} {first} {mean}");
+        assert!(n <= 16, "{n} cycles");
     }
 
     #[test]

@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 pub struct CycleOptions {
     /// Relative tolerance of the convergence rule.
     pub tolerance: Option<f64>,
-    /// Consecutive agreeing cycle pairs required.
+    /// Consecutive agreeing cycle pairs that make a period-n orbit (n > 1); 2·settle cycles at
+    /// most are averaged (see [`CycleSettings::settle`]).
     pub settle: Option<usize>,
     /// Maximum number of cycles.
     pub max_cycles: Option<usize>,

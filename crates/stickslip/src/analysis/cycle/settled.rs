@@ -49,12 +49,25 @@ const TIME_FLOOR: f64 = 10.0;
 /// The integration's error floor on ln v, in units of rtol·|ln v| + atol.
 const LN_V_FLOOR: f64 = 50.0;
 
+/// The first cycle whose scatter counts for the window `closed[start..]`: the cycle before
+/// the window as well, so that a window of one cycle has a measured scatter, but never
+/// `closed[0]`.
+fn scatter_start(start: usize) -> usize {
+    start.saturating_sub(1).max(1)
+}
+
 /// The error of one quantity's mean over the window `closed[start..]`: (transient bound at the
-/// window's first cycle, noise), with `floor(mean)` the integration's error floor.
-/// `closed[0]` (from the start, not a full cycle of the orbit) is never used.
-fn quantity(closed: &[f64], start: usize, floor: impl Fn(f64) -> f64) -> (f64, f64) {
+/// window's first cycle, noise), with the noise half the range of `closed[scatter_from..]`
+/// plus `floor(mean)`, the integration's error floor. `closed[0]` (from the start, not a full
+/// cycle of the orbit) is never used.
+fn quantity(
+    closed: &[f64],
+    start: usize,
+    scatter_from: usize,
+    floor: impl Fn(f64) -> f64,
+) -> (f64, f64) {
     let window = &closed[start..];
-    let (lo, hi) = window
+    let (lo, hi) = closed[scatter_from..]
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let mean = window.iter().sum::<f64>() / window.len() as f64;
@@ -129,30 +142,47 @@ const SLIP: Quantity = Quantity { get: |c| c.main.slip, floor: time_floor };
 /// (transient, noise) of `q` over the window `closed[start..]`.
 fn of(q: &Quantity, closed: &[CycleValues], start: usize, w_tolerance: (f64, f64)) -> (f64, f64) {
     let x: Vec<f64> = closed.iter().map(q.get).collect();
-    quantity(&x, start, |m| (q.floor)(m, w_tolerance))
+    quantity(&x, start, scatter_start(start), |m| (q.floor)(m, w_tolerance))
+}
+
+/// The first cycle of the longest settled window (see the module doc) of at most `max_len`
+/// cycles ending at the last one, for an integration with tolerance `w_tolerance` = (rtol,
+/// atol) on w; None while no window is settled.
+///
+/// A super-stable orbit settles on its third cycle: the first (from the start) gives the
+/// clean difference d_1, the second d_2 within the noise, which bounds the contraction ρ by
+/// their ratio, and the window is the third cycle alone, whose transient is ρ² |d_1| at most.
+pub(super) fn settled_start(
+    closed: &[CycleValues],
+    max_len: usize,
+    w_tolerance: (f64, f64),
+    tolerance: f64,
+) -> Option<usize> {
+    let first = closed.len().saturating_sub(max_len).max(1);
+    (first..closed.len()).find(|&start| settled(closed, start, w_tolerance, tolerance))
 }
 
 /// Whether the window `closed[start..]` is settled (see the module doc), for an integration
 /// with tolerance `w_tolerance` = (rtol, atol) on w.
 ///
-/// Every consecutive pair of the window must also agree under the convergence rule's
-/// `tolerance` ([`super::agree`]): a window that still holds a jump of the transient (e.g. the
-/// last small oscillation before the relaxation cycle) has a range, i.e. a "noise", that
-/// would hide it.
-pub(super) fn settled(
-    closed: &[CycleValues],
-    start: usize,
-    w_tolerance: (f64, f64),
-    tolerance: f64,
-) -> bool {
+/// Every consecutive pair from the cycle before the window on (at least one pair) must also
+/// agree under the convergence rule's `tolerance` ([`super::agree`]): a window that still
+/// holds a jump of the transient (e.g. the last small oscillation before the relaxation
+/// cycle) has a range, i.e. a "noise", that would hide it.
+fn settled(closed: &[CycleValues], start: usize, w_tolerance: (f64, f64), tolerance: f64) -> bool {
     if start < 1 || closed.len() <= start {
         return false;
     }
-    if !closed[start..].windows(2).all(|w| super::agree(&w[1], &w[0], tolerance)) {
+    let scattered = &closed[scatter_start(start)..];
+    if scattered.len() < 2 || !scattered.windows(2).all(|w| super::agree(&w[1], &w[0], tolerance)) {
         return false;
     }
+    // The stop compares the transient with the window's own scatter (a difference into the
+    // window may be the transient itself) plus the tightest floor, TIME_FLOOR·rtol·|x| for
+    // every quantity (v_max relative).
     [PERIOD, V_MAX, SLIP].iter().all(|q| {
-        let (transient, noise) = of(q, closed, start, w_tolerance);
+        let x: Vec<f64> = closed.iter().map(q.get).collect();
+        let (transient, noise) = quantity(&x, start, start, |m| time_floor(m, w_tolerance));
         transient <= TRANSIENT_SHARE * noise
     })
 }
@@ -196,12 +226,12 @@ mod tests {
     fn a_geometric_transient_is_bounded_and_unsettled_until_below_the_noise() {
         // ρ = 0.2, A = 1, noise 1e-9: the transient ρ^k falls below 0.3e-9 after k ≈ 14.
         let x = sequence(12, 1.0, 0.2, 1e-9);
-        let (transient, noise) = quantity(&x, 6, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 6, 6, |m| 1e-12 * m);
         let mean = x[6..].iter().sum::<f64>() / 6.0;
         assert!((mean - 10.0).abs() <= transient + noise, "{transient} {noise}");
         assert!(transient > TRANSIENT_SHARE * noise, "a visible transient is not settled");
         let x = sequence(24, 1.0, 0.2, 1e-9);
-        let (transient, noise) = quantity(&x, 18, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 18, 18, |m| 1e-12 * m);
         assert!(transient <= TRANSIENT_SHARE * noise, "{transient} {noise}");
         let mean = x[18..].iter().sum::<f64>() / 6.0;
         assert!((mean - 10.0).abs() <= transient + noise);
@@ -212,9 +242,9 @@ mod tests {
         // The last small oscillation (period 12.7) before the relaxation cycle (62.56), as at
         // γ = 1e12, ξ = 0.7, ε = 0.72: its range would pass for noise.
         let x = [8.9, 9.35, 10.16, 12.69, 62.137, 62.5552, 62.5552, 62.5552, 62.5552];
-        let (transient, noise) = quantity(&x, 3, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 3, 3, |m| 1e-12 * m);
         assert!(noise > 20.0, "{noise}");
-        let (transient_after, noise_after) = quantity(&x, 5, |m| 1e-12 * m);
+        let (transient_after, noise_after) = quantity(&x, 5, 5, |m| 1e-12 * m);
         assert!(transient_after > TRANSIENT_SHARE * noise_after, "62.137 is still transient");
         let _ = transient;
     }
@@ -222,9 +252,9 @@ mod tests {
     #[test]
     fn noise_alone_settles_after_the_assumed_decay() {
         let x = sequence(12, 0.0, 0.0, 1e-9);
-        let (transient, noise) = quantity(&x, 6, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 6, 6, |m| 1e-12 * m);
         assert!(transient <= TRANSIENT_SHARE * noise && noise >= 1e-9, "{transient} {noise}");
-        let (transient, noise) = quantity(&x, 2, |m| 1e-12 * m);
+        let (transient, noise) = quantity(&x, 2, 2, |m| 1e-12 * m);
         assert!(transient > TRANSIENT_SHARE * noise, "too soon for the assumed ρ = 0.5");
     }
 }
