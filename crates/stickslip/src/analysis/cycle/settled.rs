@@ -30,8 +30,14 @@
 //! compare two methods (`stickslip compare`) when that matters.
 //!
 //! The window is settled when, for the period, v_max and the slip, the transient at its first
-//! cycle is below [`TRANSIENT_SHARE`] of that noise. The error estimate of each value is the
-//! transient bound plus the noise.
+//! cycle is below [`TRANSIENT_SHARE`] of the noise the integration can resolve: the window's
+//! own half range plus [`TIME_FLOOR`]·rtol·|x| for all three (v_max relative), so the run
+//! stops once the transient is below the floor, after as few cycles as the contraction allows
+//! (issue #36: a super-stable orbit stops on its third cycle). The cycle before the window is
+//! left out of that noise, since the difference into the window may be the transient itself.
+//! The error estimate of each value is the transient bound plus the noise, here with the cycle
+//! before the window in the range (a window of one cycle then has a measured scatter) and the
+//! floors above.
 
 use super::{CycleValues, MainValues};
 
