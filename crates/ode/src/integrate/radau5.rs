@@ -227,15 +227,24 @@ impl Work {
             Stage::Z1 => &mut self.z1,
             Stage::Tmp => &mut self.tmp,
         };
-        for slice in b.chunks_exact_mut(m) {
-            solve_real(&self.e1, &self.ip1, m, slice);
+        if m == b.len() {
+            solve_real(&self.e1, &self.ip1, m, b);
+        } else {
+            for slice in b.chunks_exact_mut(m) {
+                solve_real(&self.e1, &self.ip1, m, slice);
+            }
         }
     }
 
     /// Solves ((α + iβ)/h − J) x = z2 + i·z3, in place, as [`Work::solve_real`] does.
     fn solve_complex(&mut self, m: usize) {
-        for (br, bi) in self.z2.chunks_exact_mut(m).zip(self.z3.chunks_exact_mut(m)) {
-            solve_complex(&self.e2r, &self.e2i, &self.ip2, m, br, bi);
+        let (e2r, e2i, ip2) = (&self.e2r, &self.e2i, &self.ip2);
+        if m == self.z2.len() {
+            solve_complex(e2r, e2i, ip2, m, &mut self.z2, &mut self.z3);
+        } else {
+            for (br, bi) in self.z2.chunks_exact_mut(m).zip(self.z3.chunks_exact_mut(m)) {
+                solve_complex(e2r, e2i, ip2, m, br, bi);
+            }
         }
     }
 
@@ -579,14 +588,15 @@ impl<S: OdeSystem> Radau5<S> {
         let fac1 = self.c.u1 / h;
         let (alphn, betan) = (self.c.alph / h, self.c.beta / h);
         let w = &mut self.work;
-        for j in 0..m {
-            for i in 0..m {
-                let k = j * m + i;
-                w.e1[k] = -w.jac[j * n + i];
-                w.e2r[k] = -w.jac[j * n + i];
-                w.e2i[k] = 0.0;
+        // The leading m × m block of −J (columns of length n in `jac`).
+        let columns = w.e1.chunks_exact_mut(m).zip(w.e2r.chunks_exact_mut(m));
+        for ((e1, e2r), jac) in columns.zip(w.jac.chunks_exact(n)).take(m) {
+            for ((a, b), &j) in e1.iter_mut().zip(e2r.iter_mut()).zip(&jac[..m]) {
+                *a = -j;
+                *b = -j;
             }
         }
+        w.e2i[..m * m].fill(0.0);
         for j in 0..m {
             w.e1[j * m + j] += fac1;
             w.e2r[j * m + j] += alphn;
