@@ -514,7 +514,7 @@ impl<S: OdeSystem> Radau5<S> {
         let nit = positive(options.max_nonlin_iters, DEFAULT_NIT);
         let declared_block = system
             .repeated_jacobian_block()
-            .filter(|&m| system.has_jacobian() && m > 0 && m < n && n % m == 0);
+            .filter(|&m| system.has_jacobian() && m > 0 && m < n && n.is_multiple_of(m));
         let mut solver = Self {
             system,
             n,
