@@ -32,6 +32,18 @@ pub trait OdeSystem {
     /// when [`OdeSystem::has_jacobian_derivative`] returns true.
     fn jacobian_derivative(&self, _t: f64, _y: &[f64], _k: usize, _out: &mut JacobianMatrix<'_>) {}
 
+    /// The size m of the blocks when the analytic Jacobian ([`OdeSystem::jacobian`]) is block
+    /// diagonal with dim/m identical m × m blocks, as the Newton Jacobian of variational
+    /// equations is (J on y and on each column of Φ). Radau5 then factors and solves with one
+    /// block instead of the whole matrix: the same numbers (partial pivoting on such a matrix
+    /// repeats the block's factorisation, and the zeros add nothing to the solves) for a
+    /// fraction of the work. `None` (the default): no such structure. Radau5 checks the
+    /// structure on every Jacobian and uses the whole matrix where it does not hold, so a
+    /// wrong answer here costs time, never accuracy.
+    fn repeated_jacobian_block(&self) -> Option<usize> {
+        None
+    }
+
     /// Whether f may have linear invariants (conserved combinations c·y, such as a mass
     /// balance) that rodas5p must keep to working accuracy. When true, each of its stage
     /// solves is refined once with a compensated residual (+43 % instructions on the

@@ -36,7 +36,7 @@
 // RADAU5's coefficients are kept with the digits it publishes.
 #![allow(clippy::excessive_precision)]
 
-use super::linalg::{lu_real, pivot, rms, solve_real};
+use super::linalg::{lu_real, pivot, rms, solve_real, with_small_n};
 use super::stepper::{
     self, all_finite, Cause, Core, StepControl, Stepper, DEFAULT_MAX_ERR_TEST_FAILS, MAX_SINGULAR,
     UROUND,
@@ -196,7 +196,58 @@ struct Work {
     ip2: Vec<usize>,
 }
 
+/// The vector [`Work::solve_real`] solves for in place.
+#[derive(Debug, Clone, Copy)]
+enum Stage {
+    /// The real stage system's right-hand side.
+    Z1,
+    /// The error estimate's.
+    Tmp,
+}
+
+/// Whether the column-major n × n matrix `jac` is block diagonal with n/m copies of its
+/// leading m × m block (exactly: every block equal to the first, zeros elsewhere).
+fn repeats_block(jac: &[f64], n: usize, m: usize) -> bool {
+    jac.chunks_exact(n).enumerate().all(|(j, column)| {
+        column.iter().enumerate().all(|(i, &a)| {
+            if i / m == j / m {
+                a == jac[(j % m) * n + i % m]
+            } else {
+                a == 0.0
+            }
+        })
+    })
+}
+
 impl Work {
+    /// Solves (γ/h − J) x = b for b = `which`, in place, with the factors of m × m blocks
+    /// (m = n: the whole matrix) applied to each m-slice.
+    fn solve_real(&mut self, m: usize, which: Stage) {
+        let b = match which {
+            Stage::Z1 => &mut self.z1,
+            Stage::Tmp => &mut self.tmp,
+        };
+        if m == b.len() {
+            solve_real(&self.e1, &self.ip1, m, b);
+        } else {
+            for slice in b.chunks_exact_mut(m) {
+                solve_real(&self.e1, &self.ip1, m, slice);
+            }
+        }
+    }
+
+    /// Solves ((α + iβ)/h − J) x = z2 + i·z3, in place, as [`Work::solve_real`] does.
+    fn solve_complex(&mut self, m: usize) {
+        let (e2r, e2i, ip2) = (&self.e2r, &self.e2i, &self.ip2);
+        if m == self.z2.len() {
+            solve_complex(e2r, e2i, ip2, m, &mut self.z2, &mut self.z3);
+        } else {
+            for (br, bi) in self.z2.chunks_exact_mut(m).zip(self.z3.chunks_exact_mut(m)) {
+                solve_complex(e2r, e2i, ip2, m, br, bi);
+            }
+        }
+    }
+
     fn new(n: usize) -> Self {
         let v = || vec![0.0; n];
         Self {
@@ -273,6 +324,13 @@ pub struct Radau5<S: OdeSystem> {
     action: Action,
     /// Step size the LU factors were computed for (NaN: none).
     lu_h: f64,
+    /// The block size the system declares ([`OdeSystem::repeated_jacobian_block`]) when it
+    /// divides n and is smaller, with an analytic Jacobian; None otherwise.
+    declared_block: Option<usize>,
+    /// The size m of the matrices factorised: the declared block when the current Jacobian
+    /// has that structure (n/m copies of its leading m × m block on the diagonal, zeros
+    /// elsewhere), else n. The solves apply the factors to each m-slice of a stage vector.
+    block: usize,
     /// Point, last step, returned state, step-sequence options and statistics.
     core: Core,
     work: Work,
@@ -299,8 +357,14 @@ fn cdiv(a: f64, b: f64, c: f64, d: f64) -> (f64, f64) {
 
 /// Complex LU factorisation with partial pivoting (real parts `ar`, imaginary `ai`). (Column
 /// slices instead of indices, as in [`solve_complex`]: the same operations in the same order,
-/// without bounds checks in the inner loops.)
+/// without bounds checks in the inner loops; n unrolled for the small systems, see
+/// [`with_small_n`].)
 fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> bool {
+    with_small_n!(n, lu_complex_n(ar, ai, ip, n))
+}
+
+#[inline(always)]
+fn lu_complex_n(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> bool {
     let (ar, ai, ip) = (&mut ar[..n * n], &mut ai[..n * n], &mut ip[..n]);
     for k in 0..n {
         // Column k, and the columns right of it.
@@ -342,8 +406,14 @@ fn lu_complex(ar: &mut [f64], ai: &mut [f64], ip: &mut [usize], n: usize) -> boo
 }
 
 /// Solves with the factors of [`lu_complex`], in place on (br, bi). (Column slices instead of
-/// indices: the same operations in the same order, without bounds checks in the inner loops.)
+/// indices: the same operations in the same order, without bounds checks in the inner loops;
+/// n unrolled for the small systems, see [`with_small_n`].)
 fn solve_complex(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64], bi: &mut [f64]) {
+    with_small_n!(n, solve_complex_n(ar, ai, ip, n, br, bi))
+}
+
+#[inline(always)]
+fn solve_complex_n(ar: &[f64], ai: &[f64], ip: &[usize], n: usize, br: &mut [f64], bi: &mut [f64]) {
     let (ar, ai, ip, br, bi) = (&ar[..n * n], &ai[..n * n], &ip[..n], &mut br[..n], &mut bi[..n]);
     for (k, (cr, ci)) in ar.chunks_exact(n).zip(ai.chunks_exact(n)).enumerate() {
         let p = ip[k];
@@ -442,6 +512,9 @@ impl<S: OdeSystem> Radau5<S> {
             .unwrap_or((10.0 * UROUND / rtol).max(0.03f64.min(rtol.sqrt())));
         let positive = |v: Option<i32>, default: u32| v.map_or(default, |v| v.max(1) as u32);
         let nit = positive(options.max_nonlin_iters, DEFAULT_NIT);
+        let declared_block = system
+            .repeated_jacobian_block()
+            .filter(|&m| system.has_jacobian() && m > 0 && m < n && n.is_multiple_of(m));
         let mut solver = Self {
             system,
             n,
@@ -465,6 +538,8 @@ impl<S: OdeSystem> Radau5<S> {
             jacobian_max_age: options.jacobian_max_age.map_or(u64::MAX, |a| a as u64),
             action: Action::Jacobian,
             lu_h: f64::NAN,
+            declared_block,
+            block: n,
             core,
             work: Work::new(n),
         };
@@ -493,31 +568,43 @@ impl<S: OdeSystem> Radau5<S> {
 
     /// Jacobian at (x, y) into `work.jac`: analytic, or forward differences (RADAU5's
     /// increments √(u·max(1e-5, |y_i|))). False if not finite.
+    /// Also sets the block size of the factorisations from the Jacobian's structure.
     fn compute_jacobian(&mut self) -> bool {
         let w = &mut self.work;
-        stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew)
+        let ok =
+            stepper::jacobian(&self.system, &mut self.core, &mut w.jac, &mut w.tmp, &mut w.fnew);
+        self.block = match self.declared_block {
+            Some(m) if repeats_block(&w.jac, self.n, m) => m,
+            _ => self.n,
+        };
+        ok
     }
 
-    /// LU factors of γ/h − J and (α + iβ)/h − J. False if either is singular.
+    /// LU factors of γ/h − J and (α + iβ)/h − J (of their leading `block` × `block` blocks).
+    /// False if either is singular.
     fn decompose(&mut self) -> bool {
-        let n = self.n;
+        let (n, m) = (self.n, self.block);
         let h = self.core.h;
         let fac1 = self.c.u1 / h;
         let (alphn, betan) = (self.c.alph / h, self.c.beta / h);
         let w = &mut self.work;
-        for k in 0..n * n {
-            w.e1[k] = -w.jac[k];
-            w.e2r[k] = -w.jac[k];
-            w.e2i[k] = 0.0;
+        // The leading m × m block of −J (columns of length n in `jac`).
+        let columns = w.e1.chunks_exact_mut(m).zip(w.e2r.chunks_exact_mut(m));
+        for ((e1, e2r), jac) in columns.zip(w.jac.chunks_exact(n)).take(m) {
+            for ((a, b), &j) in e1.iter_mut().zip(e2r.iter_mut()).zip(&jac[..m]) {
+                *a = -j;
+                *b = -j;
+            }
         }
-        for j in 0..n {
-            w.e1[j * n + j] += fac1;
-            w.e2r[j * n + j] += alphn;
-            w.e2i[j * n + j] = betan;
+        w.e2i[..m * m].fill(0.0);
+        for j in 0..m {
+            w.e1[j * m + j] += fac1;
+            w.e2r[j * m + j] += alphn;
+            w.e2i[j * m + j] = betan;
         }
         self.core.stats.lin_setups += 1;
         let ok =
-            lu_real(&mut w.e1, &mut w.ip1, n) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, n);
+            lu_real(&mut w.e1, &mut w.ip1, m) && lu_complex(&mut w.e2r, &mut w.e2i, &mut w.ip2, m);
         self.lu_h = if ok { h } else { f64::NAN };
         ok
     }
@@ -588,8 +675,8 @@ impl<S: OdeSystem> Radau5<S> {
                 w.z2[i] = z2 + s2 * alphn - s3 * betan;
                 w.z3[i] = z3 + s3 * alphn + s2 * betan;
             }
-            solve_real(&w.e1, &w.ip1, n, &mut w.z1);
-            solve_complex(&w.e2r, &w.e2i, &w.ip2, n, &mut w.z2, &mut w.z3);
+            w.solve_real(self.block, Stage::Z1);
+            w.solve_complex(self.block);
             newt += 1;
             self.core.stats.nonlin_iters += 1;
             let mut sum = 0.0;
@@ -647,7 +734,7 @@ impl<S: OdeSystem> Radau5<S> {
             w.f2[i] = hee1 * w.z1[i] + hee2 * w.z2[i] + hee3 * w.z3[i];
             w.tmp[i] = w.f2[i] + self.core.f0[i];
         }
-        solve_real(&w.e1, &w.ip1, n, &mut w.tmp);
+        w.solve_real(self.block, Stage::Tmp);
         let mut err = rms(&w.tmp, &self.scal).max(1e-10);
         if err >= 1.0 && (!self.core.have_step || self.core.reject) {
             for i in 0..n {
@@ -662,7 +749,7 @@ impl<S: OdeSystem> Radau5<S> {
             for i in 0..n {
                 w.tmp[i] = w.f1[i] + w.f2[i];
             }
-            solve_real(&w.e1, &w.ip1, n, &mut w.tmp);
+            w.solve_real(self.block, Stage::Tmp);
             err = rms(&w.tmp, &self.scal).max(1e-10);
         }
         Some(if err.is_finite() { err } else { 1e20 })
@@ -853,6 +940,114 @@ stepper::integrator_via_stepper!(Radau5, METHOD, {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::integrate::{JacobianMatrix, Tolerance};
+
+    /// Robertson's stiff kinetics y' = f(y) and one tangent vector w' = J(y) w: z = (y, w).
+    /// `declare` is what [`OdeSystem::repeated_jacobian_block`] says; `coupled` adds the block
+    /// ∂(J w)/∂y to the Jacobian (which then does not repeat J).
+    struct Tangent {
+        declare: Option<usize>,
+        coupled: bool,
+    }
+
+    fn robertson_jacobian(y: &[f64]) -> [[f64; 3]; 3] {
+        [
+            [-0.04, 1e4 * y[2], 1e4 * y[1]],
+            [0.04, -1e4 * y[2] - 6e7 * y[1], -1e4 * y[1]],
+            [0.0, 6e7 * y[1], 0.0],
+        ]
+    }
+
+    impl OdeSystem for Tangent {
+        fn dim(&self) -> usize {
+            6
+        }
+        fn rhs(&self, _t: f64, z: &[f64], dz: &mut [f64]) {
+            let y = &z[..3];
+            dz[0] = -0.04 * y[0] + 1e4 * y[1] * y[2];
+            dz[2] = 3e7 * y[1] * y[1];
+            dz[1] = -dz[0] - dz[2];
+            let j = robertson_jacobian(y);
+            for (row, r) in j.iter().enumerate() {
+                dz[3 + row] = (0..3).map(|k| r[k] * z[3 + k]).sum();
+            }
+        }
+        fn has_jacobian(&self) -> bool {
+            true
+        }
+        fn jacobian(&self, _t: f64, z: &[f64], jac: &mut JacobianMatrix<'_>) {
+            let j = robertson_jacobian(&z[..3]);
+            for (row, r) in j.iter().enumerate() {
+                for (col, &a) in r.iter().enumerate() {
+                    jac.set(row, col, a);
+                    jac.set(3 + row, 3 + col, a);
+                }
+            }
+            if self.coupled {
+                // ∂(J w)_row/∂y_k (J is linear in y).
+                let w = &z[3..];
+                jac.set(3, 1, 1e4 * w[2]);
+                jac.set(3, 2, 1e4 * w[1]);
+                jac.set(4, 1, -6e7 * w[1] - 1e4 * w[2]);
+                jac.set(4, 2, -1e4 * w[1]);
+                jac.set(5, 1, 6e7 * w[1]);
+            }
+        }
+        fn repeated_jacobian_block(&self) -> Option<usize> {
+            self.declare
+        }
+    }
+
+    /// Integrates `system` to t = 1e3 and returns the state, the statistics and the block size
+    /// of the last factorisation.
+    fn run(system: Tangent) -> (Vec<f64>, Stats, usize) {
+        let z0 = [1.0, 0.0, 0.0, 0.3, -0.2, 0.5];
+        let options = Options::new(1e-8, Tolerance::Scalar(1e-12));
+        let mut solver = Radau5::new(system, 0.0, &z0, &options).unwrap();
+        solver.advance(1e3, Task::Normal).unwrap();
+        (solver.state().to_vec(), solver.stats(), solver.block)
+    }
+
+    /// A Jacobian that repeats its block is factorised block by block with the same numbers as
+    /// the whole matrix: the same states and statistics to the bit.
+    #[test]
+    fn repeated_blocks_give_the_whole_matrix_numbers() {
+        let (whole, whole_stats, whole_block) = run(Tangent { declare: None, coupled: false });
+        let (blocks, block_stats, block) = run(Tangent { declare: Some(3), coupled: false });
+        assert_eq!((whole_block, block), (6, 3));
+        assert_eq!(whole, blocks);
+        assert_eq!(whole_stats, block_stats);
+        assert!(whole_stats.steps > 20, "{whole_stats:?}");
+    }
+
+    /// A declared structure the Jacobian does not have (the coupling block) is not used: the
+    /// whole matrix is factorised, with the numbers of a system that declares nothing.
+    #[test]
+    fn a_wrong_declaration_falls_back_to_the_whole_matrix() {
+        let (whole, whole_stats, _) = run(Tangent { declare: None, coupled: true });
+        let (declared, declared_stats, block) = run(Tangent { declare: Some(3), coupled: true });
+        assert_eq!(block, 6);
+        assert_eq!(whole, declared);
+        assert_eq!(whole_stats, declared_stats);
+        // A block size that does not divide n is ignored from the start.
+        let (odd, _, block) = run(Tangent { declare: Some(4), coupled: false });
+        assert_eq!(block, 6);
+        assert!(odd.iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn repeats_block_needs_equal_blocks_and_zeros() {
+        // Column-major 4×4 with two copies of [[1, 2], [3, 4]].
+        let mut m =
+            [1.0, 3.0, 0.0, 0.0, 2.0, 4.0, 0.0, 0.0, 0.0, 0.0, 1.0, 3.0, 0.0, 0.0, 2.0, 4.0];
+        assert!(repeats_block(&m, 4, 2));
+        assert!(!repeats_block(&m, 4, 1));
+        m[2] = 1e-300;
+        assert!(!repeats_block(&m, 4, 2));
+        m[2] = 0.0;
+        m[15] = 4.5;
+        assert!(!repeats_block(&m, 4, 2));
+    }
 
     /// The complex LU solve (the real one is tested in linalg.rs).
     #[test]

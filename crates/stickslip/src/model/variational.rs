@@ -117,6 +117,12 @@ impl<S: OdeSystem, const N: usize> OdeSystem for Variational<S, N> {
         true
     }
 
+    /// Without the coupling block ([`Variational::for_newton`]) the Jacobian is J repeated on
+    /// the diagonal, N + 1 times.
+    fn repeated_jacobian_block(&self) -> Option<usize> {
+        (!self.coupled).then_some(N)
+    }
+
     fn jacobian(&self, t: f64, z: &[f64], jac: &mut JacobianMatrix<'_>) {
         let y = &z[..N];
         let j = self.jac(t, y);
