@@ -13,7 +13,9 @@ use crate::solver::{Method, SolverSpec};
 /// within 9.6e-12 and v_max within 3.4e-10 for 3.08 G instructions (whole `stickslip run` per
 /// case, cachegrind), where the former default, cvode-bdf at rtol 1e-8, gave 1.2e-7 and 8e-7
 /// for 4.15 G. Extrapolation at rtol 1e-10 is cheaper there (1.33 G) but does not finish the
-/// γ continuation of data/scenes/fig1c-extended.json in 300 s (radau5: 3.8 s).
+/// γ continuation of data/scenes/fig1c-extended.json in 300 s (radau5: 3.8 s). Since the cycle
+/// analysis stops once the orbit is settled (issue #36), radau5 at 1e-10 costs 1.79 G on the
+/// 12 (period within 3.8e-11, v_max within 4.5e-10): 0.43× the former default.
 pub const DEFAULT_METHOD: Method = Method::Radau5;
 
 /// The relative tolerance of a scene without a `solver` block (or without `solver.rtol`); see
@@ -25,7 +27,7 @@ const DEFAULT_ATOL_OVER_RTOL: f64 = 1e-2;
 
 /// The report's `solver.chosen_by` for a scene without a `solver` block: what ran and why.
 pub const CHOSEN_BY_DEFAULT: &str = "default: no solver block; radau5 at rtol 1e-10 meets \
-    period 1e-9 and v_max 1e-8 on the 12 QDYN spring-block cases for 0.74x the instructions \
+    period 1e-9 and v_max 1e-8 on the 12 QDYN spring-block cases for 0.43x the instructions \
     of cvode-bdf at rtol 1e-8 (docs/from-qdyn.md, \"What the defaults give\")";
 
 /// The report's `solver.chosen_by` for a scene whose `solver` block sets method and rtol.
