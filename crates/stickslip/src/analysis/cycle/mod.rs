@@ -746,7 +746,6 @@ const DISTINCT_CYCLES: f64 = 0.1;
 /// orbit is never mistaken for a period-n one.
 fn periodicity(closed: &[CycleValues], settings: &CycleSettings) -> Option<usize> {
     let k = closed.len();
-    // An "orbit" whose ln v range is within the integration noise is not one (found by the
     if !is_orbit(closed, settings) {
         return None;
     }

@@ -164,8 +164,8 @@ pub(super) fn settled_start(
     w_tolerance: (f64, f64),
     tolerance: f64,
 ) -> Option<usize> {
-    let first = closed.len().saturating_sub(max_len).max(1);
-    (first..closed.len()).find(|&start| settled(closed, start, w_tolerance, tolerance))
+    (super::last_window(closed, max_len)..closed.len())
+        .find(|&start| settled(closed, start, w_tolerance, tolerance))
 }
 
 /// Whether the window `closed[start..]` is settled (see the module doc), for an integration
