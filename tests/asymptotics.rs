@@ -2,7 +2,7 @@
 //! numbers (not by the verdict strings), the ones that do not hold are pinned as failing, and
 //! the stick's distance from the 2D slow flow scales as 1/γ².
 
-use stickslip::analysis::asymptotics::AsymptoticsReport;
+use stickslip::paper::asymptotics::AsymptoticsReport;
 use stickslip::scene;
 
 mod common;

@@ -34,9 +34,13 @@ const CRATES: &[(&str, Table)] = &[
         &[
             ("parallel", &[]),
             ("model", &["integrate"]),
-            ("analysis", &["integrate", "model", "parallel", "solver", "sundials"]),
-            ("scene", &["analysis", "model", "solver", "sundials"]),
-            ("report", &["analysis", "integrate", "model", "scene"]),
+            // The numerics the analyses share (events, finite checks, fits, figure series).
+            ("numerics", &["integrate"]),
+            ("analysis", &["integrate", "model", "numerics", "parallel", "solver", "sundials"]),
+            // The paper's claims tested: its quoted values, asymptotics and lyapunov.
+            ("paper", &["analysis", "integrate", "model", "numerics", "solver", "sundials"]),
+            ("scene", &["analysis", "model", "numerics", "paper", "solver", "sundials"]),
+            ("report", &["analysis", "integrate", "model", "numerics", "paper", "scene"]),
             // The time-series files (CSV, .npy, QDYN's output files): sinks for the analysis's
             // rows, an output layer; QDYN's files take their physical units from the scene.
             ("series_file", &["analysis", "model", "scene"]),
@@ -46,6 +50,8 @@ const CRATES: &[(&str, Table)] = &[
                     "analysis",
                     "integrate",
                     "model",
+                    "numerics",
+                    "paper",
                     "report",
                     "scene",
                     "series_file",

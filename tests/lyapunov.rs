@@ -2,10 +2,10 @@
 //! finite-time exponents against an independent reference, finite differences of the
 //! Poincaré map.
 
-use stickslip::analysis::cycle_period::CyclePeriod;
-use stickslip::analysis::events;
 use stickslip::integrate::{Options, Radau5, Task, Tolerance};
 use stickslip::model::{Drr, DrrParams, Friction};
+use stickslip::numerics::events;
+use stickslip::paper::cycle_period::CyclePeriod;
 
 mod common;
 use common::{run_scene, run_scene_file};

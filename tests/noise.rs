@@ -203,7 +203,7 @@ fn drr_ensemble_agrees_with_the_linear_response_at_small_noise() {
         r#"{"amplitudes": [1e-3, 1e3, 1e-3], "realisations": 300, "start_before_event": 2.5, "window": [1.5, 0.03], "grid_points": 400}"#,
     );
     let r = noise::run(&model, &initial, &o, 2, &|_, _| {}).unwrap();
-    assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None);
+    assert_eq!(stickslip::numerics::finite::first_non_finite(&r, "noise"), None);
     assert_agreement(&r);
     // The event time of the deterministic start and of the scheme without noise agree.
     assert!(r.deterministic.scheme_event_time_error.abs() < 1e-6, "{:?}", r.deterministic);
@@ -260,7 +260,7 @@ fn drr_noise_runs_under_the_ageing_law_and_under_prz_with_damping() {
         let r =
             noise::run(&model, &[drr.manifold_u(w, theta), w, theta], &o, 2, &|_, _| {}).unwrap();
         let name = law.name();
-        assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None, "{name}");
+        assert_eq!(stickslip::numerics::finite::first_non_finite(&r, "noise"), None, "{name}");
         assert!(
             r.deterministic.scheme_event_time_error.abs() < 1e-6,
             "{name}: {:?}",
@@ -304,7 +304,7 @@ fn damped_slip_peak_is_outside_the_linearised_event_time() {
         r#"{"amplitudes": [1e-3, 1e3, 1e-3], "realisations": 100, "start_before_event": 1, "window": [0.8, 0.03], "correlation_curves_at": [0.5, 0.03], "grid_points": 300}"#,
     );
     let r = noise::run(&model, &initial, &o, 2, &|_, _| {}).unwrap();
-    assert_eq!(stickslip::analysis::finite::first_non_finite(&r, "noise"), None);
+    assert_eq!(stickslip::numerics::finite::first_non_finite(&r, "noise"), None);
     let l = r.events.linearity.as_ref().unwrap();
     assert!(!l.valid, "{l:?}");
     // In each realisation's own frame the event function has lost its relation to the orbit's

@@ -3,8 +3,8 @@
 use super::progress::Progress;
 use super::{worker_threads, Failure};
 use std::path::PathBuf;
-use stickslip::analysis::claims::Verdict;
 use stickslip::analysis::noise::report as noise_report;
+use stickslip::paper::claims::Verdict;
 use stickslip::report;
 
 /// Runs `stickslip reproduce`: the paper's figures, reports and claims in `out`.

@@ -11,7 +11,7 @@ use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Panel, RefLine, Series, Style};
 use serde_json::json;
-use stickslip::analysis::asymptotics::{matching, scan, verdicts};
+use stickslip::paper::asymptotics::{matching, scan, verdicts};
 
 /// Window of the zoom (b) in t − t_c: the slip lasts a few 1/γ.
 const ZOOM: (f64, f64) = (-0.015, 0.02);

@@ -10,8 +10,8 @@ use super::fig1::UNITS;
 use super::{Context, Output, ReproduceError, Row};
 use crate::figure::{Axis, Dash, Figure, LegendPlace, Marker, Panel, RefLine, Series, Style};
 use serde_json::{json, Value};
-use stickslip::analysis::claims::{Claim, Source};
 use stickslip::model::StateLaw;
+use stickslip::paper::claims::{Claim, Source};
 use stickslip::report::Report;
 
 /// The slip law's reference table (ξ = 0.7 and 0.8 rows).

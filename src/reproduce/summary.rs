@@ -4,8 +4,8 @@
 use super::{Entry, Output, Pending, ReproduceError, PENDING};
 use crate::figure::svg::escape;
 use serde::Serialize;
-use stickslip::analysis::claims::{Claim, Source, Verdict};
-use stickslip::analysis::paper;
+use stickslip::paper::claims::{Claim, Source, Verdict};
+use stickslip::paper::quoted;
 
 /// One claim of the paper set beside ours.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -26,7 +26,7 @@ pub struct Row {
 }
 
 impl Row {
-    /// A row from one of [`stickslip::analysis::paper`]'s claims (its value to four decimals and
+    /// A row from one of [`stickslip::paper::quoted`]'s claims (its value to four decimals and
     /// the relative difference; the criterion, 5 %, is the summary's).
     pub fn from_claim(figure: &str, c: &Claim) -> Self {
         let rel =
@@ -42,7 +42,7 @@ impl Row {
     }
 
     /// A row from a claim of the "asymptotics" or "lyapunov" analyses
-    /// ([`stickslip::analysis::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
+    /// ([`stickslip::paper::claims`]), with its own verdict ("agrees", "roughly", "disagrees")
     /// and criterion (in the note).
     pub fn from_analysis(figure: &str, c: &Claim) -> Self {
         let source = match c.source {
@@ -64,7 +64,7 @@ impl Row {
 
     /// A numerical claim, judged as [`paper::claim`] judges.
     pub fn numeric(figure: &str, claim: &str, paper_value: f64, ours: f64, note: String) -> Self {
-        Self::from_claim(figure, &paper::claim(claim, paper_value, ours, note))
+        Self::from_claim(figure, &quoted::claim(claim, paper_value, ours, note))
     }
 
     /// A qualitative claim: it holds or it does not.

@@ -8,13 +8,15 @@ use crate::analysis::shooting;
 use crate::analysis::time_series::{
     self, DiscardSink, SeriesCollector, SeriesSink, TimeSeriesOutcome, TimeSeriesSettings,
 };
-use crate::analysis::{asymptotics, cycle, finite, lyapunov, paper, AnalysisError};
+use crate::analysis::{cycle, AnalysisError};
 use crate::integrate::{
     ErrorKind, ErrorScale, ImexSystem, Integrator, Options, SolverError, Stats, Tolerance,
 };
 use crate::model::drr::W;
 use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
+use crate::numerics::finite;
+use crate::paper::{asymptotics, lyapunov, quoted};
 use crate::report::{
     CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report, SolverSection,
 };
@@ -484,7 +486,7 @@ fn run_inner(
     let paper = linear
         .as_ref()
         .filter(|_| a.paper)
-        .map(|h| paper::compare(&scene.params, h, values.as_ref()));
+        .map(|h| quoted::compare(&scene.params, h, values.as_ref()));
     let noise = match &a.noise {
         // Cancelled: the report is dropped.
         Some(_) if cancel::is_set(cancel) => None,

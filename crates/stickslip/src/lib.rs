@@ -3,7 +3,8 @@
 //!
 //! Data flow: [`scene`] (JSON, validated) → [`model`] (the DRR system and its relatives) →
 //! integrator (the [`integrate`] contract, implemented over SUNDIALS in [`sundials`] and by
-//! the homemade methods; [`solver`] picks one by name) → [`analysis`] → [`report`] (JSON).
+//! the homemade methods; [`solver`] picks one by name) → [`analysis`] (what a scene asks for,
+//! over the shared [`numerics`]; the paper's claims tested in [`paper`]) → [`report`] (JSON).
 //! [`engine`] wires them; [`sweep`] maps a scene over a parameter grid and [`compare`] checks
 //! a trajectory from elsewhere against a scene. The integrators live in the `stickslip-ode`
 //! crate and are re-exported here under their old paths.
@@ -16,6 +17,8 @@ pub mod analysis;
 pub mod compare;
 pub mod engine;
 pub mod model;
+pub mod numerics;
+pub mod paper;
 pub mod parallel;
 pub mod report;
 pub mod scene;

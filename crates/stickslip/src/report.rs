@@ -1,8 +1,6 @@
 //! Reports: the JSON a scene produces (schema in docs/reports.md), its atomic writing and the
 //! CLI summary (src/report/summary.rs).
 
-use crate::analysis::asymptotics::AsymptoticsReport;
-use crate::analysis::claims::Claim;
 use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleReport, CycleValues};
 use crate::analysis::hopf::HopfReport;
@@ -11,6 +9,8 @@ use crate::analysis::shooting::ShootingReport;
 use crate::analysis::time_series::{Event, Runaway, TimeSeriesReport};
 use crate::integrate::Stats;
 use crate::model::{DrrParams, Friction, PhysicalScales, StateLaw};
+use crate::paper::asymptotics::AsymptoticsReport;
+use crate::paper::claims::Claim;
 use crate::scene::{Dimensional, Method, OtherModel, Units};
 use serde::Serialize;
 use std::io::Write;
@@ -243,7 +243,7 @@ pub struct Report {
     pub asymptotics: Option<AsymptoticsReport>,
     /// The "lyapunov" analysis.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub lyapunov: Option<crate::analysis::lyapunov::LyapunovReport>,
+    pub lyapunov: Option<crate::paper::lyapunov::LyapunovReport>,
     /// Cycle durations in physical units (with `units` and a periodic cycle).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub physical: Option<Physical>,

@@ -290,9 +290,9 @@ pub struct Analyses {
     /// Compare with the paper's quoted values.
     pub paper: bool,
     /// Matched asymptotics against the numerics (needs "cycle").
-    pub asymptotics: Option<crate::analysis::asymptotics::AsymptoticsOptions>,
+    pub asymptotics: Option<crate::paper::asymptotics::AsymptoticsOptions>,
     /// Local and finite-time Lyapunov exponents along the cycle (needs "cycle").
-    pub lyapunov: Option<crate::analysis::lyapunov::LyapunovOptions>,
+    pub lyapunov: Option<crate::paper::lyapunov::LyapunovOptions>,
     /// The periodic orbit by shooting (None: not asked).
     pub shooting: Option<ShootingOptions>,
     /// Continuation of the orbit in a parameter (None: not asked).

@@ -22,11 +22,11 @@
 //! the state.
 
 use super::cycle::restart_safe;
-use super::events;
 use super::AnalysisError;
 use crate::integrate::{Clock, Integrator, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::Variational;
+use crate::numerics::events;
 use nalgebra::{Matrix2, Matrix3};
 
 /// The flow from one point of the section to its next upward crossing of v = 1.

@@ -1,14 +1,14 @@
 //! The CLI summary of a report: one function per section, in the order they are printed.
 
 use super::{CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report};
-use crate::analysis::claims::Claim;
 use crate::analysis::continuation::ContinuationReport;
 use crate::analysis::cycle::{CycleStatus, CycleValues};
 use crate::analysis::hopf::HopfReport;
 use crate::analysis::noise::NoiseReport;
 use crate::analysis::shooting::{PeriodDoubling, PeriodicOrbit, ShootingReport};
 use crate::analysis::time_series::{Event, Runaway, TimeSeriesReport};
-use crate::analysis::{asymptotics, lyapunov};
+use crate::paper::claims::Claim;
+use crate::paper::{asymptotics, lyapunov};
 use crate::scene::{OtherModel, CHOSEN_BY_SCENE};
 
 impl Report {

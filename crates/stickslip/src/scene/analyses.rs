@@ -3,15 +3,15 @@
 //! dispatches by name, and the messages that list the analyses are built from it.
 
 use super::{finite, Analyses, ContinuationOptions, RawAnalysis, SceneError};
-use crate::analysis::asymptotics::AsymptoticsOptions;
 use crate::analysis::continuation::Parameter;
 use crate::analysis::cycle::CycleOptions;
-use crate::analysis::lyapunov::LyapunovOptions;
 use crate::analysis::noise::options::{self as noise_options, NoiseOptions};
 use crate::analysis::shooting::ShootingOptions;
 use crate::analysis::time_series::TimeSeriesOptions;
 use crate::analysis::InvalidOption;
 use crate::model::ModelKind;
+use crate::paper::asymptotics::AsymptoticsOptions;
+use crate::paper::lyapunov::LyapunovOptions;
 use serde::Deserialize;
 use serde_json::Value;
 

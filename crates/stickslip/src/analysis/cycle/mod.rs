@@ -40,11 +40,11 @@ mod settled;
 
 pub use options::CycleOptions;
 
-use super::events::{self, Knot};
 use super::AnalysisError;
 use crate::integrate::{Clock, Integrator, OdeSystem, SolverError, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::DeepStick;
+use crate::numerics::events::{self, Knot};
 use serde::Serialize;
 
 /// How the cycle analysis runs; defaults documented on each field.

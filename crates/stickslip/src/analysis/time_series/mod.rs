@@ -36,11 +36,11 @@ pub use options::{Sampling, TimeSeriesOptions};
 pub use runaway::Runaway;
 pub use sink::{DiscardSink, SeriesCollector, SeriesSink, TeeSink};
 
-use super::events;
 use super::AnalysisError;
 use crate::integrate::{Clock, Integrator, OdeSystem, Time};
 use crate::model::drr::{Drr, THETA, U, W};
 use crate::model::scales::{dimensionless_friction, PhysicalScales};
+use crate::numerics::events;
 use serde::Serialize;
 
 /// How the analysis runs (dimensionless).

@@ -5,8 +5,8 @@
 //! the slip duration "about 2.5/γ", and the earthquake case τ = 28, i.e. 75 years).
 
 use super::claims::{Claim, Source};
-use super::cycle::CycleValues;
-use super::hopf::HopfReport;
+use crate::analysis::cycle::CycleValues;
+use crate::analysis::hopf::HopfReport;
 use crate::model::{DrrParams, Friction};
 
 /// A claim of the paper with its verdict: agrees within 5 %, roughly within 20 %, else

@@ -12,8 +12,8 @@
 //! Each is measured across the γ scan, with the finite-γ corrections as observed.
 
 use super::scan::ScanValues;
-use crate::analysis::fit::{least_squares, Fit};
 use crate::model::DrrParams;
+use crate::numerics::fit::{least_squares, Fit};
 use serde::Serialize;
 
 /// The slope of the period between two neighbouring scan points.

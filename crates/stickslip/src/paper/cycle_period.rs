@@ -6,8 +6,8 @@
 //! the v minimum and the v maximum are samples: at both, dv/dt = −γ²G = 0, i.e. the state lies
 //! on the slow manifold to the solver's accuracy.
 
-use super::cycle::{CycleReport, CycleStatus};
-use super::AnalysisError;
+use crate::analysis::cycle::{CycleReport, CycleStatus};
+use crate::analysis::AnalysisError;
 
 /// One period of the cycle analysis' last recorded cycle, from v minimum to v minimum (not the
 /// shooting's corrected orbit, nor the noise analysis's settled orbit); samples in time order

@@ -15,9 +15,9 @@
 //!   a ≈ a₂ to leading order in γ: B = ½ (−q + (ξ + p)/(f'(v) + η)), C = −ξ q/(f'(v) + η)
 //!   (the paper's B = ½ (v + (ξ − A)/f'(v)), C = ξ v/f'(v) for the slip law without damping).
 
-use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::hopf::cubic_roots;
 use crate::model::Drr;
+use crate::paper::cycle_period::CyclePeriod;
 use nalgebra::Matrix3;
 
 /// The local exponents at one state.

@@ -12,10 +12,10 @@
 //! θ is extremal on S where εθ + (1+ε)ξu = 0 (dθ/dt = v[εθ + (1+ε)ξu]).
 
 use super::AsymptoticsOptions;
-use crate::analysis::cycle_period::CyclePeriod;
-use crate::analysis::series::{decimate, pick};
 use crate::model::slow_manifold::{matching_k, matching_theta, phi, SlowFlow};
 use crate::model::DrrParams;
+use crate::numerics::series::{decimate, pick};
+use crate::paper::cycle_period::CyclePeriod;
 use serde::Serialize;
 
 /// A straight line θ = intercept + slope·u in the (u, θ) plane.

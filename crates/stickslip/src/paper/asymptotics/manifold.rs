@@ -6,12 +6,12 @@
 
 use super::slow_run::{self, SlowRun};
 use super::AsymptoticsOptions;
-use crate::analysis::cycle_period::CyclePeriod;
-use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Options, Tolerance};
 use crate::model::slow_manifold::SlowFlow;
 use crate::model::DrrParams;
+use crate::numerics::series::{decimate, pick};
+use crate::paper::cycle_period::CyclePeriod;
 use crate::solver::{self, Method};
 use serde::Serialize;
 

@@ -12,13 +12,13 @@
 pub mod ftle;
 pub mod local;
 
-use crate::analysis::claims::{Claim, Source};
 use crate::analysis::cycle::CycleReport;
-use crate::analysis::cycle_period::CyclePeriod;
-use crate::analysis::series::{decimate, pick};
 use crate::analysis::{AnalysisError, InvalidOption};
 use crate::integrate::{Integrator, SolverError};
 use crate::model::{Drr, DrrParams, Friction};
+use crate::numerics::series::{decimate, pick};
+use crate::paper::claims::{Claim, Source};
+use crate::paper::cycle_period::CyclePeriod;
 use crate::solver::SolverSpec;
 use local::Crossing;
 use serde::{Deserialize, Serialize};
@@ -487,6 +487,6 @@ pub fn summary(r: &LyapunovReport) -> String {
         }
     }
     s += "  claims:\n";
-    s += &crate::analysis::claims::summary_lines(&r.claims);
+    s += &crate::paper::claims::summary_lines(&r.claims);
     s
 }

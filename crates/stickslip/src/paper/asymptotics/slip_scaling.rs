@@ -13,14 +13,14 @@
 
 use super::scan::ScanValues;
 use super::AsymptoticsOptions;
-use crate::analysis::cycle_period::CyclePeriod;
-use crate::analysis::events::{self, Knot};
-use crate::analysis::fit::{least_squares, power_limit, Fit, PowerLimit};
-use crate::analysis::series::{decimate, pick};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Integrator, Options, SolverError, Task, Tolerance};
 use crate::model::fast_slip::{shifts, FastSlip};
 use crate::model::DrrParams;
+use crate::numerics::events::{self, Knot};
+use crate::numerics::fit::{least_squares, power_limit, Fit, PowerLimit};
+use crate::numerics::series::{decimate, pick};
+use crate::paper::cycle_period::CyclePeriod;
 use crate::solver::{self, Method};
 use serde::Serialize;
 

@@ -33,15 +33,15 @@
 
 use super::VariationalFactory;
 use crate::analysis::cycle::restart_safe;
-use crate::analysis::cycle_period::CyclePeriod;
-use crate::analysis::events;
-use crate::analysis::series::{decimate, pick};
 use crate::analysis::shooting::{self, ShootingSettings};
 use crate::analysis::AnalysisError;
 use crate::integrate::{Clock, Time};
 use crate::model::drr::{Drr, W};
 use crate::model::DrrParams;
 use crate::model::Variational;
+use crate::numerics::events;
+use crate::numerics::series::{decimate, pick};
+use crate::paper::cycle_period::CyclePeriod;
 use crate::solver::{Method, SolverSpec};
 use nalgebra::{Matrix3x2, Vector3};
 use serde::Serialize;

@@ -22,11 +22,11 @@ pub mod slip_scaling;
 pub mod slow_run;
 pub mod verdicts;
 
-use crate::analysis::claims::Claim;
 use crate::analysis::cycle::CycleReport;
-use crate::analysis::cycle_period::CyclePeriod;
 use crate::analysis::{AnalysisError, InvalidOption};
 use crate::model::{Drr, DrrParams};
+use crate::paper::claims::Claim;
+use crate::paper::cycle_period::CyclePeriod;
 use serde::{Deserialize, Serialize};
 
 /// Options of the "asymptotics" analysis (scene: `{"asymptotics": {...}}`).
@@ -293,6 +293,6 @@ pub fn summary(a: &AsymptoticsReport) -> String {
         );
     }
     s += "  claims:\n";
-    s += &crate::analysis::claims::summary_lines(&a.claims);
+    s += &crate::paper::claims::summary_lines(&a.claims);
     s
 }

@@ -7,9 +7,9 @@ use super::scan::ScanValues;
 use super::singular_limit::SingularLimitReport;
 use super::slip_scaling::SlipScalingReport;
 use super::AsymptoticsOptions;
-use crate::analysis::claims::{Claim, Source};
-use crate::analysis::fit::least_squares;
 use crate::model::{DrrParams, Friction};
+use crate::numerics::fit::least_squares;
+use crate::paper::claims::{Claim, Source};
 
 /// The claims about the stick and the matching (the paper's Fig. 3): the first of
 /// [`claims`], empty without a cycle.
