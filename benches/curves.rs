@@ -23,7 +23,7 @@ fn bench(c: &mut Criterion) {
         let parsed = scene::parse(&text, &path).expect("valid scene");
         group.bench_function(name, |b| {
             b.iter(|| {
-                let report = engine::run(black_box(&parsed), serde_json::Value::Null)
+                let report = engine::run(black_box(&parsed), engine::RunOptions::default())
                     .expect("the scene runs");
                 assert!(report.continuation.as_ref().is_some_and(|c| c.points.len() >= 50));
                 report

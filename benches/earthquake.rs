@@ -125,7 +125,8 @@ fn setup() -> Setup {
         ..cycle::CycleSettings::defaults(s.rtol, s.atol[1])
     };
     let limits = [format!("{max_step:e}"), format!("{:e}", escape.near)];
-    let report = engine::run(&scene, json.clone()).expect("the earthquake scene runs");
+    let report = engine::run(&scene, engine::RunOptions::echoing(json.clone()))
+        .expect("the earthquake scene runs");
     let c = report.cycle.as_ref().expect("cycle section");
     assert!(c.converged, "the earthquake scene no longer converges");
     assert_eq!(
@@ -249,7 +250,9 @@ fn c_total(binary: &Path, s: &Setup, iters: u64, steps_per_run: u64) -> Duration
 fn independent(binary: &Path, s: &Setup) -> (Vec<Duration>, Vec<Duration>, Vec<Duration>) {
     for _ in 0..INDEPENDENT_WARMUP {
         black_box(rust_cycles(s, &s.settings));
-        black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
+        black_box(
+            engine::run(&s.scene, engine::RunOptions::echoing(s.json.clone())).expect("scene"),
+        );
     }
     let (c, [rust, scene]) = common::alternate(
         ROUNDS,
@@ -273,7 +276,10 @@ fn independent(binary: &Path, s: &Setup) -> (Vec<Duration>, Vec<Duration>, Vec<D
                     black_box(rust_cycles(s, &s.settings));
                 }),
                 common::time_one(|| {
-                    black_box(engine::run(&s.scene, s.json.clone()).expect("scene"));
+                    black_box(
+                        engine::run(&s.scene, engine::RunOptions::echoing(s.json.clone()))
+                            .expect("scene"),
+                    );
                 }),
             ]
         },
@@ -307,7 +313,9 @@ fn main() {
             .sample_size(20)
             .measurement_time(Duration::from_secs(8));
         group.bench_function("engine_run", |b| {
-            b.iter(|| engine::run(&s.scene, s.json.clone()).expect("scene"))
+            b.iter(|| {
+                engine::run(&s.scene, engine::RunOptions::echoing(s.json.clone())).expect("scene")
+            })
         });
         group.finish();
     }

@@ -17,7 +17,8 @@
 //! overrides the 1000 realisations of the DRR scene.
 
 use std::time::Instant;
-use stickslip::engine;
+use stickslip::engine::{self, RunOptions};
+use stickslip::report::AnyReport;
 use stickslip::scene::{self, AnyScene};
 
 const SCENE: &str = "data/scenes/noise-drr.json";
@@ -55,8 +56,8 @@ fn main() {
     let mut runs = Vec::new();
     for threads in [2usize, 1] {
         let (wall0, cpu0) = (Instant::now(), cpu_seconds());
-        let report =
-            engine::run_with(&scene, json.clone(), threads, &|_, _| {}).expect("the scene runs");
+        let options = RunOptions::echoing(json.clone()).threads(threads);
+        let report = engine::run(&scene, options).expect("the scene runs");
         let (wall, cpu) = (wall0.elapsed().as_secs_f64(), cpu_seconds() - cpu0);
         let n = report.noise.as_ref().expect("a noise section");
         let w = &n.work;
@@ -85,15 +86,12 @@ fn main() {
         let text = std::fs::read_to_string(other).expect("the scene");
         let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         let (wall0, cpu0) = (Instant::now(), cpu_seconds());
-        let noise = match scene::parse_any(&text, other).expect("a valid scene") {
-            AnyScene::Drr(s) => engine::run_with(&s, json, 2, &|_, _| {})
-                .expect("the scene runs")
-                .noise
-                .expect("a noise section"),
-            AnyScene::Other(s) => {
-                stickslip::engine::run_other(&s, json, 2, &|_, _| {}).expect("the scene runs").noise
-            }
-            AnyScene::Lab(_) => panic!("{other}: a noise scene, not a lab one"),
+        let scene = scene::parse_any(&text, other).expect("a valid scene");
+        let report = engine::run(&scene, RunOptions::echoing(json).threads(2));
+        let noise = match report.expect("the scene runs") {
+            AnyReport::Drr(r) => r.noise.expect("a noise section"),
+            AnyReport::Other(r) => r.noise,
+            AnyReport::Lab(_) => panic!("{other}: a noise scene, not a lab one"),
         };
         println!(
             "{other}: {} realisations, {:.2} s wall, {:.2} s CPU, {:.0} nodes per realisation; load average {}",

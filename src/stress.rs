@@ -415,7 +415,7 @@ pub fn run_cell(cell: &Cell) -> Outcome {
     let outcome = std::panic::catch_unwind(|| {
         let scene = scene::parse(&text, "stress")
             .map_err(|e| ("invalid_scene".to_string(), e.to_string()))?;
-        engine::run(&scene, serde_json::Value::Null).map_err(|e| (e.kind.label(), e.to_string()))
+        engine::run(&scene, engine::RunOptions::default()).map_err(|e| (e.label(), e.to_string()))
     });
     match outcome {
         Ok(Ok(report)) => {

@@ -2,7 +2,7 @@
 //! [`engine::RunError::Cancelled`], and a run never cancelled is the plain run.
 
 use stickslip::analysis::time_series::SeriesSink;
-use stickslip::engine::{self, Cancel, RunError};
+use stickslip::engine::{self, Cancel, RunError, RunOptions};
 use stickslip::{scene, sweep};
 
 /// A time series of 40 time units in 4001 rows (CVODE's BDF takes ~2 steps per 10 rows).
@@ -37,24 +37,18 @@ fn rows_until_cancelled_at(at: usize) -> (Result<(), RunError>, usize) {
     let s = scene::parse(SERIES, "test").unwrap();
     let cancel = Cancel::new();
     let mut sink = CancelAt { cancel: cancel.clone(), at, rows: 0 };
-    let outcome = engine::run_cancellable(
-        &s,
-        serde_json::Value::Null,
-        1,
-        &|_, _| {},
-        Some(&mut sink),
-        &cancel,
-    );
+    let options = RunOptions::default().threads(1).series(&mut sink).cancel(&cancel);
+    let outcome = engine::run(&s, options);
     (outcome.map(|_| ()), sink.rows)
 }
 
 #[test]
 fn a_cancelled_run_stops_at_the_next_step_with_a_typed_error() {
     let (whole, all) = rows_until_cancelled_at(usize::MAX);
-    assert_eq!(whole, Ok(()));
+    assert!(whole.is_ok(), "{whole:?}");
     assert_eq!(all, 4001);
     let (cancelled, rows) = rows_until_cancelled_at(100);
-    assert_eq!(cancelled, Err(RunError::Cancelled));
+    assert!(matches!(cancelled, Err(RunError::Cancelled)), "{cancelled:?}");
     // The rows of the step in progress at most (measured: 100, none after the cancel).
     assert!((100..110).contains(&rows), "{rows} rows written after cancelling at row 100");
 }
@@ -68,9 +62,10 @@ fn a_run_never_cancelled_is_the_plain_run() {
     .unwrap();
     let s = scene::parse(&text, "earthquake").unwrap();
     let echo: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let plain = engine::run_with(&s, echo.clone(), 1, &|_, _| {}).unwrap();
+    let plain = engine::run(&s, RunOptions::echoing(echo.clone()).threads(1)).unwrap();
     let cancel = Cancel::new();
-    let cancellable = engine::run_cancellable(&s, echo, 1, &|_, _| {}, None, &cancel).unwrap();
+    let cancellable =
+        engine::run(&s, RunOptions::echoing(echo).threads(1).cancel(&cancel)).unwrap();
     let json = |r: &stickslip::report::Report| {
         let mut v = serde_json::to_value(r).unwrap();
         v.as_object_mut().unwrap().remove("wall_time_s");
@@ -118,8 +113,9 @@ fn a_cancelled_noise_analysis_stops_between_realisations() {
             cancel.cancel();
         }
     };
-    let outcome = engine::run_cancellable(&s, echo, 1, &progress, None, &cancel);
-    assert_eq!(outcome.err(), Some(RunError::Cancelled));
+    let options = RunOptions::echoing(echo).threads(1).progress(&progress).cancel(&cancel);
+    let outcome = engine::run(&s, options);
+    assert!(matches!(outcome, Err(RunError::Cancelled)), "{outcome:?}");
     let calls = calls.into_inner();
     assert!((5..=6).contains(&calls), "{calls} realisations reported after cancelling at 5");
 }

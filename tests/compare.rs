@@ -46,7 +46,7 @@ fn compare_cli(file: &std::path::Path, extra: &[&str]) -> (Option<i32>, String, 
 
 /// A start on the fig1 limit cycle, between two slips.
 fn on_cycle() -> [f64; 3] {
-    let report = stickslip::engine::run(&fig1(), serde_json::Value::Null).unwrap();
+    let report = stickslip::engine::run(&fig1(), stickslip::engine::RunOptions::default()).unwrap();
     let c = report.cycle.unwrap();
     let t = c.trajectory.last().unwrap();
     let i = t.t.len() / 2;
@@ -173,7 +173,7 @@ fn user_files_are_validated() {
 #[test]
 fn a_user_report_is_checked_key_by_key_and_strictly() {
     let s = fig1();
-    let ours = stickslip::engine::run(&s, serde_json::Value::Null).unwrap();
+    let ours = stickslip::engine::run(&s, stickslip::engine::RunOptions::default()).unwrap();
     let mut user: serde_json::Value = serde_json::from_str(&ours.to_json()).unwrap();
     user["cycle"]["period"] = serde_json::json!(18.1);
     let UserData::Report(cycle) = compare::read_user_data(&user.to_string()).unwrap() else {

@@ -84,7 +84,8 @@ fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_t
     let (times, states) = field_trajectory();
     // Its period error: the recurrence of its last events against the cycle analysis's
     // period by Radau5 at rtol 1e-12.
-    let report = stickslip::engine::run(&field(), serde_json::Value::Null).unwrap();
+    let report =
+        stickslip::engine::run(&field(), stickslip::engine::RunOptions::default()).unwrap();
     let period = report.cycle.unwrap().values.unwrap().main.period;
     let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
     let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
@@ -182,7 +183,7 @@ fn cycle_value(s: &scene::Scene, method: Method, rtol: f64, key: &str) -> f64 {
     s.solver.method = method;
     s.solver.rtol = rtol;
     s.solver.atol = [rtol; 3];
-    let r = stickslip::engine::run(&s, serde_json::Value::Null).unwrap();
+    let r = stickslip::engine::run(&s, stickslip::engine::RunOptions::default()).unwrap();
     let v = r.cycle.unwrap().values.unwrap();
     match key {
         "t0" => v.main.t0,
@@ -294,7 +295,8 @@ fn a_bad_reference_method_is_named() {
 fn a_reference_too_loose_for_the_tolerance_is_tightened_or_gives_no_verdict() {
     let text = FIELD.replace("\"rtol\": 1e-12", "\"rtol\": 1e-6");
     let s = scene::parse(&text, "field").unwrap();
-    let report = stickslip::engine::run(&field(), serde_json::Value::Null).unwrap();
+    let report =
+        stickslip::engine::run(&field(), stickslip::engine::RunOptions::default()).unwrap();
     let v = report.cycle.unwrap().values.unwrap();
     let read = |keys: &str| {
         let compare::UserData::Report(user) =

@@ -216,7 +216,12 @@ fn arkode_imex_stops_loudly_from_every_far_start() {
     for (initial, cause) in starts {
         let text = earthquake("arkode-imex", initial);
         let s = scene::parse(&text, "test").unwrap();
-        let error = engine::run(&s, serde_json::from_str(&text).unwrap()).unwrap_err();
+        let engine::RunError::Failed(error) =
+            engine::run(&s, engine::RunOptions::echoing(serde_json::from_str(&text).unwrap()))
+                .unwrap_err()
+        else {
+            panic!("a failed run")
+        };
         assert!(error.message.contains(cause), "arkode-imex from {initial}: {}", error.message);
     }
 }

@@ -163,7 +163,11 @@ fn the_cycle_step_budget_is_the_analysis_error_naming_its_option() {
     let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.2},
                    "analyses": [{"cycle": {"max_steps": 500}}]}"#;
     let s = scene::parse(text, "test").unwrap();
-    let error = engine::run(&s, serde_json::Value::Null).unwrap_err();
+    let engine::RunError::Failed(error) =
+        engine::run(&s, engine::RunOptions::default()).unwrap_err()
+    else {
+        panic!("a failed run")
+    };
     let AnalysisError::Budget { analysis, t, .. } = &*error.kind else { panic!("{error:?}") };
     assert_eq!(*analysis, "cycle");
     assert!(*t > 0.0 && t.is_finite(), "{t}");
@@ -183,7 +187,11 @@ fn the_block_stopping_in_finite_time_is_diagnosed_not_hidden() {
     let text = r#"{"name": "t", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 1.5, "friction": "asinh"},
                    "solver": {"rtol": 1e-10, "atol": 1e-12}, "analyses": ["cycle"]}"#;
     let s = scene::parse(text, "test").unwrap();
-    let error = engine::run(&s, serde_json::Value::Null).unwrap_err();
+    let engine::RunError::Failed(error) =
+        engine::run(&s, engine::RunOptions::default()).unwrap_err()
+    else {
+        panic!("a failed run")
+    };
     assert!(error.message.contains("falling to 0 in finite time"), "{error}");
     assert!(error.state[1] < -10.0);
 }

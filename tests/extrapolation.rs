@@ -357,8 +357,8 @@ fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
             "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 3e4, "max_steps": 2000000}}}}]}}"#
     );
     let scene = stickslip::scene::parse(&text, "deep-floor").unwrap();
-    let report =
-        stickslip::engine::run(&scene, serde_json::Value::Null).unwrap_or_else(|e| panic!("{e}"));
+    let report = stickslip::engine::run(&scene, stickslip::engine::RunOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
     let cycle = report.cycle.expect("the scene asks for the cycle");
     cycle.values.expect("a converged cycle").main.period
 }

@@ -8,8 +8,7 @@
 //! within 1e-8, the blow-up time within 1e-8 (relative).
 
 use serde_json::{json, Value};
-use stickslip::analysis::time_series::DiscardSink;
-use stickslip::engine;
+use stickslip::engine::{self, RunOptions};
 use stickslip::scene::lab::parse;
 
 const REFERENCE: &str = include_str!("../data/reference/lab/reference.json");
@@ -39,7 +38,7 @@ fn check(method: &str, rtol: f64, strict: bool) {
     for (name, case) in doc["cases"].as_object().unwrap() {
         let text = scene(name, case, method, rtol).to_string();
         let scene = parse(&text, name).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let report = engine::lab::run(&scene, json!(null), &mut DiscardSink)
+        let report = engine::run(&scene, RunOptions::default())
             .unwrap_or_else(|e| panic!("{name} ({method}): {e}"));
         let n = scene.params.states.len();
         let (mut mu, mut vt) = (0.0f64, 0.0f64);
@@ -112,7 +111,7 @@ fn vanishing_inertia_gives_the_quasi_static_model() {
             s["model"]["mass"] = json!(m);
         }
         let scene = parse(&s.to_string(), "inertia-limit").unwrap();
-        engine::lab::run(&scene, json!(null), &mut DiscardSink).unwrap().series.rows
+        engine::run(&scene, RunOptions::default()).unwrap().series.rows
     };
     let quasi_static = run(None);
     let gap = |m: f64| {

@@ -7,6 +7,7 @@ use stickslip::analysis::noise::models::NoiseModel;
 use stickslip::analysis::noise::options::NoiseOptions;
 use stickslip::analysis::noise::scheme::{SchemeSettings, Start};
 use stickslip::analysis::noise::{self, NoiseReport};
+use stickslip::engine::RunOptions;
 use stickslip::model::{
     Drr, DrrParams, Friction, SaddleNode, SaddleNodeParams, StateLaw, VanDerPol, VanDerPolParams,
 };
@@ -439,17 +440,11 @@ fn shipped_noise_scenes_run_in_reduced_form() {
             noise["start_before_event"] = 40.into();
         }
         let text = json.to_string();
-        let report = match scene::parse_any(&text, &path).unwrap() {
-            AnyScene::Drr(s) => serde_json::to_value(
-                stickslip::engine::run_with(&s, json.clone(), 2, &|_, _| {}).unwrap(),
-            )
-            .unwrap(),
-            AnyScene::Other(s) => serde_json::to_value(
-                stickslip::engine::run_other(&s, json.clone(), 2, &|_, _| {}).unwrap(),
-            )
-            .unwrap(),
-            AnyScene::Lab(_) => panic!("{name}: a noise scene, not a lab one"),
-        };
+        let scene = scene::parse_any(&text, &path).unwrap();
+        assert!(!matches!(scene, AnyScene::Lab(_)), "{name}: a noise scene, not a lab one");
+        let options = RunOptions::echoing(json.clone()).threads(2);
+        let report =
+            serde_json::to_value(stickslip::engine::run(&scene, options).unwrap()).unwrap();
         let points = report["noise"]["correlation_time"].as_array().unwrap();
         assert_eq!(points.len(), 12, "{name}");
         assert!(

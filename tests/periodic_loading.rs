@@ -107,10 +107,22 @@ fn the_engine_refuses_autonomous_analyses_of_a_forced_scene() {
     let text = inertial("radau5", LOADING);
     let mut scene = stickslip::scene::parse(&text, "forced").unwrap();
     scene.analyses.cycle = Some(Default::default());
-    let e = stickslip::engine::run(&scene, serde_json::from_str(&text).unwrap()).unwrap_err();
+    let stickslip::engine::RunError::Failed(e) = stickslip::engine::run(
+        &scene,
+        stickslip::engine::RunOptions::echoing(serde_json::from_str(&text).unwrap()),
+    )
+    .unwrap_err() else {
+        panic!("a failed run")
+    };
     assert!(e.is_bad_input() && e.message.contains("autonomous"), "{e}");
     let mut scene = stickslip::scene::parse(&text, "forced").unwrap();
     scene.analyses.hopf = true;
-    let e = stickslip::engine::run(&scene, serde_json::from_str(&text).unwrap()).unwrap_err();
+    let stickslip::engine::RunError::Failed(e) = stickslip::engine::run(
+        &scene,
+        stickslip::engine::RunOptions::echoing(serde_json::from_str(&text).unwrap()),
+    )
+    .unwrap_err() else {
+        panic!("a failed run")
+    };
     assert!(e.is_bad_input() && e.message.contains("autonomous"), "{e}");
 }

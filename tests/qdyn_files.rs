@@ -121,7 +121,7 @@ fn a_no_healing_file_reports_its_runaway_time_as_qdyn_reaches_it() {
         let mut scene: serde_json::Value = serde_json::from_str(&mapped).unwrap();
         scene["analyses"][0]["time_series"]["runaway_velocity"] = velocity.into();
         let s = scene::parse(&scene.to_string(), "kept").unwrap();
-        let r = stickslip::engine::run(&s, scene).unwrap();
+        let r = stickslip::engine::run(&s, stickslip::engine::RunOptions::echoing(scene)).unwrap();
         let ours = r.runaway.unwrap().physical.unwrap().t.unwrap();
         assert!((ours - theirs).abs() < 1e-10 * theirs, "V = {velocity}: {ours} vs QDYN {theirs}");
     }

@@ -86,8 +86,8 @@ fn radau5_from_v_1e30_at_rtol_1e_4_reaches_the_cycle() {
             rtol * 1e-2
         );
         let s = scene::parse(&text, "reference_far").unwrap();
-        let report = engine::run(&s, serde_json::Value::Null)
-            .unwrap_or_else(|e| panic!("{method}: {e} [{:?}]", e.kind));
+        let report = engine::run(&s, engine::RunOptions::default())
+            .unwrap_or_else(|e| panic!("{method}: {e} [{e:?}]"));
         let c = report.cycle.unwrap();
         c.values
             .unwrap_or_else(|| {

@@ -288,7 +288,8 @@ fn map_differences(s: &scene::Scene, x: [f64; 2], rel: f64) -> nalgebra::Matrix2
 #[test]
 fn ageing_multiplier_at_gamma_1e8_matches_differences_of_the_map() {
     let s = scene::parse(&earthquake_under("ageing"), "test").unwrap();
-    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    let orbit =
+        engine::run(&s, engine::RunOptions::default()).unwrap().shooting.unwrap().orbit.unwrap();
     let x = [orbit.section_point[0], orbit.section_point[2]];
     // The Poincaré map by central differences of the return (steps 1e-4 relative: the map's
     // noise is ~1e-9).
@@ -322,7 +323,8 @@ fn cvode_ageing_multipliers_at_gamma_1e10_are_resolved_or_withheld() {
     v["solver"]["method"] = "cvode-bdf".into();
     v["analyses"] = serde_json::json!(["shooting"]);
     let s = scene::parse(&v.to_string(), "test").unwrap();
-    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    let orbit =
+        engine::run(&s, engine::RunOptions::default()).unwrap().shooting.unwrap().orbit.unwrap();
     if orbit.multipliers_source == MultiplierSource::Unresolved {
         assert!(
             orbit.stable.is_none()

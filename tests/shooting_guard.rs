@@ -48,7 +48,8 @@ fn cvode_ageing_multipliers_at_gamma_1e8_agree_with_radau5() {
     // CVODE's variational integration fails here (trivial multiplier error 0.998; DP's
     // multiplier 0.0414). Radau5 gives 0.0544152 (DP), 0.0544180 by the map's differences.
     let s = ageing_earthquake(1e8, "cvode-bdf");
-    let orbit = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    let orbit =
+        engine::run(&s, engine::RunOptions::default()).unwrap().shooting.unwrap().orbit.unwrap();
     assert!(
         orbit.trivial_multiplier_error > 0.5,
         "the failure this test is about is gone: {orbit:?}"
@@ -78,7 +79,8 @@ fn forcing_the_check_on_a_resolved_orbit_keeps_its_numbers() {
     let text = r#"{"name": "x", "model": {"gamma": 1e3, "xi": 0.7, "epsilon": 0.72},
         "solver": {"method": "radau5", "rtol": 1e-10, "atol": 1e-12}, "analyses": ["shooting"]}"#;
     let s = scene::parse(text, "test").unwrap();
-    let plain = engine::run(&s, serde_json::Value::Null).unwrap().shooting.unwrap().orbit.unwrap();
+    let plain =
+        engine::run(&s, engine::RunOptions::default()).unwrap().shooting.unwrap().orbit.unwrap();
     assert_eq!(plain.multipliers_source, MultiplierSource::SectionJacobian);
     let drr = Drr::new(s.params);
     let mut settings = ShootingSettings::defaults(s.solver.rtol, s.solver.atol[1]);

@@ -376,7 +376,11 @@ fn no_healing_scenes_refuse_what_needs_a_steady_state_or_a_cycle() {
     let text =
         no_healing(r#""gamma": 100, "xi": 0.5, "epsilon": 0.5"#, 5.0, 2.0, 10.0, "radau5", 1e-8);
     let s = scene::parse(&text, "t").unwrap();
-    let e = stickslip::engine::run(&s, serde_json::Value::Null).unwrap_err();
+    let stickslip::engine::RunError::Failed(e) =
+        stickslip::engine::run(&s, stickslip::engine::RunOptions::default()).unwrap_err()
+    else {
+        panic!("a failed run")
+    };
     assert!(e.is_bad_input() && e.message.contains("runaway_velocity"), "{e}");
 }
 

@@ -4,10 +4,20 @@
 //! scene run tight (an independent event rule: upward crossings of v = 1 averaged over
 //! settled cycles, against the time series' peak-to-peak recurrences).
 
+use engine::RunOptions;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use stickslip::analysis::time_series::SeriesCollector;
+use stickslip::report::Report;
 use stickslip::series_file::{self, ReadSeries};
 use stickslip::{engine, scene};
+
+/// The report of `scene` with its "time_series" rows kept in memory.
+fn run_collecting(scene: &scene::Scene) -> (Report, SeriesCollector) {
+    let mut series = SeriesCollector::default();
+    let report = engine::run(scene, RunOptions::default().series(&mut series)).unwrap();
+    (report, series)
+}
 
 const EXE: &str = env!("CARGO_BIN_EXE_stickslip");
 
@@ -194,7 +204,7 @@ fn gamma_1e8_absolute_time_keeps_its_digits() {
         "solver": {"method": "radau5", "rtol": 1e-11},
         "analyses": [{"cycle": {"tolerance": 1e-9}}, {"time_series": {"t_max": 400}}]}"#;
     let scene = scene::parse(text, "test").unwrap();
-    let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
+    let (report, series) = run_collecting(&scene);
     let period = report.cycle.as_ref().unwrap().values.unwrap().main.period;
     let events = report.events.as_ref().unwrap();
     assert!(events.len() >= 6, "{}", events.len());
@@ -214,8 +224,7 @@ fn gamma_1e8_absolute_time_keeps_its_digits() {
 fn every_and_points_choose_the_rows() {
     let base = |ts: &str| {
         let text = field_scene(ts).replace("1e-12", "1e-8");
-        engine::run_collecting(&scene::parse(&text, "test").unwrap(), serde_json::Value::Null)
-            .unwrap()
+        run_collecting(&scene::parse(&text, "test").unwrap())
     };
     let (all, s_all) = base(r#"{"t_max": 120}"#);
     let (every, s_every) = base(r#"{"t_max": 120, "every": 10}"#);
@@ -255,7 +264,7 @@ fn a_time_series_alone_names_the_integrator_family() {
             .replace(r#"{"cycle": {"tolerance": 1e-11}}, "#, "");
         let scene = scene::parse(&text, "test").unwrap();
         assert!(scene.analyses.cycle.is_none());
-        let report = engine::run(&scene, serde_json::Value::Null).unwrap();
+        let report = engine::run(&scene, engine::RunOptions::default()).unwrap();
         assert_eq!(report.solver.integrator, method.capabilities().family, "{method}");
     }
 }
@@ -264,7 +273,7 @@ fn a_time_series_alone_names_the_integrator_family() {
 fn event_threshold_selects_the_episodes() {
     let run = |ts: &str| {
         let text = field_scene(ts).replace("1e-12", "1e-8");
-        engine::run(&scene::parse(&text, "test").unwrap(), serde_json::Value::Null).unwrap()
+        engine::run(&scene::parse(&text, "test").unwrap(), engine::RunOptions::default()).unwrap()
     };
     let one = run(r#"{"t_max": 300}"#);
     let high = run(r#"{"t_max": 300, "event_threshold": 1e4}"#);
@@ -403,7 +412,7 @@ fn absolute_friction_level_adds_shear_stress_and_friction_columns() {
         "solver": {"method": "radau5", "rtol": 1e-8},
         "analyses": [{"time_series": {"t_max": 2e7, "points": 101}}]}"#;
     let scene = scene::parse(text, "test").unwrap();
-    let (report, series) = engine::run_collecting(&scene, serde_json::Value::Null).unwrap();
+    let (report, series) = run_collecting(&scene);
     let columns = &report.time_series.as_ref().unwrap().columns;
     assert_eq!(columns[columns.len() - 2..], ["tau_phys", "mu"]);
     let mu_ref = 0.6 + (0.01 - 0.015) * (1e-9f64 / 1e-6).ln();

@@ -51,8 +51,12 @@ fn try_cycle(
         "analyses": [{ "cycle": { "tolerance": tolerance } }]
     });
     let scene = scene::parse(&text.to_string(), "reference").expect("valid scene");
-    let report = engine::run(&scene, text).map_err(|e| {
-        format!("{e} [kind {}, state (u, ln v, θ) = {:?}]", e.kind.label(), e.state)
+    let report = engine::run(&scene, engine::RunOptions::echoing(text)).map_err(|e| {
+        let state = match &e {
+            engine::RunError::Failed(f) => format!("{:?}", f.state),
+            _ => "unknown".into(),
+        };
+        format!("{e} [kind {}, state (u, ln v, θ) = {state}]", e.label())
     })?;
     let c = report.cycle.expect("cycle asked");
     let v = c.values.ok_or_else(|| {
@@ -355,7 +359,7 @@ fn quasi() {
                         "analyses": [{ "cycle": { "tolerance": 1e-10 } }]
                     });
                     let scene = scene::parse(&text.to_string(), "reference").expect("valid scene");
-                    let report = engine::run(&scene, text)
+                    let report = engine::run(&scene, engine::RunOptions::echoing(text))
                         .unwrap_or_else(|e| panic!("{law} {k_over_kc} {eta} {method}: {e}"));
                     let c = report.cycle.expect("cycle asked");
                     let v = c.values.unwrap_or_else(|| {

@@ -21,7 +21,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 use stickslip::analysis::time_series::SeriesCollector;
 use stickslip::analysis::AnalysisError;
-use stickslip::engine::{self, Cancel, EngineError, RunError};
+use stickslip::engine::{self, Cancel, EngineError, RunError, RunOptions};
 use stickslip::integrate::ToleranceTransform;
 use stickslip::scene::{self, AnyScene, SceneError};
 use stickslip::solver::{Capabilities, Method, TableKind};
@@ -81,12 +81,6 @@ fn run_error(py: Python<'_>, name: &str, e: &EngineError) -> PyErr {
         Ok(()) => python_error(py, "RunError", format!("scene {name}: {e}"), attributes),
         Err(err) => err,
     }
-}
-
-/// Why a scene's run failed: the engine's error (or a cancel), or a lab run's.
-enum Failed {
-    Run(RunError),
-    Lab(Box<engine::lab::LabError>),
 }
 
 /// Runs `work` on a thread of its own without the GIL, checking for signals every 50 ms. On a
@@ -163,41 +157,23 @@ fn run(
     let scene = scene::parse_any(&text, &source).map_err(|e| scene_error(py, &e))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let name = scene.name().to_string();
     let cancel = Cancel::new();
     let stop = cancel.clone();
-    let outcome = off_the_gil(py, &cancel, move || -> Result<RunOutput, _> {
-        match &scene {
-            AnyScene::Drr(s) => {
-                let mut series = SeriesCollector::default();
-                let report =
-                    engine::run_cancellable(s, echo, threads, &|_, _| {}, Some(&mut series), &stop)
-                        .map_err(|e| (s.name.clone(), Failed::Run(e)))?;
-                let columns =
-                    series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
-                Ok((report.to_json(), columns))
-            }
-            AnyScene::Other(s) => engine::run_other(s, echo, threads, &|_, _| {})
-                .map(|r| (r.to_json(), Vec::new()))
-                .map_err(|e| (s.name.clone(), Failed::Run(RunError::Failed(e)))),
-            AnyScene::Lab(s) => {
-                let mut series = SeriesCollector::default();
-                let report = engine::lab::run(s, echo, &mut series)
-                    .map_err(|e| (s.name.clone(), Failed::Lab(Box::new(e))))?;
-                let columns =
-                    series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
-                Ok((report.to_json(), columns))
-            }
-        }
+    let outcome = off_the_gil(py, &cancel, move || -> Result<RunOutput, RunError> {
+        let mut series = SeriesCollector::default();
+        let options = RunOptions::echoing(echo).threads(threads).series(&mut series).cancel(&stop);
+        let report = engine::run(&scene, options)?;
+        let columns = series.names.iter().map(|n| n.to_string()).zip(series.columns).collect();
+        Ok((report.to_json(), columns))
     })?;
-    let (json, columns) = outcome.map_err(|(name, e)| match e {
-        Failed::Lab(e) => {
+    let (json, columns) = outcome.map_err(|e| match e {
+        RunError::Lab(e) => {
             python_error(py, "RunError", format!("scene {name}: {e}"), PyDict::new(py))
         }
-        Failed::Run(RunError::Failed(e)) => run_error(py, &name, &e),
+        RunError::Failed(e) => run_error(py, &name, &e),
         // Only set on a signal, whose exception off_the_gil has returned instead.
-        Failed::Run(RunError::Cancelled) => {
-            pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled")
-        }
+        RunError::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err("cancelled"),
     })?;
     let columns = columns.into_iter().map(|(n, c)| (n, numpy::PyArray1::from_vec(py, c))).collect();
     Ok((json, columns))

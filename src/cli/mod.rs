@@ -18,7 +18,7 @@ pub struct Failure(pub u8, pub String);
 
 /// A failed run of the scene `name`: exit code 2 when an option does not fit the computed
 /// orbit (bad input, the field named), 1 otherwise.
-pub fn failed(name: &str, error: engine::EngineError) -> Failure {
+pub fn failed(name: &str, error: engine::RunError) -> Failure {
     Failure(if error.is_bad_input() { 2 } else { 1 }, format!("scene {name}: {error}"))
 }
 

@@ -59,15 +59,11 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
     let scene = scene::parse_any(&text, &source).map_err(|e| Failure(2, e.to_string()))?;
     let echo: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| Failure(2, e.to_string()))?;
-    let progress = Progress::new("noise", "realisations");
-    let update = |d, t| progress.update(d, t);
-    let threads = worker_threads(threads);
-    let mut not_converged = None;
-    let (report_json, summary, ensembles) = match &scene {
+    let qdyn = match &scene {
         scene::AnyScene::Lab(_) if qdyn_output.is_some() => {
             return Err(Failure(2, "--qdyn-output: a lab scene has no QDYN output (QDYN's files hold a fault's slip history); use --series".into()));
         }
-        scene::AnyScene::Lab(scene) => return run_lab(scene, echo, json, out, &series, figure),
+        scene::AnyScene::Lab(_) => None,
         _ if figure.is_some() => {
             return Err(Failure(2, "--figure: only lab scenes (\"model\": {\"kind\": \"lab\"}) draw a figure here; `stickslip reproduce` draws the paper's".into()));
         }
@@ -75,16 +71,11 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
             for warning in &scene.warnings {
                 eprintln!("stickslip: warning: {warning}");
             }
-            let report = if series.is_empty() && qdyn_output.is_none() {
-                engine::run_with(scene, echo, threads, &update)
-                    .map_err(|e| failed(&scene.name, e))?
-            } else {
-                let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
-                let qdyn = qdyn.map_err(|e| Failure(2, e))?;
-                run_writing_series(scene, echo, threads, &update, &series, qdyn)?
-            };
-            not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
-            (report.to_json(), report.summary(), scene.analyses.noise.is_some())
+            if scene.analyses.time_series.is_none() {
+                refuse_series_files(&scene.name, &series, qdyn_output.is_some())?;
+            }
+            let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
+            qdyn.map_err(|e| Failure(2, e))?
         }
         scene::AnyScene::Other(_) if !series.is_empty() || qdyn_output.is_some() => {
             return Err(Failure(
@@ -94,42 +85,58 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
                     .into(),
             ));
         }
-        scene::AnyScene::Other(scene) => {
-            let report = engine::run_other(scene, echo, threads, &update)
-                .map_err(|e| failed(&scene.name, e))?;
-            (report.to_json(), report.summary(), true)
-        }
+        scene::AnyScene::Other(_) => None,
     };
+    let ensembles = match &scene {
+        scene::AnyScene::Drr(s) => s.analyses.noise.is_some(),
+        scene::AnyScene::Other(_) => true,
+        scene::AnyScene::Lab(_) => false,
+    };
+    let progress = Progress::new("noise", "realisations");
+    let update = |d, t| progress.update(d, t);
+    let threads = worker_threads(threads);
+    let report = with_series_files(&series, qdyn, |sink| {
+        let options =
+            engine::RunOptions::echoing(echo).threads(threads).progress(&update).series(sink);
+        engine::run(&scene, options).map_err(|e| failed(scene.name(), e))
+    })?;
     if ensembles {
         progress.finish();
     }
-    deliver_report(&report_json, &summary, json, out.as_deref())?;
+    if let (report::AnyReport::Lab(report), Some(file)) = (&report, &figure) {
+        crate::figure::lab::friction_against_displacement(report)
+            .write(file)
+            .map_err(|e| Failure(1, format!("--figure: {e}")))?;
+    }
+    deliver_report(&report.to_json(), &report.summary(), json, out.as_deref())?;
+    let not_converged = match &report {
+        report::AnyReport::Drr(r) => r.cycle.as_ref().and_then(|c| unconverged(scene.name(), c)),
+        _ => None,
+    };
     match not_converged {
         Some(message) => Err(Failure(4, message)),
         None => Ok(()),
     }
 }
 
-/// Runs a lab scene: report, optional series files (through staging files, as for DRR
-/// scenes) and optional figure.
-fn run_lab(
-    scene: &scene::lab::LabScene,
-    echo: serde_json::Value,
-    json: bool,
-    out: Option<PathBuf>,
-    series: &[PathBuf],
-    figure: Option<PathBuf>,
-) -> Result<(), Failure> {
-    let report = with_series_files(series, None, |sink| {
-        engine::lab::run(scene, echo, sink)
-            .map_err(|e| Failure(1, format!("scene {}: {e}", scene.name)))
-    })?;
-    if let Some(file) = &figure {
-        crate::figure::lab::friction_against_displacement(&report)
-            .write(file)
-            .map_err(|e| Failure(1, format!("--figure: {e}")))?;
+/// Refuses `--series` files and `--qdyn-output` for a scene without a "time_series" analysis
+/// (exit 2, naming them and the analysis to add).
+fn refuse_series_files(name: &str, files: &[PathBuf], qdyn: bool) -> Result<(), Failure> {
+    let mut named: Vec<String> =
+        files.iter().map(|f| format!("--series {}", f.display())).collect();
+    if qdyn {
+        named.push("--qdyn-output".into());
     }
-    deliver_report(&report.to_json(), &report.summary(), json, out.as_deref())
+    if named.is_empty() {
+        return Ok(());
+    }
+    let named = named.join(", ");
+    Err(Failure(
+        2,
+        format!(
+            "{named}: scene {name} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses"
+        ),
+    ))
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
@@ -165,37 +172,6 @@ fn series_staging(file: &Path) -> (PathBuf, PathBuf) {
         _ => file.clone(),
     };
     (staging, file)
-}
-
-/// Runs a DRR scene streaming its "time_series" rows to each of `files` (CSV or .npy by its
-/// suffix) through [`with_series_files`].
-fn run_writing_series(
-    scene: &scene::Scene,
-    echo: serde_json::Value,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
-    files: &[PathBuf],
-    qdyn: Option<Box<dyn SeriesSink>>,
-) -> Result<report::Report, Failure> {
-    if scene.analyses.time_series.is_none() {
-        let mut named: Vec<String> =
-            files.iter().map(|f| format!("--series {}", f.display())).collect();
-        if qdyn.is_some() {
-            named.push("--qdyn-output".into());
-        }
-        let named = named.join(", ");
-        return Err(Failure(
-            2,
-            format!(
-                "{named}: scene {} has no \"time_series\" analysis; add {{\"time_series\": {{\"t_max\": T}}}} to its analyses",
-                scene.name
-            ),
-        ));
-    }
-    with_series_files(files, qdyn, |sink| {
-        engine::run_with_series(scene, echo, threads, progress, sink)
-            .map_err(|e| failed(&scene.name, e))
-    })
 }
 
 /// Runs `run` with one sink that writes every row to each of `files` (CSV or .npy by its

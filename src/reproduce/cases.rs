@@ -59,7 +59,8 @@ pub fn run_scene(scene_json: &Value) -> Result<Report, ReproduceError> {
     let name = scene_json["name"].as_str().unwrap_or("?").to_string();
     let s = scene::parse(&scene_json.to_string(), &name)
         .map_err(|e| ReproduceError::Scene(e.to_string()))?;
-    engine::run(&s, scene_json.clone()).map_err(|source| ReproduceError::Run { case: name, source })
+    engine::run(&s, engine::RunOptions::echoing(scene_json.clone()))
+        .map_err(|source| ReproduceError::Run { case: name, source })
 }
 
 /// Runs `jobs` on `threads` worker threads, results in input order, reporting progress.

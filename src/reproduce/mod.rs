@@ -24,7 +24,7 @@ pub mod summary;
 
 use crate::figure::FigureError;
 use std::path::{Path, PathBuf};
-use stickslip::engine::EngineError;
+use stickslip::engine::RunError;
 pub use summary::{Row, Summary};
 
 /// Why a figure could not be made.
@@ -39,7 +39,7 @@ pub enum ReproduceError {
         /// The scene's name.
         case: String,
         /// The engine's error.
-        source: EngineError,
+        source: RunError,
     },
     /// A run ended without what the figure needs (e.g. no periodic cycle).
     #[error("{0}")]

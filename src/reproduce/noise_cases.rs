@@ -5,7 +5,9 @@ use super::{Context, ReproduceError, Row};
 use serde_json::Value;
 use std::sync::{Arc, Mutex};
 use stickslip::analysis::noise::{CorrelationPoint, NoiseReport};
-use stickslip::scene::{self, AnyScene};
+use stickslip::engine::RunOptions;
+use stickslip::report::AnyReport;
+use stickslip::scene;
 
 /// Runs already made in this process, by scene (Figs. 6 and 7 both need the DRR scene; its
 /// results do not depend on the thread count, so a second run would give the same numbers).
@@ -53,27 +55,18 @@ pub fn run(ctx: &Context, text: &str) -> Result<Arc<NoiseRun>, ReproduceError> {
     let name = json["name"].as_str().unwrap_or("?").to_string();
     let failed = |source| ReproduceError::Run { case: name.clone(), source };
     let progress = |done, total| ctx.progress.points(done, total);
-    let (report, noise) = match scene::parse_any(&json.to_string(), &name)
-        .map_err(|e| ReproduceError::Scene(e.to_string()))?
-    {
-        AnyScene::Drr(s) => {
-            let r = stickslip::engine::run_with(&s, json.clone(), ctx.threads, &progress)
-                .map_err(failed)?;
-            let n = r
-                .noise
-                .clone()
-                .ok_or_else(|| ReproduceError::Missing(format!("{name}: no noise section")))?;
-            (serde_json::to_value(&r).expect("a report serialises"), n)
-        }
-        AnyScene::Other(s) => {
-            let r = stickslip::engine::run_other(&s, json.clone(), ctx.threads, &progress)
-                .map_err(failed)?;
-            (serde_json::to_value(&r).expect("a report serialises"), r.noise)
-        }
-        AnyScene::Lab(_) => {
-            return Err(ReproduceError::Scene(format!("{name}: a lab scene has no noise analysis")))
-        }
+    let scene = scene::parse_any(&json.to_string(), &name)
+        .map_err(|e| ReproduceError::Scene(e.to_string()))?;
+    let options = RunOptions::echoing(json.clone()).threads(ctx.threads).progress(&progress);
+    let report = stickslip::engine::run(&scene, options).map_err(failed)?;
+    let noise = match &report {
+        AnyReport::Drr(r) => r.noise.clone(),
+        AnyReport::Other(r) => Some(r.noise.clone()),
+        AnyReport::Lab(_) => None,
     };
+    let noise =
+        noise.ok_or_else(|| ReproduceError::Missing(format!("{name}: no noise section")))?;
+    let report = serde_json::to_value(&report).expect("a report serialises");
     let run = Arc::new(NoiseRun { name, report, noise });
     DONE.lock().unwrap_or_else(|e| e.into_inner()).push((key, run.clone()));
     Ok(run)

@@ -16,8 +16,11 @@ pub fn scene_file_text(name: &str) -> String {
 /// `scene::parse`, then `engine::run` with the text echoed; panics with the error's message.
 pub fn run_scene(text: &str) -> stickslip::report::Report {
     let s = stickslip::scene::parse(text, "test").unwrap_or_else(|e| panic!("{e}"));
-    stickslip::engine::run(&s, serde_json::from_str(text).unwrap())
-        .unwrap_or_else(|e| panic!("{e}"))
+    stickslip::engine::run(
+        &s,
+        stickslip::engine::RunOptions::echoing(serde_json::from_str(text).unwrap()),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// [`run_scene`] on the shipped scene data/scenes/`name`.

@@ -141,8 +141,8 @@ fn cycle_of(table: &Table, row: &serde_json::Value, run: &Run) -> Result<CycleVa
         run.method, run.rtol
     );
     let s = scene::parse(&text, "reference").unwrap();
-    let report = engine::run(&s, serde_json::Value::Null)
-        .map_err(|e| format!("{point}: {e} [{:?}]", e.kind))?;
+    let report = engine::run(&s, engine::RunOptions::default())
+        .map_err(|e| format!("{point}: {e} [{e:?}]"))?;
     let c = report.cycle.unwrap();
     c.values.ok_or_else(|| format!("{point}: {:?} after {} cycles", c.status, c.cycles_computed))
 }

@@ -6,7 +6,7 @@ use crate::analysis::hopf::{self, HopfReport};
 use crate::analysis::noise::{self, models::NoiseModel};
 use crate::analysis::shooting;
 use crate::analysis::time_series::{
-    self, DiscardSink, SeriesCollector, SeriesSink, TimeSeriesOutcome, TimeSeriesSettings,
+    self, DiscardSink, SeriesSink, TimeSeriesOutcome, TimeSeriesSettings,
 };
 use crate::analysis::{cycle, AnalysisError};
 use crate::integrate::{
@@ -17,10 +17,13 @@ use crate::model::{Drr, Variational};
 use crate::model::{SaddleNode, VanDerPol};
 use crate::numerics::finite;
 use crate::paper::{asymptotics, lyapunov, quoted};
+use crate::report::lab::LabReport;
 use crate::report::{
-    CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report, SolverSection,
+    AnyReport, CyclePhysical, CycleSection, ModelReport, ModelSection, Physical, Report,
+    SolverSection,
 };
-use crate::scene::{AnalysisKind, OtherModel, OtherScene, Scene, SolverSpec};
+use crate::scene::lab::LabScene;
+use crate::scene::{AnalysisKind, AnyScene, OtherModel, OtherScene, Scene, SolverSpec};
 use crate::solver::{self, MethodSettings};
 use crate::sundials;
 
@@ -29,7 +32,9 @@ mod forced;
 mod guard;
 mod imex_stick;
 pub mod lab;
+mod options;
 pub use cancel::{Cancel, RunError};
+pub use options::{ProgressSink, RunOptions};
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
 /// Butcher tables used (ARKStep).
@@ -360,77 +365,103 @@ fn cycle_cancellable(
     Ok((report, scene.solver.method.capabilities().family.to_string(), tables, integ.stats()))
 }
 
-/// Runs a scene. `scene_json` is the scene as given, echoed in the report. Ensembles (the
-/// "noise" analysis) use every core.
-pub fn run(scene: &Scene, scene_json: serde_json::Value) -> Result<Report, EngineError> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    run_with(scene, scene_json, threads, &|_, _| {})
-}
-
-/// [`run`] with `threads` worker threads for ensembles and `progress(done, total)` called
-/// after each realisation. The pipeline: the linear analysis, the cycle, shooting and
-/// continuation, the analyses of the recorded cycle (asymptotics, lyapunov), the paper's
-/// claims, noise; then one check that every number reported is finite.
-pub fn run_with(
-    scene: &Scene,
-    scene_json: serde_json::Value,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Report, EngineError> {
-    run_with_series(scene, scene_json, threads, progress, &mut DiscardSink)
-}
-
-/// [`run`] keeping the "time_series" rows in memory (for short runs; the report's
-/// `time_series` and `events` as with [`run`]). Without a "time_series" analysis in the scene
-/// the series is empty.
-pub fn run_collecting(
-    scene: &Scene,
-    scene_json: serde_json::Value,
-) -> Result<(Report, SeriesCollector), EngineError> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut series = SeriesCollector::default();
-    let report = run_with_series(scene, scene_json, threads, &|_, _| {}, &mut series)?;
-    Ok((report, series))
-}
-
-/// [`run_with`] streaming the "time_series" rows to `series` (e.g. a file of
-/// [`crate::series_file`], or a [`SeriesCollector`]); nothing is written to it when the scene
-/// asks for no time series.
-pub fn run_with_series(
-    scene: &Scene,
-    scene_json: serde_json::Value,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
-    series: &mut dyn SeriesSink,
-) -> Result<Report, EngineError> {
-    run_inner(scene, scene_json, threads, progress, series, None)
-}
-
-/// [`run_with_series`] (with `series` None: [`run_with`]) that the caller can stop from
-/// another thread with `cancel`: every integration fails at its next step once it is set, the
-/// analyses not begun are skipped, and the run returns [`RunError::Cancelled`] (whatever it
-/// computed on the way is dropped, and the rows written to `series` are incomplete). A "noise"
-/// analysis checks it before each realisation.
-pub fn run_cancellable(
-    scene: &Scene,
-    scene_json: serde_json::Value,
-    threads: usize,
-    progress: &(dyn Fn(usize, usize) + Sync),
-    series: Option<&mut dyn SeriesSink>,
-    cancel: &Cancel,
-) -> Result<Report, RunError> {
-    let mut discard = DiscardSink;
-    let series = series.unwrap_or(&mut discard);
-    match run_inner(scene, scene_json, threads, progress, series, Some(cancel)) {
-        Err(e) if e.is_cancelled() => Err(RunError::Cancelled),
+/// Runs a validated scene: the one entry of the engine. `options` say how (the scene as given,
+/// echoed in the report; worker threads; where the time-series rows go; cancellation; the
+/// progress of ensembles; [`RunOptions`]); none of them changes a number of the report.
+///
+/// The report's type follows the scene's: a spring-slider [`Scene`] gives a [`Report`], a
+/// saddle-node or van der Pol [`OtherScene`] a [`ModelReport`], a laboratory
+/// [`LabScene`](crate::scene::lab::LabScene) a [`LabReport`](crate::report::lab::LabReport),
+/// and a scene of any kind ([`AnyScene`], what `scene::parse_any` gives) an [`AnyReport`].
+///
+/// For the spring-slider the pipeline is the linear analysis, the cycle, shooting and
+/// continuation, the time series, the analyses of the recorded cycle (asymptotics, lyapunov),
+/// the paper's claims and noise; then one check that every number reported is finite.
+///
+/// # Errors
+/// [`RunError::Failed`] names the analysis that failed, where and why;
+/// [`RunError::Lab`] a laboratory run's failure; [`RunError::Cancelled`] a run stopped
+/// through [`RunOptions::cancel`] (whatever it computed on the way is dropped).
+pub fn run<S: Runnable>(scene: &S, options: RunOptions<'_>) -> Result<S::Report, RunError> {
+    let cancel = options.cancel;
+    match scene.carry_out(options) {
+        Err(RunError::Failed(e)) if e.is_cancelled() => Err(RunError::Cancelled),
         // A noise analysis stopped between realisations, or an analysis skipped.
-        _ if cancel.is_cancelled() => Err(RunError::Cancelled),
-        report => Ok(report?),
+        _ if cancel.is_some_and(Cancel::is_cancelled) => Err(RunError::Cancelled),
+        report => report,
     }
 }
 
-/// [`run_with_series`], stopping early once `cancel` is given and set.
-fn run_inner(
+/// A validated scene that [`run`] carries out, and the report it gives. Implemented for every
+/// kind of scene and for [`AnyScene`]; sealed (a new kind of model gets its arm here).
+pub trait Runnable: sealed::CarryOut {}
+
+mod sealed {
+    use super::{RunError, RunOptions};
+
+    /// How each kind of scene is carried out ([`super::run`] is the one way to call it).
+    pub trait CarryOut {
+        /// The report of a run.
+        type Report;
+        /// Runs the scene.
+        fn carry_out(&self, options: RunOptions<'_>) -> Result<Self::Report, RunError>;
+    }
+}
+
+impl Runnable for Scene {}
+impl sealed::CarryOut for Scene {
+    type Report = Report;
+    fn carry_out(&self, mut options: RunOptions<'_>) -> Result<Report, RunError> {
+        let threads = options.worker_threads();
+        let progress = options.progress.unwrap_or(&|_, _| {});
+        let mut discard = DiscardSink;
+        let series = options.series.take().unwrap_or(&mut discard);
+        Ok(run_drr(self, options.echo, threads, progress, series, options.cancel)?)
+    }
+}
+
+impl Runnable for OtherScene {}
+impl sealed::CarryOut for OtherScene {
+    type Report = ModelReport;
+    fn carry_out(&self, options: RunOptions<'_>) -> Result<ModelReport, RunError> {
+        let threads = options.worker_threads();
+        let progress = options.progress.unwrap_or(&|_, _| {});
+        Ok(run_other(self, options.echo, threads, progress, options.cancel)?)
+    }
+}
+
+impl Runnable for LabScene {}
+impl sealed::CarryOut for LabScene {
+    type Report = LabReport;
+    fn carry_out(&self, mut options: RunOptions<'_>) -> Result<LabReport, RunError> {
+        let mut discard = DiscardSink;
+        let series = options.series.take().unwrap_or(&mut discard);
+        Ok(lab::run(self, options.echo, series)?)
+    }
+}
+
+impl<S: Runnable> Runnable for Box<S> {}
+impl<S: Runnable> sealed::CarryOut for Box<S> {
+    type Report = S::Report;
+    fn carry_out(&self, options: RunOptions<'_>) -> Result<S::Report, RunError> {
+        (**self).carry_out(options)
+    }
+}
+
+impl Runnable for AnyScene {}
+impl sealed::CarryOut for AnyScene {
+    type Report = AnyReport;
+    fn carry_out(&self, options: RunOptions<'_>) -> Result<AnyReport, RunError> {
+        Ok(match self {
+            AnyScene::Drr(s) => AnyReport::Drr(Box::new(s.carry_out(options)?)),
+            AnyScene::Other(s) => AnyReport::Other(Box::new(s.carry_out(options)?)),
+            AnyScene::Lab(s) => AnyReport::Lab(Box::new(s.carry_out(options)?)),
+        })
+    }
+}
+
+/// Runs a spring-slider scene ([`run`]), stopping early once `cancel` is given and set.
+fn run_drr(
     scene: &Scene,
     scene_json: serde_json::Value,
     threads: usize,
@@ -826,13 +857,15 @@ fn variational_integrator_with_tables(
     integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 
-/// Runs a saddle-node or van der Pol scene (the noise analysis alone) on `threads` threads;
-/// `progress(done, total)` after each realisation.
-pub fn run_other(
+/// Runs a saddle-node or van der Pol scene (the noise analysis alone, [`run`]) on `threads`
+/// threads; `progress(done, total)` after each realisation; stops between realisations once
+/// `cancel` is set.
+fn run_other(
     scene: &OtherScene,
     scene_json: serde_json::Value,
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
+    cancel: Option<&Cancel>,
 ) -> Result<ModelReport, EngineError> {
     let started = std::time::Instant::now();
     let a = &scene.noise.amplitudes;
@@ -846,7 +879,8 @@ pub fn run_other(
             initial.to_vec(),
         ),
     };
-    let noise = noise::run(&model, &initial, &scene.noise, threads, progress)
+    let stop = || cancel::is_set(cancel);
+    let noise = noise::run_stoppable(&model, &initial, &scene.noise, threads, progress, &stop)
         .map_err(|e| EngineError::new(AnalysisKind::Noise, e))?;
     let section = AnalysisKind::Noise.name();
     if let Some(path) = finite::first_non_finite(&noise, section) {

@@ -342,3 +342,32 @@ impl ModelReport {
         serde_json::to_string_pretty(self).expect("a report always serialises")
     }
 }
+
+/// The report of a scene of any kind ([`crate::engine::run`] on a
+/// [`crate::scene::AnyScene`]): its JSON is the kind's own report, unchanged.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum AnyReport {
+    /// A spring-slider scene's.
+    Drr(Box<Report>),
+    /// A saddle-node or van der Pol scene's.
+    Other(Box<ModelReport>),
+    /// A laboratory scene's.
+    Lab(Box<lab::LabReport>),
+}
+
+impl AnyReport {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string_pretty(self).expect("a report always serialises")
+    }
+
+    /// The text summary of the kind's report.
+    pub fn summary(&self) -> String {
+        match self {
+            AnyReport::Drr(r) => r.summary(),
+            AnyReport::Other(r) => r.summary(),
+            AnyReport::Lab(r) => r.summary(),
+        }
+    }
+}

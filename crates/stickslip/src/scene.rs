@@ -390,6 +390,17 @@ pub enum AnyScene {
     Lab(Box<lab::LabScene>),
 }
 
+impl AnyScene {
+    /// The scene's name.
+    pub fn name(&self) -> &str {
+        match self {
+            AnyScene::Drr(s) => &s.name,
+            AnyScene::Other(s) => &s.name,
+            AnyScene::Lab(s) => &s.name,
+        }
+    }
+}
+
 /// Parses and validates a scene of any model kind (`"model": {"kind": ...}`).
 pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> {
     let err = |field: &str, message: String| SceneError {

@@ -301,28 +301,24 @@ pub fn check_base(base: &serde_json::Value, axes: &[Axis]) -> Result<(), SweepEr
 /// requested report sections kept and the wall time dropped.
 pub fn run_point(base: &serde_json::Value, index: usize, point: &Point) -> Row {
     let outcome = point_scene(base, point)
-        .and_then(|s| engine::run(&s, serde_json::Value::Null).map_err(|e| e.to_string()));
+        .and_then(|s| engine::run(&s, engine::RunOptions::default()).map_err(|e| e.to_string()));
     row(index, point, outcome)
 }
 
-/// [`run_point`] that the caller can stop with `cancel` ([`engine::run_cancellable`]): `None`
-/// when it was cancelled.
+/// [`run_point`] that the caller can stop with `cancel` ([`engine::RunOptions::cancel`]):
+/// `None` when it was cancelled.
 pub fn run_point_cancellable(
     base: &serde_json::Value,
     index: usize,
     point: &Point,
     cancel: &engine::Cancel,
 ) -> Option<Row> {
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let outcome = match point_scene(base, point) {
         Err(e) => Err(e),
-        Ok(s) => {
-            let null = serde_json::Value::Null;
-            match engine::run_cancellable(&s, null, threads, &|_, _| {}, None, cancel) {
-                Err(engine::RunError::Cancelled) => return None,
-                other => other.map_err(|e| e.to_string()),
-            }
-        }
+        Ok(s) => match engine::run(&s, engine::RunOptions::default().cancel(cancel)) {
+            Err(engine::RunError::Cancelled) => return None,
+            other => other.map_err(|e| e.to_string()),
+        },
     };
     Some(row(index, point, outcome))
 }

@@ -108,7 +108,7 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
         s.solver = SolverSpec { method, table: None, explicit_table: None, ..scene.solver.clone() };
         // The noise analysis does not depend on the method (its realisations use Rodas5P).
         s.analyses.noise = None;
-        match engine::run(&s, serde_json::Value::Null) {
+        match engine::run(&s, engine::RunOptions::default()) {
             Ok(r) => {
                 let status = r
                     .cycle
@@ -205,7 +205,7 @@ pub struct ReportComparison {
 pub const TIGHTEST_RTOL: f64 = 1e-13;
 
 /// The scene's cycle analysis alone, by `method` at `rtol` (absolute tolerances no looser).
-fn cycle_run(scene: &Scene, method: Method, rtol: f64) -> Result<Report, engine::EngineError> {
+fn cycle_run(scene: &Scene, method: Method, rtol: f64) -> Result<Report, engine::RunError> {
     let mut s = scene.clone();
     s.solver = SolverSpec {
         method,
@@ -216,7 +216,7 @@ fn cycle_run(scene: &Scene, method: Method, rtol: f64) -> Result<Report, engine:
     };
     let cycle = s.analyses.cycle.take().unwrap_or_default();
     s.analyses = crate::scene::Analyses { cycle: Some(cycle), ..Default::default() };
-    engine::run(&s, serde_json::Value::Null)
+    engine::run(&s, engine::RunOptions::default())
 }
 
 /// Compares the `cycle` keys a user's report has with the scene's cycle analysis run by

@@ -184,7 +184,7 @@ fn state_deviation(user: &[f64; 3], reference: &[f64; 3]) -> [f64; 3] {
 
 /// Why a comparison cannot be made: bad input (exit 2) or a failed or inaccurate reference
 /// (exit 1).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum CompareError {
     /// The user's data cannot be compared (sampled too coarsely); the message says why.
     #[error("{0}")]
@@ -197,7 +197,7 @@ pub enum CompareError {
     Reference(SolverError),
     /// The reference run of a report comparison failed.
     #[error("reference run failed: {0}")]
-    ReferenceRun(crate::engine::EngineError),
+    ReferenceRun(crate::engine::RunError),
     /// The file does not fit the scene (other units, an offset u, too long a span).
     #[error("{0}")]
     Mismatch(#[from] SceneMismatch),

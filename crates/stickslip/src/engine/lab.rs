@@ -1,5 +1,5 @@
-//! Runs a lab scene: the lab analysis, its rows to a sink and into the report; or fits the
-//! scene's model to a friction record.
+//! A lab scene's run (through [`super::run`]): the lab analysis, its rows to a sink and into
+//! the report; and the fit of the scene's model to a friction record.
 
 use crate::analysis::lab::{self, LabRunError};
 use crate::analysis::lab_fit::{
@@ -23,9 +23,9 @@ pub enum LabError {
     Sink(std::io::Error),
 }
 
-/// Runs `scene`, handing each row to `sink` too (begin, rows, finish); `echo` is the scene as
-/// given.
-pub fn run(
+/// Runs `scene` ([`super::run`]), handing each row to `sink` too (begin, rows, finish);
+/// `echo` is the scene as given.
+pub(super) fn run(
     scene: &LabScene,
     echo: serde_json::Value,
     sink: &mut dyn SeriesSink,
