@@ -2,7 +2,8 @@
 //! what runs: README.md has at most 150 lines, gives the two commands and links the docs index,
 //! which names every page in docs/; its Rust and Python lines are, verbatim, part of
 //! examples/readme.rs and examples/python/readme.py (which tools/test.sh runs); the Slurm
-//! recipe in docs/slurm.md is the two files tools/slurm.sh runs on a real cluster.
+//! recipe in docs/slurm.md is the two files tools/slurm.sh runs on a real cluster; and the
+//! README's sample run has the step and cycle counts that `bash tools/run.sh` prints.
 
 use std::path::Path;
 
@@ -105,4 +106,66 @@ fn the_slurm_page_shows_the_batch_script_verbatim() {
 #[test]
 fn the_slurm_page_shows_the_submit_script_verbatim() {
     check_indented_block("docs/slurm.md", "tools/slurm-submit.sh");
+}
+
+/// The README's "A first run" block: the indented lines after "`bash tools/run.sh` prints".
+fn readme_sample_run() -> Vec<String> {
+    let readme = read("README.md");
+    let lines: Vec<&str> = readme.lines().collect();
+    let start = lines
+        .iter()
+        .position(|l| l.starts_with("`bash tools/run.sh` prints"))
+        .expect("README.md introduces its sample run with \"`bash tools/run.sh` prints\"");
+    lines[start + 1..]
+        .iter()
+        .skip_while(|l| l.trim().is_empty())
+        .take_while(|l| l.starts_with("    "))
+        .map(|l| l[4..].to_string())
+        .collect()
+}
+
+/// The number after `label` in `text` ("… 18023 steps" with label " steps", digits before it;
+/// "periodic after 3 cycles" with label "periodic after ", digits after it).
+fn count(text: &str, label: &str, before: bool) -> Option<u64> {
+    let at = text.find(label)?;
+    let digits: String = if before {
+        let head: Vec<char> = text[..at].chars().rev().take_while(char::is_ascii_digit).collect();
+        head.into_iter().rev().collect()
+    } else {
+        text[at + label.len()..].chars().take_while(char::is_ascii_digit).collect()
+    };
+    digits.parse().ok()
+}
+
+#[test]
+fn the_readme_sample_run_is_what_tools_run_sh_prints() {
+    // tools/run.sh is `stickslip run` on the built-in earthquake scene.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .arg("run")
+        .output()
+        .expect("stickslip runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let real = String::from_utf8(out.stdout).unwrap();
+    let sample = readme_sample_run().join("\n");
+    let line = |text: &str, start: &str| {
+        text.lines().find(|l| l.starts_with(start)).map(str::to_string).unwrap_or_default()
+    };
+    let (sample_solver, real_solver) = (line(&sample, "solver "), line(&real, "solver "));
+    let steps = |l: &str| count(l, " steps", true);
+    assert!(steps(&real_solver).is_some(), "no step count in {real_solver:?}");
+    assert_eq!(
+        steps(&sample_solver),
+        steps(&real_solver),
+        "README.md's sample run shows another step count: copy `bash tools/run.sh`'s output \
+         into it\nREADME: {sample_solver}\nreal:   {real_solver}"
+    );
+    let (sample_cycle, real_cycle) = (line(&sample, "cycle: "), line(&real, "cycle: "));
+    let cycles = |l: &str| count(l, "periodic after ", false);
+    assert!(cycles(&real_cycle).is_some(), "no cycle count in {real_cycle:?}");
+    assert_eq!(
+        cycles(&sample_cycle),
+        cycles(&real_cycle),
+        "README.md's sample run shows another cycle count: copy `bash tools/run.sh`'s output \
+         into it\nREADME: {sample_cycle}\nreal:   {real_cycle}"
+    );
 }

@@ -127,6 +127,18 @@ fn damping_moves_the_threshold_and_the_engine_sees_it() {
     assert_ne!(damped.cycle.as_ref().unwrap().status, CycleStatus::Periodic);
 }
 
+#[test]
+fn the_field_s_other_names_of_the_laws_are_accepted_as_in_the_lab() {
+    for (alias, law) in
+        [("aging", StateLaw::Ageing), ("dieterich", StateLaw::Ageing), ("ruina", StateLaw::Slip)]
+    {
+        let text = format!(
+            r#"{{"name": "t", "model": {{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "{alias}"}}, "analyses": ["hopf"]}}"#
+        );
+        assert_eq!(scene::parse(&text, "test").unwrap().params.state_law, law, "{alias}");
+    }
+}
+
 fn parse_error(model: &str, analyses: &str) -> scene::SceneError {
     let text = format!(r#"{{"name": "t", "model": {model}, "analyses": {analyses}}}"#);
     scene::parse(&text, "test").expect_err("the scene must be rejected")
@@ -135,7 +147,7 @@ fn parse_error(model: &str, analyses: &str) -> scene::SceneError {
 #[test]
 fn scene_fields_are_validated_naming_the_field_and_the_valid_values() {
     let e = parse_error(
-        r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "aging"}"#,
+        r#"{"gamma": 10, "xi": 0.7, "epsilon": 1, "state_law": "agin"}"#,
         r#"["hopf"]"#,
     );
     assert_eq!(e.field, "model.state_law");

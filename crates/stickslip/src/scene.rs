@@ -18,7 +18,11 @@ pub mod lab;
 pub mod qdyn_input;
 mod solver_block;
 pub use analyses::{analysis_names, AnalysisKind};
-pub use solver_block::{CHOSEN_BY_DEFAULT, CHOSEN_BY_SCENE, DEFAULT_METHOD, DEFAULT_RTOL};
+use solver_block::RawSolver;
+pub use solver_block::{
+    SolverDefaults, CHOSEN_BY_DEFAULT, CHOSEN_BY_SCENE, DEFAULT_METHOD, DEFAULT_RTOL,
+    LAB_CHOSEN_BY_DEFAULT, LAB_DEFAULTS, LAB_DEFAULT_RTOL, SPRING_SLIDER_DEFAULTS,
+};
 
 /// A bad scene: the field at fault and how to fix it. CLI exit code 2.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -236,30 +240,6 @@ struct RawInitial {
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
-enum RawAtol {
-    Scalar(f64),
-    PerComponent(Vec<f64>),
-}
-
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-struct RawSolver {
-    #[serde(default)]
-    method: Option<String>,
-    #[serde(default)]
-    rtol: Option<f64>,
-    #[serde(default)]
-    atol: Option<RawAtol>,
-    #[serde(default)]
-    table: Option<String>,
-    #[serde(default)]
-    explicit_table: Option<String>,
-    #[serde(default)]
-    max_steps: Option<u64>,
-}
-
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(untagged)]
 enum RawAnalysis {
     Name(String),
     WithOptions(std::collections::BTreeMap<String, serde_json::Value>),
@@ -408,10 +388,11 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
         field: field.into(),
         message,
     };
-    if lab::is_lab(text) {
-        return lab::parse(text, source_name).map(|s| AnyScene::Lab(Box::new(s)));
+    let json = json(text, &err)?;
+    if json["model"]["kind"].as_str() == Some(lab::KIND) {
+        return lab::from_json(&json, source_name).map(|s| AnyScene::Lab(Box::new(s)));
     }
-    let raw = parse_raw(text, &err)?;
+    let raw: RawScene = deserialize(&json, &err)?;
     match raw.model.kind.as_deref().map(ModelKind::from_name) {
         None | Some(Some(ModelKind::Drr)) => {
             validate(raw, &err).map(|s| AnyScene::Drr(Box::new(s)))
@@ -420,12 +401,20 @@ pub fn parse_any(text: &str, source_name: &str) -> Result<AnyScene, SceneError> 
     }
 }
 
-fn parse_raw(
+/// The scene text as JSON: the one parse of the text (a syntax error names the document).
+fn json(
     text: &str,
     err: &impl Fn(&str, String) -> SceneError,
-) -> Result<RawScene, SceneError> {
-    let deserializer = &mut serde_json::Deserializer::from_str(text);
-    serde_path_to_error::deserialize(deserializer).map_err(|e| {
+) -> Result<serde_json::Value, SceneError> {
+    serde_json::from_str(text).map_err(|e| err("(document)", e.to_string()))
+}
+
+/// A scene's raw form from its JSON, an error naming the path of the field at fault.
+fn deserialize<T: serde::de::DeserializeOwned>(
+    json: &serde_json::Value,
+    err: &impl Fn(&str, String) -> SceneError,
+) -> Result<T, SceneError> {
+    serde_path_to_error::deserialize(json).map_err(|e| {
         let path = e.path().to_string();
         let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
         err(&field, e.into_inner().to_string())
@@ -535,7 +524,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<Scene, SceneError> {
         field: field.into(),
         message,
     };
-    let raw = parse_raw(text, &err)?;
+    let raw: RawScene = deserialize(&json(text, &err)?, &err)?;
     if let Some(kind) = raw.model.kind.as_deref().filter(|k| *k != ModelKind::Drr.name()) {
         return Err(err("model.kind", format!("\"{kind}\": this command needs a DRR scene; `stickslip run` runs {kind} scenes (noise analysis)")));
     }
@@ -648,10 +637,15 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
         Some(name) => StateLaw::from_name(name).ok_or_else(|| {
             let names: Vec<String> =
                 StateLaw::ALL.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            let lab = if name == "nagata" {
+                " (the nagata law is the laboratory model's, \"kind\": \"lab\")"
+            } else {
+                ""
+            };
             err(
                 "model.state_law",
                 format!(
-                    "\"{name}\" is not a state law; use one of {} (default \"slip\")",
+                    "\"{name}\" is not a state law of this model{lab}; use one of {} (default \"slip\"; also \"aging\", \"dieterich\", \"ruina\")",
                     names.join(", ")
                 ),
             )
@@ -705,7 +699,9 @@ fn validate(raw: RawScene, err: &impl Fn(&str, String) -> SceneError) -> Result<
     let field_initial =
         raw.initial.as_ref().map(|r| field_start(r, scales.as_ref(), &params, err)).transpose()?;
     let initial = initial_state(&drr, field_initial.as_ref().or(raw.initial.as_ref()), err)?;
-    let (solver, solver_chosen_by) = solver_block::parse(raw.solver.as_ref(), err)?;
+    let (solver, solver_chosen_by) =
+        solver_block::parse(raw.solver.as_ref(), &SPRING_SLIDER_DEFAULTS, err)?
+            .spring_slider(err)?;
     let analyses = analyses::parse(
         &raw.analyses,
         (ModelKind::Drr, ModelKind::Drr.dimension(), Some(gamma * gamma)),

@@ -7,7 +7,7 @@ use crate::analysis::lab_fit::{
 };
 use crate::analysis::time_series::SeriesSink;
 use crate::model::Loading;
-use crate::report::lab::{LabReport, LabSeries};
+use crate::report::lab::{LabReport, LabSeries, LabSolverSection};
 use crate::report::lab_fit::FitReport;
 use crate::scene::lab::LabScene;
 use crate::sundials;
@@ -60,7 +60,10 @@ pub(super) fn run(
         params: scene.params.clone(),
         critical_stiffness: scene.params.critical_stiffness(),
         loading: scene.loading.clone(),
-        solver: scene.solver.clone(),
+        solver: LabSolverSection {
+            solver: scene.solver.clone(),
+            chosen_by: scene.solver_chosen_by.clone(),
+        },
         outcome,
         series: LabSeries { columns, rows },
     })

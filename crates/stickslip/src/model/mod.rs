@@ -29,8 +29,8 @@ pub use van_der_pol::{VanDerPol, VanDerPolParams};
 pub use variational::Variational;
 
 /// The kind of a scene's model (`"model": {"kind": ...}`); [`ModelKind::name`] is its name in
-/// the scene and the messages. Laboratory scenes are told apart by their form instead
-/// (`scene::parse_any`).
+/// the scene and the messages. Laboratory scenes (`"kind": "lab"`, `scene::lab::KIND`) have
+/// a scene form of their own, which `scene::parse_any` tells apart by that kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ModelKind {
     /// "drr": the spring-slider (the default).

@@ -71,9 +71,15 @@ impl StateLaw {
         Self::ALL.iter().find(|(_, l)| *l == self).map_or("?", |(n, _)| n)
     }
 
-    /// The law by its scene name.
+    /// Other names the field uses for a law, accepted wherever a scene names a state law (the
+    /// spring-slider's `model.state_law`, the laboratory's `model.states[i].law`): the
+    /// American spelling and the laws' authors. Reports use the names of [`StateLaw::ALL`].
+    pub const ALIASES: [(&'static str, StateLaw); 3] =
+        [("aging", StateLaw::Ageing), ("dieterich", StateLaw::Ageing), ("ruina", StateLaw::Slip)];
+
+    /// The law by its scene name or one of its [`StateLaw::ALIASES`].
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.iter().find(|(n, _)| *n == name).map(|(_, l)| *l)
+        Self::ALL.iter().chain(&Self::ALIASES).find(|(n, _)| *n == name).map(|(_, l)| *l)
     }
 
     /// v·F(x) alone at w = ln v, given v = e^w: the `f` of [`StateLaw::terms`], for a
@@ -172,6 +178,10 @@ mod tests {
         assert!((ageing - c * (-theta / c).exp() - ours).abs() < 1e-13 * ours.abs());
         assert!(!StateLaw::NoHealing.heals() && StateLaw::Ageing.heals());
         assert_eq!(StateLaw::from_name("no_healing"), Some(StateLaw::NoHealing));
+        for (alias, law) in [("aging", "ageing"), ("dieterich", "ageing"), ("ruina", "slip")] {
+            assert_eq!(StateLaw::from_name(alias), StateLaw::from_name(law), "{alias}");
+        }
+        assert_eq!(StateLaw::from_name("agin"), None);
     }
 
     #[test]

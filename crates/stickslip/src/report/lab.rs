@@ -13,6 +13,17 @@ pub struct LabSeries {
     pub rows: Vec<Vec<f64>>,
 }
 
+/// The report's `solver`: method, rtol and atol as used, and `chosen_by`, why (the scene's
+/// block, or the defaults and why; `scene::LAB_DEFAULTS`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LabSolverSection {
+    /// The solver as used.
+    #[serde(flatten)]
+    pub solver: LabSolver,
+    /// Why this solver runs.
+    pub chosen_by: String,
+}
+
 /// The report of one lab scene.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LabReport {
@@ -30,8 +41,8 @@ pub struct LabReport {
     pub critical_stiffness: Option<f64>,
     /// The load-point history as used (segments and end).
     pub loading: Loading,
-    /// The solver.
-    pub solver: LabSolver,
+    /// The solver, and why it runs.
+    pub solver: LabSolverSection,
     /// Events and the numbers read off the record.
     #[serde(flatten)]
     pub outcome: LabOutcome,
@@ -56,7 +67,7 @@ impl LabReport {
             self.loading.t_start(),
             o.t_end,
             o.steps,
-            self.solver.method
+            self.solver.solver.method
         );
         for v in &o.velocity_steps {
             s += &format!(

@@ -1,10 +1,10 @@
 //! Lab scenes (`"model": {"kind": "lab", …}`): the laboratory spring-slider driven through a
 //! load-point history (docs/lab.md). Parsed apart from the DRR scenes: their keys differ.
 
+use super::solver_block::{self, RawAtol, RawSolver, LAB_DEFAULTS};
 use super::{finite, positive, SceneError};
 use crate::analysis::lab::{LabSolver, Output, MAX_STATES};
-use crate::model::{LabLaw, LabParams, LabState, Loading, Segment};
-use crate::solver::Method;
+use crate::model::{LabLaw, LabParams, LabState, Loading, Segment, StateLaw};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -23,6 +23,9 @@ pub struct LabScene {
     pub initial: Vec<f64>,
     /// The solver.
     pub solver: LabSolver,
+    /// Why this solver runs: the scene's block, or the defaults and why (the report's
+    /// `solver.chosen_by`; [`LAB_DEFAULTS`]).
+    pub solver_chosen_by: String,
     /// Which rows to write.
     pub output: Output,
 }
@@ -46,7 +49,7 @@ struct Raw {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawModel {
-    #[allow(dead_code)] // "lab": checked by [`is_lab`]
+    /// "lab" ([`KIND`]).
     kind: String,
     mu0: f64,
     a: f64,
@@ -109,17 +112,6 @@ enum RawInitial {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawSolver {
-    #[serde(default)]
-    method: Option<String>,
-    #[serde(default)]
-    rtol: Option<f64>,
-    #[serde(default)]
-    atol: Option<f64>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct RawAnalysis {
     time_series: RawTimes,
 }
@@ -130,11 +122,8 @@ struct RawTimes {
     times: Vec<f64>,
 }
 
-/// Whether the scene text is a lab scene (`model.kind` is "lab").
-pub fn is_lab(text: &str) -> bool {
-    serde_json::from_str::<serde_json::Value>(text)
-        .is_ok_and(|v| v["model"]["kind"].as_str() == Some("lab"))
-}
+/// The `model.kind` of a lab scene.
+pub const KIND: &str = "lab";
 
 /// Parses and validates a lab scene. `source_name` names it in errors; a relative
 /// `loading.csv` path is read relative to `source_name`'s folder.
@@ -144,12 +133,26 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
         field: field.into(),
         message,
     };
-    let deserializer = &mut serde_json::Deserializer::from_str(text);
-    let raw: Raw = serde_path_to_error::deserialize(deserializer).map_err(|e| {
-        let path = e.path().to_string();
-        let field = if path == "." || path.is_empty() { "(document)".to_string() } else { path };
-        err(&field, e.into_inner().to_string())
-    })?;
+    from_json(&super::json(text, &err)?, source_name)
+}
+
+/// [`parse`] on the scene's JSON, parsed once by `scene::parse_any`.
+pub(super) fn from_json(
+    json: &serde_json::Value,
+    source_name: &str,
+) -> Result<LabScene, SceneError> {
+    let err = |field: &str, message: String| SceneError {
+        source_name: source_name.into(),
+        field: field.into(),
+        message,
+    };
+    let raw: Raw = super::deserialize(json, &err)?;
+    if raw.model.kind != KIND {
+        return Err(err(
+            "model.kind",
+            format!("\"{}\": a lab scene has \"kind\": \"{KIND}\"", raw.model.kind),
+        ));
+    }
     if raw.name.trim().is_empty() {
         return Err(err("name", "must not be empty".into()));
     }
@@ -187,7 +190,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
             y
         }
     };
-    let solver = solver(raw.solver.as_ref(), &err)?;
+    let (solver, solver_chosen_by) = solver(raw.solver.as_ref(), &err)?;
     let output = match raw.analyses.as_slice() {
         [] => Output::EveryStep,
         [a] => {
@@ -205,6 +208,7 @@ pub fn parse(text: &str, source_name: &str) -> Result<LabScene, SceneError> {
         loading,
         initial,
         solver,
+        solver_chosen_by,
         output,
     })
 }
@@ -238,11 +242,8 @@ fn params(
         let b = finite(&field("b"), s.b, err)?;
         let d_c =
             positive(&field("d_c"), s.d_c, "the critical slip distance D_c, e.g. 10 (µm)", err)?;
-        let law = match s.law.as_str() {
-            "ageing" | "aging" | "dieterich" => LabLaw::Ageing,
-            "slip" | "ruina" => LabLaw::Slip,
-            "prz" => LabLaw::Prz,
-            "nagata" => {
+        let law = match (s.law.as_str(), StateLaw::from_name(&s.law)) {
+            ("nagata", _) => {
                 let c = s.c.ok_or_else(|| {
                     err(&field("c"), "missing: the Nagata law needs c (e.g. 2)".into())
                 })?;
@@ -251,10 +252,13 @@ fn params(
                 }
                 LabLaw::Nagata { c: finite(&field("c"), c, err)? }
             }
-            other => {
+            (_, Some(StateLaw::Ageing)) => LabLaw::Ageing,
+            (_, Some(StateLaw::Slip)) => LabLaw::Slip,
+            (_, Some(StateLaw::Prz)) => LabLaw::Prz,
+            (other, Some(StateLaw::NoHealing) | None) => {
                 return Err(err(
                     &field("law"),
-                    format!("unknown law \"{other}\"; use ageing, slip, prz or nagata"),
+                    format!("\"{other}\" is not a state law of the lab model; use ageing, slip, prz or nagata (also aging, dieterich, ruina)"),
                 ))
             }
         };
@@ -389,28 +393,47 @@ fn steady(
     Ok(p.steady_state(v))
 }
 
+/// The lab's solver from the scene's `solver` block ([`LAB_DEFAULTS`] for what it leaves
+/// out): atol is one number, the absolute tolerance of ln V and each ln θ_i (by default rtol);
+/// no Butcher table, no step budget.
 fn solver(
     raw: Option<&RawSolver>,
     err: &impl Fn(&str, String) -> SceneError,
-) -> Result<LabSolver, SceneError> {
-    let method = match raw.and_then(|r| r.method.as_deref()) {
-        None => Method::CvodeBdf,
-        Some(name) => name.parse::<Method>().map_err(|e| err("solver.method", e.to_string()))?,
+) -> Result<(LabSolver, String), SceneError> {
+    let block = solver_block::parse(raw, &LAB_DEFAULTS, err)?;
+    let atol = match &block.atol {
+        None => block.rtol,
+        Some(RawAtol::Scalar(a)) => *a,
+        Some(RawAtol::PerComponent(v)) => {
+            return Err(err(
+                "solver.atol",
+                format!(
+                    "{v:?}: give one number, the absolute tolerance of ln V and each ln θ_i \
+                     (an absolute error in a logarithm is a relative one in V and θ), e.g. 1e-12"
+                ),
+            ))
+        }
     };
-    let rtol =
-        positive("solver.rtol", raw.and_then(|r| r.rtol).unwrap_or(1e-10), "e.g. 1e-10", err)?;
-    let atol = positive(
-        "solver.atol",
-        raw.and_then(|r| r.atol).unwrap_or(rtol),
-        "absolute in ln V and ln θ, e.g. 1e-10",
-        err,
-    )?;
-    Ok(LabSolver { method, rtol, atol })
+    let atol = positive("solver.atol", atol, "absolute in ln V and ln θ, e.g. 1e-12", err)?;
+    for (field, given) in [
+        ("table", block.table.is_some()),
+        ("explicit_table", block.explicit_table.is_some()),
+        ("max_steps", block.max_steps.is_some()),
+    ] {
+        if given {
+            return Err(err(
+                &format!("solver.{field}"),
+                "a lab scene's solver takes method, rtol and atol only".into(),
+            ));
+        }
+    }
+    Ok((LabSolver { method: block.method, rtol: block.rtol, atol }, block.chosen_by))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::Method;
 
     const STEP: &str = r#"{"name": "s", "model": {"kind": "lab", "mu0": 0.6, "a": 0.005, "k": 1e-3,
         "states": [{"law": "ageing", "b": 0.01, "d_c": 10}]},
@@ -418,12 +441,36 @@ mod tests {
 
     #[test]
     fn parses_steps_into_segments() {
-        assert!(is_lab(STEP));
         let s = parse(STEP, "x.json").unwrap();
         assert_eq!(s.loading.segments.len(), 3);
         assert_eq!(s.loading.segments[2].t_start, 110.0);
         assert_eq!(s.loading.t_end, 140.0);
         assert_eq!(s.output, Output::EveryStep);
+    }
+
+    #[test]
+    fn takes_the_state_law_names_and_aliases_every_model_takes() {
+        for (name, law) in
+            [("aging", LabLaw::Ageing), ("dieterich", LabLaw::Ageing), ("ruina", LabLaw::Slip)]
+        {
+            let s = parse(&STEP.replace("\"ageing\"", &format!("\"{name}\"")), "x").unwrap();
+            assert_eq!(s.params.states[0].law, law, "{name}");
+        }
+        let e = parse(&STEP.replace("\"ageing\"", "\"no_healing\""), "x").unwrap_err();
+        assert_eq!(e.field, "model.states[0].law");
+    }
+
+    #[test]
+    fn a_scene_without_a_solver_block_runs_the_lab_default_and_says_why() {
+        let s = parse(STEP, "x").unwrap();
+        assert_eq!((s.solver.method, s.solver.rtol, s.solver.atol), (Method::Radau5, 1e-12, 1e-12));
+        assert_eq!(s.solver_chosen_by, crate::scene::LAB_CHOSEN_BY_DEFAULT);
+        let e = parse(
+            &STEP.replace("\"loading\"", "\"solver\": {\"atol\": [1e-12, 1e-12]}, \"loading\""),
+            "x",
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "solver.atol");
     }
 
     #[test]
