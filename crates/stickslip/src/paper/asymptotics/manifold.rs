@@ -45,11 +45,14 @@ pub struct StickDeviation {
     pub max_abs_ln_v_times_gamma2: f64,
 }
 
+/// The method of the 2D slow flow, whatever the scene's.
+pub const SLOW_FLOW_METHOD: Method = Method::Radau5;
+
 /// How the 2D flow was integrated.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SlowIntegration {
-    /// The integrator ("radau5", in the arc parameter s with dt/ds = 1/(1 + v)).
-    pub method: &'static str,
+    /// The integrator ([`SLOW_FLOW_METHOD`], in the arc parameter s with dt/ds = 1/(1 + v)).
+    pub method: Method,
     /// Relative tolerance.
     pub rtol: f64,
     /// Absolute tolerance (t, u, θ).
@@ -152,7 +155,7 @@ pub fn analyse(
     let (rtol, atol) = (options.rtol, options.rtol * 1e-2);
     let y0 = [orbit.s[0], orbit.u[0], orbit.theta[0]];
     let mut integ = solver::build_default(
-        Method::Radau5,
+        SLOW_FLOW_METHOD,
         flow,
         0.0,
         &y0,
@@ -215,7 +218,7 @@ pub fn analyse(
         leaves_manifold,
         flows_split,
         integration: SlowIntegration {
-            method: "radau5",
+            method: SLOW_FLOW_METHOD,
             rtol,
             atol,
             steps: run.steps,

@@ -87,11 +87,14 @@ pub struct FloquetLink {
     pub period: f64,
 }
 
+/// The method of the variational equations, whatever the scene's (see the module's doc).
+pub const VARIATIONAL_METHOD: Method = Method::Radau5;
+
 /// The "ftle" part of the lyapunov section.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FtleReport {
-    /// The integration method of the variational equations ("radau5").
-    pub method: String,
+    /// The integration method of the variational equations ([`VARIATIONAL_METHOD`]).
+    pub method: Method,
     /// Periods integrated.
     pub periods: usize,
     /// Total time integrated.
@@ -159,8 +162,12 @@ pub fn analyse(
 ) -> Result<FtleReport, AnalysisError> {
     let drr = Drr::new(p);
     let start = orbit.state(orbit.peak);
-    let spec =
-        SolverSpec { method: Method::Radau5, table: None, explicit_table: None, ..solver.clone() };
+    let spec = SolverSpec {
+        method: VARIATIONAL_METHOD,
+        table: None,
+        explicit_table: None,
+        ..solver.clone()
+    };
     let mut integ = variational(drr, &spec, &start)?;
     let w_tol = (solver.rtol, solver.atol[1]);
     let floor = 1e-9f64.max(1e3 * (w_tol.0 + w_tol.1));
@@ -287,7 +294,7 @@ pub fn analyse(
             Err(why) => (None, Some(why.into_note()?)),
         };
     Ok(FtleReport {
-        method: "radau5".into(),
+        method: VARIATIONAL_METHOD,
         periods: per_period.len(),
         time: total_time,
         exponents,
