@@ -29,10 +29,12 @@ const CRATES: &[(&str, Table)] = &[
         ],
     ),
     (
-        // integrate, solver and sundials are stickslip-ode's, re-exported at the crate root.
+        // integrate and sundials are stickslip-ode's, re-exported at the crate root; solver
+        // re-exports stickslip-ode's and adds a scene's solver settings.
         "crates/stickslip/src",
         &[
             ("parallel", &[]),
+            ("solver", &[]),
             ("model", &["integrate"]),
             // The numerics the analyses share (events, finite checks, fits, figure series).
             ("numerics", &["integrate"]),
