@@ -819,12 +819,12 @@ fn variational_integrator_with_tables(
     let z0 = Variational::<Drr, 3>::initial(y0);
     // The method table says which methods take the simplified Jacobian (Radau5, whose Newton
     // iteration failed with the coupling block; EngineSettings::variational_newton_jacobian).
-    let system: Variational<Drr, 3> =
-        if EngineSettings::of(spec.method).variational_newton_jacobian {
-            Variational::for_newton(drr)
-        } else {
-            Variational::new(drr)
-        };
+    let system: Variational<Drr, 3> = if EngineSettings::of(spec.method).variational_newton_jacobian
+    {
+        Variational::for_newton(drr)
+    } else {
+        Variational::new(drr)
+    };
     integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 

@@ -12,7 +12,7 @@
 
 #![deny(unsafe_code)]
 
-pub use stickslip_ode::{integrate, sundials};
+pub use stickslip_ode::{integrate, robertson, sundials};
 
 pub mod analysis;
 pub mod compare;

@@ -12,8 +12,8 @@ use crate::problem::{run, scd_of, AllImplicit, TestProblem};
 use crate::rober::Rober;
 use crate::vdpol::Vdpol;
 use crate::RTOLS;
-use stickslip::integrate::{Integrator, Options, Task, Tolerance};
-use stickslip::solver::{self, Method, MethodSettings};
+use stickslip_ode::integrate::{Integrator, Options, Task, Tolerance};
+use stickslip_ode::solver::{self, Method, MethodSettings};
 
 /// The cells of `P` with `method` that miss the bound, as lines naming them.
 fn misses<P: TestProblem>(method: Method) -> Vec<String> {

@@ -32,8 +32,8 @@ use orego::Orego;
 use pollu::Pollu;
 use problem::{run, scd_of, TestProblem, MEASURED};
 use rober::Rober;
-use stickslip::integrate::{ErrorKind, JacobianMatrix};
-use stickslip::solver::Method;
+use stickslip_ode::integrate::{ErrorKind, JacobianMatrix};
+use stickslip_ode::solver::Method;
 use vdpol::Vdpol;
 
 /// One measured cell: the scd, or the error kind and message.

@@ -3,7 +3,7 @@
 //! accurately than when weighed relative to its size; and scales that are all relative give
 //! the same integration, bit for bit, as no scales.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorScale, Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, Task, Tolerance,
 };
 
