@@ -109,7 +109,7 @@ fn row<P: TestProblem>(method: Method) -> String {
 }
 
 /// Prints the 108 cells' digits (docs/test-set.md, "Through solver::build"):
-/// `cargo test --release --test test_set -- --ignored --nocapture print_library_cells`.
+/// `cargo test --release -p stickslip-ode --test test_set -- --ignored --nocapture print_library_cells`.
 #[test]
 #[ignore = "prints the table; run with --ignored --nocapture"]
 fn print_library_cells() {
@@ -137,7 +137,7 @@ fn without_stop_time<P: TestProblem>(method: Method, rtol: f64) -> f64 {
 }
 
 /// Prints what a run without the stop time loses (docs/library.md, "Integrate"):
-/// `cargo test --release --test test_set -- --ignored --nocapture print_without_stop_time`.
+/// `cargo test --release -p stickslip-ode --test test_set -- --ignored --nocapture print_without_stop_time`.
 #[test]
 #[ignore = "prints the table; run with --ignored --nocapture"]
 fn print_without_stop_time() {
