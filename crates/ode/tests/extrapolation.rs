@@ -4,7 +4,7 @@
 //! counts and the failures its own knobs produce (the orders of the tableaux with fixed
 //! steps, Prothero–Robinson, VDPOL and dense output of both schemes are tests/methods.rs, run
 //! over every homemade method; the Integrator contract is tests/contract.rs, run over every
-//! method; the deep arrest floor is the workspace's tests/integrators_drr.rs).
+//! method; the deep arrest floor is the workspace's tests/integrators_on_model.rs).
 
 use stickslip_ode::integrate::{
     ErrorKind, Extrapolation, Integrator, JacobianMatrix, OdeSystem, Options, Task, Tolerance,

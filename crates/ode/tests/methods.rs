@@ -5,7 +5,7 @@
 //! there). Each row carries its method's bounds (measured, see the comments); what only one
 //! method has is tested in tests/radau5.rs, tests/rodas5p.rs and tests/extrapolation.rs, and
 //! the Integrator contract over every method in tests/contract.rs. The homemade methods on
-//! the stickslip library's spring-slider are the workspace's tests/integrators_drr.rs.
+//! the stickslip library's spring-slider are the workspace's tests/integrators_on_model.rs.
 
 use std::ops::RangeInclusive;
 

@@ -2,7 +2,7 @@
 //! derivatives and Jacobian counts and the failures its own knobs produce (the orders,
 //! Prothero–Robinson, VDPOL and dense output are tests/methods.rs, run over every homemade
 //! method; the Integrator contract is tests/contract.rs, run over every method; the PRZ cells
-//! it once failed on are the workspace's tests/integrators_drr.rs). Mirrors tests/radau5.rs.
+//! it once failed on are the workspace's tests/integrators_on_model.rs). Mirrors tests/radau5.rs.
 
 use stickslip_ode::integrate::{
     ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Rodas5p, Task, Tolerance,
