@@ -1,7 +1,7 @@
 //! The homemade Rosenbrock integrator Rodas5P: the autonomous declaration, its dense
 //! derivatives and Jacobian counts and the failures its own knobs produce (the orders,
 //! Prothero–Robinson, VDPOL and dense output are tests/methods.rs, run over every homemade
-//! method; the Integrator contract is tests/contract.rs, run over every method; the PRZ cells
+//! method; the Integrator contract is tests/contract.rs, run over every method; the model cells
 //! it once failed on are the workspace's tests/integrators_on_model.rs). Mirrors tests/radau5.rs.
 
 use stickslip_ode::integrate::{
