@@ -1,6 +1,6 @@
 //! Robertson (SUNDIALS' `cvode/serial/cvRoberts_dns.c`): our safe wrapper against plain C.
 //!
-//! `rust_wrapper` times `stickslip_cli::robertson_examples::cvode_example()` (build the solver, run
+//! `rust_wrapper` times `stickslip::robertson::examples::cvode_example()` (build the solver, run
 //! the whole example, free everything). `plain_c` times `benches/c/robertson_cvode.c`, the same
 //! example with identical settings and no I/O, compiled here with `cc -O3` (cargo's bench
 //! profile is opt-level 3) against the same system SUNDIALS libraries; the C program times
@@ -21,7 +21,7 @@ use criterion::Criterion;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::{Duration, SystemTime};
-use stickslip_cli::robertson_examples::{cvode_example, ExampleRun};
+use stickslip::robertson::examples::{cvode_example, ExampleRun};
 
 const GROUP: &str = "robertson_cvode";
 const C_OPT: &str = "-O3";

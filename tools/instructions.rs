@@ -1,19 +1,19 @@
 //! The test-set cases of the instruction-count guard (tools/instructions.sh,
 //! docs/benchmarks.md): `instructions CASE` runs one method on one problem of the Test Set for
-//! IVP Solvers (the problems of tests/test_set/, compiled in from there) at rtol 1e-7 and prints
-//! the mixed-error significant correct digits, so that a run which stops converging shows. The
-//! scene cases of the guard run the `stickslip` binary itself.
+//! IVP Solvers (the problems of crates/ode/tests/test_set/, compiled in from there) at rtol
+//! 1e-7 and prints the mixed-error significant correct digits, so that a run which stops
+//! converging shows. The scene cases of the guard run the `stickslip` binary itself.
 //!
 //! Cases: hires-radau5, hires-rodas5p, orego-radau5, orego-rodas5p.
 
 #[allow(dead_code)]
-#[path = "../tests/test_set/hires.rs"]
+#[path = "../crates/ode/tests/test_set/hires.rs"]
 mod hires;
 #[allow(dead_code)]
-#[path = "../tests/test_set/orego.rs"]
+#[path = "../crates/ode/tests/test_set/orego.rs"]
 mod orego;
 #[allow(dead_code)]
-#[path = "../tests/test_set/problem.rs"]
+#[path = "../crates/ode/tests/test_set/problem.rs"]
 mod problem;
 
 use problem::{run, scd_of, TestProblem};

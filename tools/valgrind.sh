@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 STICKSLIP_WITH_VALGRIND=1 bash tools/deps.sh
 status=0
 for test in wrappers sundials_examples cvodes_sensitivities; do
-    binary=$(cargo test --test "$test" --no-run --message-format=json 2>/dev/null \
+    binary=$(cargo test -p stickslip-ode --test "$test" --no-run --message-format=json 2>/dev/null \
         | grep '"kind":\["test"\]' | grep -o '"executable":"[^"]*"' | tail -n 1 | cut -d'"' -f4)
     [ -n "$binary" ] || { echo "valgrind.sh: no test binary for $test" >&2; exit 1; }
     echo "== valgrind memcheck: $test ($binary)"

@@ -1,7 +1,7 @@
 //! `stickslip robertson`: SUNDIALS' Robertson examples replayed through the safe wrappers.
 
 use super::Failure;
-use crate::robertson_examples::{self as robertson, ExampleRun};
+use stickslip::robertson::examples::{self as robertson, ExampleRun};
 use stickslip::sundials;
 
 fn print_stats(run: &ExampleRun) {

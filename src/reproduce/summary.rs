@@ -62,7 +62,7 @@ impl Row {
         }
     }
 
-    /// A numerical claim, judged as [`paper::claim`] judges.
+    /// A numerical claim, judged as [`quoted::claim`] judges.
     pub fn numeric(figure: &str, claim: &str, paper_value: f64, ours: f64, note: String) -> Self {
         Self::from_claim(figure, &quoted::claim(claim, paper_value, ours, note))
     }

@@ -1,10 +1,12 @@
 //! Solver selection: the methods ([`Method`]: their names and dense-output orders, defined
-//! below the integrators, which read them; what each can do, [`Method::capabilities`]), a
-//! scene's solver settings ([`SolverSpec`]) and one constructor for every method ([`build`]).
+//! below the integrators, which read them; what each can do, [`Method::capabilities`]), the
+//! choices only some methods have ([`MethodSettings`]) and one constructor for every method
+//! ([`build`]).
 //!
-//! It sits between the integrators ([`crate::integrate`], [`crate::sundials`]) and their users
-//! (analyses, the engine, library users): whoever needs an integrator names a method and gets
-//! a boxed [`Integrator`] of the same shape, whatever implements it.
+//! It sits between the integrators ([`crate::integrate`], [`crate::sundials`]) and their
+//! users: whoever needs an integrator names a method and gets a boxed [`Integrator`] of the
+//! same shape, whatever implements it. How a user runs each method on its own problem (which
+//! [`Options`] it sets per method) is the user's table, not this crate's.
 
 use crate::integrate::{
     ErrorKind, Extrapolation, ImexSystem, Integrator, OdeSystem, Options, Radau5, Rodas5p,
@@ -13,14 +15,13 @@ use crate::integrate::{
 use crate::sundials::{
     self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
 };
-use serde::Serialize;
 
 pub use crate::method::Method;
 
 impl std::str::FromStr for Method {
     type Err = MethodError;
 
-    /// The method by its scene name (the one parser of method names: scenes and the CLI); the
+    /// The method by its name (the one parser of method names); the
     /// error names the valid ones.
     fn from_str(name: &str) -> Result<Self, MethodError> {
         Self::ALL
@@ -35,7 +36,7 @@ impl std::str::FromStr for Method {
 /// field at fault and lists what is accepted.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum MethodError {
-    /// Not the scene name of any method.
+    /// Not the name of any method.
     #[error("\"{name}\" is not a method; use one of {}", Method::ALL.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "))]
     UnknownMethod {
         /// The name as given.
@@ -62,7 +63,7 @@ pub enum MethodError {
     NoExplicitTable {
         /// The method.
         method: Method,
-        /// The scene names of the methods that take one.
+        /// The names of the methods that take one.
         takers: Vec<&'static str>,
     },
     /// An optional setting the method does not take ([`Method::capabilities`]).
@@ -76,7 +77,7 @@ pub enum MethodError {
         name: &'static str,
         /// The method.
         method: Method,
-        /// The scene names of the methods that take it.
+        /// The names of the methods that take it.
         takers: Vec<&'static str>,
     },
     /// deduce_implicit_rhs for a method that does not take it ([`Accepts::deduce_implicit_rhs`]).
@@ -87,7 +88,7 @@ pub enum MethodError {
     NoDeducedImplicitRhs {
         /// The method.
         method: Method,
-        /// The scene names of the methods that take it.
+        /// The names of the methods that take it.
         takers: Vec<&'static str>,
     },
     /// table for a method that is not an ARKODE one.
@@ -138,9 +139,8 @@ impl Method {
         self.capabilities().stiff
     }
 
-    /// What the method is, accepts and gives, and how the engine runs it: the one table of
-    /// per-method facts. One `match` without a wildcard arm, so that a new method does not
-    /// compile until its row is written.
+    /// What the method is, accepts and gives: the one table of per-method facts. One `match`
+    /// without a wildcard arm, so that a new method does not compile until its row is written.
     pub fn capabilities(self) -> Capabilities {
         // The options of a Newton iteration (CVODE, ARKStep's implicit methods, Radau5), and
         // the error scales every method takes (SUNDIALS through a user error-weight function).
@@ -161,71 +161,18 @@ impl Method {
         // Rodas5P and extrapolation solve linear systems only: no Newton iteration to limit.
         let linearly_implicit =
             Accepts { max_nonlin_iters: false, nonlin_conv_coef: false, ..newton };
-        let plain = EngineSettings {
-            jacobian_max_age: None,
-            deduce_implicit_rhs: false,
-            dirk_newton: false,
-            absolute_ln_v: None,
-            max_conv_fails: None,
-            stop_when_u_freezes: false,
-            variational_newton_jacobian: false,
-            damping_rtol_floor: None,
-        };
-        // A fresh Jacobian at every step, see `engine`.
-        let fresh = EngineSettings { jacobian_max_age: Some(1), ..plain };
         match self {
-            Method::CvodeBdf => Capabilities {
-                stiff: true,
-                needs_imex: false,
-                family: "CVODE",
-                accepts: cvode,
-                engine: EngineSettings {
-                    absolute_ln_v: Some(0.1),
-                    max_conv_fails: Some(20),
-                    ..fresh
-                },
-                physical_region: true,
-            },
-            Method::CvodeAdams => Capabilities {
-                stiff: false,
-                needs_imex: false,
-                family: "CVODE",
-                accepts: cvode,
-                engine: plain,
-                physical_region: false,
-            },
-            Method::ArkodeDirk => Capabilities {
-                stiff: true,
-                needs_imex: false,
-                family: "ARKStep",
-                accepts: dirk,
-                engine: EngineSettings {
-                    deduce_implicit_rhs: true,
-                    dirk_newton: true,
-                    absolute_ln_v: Some(1.0),
-                    max_conv_fails: Some(20),
-                    damping_rtol_floor: Some(1e-8),
-                    ..fresh
-                },
-                physical_region: true,
-            },
+            Method::CvodeBdf => Capabilities::sundials(true, "CVODE", cvode),
+            Method::CvodeAdams => Capabilities::sundials(false, "CVODE", cvode),
+            Method::ArkodeDirk => Capabilities::sundials(true, "ARKStep", dirk),
             Method::ArkodeImex => Capabilities {
-                stiff: true,
                 needs_imex: true,
-                family: "ARKStep",
-                accepts: Accepts { explicit_table: true, ..dirk },
-                engine: EngineSettings {
-                    deduce_implicit_rhs: true,
-                    stop_when_u_freezes: true,
-                    ..fresh
-                },
-                physical_region: false,
+                ..Capabilities::sundials(true, "ARKStep", Accepts { explicit_table: true, ..dirk })
             },
-            Method::ArkodeErk => Capabilities {
-                stiff: false,
-                needs_imex: false,
-                family: "ARKStep",
-                accepts: Accepts {
+            Method::ArkodeErk => Capabilities::sundials(
+                false,
+                "ARKStep",
+                Accepts {
                     max_nonlin_iters: false,
                     max_conv_fails: false,
                     nonlin_conv_coef: false,
@@ -234,27 +181,15 @@ impl Method {
                     table: Some(TableKind::Explicit),
                     ..dirk
                 },
-                engine: plain,
-                physical_region: false,
-            },
-            Method::Radau5 => Capabilities::own_stiff(
-                "Radau5",
-                newton,
-                EngineSettings {
-                    absolute_ln_v: Some(0.1),
-                    variational_newton_jacobian: true,
-                    ..fresh
-                },
             ),
+            Method::Radau5 => Capabilities::own_stiff("Radau5", newton),
             Method::Rodas5p => Capabilities::own_stiff(
                 "Rodas5P",
                 Accepts { max_conv_fails: false, ..linearly_implicit },
-                EngineSettings { absolute_ln_v: Some(0.1), ..plain },
             ),
             Method::Extrapolation => Capabilities::own_stiff(
                 "Extrapolation",
                 Accepts { max_order: true, jacobian_max_age: false, ..linearly_implicit },
-                EngineSettings { absolute_ln_v: Some(1.0), ..plain },
             ),
         }
     }
@@ -268,30 +203,23 @@ pub struct Capabilities {
     /// Needs a system split into explicit and implicit parts ([`ImexSystem`], built by
     /// [`build`]; [`build_ode`] refuses it).
     pub needs_imex: bool,
-    /// The integrator family that runs it, as the report's `solver.integrator` names it.
+    /// The integrator family that runs it, e.g. "CVODE" or "Radau5".
     pub family: &'static str,
     /// The optional [`Options`] it accepts; [`build`] refuses the others.
     pub accepts: Accepts,
-    /// How the engine runs it on the spring-slider.
-    pub engine: EngineSettings,
-    /// Whether the stress grid's physical-region guarantee covers it (src/stress.rs; issue
-    /// #13): the stiff methods, except arkode-imex, whose explicit plate drive is not part of
-    /// it.
-    pub physical_region: bool,
 }
 
 impl Capabilities {
-    /// The row of one of stickslip's own stiff methods (pure Rust, no IMEX split, inside the
-    /// physical-region guarantee): its `family`, `accepts` and `engine`.
-    fn own_stiff(family: &'static str, accepts: Accepts, engine: EngineSettings) -> Self {
-        Capabilities {
-            stiff: true,
-            needs_imex: false,
-            family,
-            accepts,
-            engine,
-            physical_region: true,
-        }
+    /// The row of a SUNDIALS method on a system without an IMEX split: whether it is `stiff`,
+    /// its `family` and what it `accepts`.
+    fn sundials(stiff: bool, family: &'static str, accepts: Accepts) -> Self {
+        Capabilities { stiff, needs_imex: false, family, accepts }
+    }
+
+    /// The row of one of this crate's own stiff methods (pure Rust, no IMEX split): its
+    /// `family` and what it `accepts`.
+    fn own_stiff(family: &'static str, accepts: Accepts) -> Self {
+        Capabilities { stiff: true, needs_imex: false, family, accepts }
     }
 }
 
@@ -343,57 +271,6 @@ impl Accepts {
     }
 }
 
-/// The engine's per-method settings on the spring-slider (src/engine.rs gives the reasons and
-/// measurements).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct EngineSettings {
-    /// [`Options::jacobian_max_age`]: `Some(1)`, a fresh Jacobian at every step, for the
-    /// stiff methods with a Newton iteration whose Jacobian would otherwise age.
-    pub jacobian_max_age: Option<i64>,
-    /// [`MethodSettings::deduce_implicit_rhs`] (ARKStep's implicit methods).
-    pub deduce_implicit_rhs: bool,
-    /// ARKStep DIRK's tighter Newton iteration: `nonlin_conv_coef` = 1000 u / rtol within
-    /// [1e-3, 0.1] and `max_nonlin_iters` = 5.
-    pub dirk_newton: bool,
-    /// ln v's error weighed absolutely at this fraction of rtol ([`Options::error_scales`]):
-    /// a tenth of rtol for CVODE BDF, Radau5 and Rodas5P, rtol for Extrapolation and ARKStep
-    /// DIRK; see `engine`.
-    pub absolute_ln_v: Option<f64>,
-    /// [`Options::max_conv_fails`] per step, where the method's default stops a run (CVODE
-    /// and ARKStep DIRK with ln v weighed absolutely); see `engine`.
-    pub max_conv_fails: Option<i32>,
-    /// Stop a run with an error once 10 000 steps of one size in a row leave u unchanged while
-    /// du/dt ≠ 0 (ARKStep IMEX deep on a stick, where the round-off of its explicit first stage
-    /// holds its steps below u's spacing; see `engine`).
-    pub stop_when_u_freezes: bool,
-    /// Uses the Jacobian of the variational equations only in its Newton iteration, so the
-    /// engine gives it the simplified one without the coupling block ∂(JΦ)/∂y (Radau5: its
-    /// Newton iteration failed with that block, entries ~1e29, in the ageing and PRZ laws'
-    /// sticks at γ = 1e8; Rodas5P and extrapolation need the exact one, and CVODE measured no
-    /// difference; see `engine` and src/model/variational.rs).
-    pub variational_newton_jacobian: bool,
-    /// With radiation damping, the rtol below which its default table falls to order 2 on
-    /// the quasi-static slip that damping creates (ARKStep's SDIRK-5-3-4 has stage order 1),
-    /// so that a cycle costs ~rtol^(-1/2) steps: the stress grid's known limit
-    /// (docs/robustness.md).
-    pub damping_rtol_floor: Option<f64>,
-}
-
-/// Validated solver settings of a scene.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SolverSpec {
-    /// The method.
-    pub method: Method,
-    /// Relative tolerance.
-    pub rtol: f64,
-    /// Absolute tolerances of (u, ln v, θ).
-    pub atol: [f64; 3],
-    /// Butcher table (implicit one for DIRK/IMEX, explicit one for ERK), None = default.
-    pub table: Option<String>,
-    /// Explicit table of an IMEX pair, None = default.
-    pub explicit_table: Option<String>,
-}
-
 /// Choices beyond [`Options`] that only some methods have.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MethodSettings {
@@ -408,10 +285,9 @@ pub struct MethodSettings {
     pub autonomous: bool,
     /// ARKStep's implicit methods (arkode-dirk, arkode-imex) deduce each implicit stage
     /// derivative from the stage equation instead of evaluating f_I there
-    /// ([`ArkSettings::deduce_implicit_rhs`]), and then keep ARKODE's own Newton defaults.
-    /// The engine's setting for the spring-slider ([`EngineSettings::deduce_implicit_rhs`]):
-    /// at γ ≥ 1e3 the evaluated f_I carries the Newton residual times the stiffness into
-    /// ARKStep's error estimate. Off by default, which gives the tight Newton iteration of
+    /// ([`ArkSettings::deduce_implicit_rhs`]), and then keep ARKODE's own Newton defaults:
+    /// on a very stiff system the evaluated f_I carries the Newton residual times the stiffness
+    /// into ARKStep's error estimate. Off by default, which gives the tight Newton iteration of
     /// SUNDIALS' ark_robertson example (`nonlin_conv_coef` 1e-7, predictor 1, 20 error-test
     /// failures): with deduced derivatives arkode-dirk fails OREGO and E5 of the stiff test
     /// set at rtol 1e-4 and 1e-7 and reports HIRES and VDPOL at 1e-7 about 2000 × rtol off
@@ -421,20 +297,6 @@ pub struct MethodSettings {
     /// transform ([`ToleranceTransform::Hairer`]). The other methods use the tolerances as
     /// given and have no such setting: an error for them.
     pub tolerance_transform: Option<ToleranceTransform>,
-}
-
-impl MethodSettings {
-    /// The Butcher tables of a scene's solver settings, for a system that is or is not
-    /// autonomous.
-    pub fn of(spec: &SolverSpec, autonomous: bool) -> Self {
-        MethodSettings {
-            table: spec.table.clone(),
-            explicit_table: spec.explicit_table.clone(),
-            autonomous,
-            deduce_implicit_rhs: false,
-            tolerance_transform: None,
-        }
-    }
 }
 
 /// An integrator built by [`build`].
@@ -596,27 +458,25 @@ fn reject_unsupported(
 }
 
 /// ARKStep DIRK's settings: [`ark_settings`], and, when the Jacobian is fresh at every step
-/// (`jacobian_max_age` = 1, as the engine sets it), every step-size change applied
+/// (`jacobian_max_age` = 1), every step-size change applied
 /// ([`ArkSettings::resize_every_step`]) with the Newton matrix rebuilt at every stage
-/// ([`ArkSettings::setup_every_stage`]); docs/robustness.md, "Why the damped cells fail with
-/// every step change applied".
+/// ([`ArkSettings::setup_every_stage`]). The measurements behind both are the stickslip
+/// library's (its engine's method table, arkode-dirk's row; docs/robustness.md, "Why the
+/// damped cells fail with every step change applied").
 ///
 /// The window: ARKODE keeps h while the proposed growth lies in [1, 1.5] to reuse its Newton
-/// matrix, which saves nothing when that matrix is rebuilt anyway; and in the arrest after a
-/// slip, where the error estimate sits on a floor that does not fall with h, h stalled there:
-/// the DRR work–precision cell γ = 1e8, rtol 1e-11 held h = 3.08e-13 for 192 523 accepted
-/// steps of one cycle (270 214 steps in 3 cycles; 29 576 with these settings).
+/// matrix, which saves nothing when that matrix is rebuilt anyway; and where the error
+/// estimate sits on a floor that does not fall with h, h stalls there for as long as the
+/// proposed growth stays in the window (hundreds of thousands of steps measured).
 ///
 /// The stages: SDIRK-5-3-4's embedded solution has R̂(∞) = 10/3 (the solution R(∞) = 0), so
 /// an offset δ of y_n's stiff component from the slow manifold shows in every attempt of the
 /// next step as an estimate of 10/3 δ, whatever h. A stage whose Newton iteration stopped far
 /// from its solution leaves such an offset, and where it exceeds 0.3 of the error weight no
-/// step from there passes: with the window alone two damped laws-grid cells ended in 20
-/// error-test failures at an estimate constant to 5 digits from h = 0.13 to 4.9e-11, 10/3 of
-/// the offset measured at y_n (PRZ, γ = 1e6, ξ = 0.7, ε = 10, η = 0.1, rtol 1e-6: w 5.4e-6,
-/// 0.56 of its weight, off the manifold after a step over which w fell by 0.8, so that the
-/// stiff rate γ²e^(−w) at its last stage was 2.3× the one of the Jacobian taken at the step's
-/// start). A Newton matrix per stage, with ARKODE's convergence rate measured afresh in each
+/// step from there passes: the run ends in repeated error-test failures at an estimate that
+/// does not change with h. That happens where the stiff rate changes by a large factor
+/// within a step, so that the Jacobian taken at the step's start misjudges the last stages.
+/// A Newton matrix per stage, with ARKODE's convergence rate measured afresh in each
 /// stage, keeps those stages honest. Not with ARKODE's Jacobian reuse (library defaults):
 /// there the window saves setups, and applying every change made examples/own_system.rs's
 /// Prothero–Robinson run less accurate (error 1.6e-9 → 6.8e-6 at rtol 1e-8).
@@ -659,7 +519,7 @@ struct Tables {
 }
 
 /// Checks the Butcher table names of `table` and `explicit_table` for `method`, as [`build`]
-/// does: the one check of table names, used by scenes too. The error names the setting
+/// does: the one check of table names, for a caller that checks its input before building. The error names the setting
 /// ([`MethodError::setting`]).
 pub fn check_table_names(
     method: Method,

@@ -32,8 +32,10 @@ mod forced;
 mod guard;
 mod imex_stick;
 pub mod lab;
+mod methods;
 mod options;
 pub use cancel::{Cancel, RunError};
+pub use methods::EngineSettings;
 pub use options::{ProgressSink, RunOptions};
 
 /// Builds the scene's integrator on the DRR system, starting at (0, y0). Also returns the
@@ -113,8 +115,8 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     // v = 1e-30 starts go to 3, and the earthquake scene takes 18394 CVODE steps, not 31528.
     // Not for cvode-adams (a non-stiff method, used at small γ): there the fresh Jacobian
     // only costs steps (γ = 10, ξ = 0.8, ε = 1: 1053 → 778 steps per cycle at rtol 1e-6, 1864
-    // → 1503 at 1e-8, the same period error). Which methods: `Capabilities::engine`.
-    let engine = spec.method.capabilities().engine;
+    // → 1503 at 1e-8, the same period error). Which methods: [`EngineSettings::of`].
+    let engine = EngineSettings::of(spec.method);
     // ARKStep DIRK: a Newton test 100 times tighter than ARKODE's default 0.1, with up to 5
     // iterations instead of 3. The Jacobian is fresh at each step but not at each stage, and
     // on the stick the stiff rate γ²e^(−w)/ξ falls by e^(ξ c_i h) from the step's start to
@@ -195,7 +197,7 @@ fn integrator_with_max_step<S: ImexSystem + 'static>(
     };
     let settings = MethodSettings {
         deduce_implicit_rhs: engine.deduce_implicit_rhs,
-        ..MethodSettings::of(spec, autonomous)
+        ..spec.method_settings(autonomous)
     };
     let built = solver::build(spec.method, &settings, system, 0.0, y0, options)?;
     let frozen = engine.stop_when_u_freezes.then(|| imex_stick::FrozenU::new(drr, y0));
@@ -848,12 +850,12 @@ fn variational_integrator_with_tables(
     let z0 = Variational::<Drr, 3>::initial(y0);
     // The method table says which methods take the simplified Jacobian (Radau5, whose Newton
     // iteration failed with the coupling block; EngineSettings::variational_newton_jacobian).
-    let system: Variational<Drr, 3> =
-        if spec.method.capabilities().engine.variational_newton_jacobian {
-            Variational::for_newton(drr)
-        } else {
-            Variational::new(drr)
-        };
+    let system: Variational<Drr, 3> = if EngineSettings::of(spec.method).variational_newton_jacobian
+    {
+        Variational::for_newton(drr)
+    } else {
+        Variational::new(drr)
+    };
     integrator_cancellable(system, &drr, spec, &z0, Tolerance::PerComponent(atol), cancel)
 }
 

@@ -7,11 +7,12 @@
 //! over the shared [`numerics`]; the paper's claims tested in [`paper`]) → [`report`] (JSON).
 //! [`engine`] wires them; [`sweep`] maps a scene over a parameter grid and [`compare`] checks
 //! a trajectory from elsewhere against a scene. The integrators live in the `stickslip-ode`
-//! crate and are re-exported here under their old paths.
+//! crate and are re-exported here under their old paths ([`solver`] adds a scene's solver
+//! settings to the ODE crate's method table).
 
 #![deny(unsafe_code)]
 
-pub use stickslip_ode::{integrate, solver, sundials};
+pub use stickslip_ode::{integrate, robertson, sundials};
 
 pub mod analysis;
 pub mod compare;
@@ -23,4 +24,5 @@ pub mod parallel;
 pub mod report;
 pub mod scene;
 pub mod series_file;
+pub mod solver;
 pub mod sweep;

@@ -1,15 +1,15 @@
 //! Time bookkeeping for integrations whose steps fall far below the spacing of their clock.
 //!
-//! A stick-slip cycle spans ~17 decades of time scale: at γ = 1e8 the arrest after a slip
-//! needs steps of 1e-17, and far from threshold (ε/ξ ≳ 2), where ln v falls towards its floor
-//! −(ξu + θ), steps of 1e-40 and below, while the cycle lasts ~50. No double-precision clock
+//! A relaxation oscillation can span ~17 decades of time scale and more: in a very stiff
+//! phase a cycle lasting ~50 needs steps of 1e-17, or 1e-40 and below where a log-scaled
+//! component falls towards a deep floor. No double-precision clock
 //! that keeps running resolves that: an integrator fails with "t + h = t" (or with
 //! error-test and Newton failures just before, where t + h already rounds).
 //!
 //! [`Clock`] is the one mechanism every analysis uses for it. It drives an [`Integrator`] one
 //! step at a time on a *local* clock and moves the local origin to the current point
 //! ([`Integrator::rebase`]) whenever the last step fell below [`Clock::threshold`] × |local t|
-//! (and when the caller asks, e.g. at a slip peak). The global time of the local origin, the
+//! (and when the caller asks, e.g. at an event). The global time of the local origin, the
 //! epoch, is kept exactly as an unevaluated sum of two doubles ([`Time`]), so durations read
 //! off the global clock are exact to ~1e-30 relative however many re-bases occur.
 //!
@@ -77,13 +77,14 @@ pub struct ClockStep {
 /// re-base when the last step is below 1e-3 of the local time, ~13 decades before t + h = t.
 /// Measured on the physical grid against 1e-9: the same cells converge but for two more with
 /// extrapolation (3713 against 3711 of 4680). A step that collapses by 13 decades inside one
-/// call (Radau5 after an accepted step undershot the arrest's floor) is beyond any threshold.
+/// call (Radau5 after an accepted step undershot a stiff phase's floor) is beyond any
+/// threshold.
 pub const DEFAULT_THRESHOLD: f64 = 1e-3;
 
 /// Threshold for integrators whose re-base is a restart (SUNDIALS): only when the clock is
 /// about to run out, the last step within 1e4 ulps of the local time. A restart costs work
-/// and some accuracy (BDF restarts at order 1), and where f is a γ²-amplified residual (on
-/// the slow manifold) a restarted BDF can fail: callers re-base such integrators earlier
+/// and some accuracy (BDF restarts at order 1), and where f is a stiffness-amplified
+/// residual (on a slow manifold) a restarted BDF can fail: callers re-base such integrators earlier
 /// only at points they know to be safe ([`Clock::rebase`]).
 pub const RESTART_THRESHOLD: f64 = 1e4 * f64::EPSILON;
 

@@ -37,9 +37,9 @@ pub enum ErrorKind {
     /// Invalid input (options, initial state, output time, dense-output request).
     #[error("invalid input")]
     InvalidInput,
-    /// The caller stopped the integration (e.g. Ctrl-C): not a numerical failure. The engine's
-    /// guard returns it once its cancel flag is set, and a cancellable run then reports that it
-    /// was cancelled instead of this error.
+    /// The caller stopped the integration (e.g. Ctrl-C): not a numerical failure. A caller's
+    /// wrapper returns it once its cancel flag is set, and can then report that the run was
+    /// cancelled instead of this error.
     #[error("cancelled by the caller")]
     Cancelled,
     /// The steps no longer move the solution: a run stopped because many steps in a row left
@@ -56,7 +56,7 @@ pub enum ErrorKind {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{solver} failed at t = {t:e} (state {}): {kind}{}", brief_state(.state), detail(.message))]
 pub struct SolverError {
-    /// The method's scene name, e.g. "cvode-bdf" or "radau5" ([`super::Integrator::name`]).
+    /// The method's name, e.g. "cvode-bdf" or "radau5" ([`super::Integrator::name`]).
     pub solver: &'static str,
     /// Classification of the failure.
     pub kind: ErrorKind,

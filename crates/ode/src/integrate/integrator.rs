@@ -66,7 +66,7 @@ pub trait Integrator {
     }
     /// Statistics over the integrator's life.
     fn stats(&self) -> Stats;
-    /// The method's scene name, e.g. "cvode-bdf" or "radau5" (as
+    /// The method's name, e.g. "cvode-bdf" or "radau5" (as
     /// [`SolverError::solver`](super::SolverError::solver)).
     fn name(&self) -> &'static str;
     /// The largest k that [`Integrator::dense`] accepts now: 1 before the first step (and

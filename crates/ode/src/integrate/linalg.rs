@@ -9,7 +9,7 @@ pub(super) fn rms(v: &[f64], scal: &[f64]) -> f64 {
 }
 
 /// Evaluates `body` with the dimension `n` as a compile-time constant for the small systems
-/// that dominate the integrators' cost (the spring-slider's n = 3, E5's n = 4), so that the
+/// that dominate the integrators' cost (n = 3, as in a 3-component friction model; E5's n = 4), so that the
 /// loops in it unroll and lose their bounds checks and iterator bookkeeping; any other n runs
 /// the same body with n at run time. The arithmetic, and so the result, is the same in every
 /// case. (A macro, not a function taking a closure: a closure called from three arms is not

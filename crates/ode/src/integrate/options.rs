@@ -27,10 +27,10 @@ impl Tolerance {
 pub enum ErrorScale {
     /// s_i = |y_i|: the error relative to the component's size.
     Relative,
-    /// s_i = the given number (> 0), whatever |y_i|: for a component that is a logarithm, such
-    /// as w = ln v, whose absolute error is the relative error of v and whose size says nothing
-    /// about the accuracy wanted (|ln v| = 20 at a slip's peak would loosen v's relative
-    /// accuracy twentyfold). The tolerance is kept above 100 units of round-off of y_i, so
+    /// s_i = the given number (> 0), whatever |y_i|: for a component that is a logarithm,
+    /// such as w = log x, whose absolute error is the relative error of x and whose size says
+    /// nothing about the accuracy wanted (|w| = 20 would loosen x's relative accuracy
+    /// twentyfold). The tolerance is kept above 100 units of round-off of y_i, so
     /// that it stays attainable where |y_i| is far out of its usual range.
     Absolute(f64),
 }
@@ -76,8 +76,8 @@ pub struct Options {
     /// Safety factor in the nonlinear convergence test.
     pub nonlin_conv_coef: Option<f64>,
     /// Most steps between two Jacobian evaluations (1: a fresh Jacobian at every step). For
-    /// systems whose stiff rates change by large factors within a few steps (the DRR's
-    /// γ²e^(−ln v)/ξ on the stick), where a Newton iteration with an older Jacobian leaves an
+    /// systems whose stiff rates change by large factors within a few steps (e.g. a rate
+    /// exponential in one component), where a Newton iteration with an older Jacobian leaves an
     /// error in the stiff components that the next steps amplify. CVODE and ARKStep (implicit)
     /// set their linear-solver setup and Jacobian frequencies to it; Radau5 evaluates a new one
     /// after that many accepted steps even when its Newton contraction allows reuse; Rodas5P

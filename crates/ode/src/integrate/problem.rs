@@ -47,7 +47,7 @@ pub trait OdeSystem {
     /// Whether f may have linear invariants (conserved combinations c·y, such as a mass
     /// balance) that rodas5p must keep to working accuracy. When true, each of its stage
     /// solves is refined once with a compensated residual (+43 % instructions on the
-    /// 3-component spring-slider; see docs/test-set.md, E5), without which a balance drifts
+    /// 3-component friction model of docs/test-set.md; see its E5), without which a balance drifts
     /// by u·h‖J‖ relative per step. (Extrapolation always refines: its extrapolation weights
     /// amplify the stage solves' rounding.) The default is true, so that no system silently
     /// loses its invariants; return false only for a system without any whose accuracy has
@@ -213,7 +213,7 @@ pub struct JacobianMismatch {
 /// and again with h/8. An entry passes within 1e-3 of its own size plus 1e-6 of the largest
 /// entry of its row (what the differences resolve); the worst failing entry is the error.
 /// An entry whose two differences disagree by more than that is not resolved by differences
-/// (f changes too much over h, e.g. e^(ln v) far from the usual range) and is not judged: a
+/// (f changes too much over h, e.g. e^w far from its usual range) and is not judged: a
 /// Jacobian is blamed only on evidence. `Ok` when the system has no analytic Jacobian. 4n
 /// right-hand-side calls.
 pub fn check_jacobian<S: OdeSystem + ?Sized>(

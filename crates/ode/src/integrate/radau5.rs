@@ -131,13 +131,13 @@ impl Coeffs {
 pub enum ToleranceTransform {
     /// RADAU5's own (Hairer & Wanner): rtol' = 0.1·rtol^(2/3) and atol' = rtol'·atol/rtol, so
     /// that a given rtol buys about the accuracy it buys in CVODE (rtol 1e-10 weighs the error
-    /// at 2.2e-8). The default, and what the engine, the scenes and the test set run.
+    /// at 2.2e-8). The default, and what the stiff test set runs.
     #[default]
     Hairer,
     /// The tolerances as given: each component's local error estimate below rtol·|y_i| +
     /// atol_i, and fnewt = max(10u/rtol, min(0.03, √rtol)): how scipy's `Radau` reads rtol and
-    /// atol (its error weights and Newton tolerance are these formulas), and what Python's
-    /// `stickslip.solve_ivp(method="Radau")` runs. The Newton iteration then also stops no
+    /// atol (its error weights and Newton tolerance are these formulas), for a caller that
+    /// wants scipy's reading. The Newton iteration then also stops no
     /// earlier than its second iteration (unless `max_nonlin_iters` is 1), as scipy's: RADAU5
     /// lets the first one stop on the contraction carried from the previous step, which at
     /// tolerances read as given left Newton errors that cost POLLU 1.6 digits on average over

@@ -21,7 +21,8 @@
 //! tolerance transformation), h_new = h/clamp(err^{1/5}/0.9, 1/6, 5) (so 0.2 ≤ h_new/h ≤ 6),
 //! Gustafsson's predictive controller on consecutive accepted steps, no increase right after
 //! a rejection, a first step cut by 10 when rejected. Acceptance when err ≤ 1. Two additions
-//! for layers far sharper than the step (both measured on the PRZ law, docs/robustness.md):
+//! for layers far sharper than the step (both measured on a stiff friction law,
+//! docs/robustness.md):
 //! from the second rejection in a row h is cut by the largest factor, 5, as CVODE does after
 //! two error-test failures (an error that did not fall like h⁵ is not in the asymptotic
 //! regime the controller assumes); and a stage with a non-finite right-hand side cuts h to at
@@ -40,7 +41,7 @@
 //! call per Jacobian, counted in [`Stats::rhs_evals_jacobian`]); it is exact (zero) for an
 //! autonomous system, where [`Rodas5p::autonomous`] saves that call. For non-autonomous
 //! systems this finite difference limits the attainable accuracy (relative error ~1e-8 in
-//! ∂f/∂t); the stick-slip systems of this crate are autonomous.
+//! ∂f/∂t); [`Rodas5p::autonomous`] avoids it for autonomous systems.
 //!
 //! Error flags ([`SolverError::flag`]), RODAS's IDID where it has one: −1 invalid input, −2 too
 //! many steps, −3 step size too small, −4 matrix repeatedly singular, −6 right-hand-side failure,
@@ -545,7 +546,7 @@ impl<S: OdeSystem> Rodas5p<S> {
     /// halves h) and h is cut further to the local time scale 0.01·‖y‖/‖f(y)‖ if that is
     /// shorter (Hairer–Wanner's first-step guess, in the error weights' max norm). Stages leave the range
     /// of doubles when h is decades beyond the time f needs to change y (measured: h = 3.5e-14
-    /// against 1e-193 at a PRZ arrest), which halving does not reach in the ten attempts a
+    /// against a time scale of 1e-193 in a very stiff phase), which halving does not reach in the ten attempts a
     /// step has. A step that then falls below the clock's resolution is a step underflow
     /// (`Core::layer_step` keeps it one), which the [`Clock`](super::Clock) cures by re-basing.
     fn stage_failure(&mut self, nonfinite: &mut u32) -> Result<(), SolverError> {

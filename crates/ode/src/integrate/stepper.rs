@@ -70,8 +70,8 @@ impl Cause {
 }
 
 /// An absolute error scale never asks for less than this many units of round-off of the
-/// component (`f64::EPSILON`·|y_i|): far from its usual range (ln v = −1e11 after a start at
-/// v = 1e30) a fixed tolerance would lie below the spacing of the doubles there, and the error
+/// component (`f64::EPSILON`·|y_i|): far from its usual range (a log-scaled component at
+/// −1e11) a fixed tolerance would lie below the spacing of the doubles there, and the error
 /// test could not be met (SUNDIALS stops with "too much accuracy requested").
 const ABSOLUTE_FLOOR_ULPS: f64 = 100.0 * f64::EPSILON;
 
@@ -793,7 +793,7 @@ pub(super) fn advance<M: Stepper>(m: &mut M, tout: f64, task: Task) -> Result<St
         // failed attempts; when the attempts failed mostly otherwise (Newton divergence, error
         // tests: a layer sharper than the clock resolves) and a non-finite value came from the
         // trial point of one of them, it stays a step underflow, which the Clock cures by
-        // re-basing (measured: radau5 at rtol 1e-4, γ = 1e8, ξ = 2, ε = 5 from v = 1e30, one
+        // re-basing (measured: radau5 at rtol 1e-4 on a stiff start 30 decades off, one
         // non-finite Newton iterate among the rejections of a step collapsing to 4e-16 at
         // local t = 0.63; docs/robustness.md). Likewise when Rodas5P cut h to the local time
         // scale of f after a non-finite stage (`layer_step`): the layer is sharper than the

@@ -518,8 +518,8 @@ impl<S: ImexSystem> Solver<S> {
         // f(t_n, y_n), which SUNDIALS 6 took from the last stage of an ARK pair with c_s = 1
         // (the deduced implicit stage derivative) and SUNDIALS 7 (since 6.7.0) evaluates afresh
         // for a pair whose explicit table is not stiffly accurate, which is every ARK pair. On
-        // very stiff problems that fresh f_I carries the error in y_n times the stiffness (at
-        // γ = 1e8, γ² ~ 1e16) into the dense output and its derivative, and the γ = 1e8 cycle
+        // very stiff problems that fresh f_I carries the error in y_n times the stiffness
+        // (~1e16) into the dense output and its derivative, and a cycle of that stiffness
         // fails on 7 ("error test failed repeatedly"). The Lagrange interpolant uses solution
         // values only, so both versions run the same algorithm (docs/debian.md).
         let m = solver.mem();

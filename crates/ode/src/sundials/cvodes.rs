@@ -380,7 +380,7 @@ impl<S: ParametricSystem> SensitivitySolver<S> {
         self.solver.system()
     }
 
-    /// The method's scene name ("cvode-bdf" or "cvode-adams"), as in errors.
+    /// The method's name ("cvode-bdf" or "cvode-adams"), as in errors.
     pub fn name(&self) -> &'static str {
         self.solver.name()
     }

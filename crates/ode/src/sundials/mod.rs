@@ -1,5 +1,5 @@
 //! Safe wrappers over Debian's SUNDIALS (CVODE, with CVODES' forward sensitivities, and
-//! ARKODE's ARKStep). This module is the only home of `unsafe` code in stickslip; every unsafe
+//! ARKODE's ARKStep). This module is the only home of `unsafe` code in the crate; every unsafe
 //! block carries a SAFETY comment.
 //!
 //! One type, [`Solver`], drives either family through the contract of

@@ -178,7 +178,7 @@ pub(crate) struct Attached {
 pub struct Solver<S> {
     mem: NonNull<c_void>,
     api: &'static Api,
-    /// The method's scene name ([`Method::name`] of [`Creation::method`]).
+    /// The method's name ([`Method::name`] of [`Creation::method`]).
     name: &'static str,
     /// The largest k of dense output after a step ([`Method::dense_order`] of
     /// [`Creation::method`]; CVODE: further limited by the order of the last step).
@@ -863,7 +863,7 @@ impl<S> Solver<S> {
         &self.shared().system
     }
 
-    /// The method's scene name ("cvode-bdf", "cvode-adams", "arkode-dirk", "arkode-erk" or
+    /// The method's name ("cvode-bdf", "cvode-adams", "arkode-dirk", "arkode-erk" or
     /// "arkode-imex").
     pub fn name(&self) -> &'static str {
         self.name

@@ -2,7 +2,7 @@
 //! before each advance, and for the methods whose [`EngineSettings::stop_when_u_freezes`] is
 //! set, the stop once their steps no longer move u ([`FrozenU`]).
 //!
-//! [`EngineSettings::stop_when_u_freezes`]: crate::solver::EngineSettings::stop_when_u_freezes
+//! [`EngineSettings::stop_when_u_freezes`]: crate::engine::EngineSettings::stop_when_u_freezes
 
 use super::cancel::Cancel;
 use super::imex_stick::FrozenU;

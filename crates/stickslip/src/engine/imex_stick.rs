@@ -1,5 +1,5 @@
 //! arkode-imex stops with an error when its steps no longer move u, deep on a stick
-//! ([`crate::solver::EngineSettings::stop_when_u_freezes`]).
+//! ([`crate::engine::EngineSettings::stop_when_u_freezes`]).
 //!
 //! Every ARK pair's implicit table has an explicit first stage, whose derivative f_I(y_n)
 //! ARKStep evaluates afresh at each step (SUNDIALS 6.4.1 always; 7.1.1 reuses the last stage's

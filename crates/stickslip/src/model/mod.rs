@@ -8,7 +8,6 @@ pub mod lab;
 pub mod loading;
 pub mod periodic;
 pub mod quasi_dynamic;
-pub mod robertson;
 pub mod saddle_node;
 pub mod scales;
 pub mod slow_manifold;

@@ -115,9 +115,9 @@ impl<S: OdeSystem> Extrapolation<S> {
                 let stable = if del1.is_finite() && del2.is_finite() {
                     h2 * del2 <= 4.0 * (h2 * del1).max(1.0)
                 } else {
-                    // The sums of squares overflowed: the same test on the norms. On a deep
-                    // arrest floor of the DRR (ln v ≈ −318 at γ = 1e10, rate γ²/(ξv) ≈ 1e158)
-                    // f reaches 1e155, inf ≤ inf passed every attempt as stable, the secant
+                    // The sums of squares overflowed: the same test on the norms. Where a
+                    // stiff rate reaches 1e158 (a rate-and-state friction problem whose
+                    // log-rate component fell to −318) f reaches 1e155, inf ≤ inf passed every attempt as stable, the secant
                     // estimate (which skips an overflowed sum) saw no stiffness either, and
                     // the midpoint scheme ran stability-limited at steps of 1e-158 until
                     // max_steps. Failing the check here counts as stiff and switches.

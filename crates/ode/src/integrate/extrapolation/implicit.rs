@@ -64,9 +64,9 @@ impl<S: OdeSystem> Extrapolation<S> {
         w.del.copy_from_slice(&w.dy);
         // Refined solves keep the linear invariants of f (see `solve_refined`), and, for every
         // system, the stage solves accurate enough for an error estimate that amplifies their
-        // rounding by the extrapolation weights: without refinement the spring-slider under the
-        // ageing law at γ = 1e12 (ξ = 0.7, ε = 1, rtol 1e-10) failed with 20 error-test
-        // failures in one step at h = 4.3e-24 (docs/test-set.md). Hence no
+        // rounding by the extrapolation weights: without refinement a 3-component
+        // rate-and-state friction problem with stiff rates near 1e24 (rtol 1e-10) failed with
+        // 20 error-test failures in one step at h = 4.3e-24 (docs/test-set.md). Hence no
         // `OdeSystem::has_linear_invariants` here, unlike rodas5p.
         solve_refined(&w.lu, &w.ip, &w.jac, hji, &w.dy, &mut w.del, &mut w.fnew);
         let base = self.imp.off[j];

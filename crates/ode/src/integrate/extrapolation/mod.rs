@@ -621,7 +621,7 @@ impl<S: OdeSystem> Extrapolation<S> {
             }
         }
         // An explicit attempt that overflowed is unstable too (measured: a stiff start at
-        // γ = 1e3, rtol 1e-4, blew up in all ten halvings of H before any stability check
+        // stiffness 1e3, rtol 1e-4, blew up in all ten halvings of H before any stability check
         // could stop a row).
         self.stiffness_test(h_used, failure == Failure::Unstable);
         Ok(())
@@ -641,10 +641,10 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// Restarts at (t0, y0) with the scheme in use (or the forced one): step-size and order
     /// history, Jacobian, continuous output and stiffness-test history are dropped; options,
     /// statistics and the switch count are kept. The scheme is kept because a restart
-    /// continues an integration (at a section, after a stick crossed in closed form) where the
+    /// continues an integration (at a section, after a phase crossed in closed form) where the
     /// last step tells the stiffness best: the explicit scheme restarted on a slow manifold
     /// with a small first step stays stability-limited (its secant stiffness estimate sees
-    /// only round-off there: at ln v = −500 on the DRR's stick, 1e-14-steps for ever).
+    /// only round-off there: where a log-rate component sits at −500, 1e-14-steps for ever).
     pub fn reinit(&mut self, t0: f64, y0: &[f64]) -> Result<(), SolverError> {
         self.core.restart(t0, y0)?;
         self.update_scal();

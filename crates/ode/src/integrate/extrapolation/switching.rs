@@ -79,8 +79,8 @@ impl<S: OdeSystem> Extrapolation<S> {
     /// The explicit → implicit test after an explicit attempt of size `h_used`. An attempt
     /// that was not unstable and gave no eigenvalue estimate (every pair of rows ended at the
     /// same point, or the f-differences overflowed) is no evidence either way and is not
-    /// recorded: on the DRR's deep arrest floor at γ = 1e11 (ln v ≈ −340, rate 1e170) steps of
-    /// 1e-13 leave the state unchanged to the last bit, and counting them as non-stiff
+    /// recorded: where a stiff rate reaches 1e170 (a rate-and-state friction problem whose
+    /// log-rate component fell to −340) steps of 1e-13 leave the state unchanged to the last bit, and counting them as non-stiff
     /// between the unstable attempts kept the midpoint scheme there for 2e6 steps.
     pub(super) fn stiffness_test(&mut self, h_used: f64, unstable: bool) {
         if self.forced.is_some() || self.mode != Mode::Explicit {

@@ -19,11 +19,11 @@ const WK_DEC: f64 = 1.0;
 /// 2, 3, 4, … (Mathematica's LinearlyImplicitEuler). Measured against the harmonic 1, 2, 3, …
 /// (`.implicit_sequence(1)`): on van der Pol (ε = 1e-6, t ∈ [0, 2]) 1.5–22× fewer steps and
 /// 1–5× less time at rtol = atol = 1e-3 … 1e-12 for equal or smaller errors (the n₁ = 1 row
-/// damps stiff components weakly); on the DRR model (ξ = 0.8, ε = 1, γ = 1e1 … 1e8, rtol 1e-3
-/// … 1e-12, three settled cycles) period errors of the same size, −5 … +30 % right-hand sides
-/// and −21 … +14 % factorisations, and no wrong cycle (the harmonic sequence, at rtol 1e-12
-/// and γ = 1e3, let the explicit scheme take one step in a stick that put that cycle's period
-/// off by 8e-4). Costs: on non-stiff problems forced onto the linearly implicit scheme its
+/// damps stiff components weakly); on a rate-and-state friction oscillator with stiffness
+/// 1e1 … 1e8 (rtol 1e-3 … 1e-12, three settled cycles) period errors of the same size,
+/// −5 … +30 % right-hand sides and −21 … +14 % factorisations, and no wrong cycle (the
+/// harmonic sequence, at rtol 1e-12 and stiffness 1e3, let the explicit scheme take one step
+/// in a stiff phase that put that cycle's period off by 8e-4). Costs: on non-stiff problems forced onto the linearly implicit scheme its
 /// dense output is 3–4× less accurate (tests/extrapolation.rs).
 pub(super) const DEFAULT_FIRST: usize = 2;
 
@@ -76,7 +76,7 @@ pub(super) fn weight_moduli(nj: &[f64], k: usize) -> Vec<f64> {
 /// weights of T_{k,k} in h_j = H/n_j (Λ_k = 3, 9, 28, …, 1.3e5 at k = 11 for the harmonic
 /// sequence; 5, 19, 68, …, 4.1e5 for 2, 3, 4, …). Beyond it the error estimate is roundoff,
 /// and SEULEX's control, asking for ever smaller steps, ends in a step underflow (measured
-/// with 2, 3, 4, … at rtol 1e-12 on the DRR model at γ = 1e3 and 1e8).
+/// with 2, 3, 4, … at rtol 1e-12 on the same oscillator at stiffness 1e3 and 1e8).
 fn roundoff_columns(nj: &[f64], km: usize, rtol: f64) -> usize {
     let amplification = |k: usize| -> f64 { weight_moduli(nj, k).iter().sum() };
     let mut k = km.min(4);

@@ -1,12 +1,12 @@
 //! The homemade extrapolation integrator with stiffness switching (linearly implicit Euler
 //! extrapolation / modified midpoint extrapolation, as Mathematica's "StiffnessSwitching"):
 //! convergence with the tolerance, switching in both directions, its dense derivatives and
-//! counts, the failures its own knobs produce and the deep arrest floor (the orders of the
-//! tableaux with fixed steps, Prothero–Robinson, VDPOL, dense output of both schemes and the
-//! DRR model at γ = 1e8 are tests/methods.rs, run over every homemade method; the Integrator
-//! contract is tests/contract.rs, run over every method).
+//! counts and the failures its own knobs produce (the orders of the tableaux with fixed
+//! steps, Prothero–Robinson, VDPOL and dense output of both schemes are tests/methods.rs, run
+//! over every homemade method; the Integrator contract is tests/contract.rs, run over every
+//! method; the deep arrest floor is the workspace's tests/integrators_on_model.rs).
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, Extrapolation, Integrator, JacobianMatrix, OdeSystem, Options, Task, Tolerance,
 };
 
@@ -293,7 +293,7 @@ fn failures_specific_to_extrapolation() {
 
     // Never a panic: blow-up, infinite f, extreme stiffness, tiny tolerances; each call returns
     // a result (an error is fine) and the solver stays usable for a restart.
-    let run = |f: &dyn Fn() -> Result<(), stickslip::integrate::SolverError>| {
+    let run = |f: &dyn Fn() -> Result<(), stickslip_ode::integrate::SolverError>| {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
     };
     let outcomes = [
@@ -346,35 +346,4 @@ fn two_constructions_integrate_identically() {
     let (first, second) = (run(), run());
     assert_eq!(first, second);
     assert!(first.2 > 0, "the run must switch schemes, so that the boundaries are used: {first:?}");
-}
-
-/// The cycle of a physical-grid cell (`stickslip stress --grid physical`'s scene) with
-/// extrapolation at rtol 1e-10.
-fn deep_floor_period(gamma: f64, xi: f64, epsilon: f64) -> f64 {
-    let text = format!(
-        r#"{{"name": "deep-floor", "model": {{"gamma": {gamma:e}, "xi": {xi}, "epsilon": {epsilon}}},
-            "solver": {{"method": "extrapolation", "rtol": 1e-10, "atol": 1e-12}},
-            "analyses": [{{"cycle": {{"max_cycles": 60, "max_time": 3e4, "max_steps": 2000000}}}}]}}"#
-    );
-    let scene = stickslip::scene::parse(&text, "deep-floor").unwrap();
-    let report = stickslip::engine::run(&scene, stickslip::engine::RunOptions::default())
-        .unwrap_or_else(|e| panic!("{e}"));
-    let cycle = report.cycle.expect("the scene asks for the cycle");
-    cycle.values.expect("a converged cycle").main.period
-}
-
-/// The arrest floor ln v = −(ξu + θ) at −318 (γ = 1e10) and −340 (γ = 1e11), rates γ²/(ξv) of
-/// 1e158 … 1e170: the midpoint scheme's stability check overflowed there (and at γ = 1e11 its
-/// steps left the state unchanged, so no eigenvalue estimate) and it never switched back to the
-/// linearly implicit scheme, ending in TooMuchWork after 2e6 steps. Periods: radau5 at rtol
-/// 1e-10 (docs/robustness.md), within 1e3·rtol.
-#[test]
-fn deep_arrest_floor_switches_to_the_implicit_scheme() {
-    for (gamma, reference) in [(1e10, 1268.799694186796), (1e11, 1363.868100581532)] {
-        let period = deep_floor_period(gamma, 0.5, 10.0);
-        assert!(
-            (period - reference).abs() <= 1e-7 * reference,
-            "γ = {gamma:e}: period {period} against {reference}"
-        );
-    }
 }

@@ -1,13 +1,12 @@
 //! The homemade Rosenbrock integrator Rodas5P: the autonomous declaration, its dense
-//! derivatives and Jacobian counts, the failures its own knobs produce and the PRZ cells it
-//! once failed on (the orders, Prothero–Robinson, VDPOL, dense output and the DRR model at
-//! γ = 1e8 are tests/methods.rs, run over every homemade method; the Integrator contract is
-//! tests/contract.rs, run over every method). Mirrors tests/radau5.rs.
+//! derivatives and Jacobian counts and the failures its own knobs produce (the orders,
+//! Prothero–Robinson, VDPOL and dense output are tests/methods.rs, run over every homemade
+//! method; the Integrator contract is tests/contract.rs, run over every method; the model cells
+//! it once failed on are the workspace's tests/integrators_on_model.rs). Mirrors tests/radau5.rs.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, Integrator, JacobianMatrix, OdeSystem, Options, Rodas5p, Task, Tolerance,
 };
-use stickslip::model::{Drr, DrrParams, Friction};
 
 mod common;
 use common::{Linear, NanAfter, Oscillator, Tan, Warped};
@@ -140,88 +139,4 @@ fn failures_specific_to_rodas5p() {
     // A negative fixed step.
     let mut solver = Rodas5p::new(Oscillator, 0.0, &[0.0, 1.0], &options).unwrap().fixed_step(-1.0);
     assert_eq!(solver.advance(1.0, Task::Normal).unwrap_err().kind, ErrorKind::InvalidInput);
-}
-
-/// A cell of `stickslip stress` (PRZ law, rtol 1e-6) with Rodas5P finds the cycle that Radau5
-/// finds on the same scene, within the grid's 1e3·rtol.
-fn prz_cell_agrees_with_radau5(
-    gamma: f64,
-    xi: f64,
-    epsilon: f64,
-    eta: f64,
-    start: Option<[f64; 3]>,
-) {
-    use stickslip::analysis::cycle::CycleStatus;
-    use stickslip::model::StateLaw;
-    use stickslip::scene::Method;
-    use stickslip_cli::stress::{run_cell, Cell, Outcome};
-    let period = |method| {
-        let cell =
-            Cell { gamma, xi, epsilon, rtol: 1e-6, start, method, state_law: StateLaw::Prz, eta };
-        match run_cell(&cell) {
-            Outcome::Ok { status: CycleStatus::Periodic, period: Some(p) } => p,
-            other => panic!("{}: {other:?}", cell.key()),
-        }
-    };
-    let (ours, reference) = (period(Method::Rodas5p), period(Method::Radau5));
-    let rel = (ours - reference).abs() / reference;
-    assert!(rel < 1e-3, "rodas5p period {ours} vs radau5 {reference}: {rel:.1e}");
-}
-
-/// PRZ with radiation damping η = 0.1, γ = 1e8, ξ = 0.2, ε = 3, from v = 1e30: in the initial
-/// layer an accepted step left θ 4e-3 (23 error weights) off its slow manifold (hλ ≈ −3000
-/// there: the embedded estimate sees that error only partly); the next step's error estimate
-/// then fell like h^0.2, not h⁵, while h shrank from 1e-16 towards 1/λ ≈ 2e-19, so RODAS's
-/// controller (h/err^{1/5}) cut h by only 1.2 … 1.4 a rejection and the run ended after 20
-/// error-test failures at h = 2.1e-18. Now h is cut by 5 from the second rejection in a row.
-#[test]
-fn prz_damped_initial_layer_from_v_1e30() {
-    prz_cell_agrees_with_radau5(1e8, 0.2, 3.0, 0.1, Some([0.0, 1e30, 0.0]));
-}
-
-/// PRZ, γ = 1e12, ξ = 0.7, ε = 10 (`stress --grid laws`): at an arrest an accepted step could
-/// land 16.5 above the floor ln v = −(ξu + θ), where f is 1e180 times larger than the step can
-/// follow; every stage point then left the range of doubles, and ten halvings of h (to 7e-17,
-/// against a time scale of 1e-193) ended the run in a right-hand-side failure.
-#[test]
-fn prz_deep_arrest_at_gamma_1e12() {
-    prz_cell_agrees_with_radau5(1e12, 0.7, 10.0, 0.0, None);
-}
-
-/// The state where the PRZ arrest above failed (t = 2296.05, local time 6.6e-14 on the Clock,
-/// ln v 16.5 above its floor −(ξu + θ) = −406.8, the step 3.5e-14 that had just been
-/// accepted): a non-finite stage cuts h to the local time scale 0.01‖y‖/‖f‖ (~5e-195), the
-/// Clock re-bases when that falls below its resolution, and ln v falls onto the floor with u
-/// and θ unchanged.
-#[test]
-fn nonfinite_stage_far_above_the_arrest_floor_steps_down_to_it() {
-    use stickslip::integrate::{Clock, Time};
-    use stickslip::model::StateLaw;
-    let params =
-        DrrParams { state_law: StateLaw::Prz, ..DrrParams::new(1e12, 0.7, 10.0, Friction::Log) };
-    let y0 = [1045.0786662477906, -390.3242177672276, -324.7411122203327];
-    let floor = -(0.7 * y0[0] + y0[2]);
-    let options = Options {
-        initial_step: Some(3.482098609744186e-14),
-        ..Options::new(1e-6, Tolerance::Scalar(1e-8))
-    };
-    let mut rodas =
-        Rodas5p::new(Drr::new(params), 6.61760292161855e-14, &y0, &options).unwrap().autonomous();
-    let mut clock = Clock::new(&mut rodas, Time::new(2296.05));
-    let mut steps = 0;
-    while (clock.state()[1] - floor).abs() > 1e-3 {
-        clock.step().unwrap_or_else(|e| panic!("after {steps} steps: {e} [{:?}]", e.kind));
-        steps += 1;
-        assert!(steps < 1000, "not on the floor after 1000 steps: {:?}", clock.state());
-    }
-    let y = clock.state().to_vec();
-    assert!(
-        clock.now().since(Time::new(2296.05)) < 1e-150,
-        "the fall is a layer of 1e-193 time units"
-    );
-    assert!(
-        (y[0] - y0[0]).abs() < 1e-12 * y0[0] && (y[2] - y0[2]).abs() < 1e-9,
-        "{y:?} from {y0:?}"
-    );
-    assert!(clock.integrator().stats().nonfinite_rhs > 0, "the start has a non-finite stage");
 }

@@ -70,7 +70,7 @@ const MINIMUM_SCD_SINCE_6_7: &[(&str, &str, [f64; 3])] =
 
 /// Whether the linked SUNDIALS is 6.7.0 or newer.
 fn sundials_since_6_7() -> bool {
-    let version = stickslip::sundials::version();
+    let version = stickslip_ode::sundials::version();
     let mut parts = version.split('.').map(|p| p.parse::<u32>().unwrap_or(0));
     let (major, minor) = (parts.next().unwrap_or(0), parts.next().unwrap_or(0));
     (major, minor) >= (6, 7)

@@ -2,10 +2,10 @@
 //! through `solver::build`, as a user's crate builds it), and the Test Set's accuracy measure.
 
 use std::time::{Duration, Instant};
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ImexSystem, JacobianMatrix, OdeSystem, Options, SolverError, Stats, Task, Tolerance,
 };
-use stickslip::solver::{self, Method, MethodSettings};
+use stickslip_ode::solver::{self, Method, MethodSettings};
 
 /// A problem of the Test Set for IVP Solvers: system, interval, initial value, published
 /// reference solution at the end time and the absolute tolerance the Test Set prescribes.

@@ -7,8 +7,8 @@
 //! ARKODE 7's ark_robertson_root differs from 6's in the last digits and in its counts
 //! (748 steps against 1070), and each version's own file is the reference for it.
 
-use stickslip::sundials;
-use stickslip_cli::robertson_examples as robertson;
+use stickslip_ode::robertson::examples as robertson;
+use stickslip_ode::sundials;
 
 /// The linked SUNDIALS major version, which selects the expected outputs.
 fn major() -> &'static str {

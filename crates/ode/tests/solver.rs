@@ -2,11 +2,11 @@
 //! tables are named and checked, and the capability table agrees with what the integrators
 //! accept.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, ErrorScale, Extrapolation, Options, Radau5, Rodas5p, Task, Tolerance,
     ToleranceTransform,
 };
-use stickslip::solver::{build, build_ode, Method, MethodError, MethodSettings};
+use stickslip_ode::solver::{build, build_ode, Method, MethodError, MethodSettings};
 
 mod common;
 use common::Decay;

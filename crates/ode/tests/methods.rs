@@ -1,25 +1,22 @@
 //! One suite over the methods, driven by the table [`row`]: for every homemade method
 //! (radau5, rodas5p, extrapolation) the convergence order with fixed steps, the stiff
 //! Prothero–Robinson problem, the Test Set's VDPOL at ε = 1e-6, dense output against a tight
-//! run and the spring-slider at γ = 1e8 from the slow manifold; for CVODE's BDF and ARKStep's
-//! DIRK, VDPOL (CVODE's BDF is the partner of the others there and on the spring-slider). Each
-//! row carries its method's bounds (measured, see the comments); what only one method has is
-//! tested in tests/radau5.rs, tests/rodas5p.rs and tests/extrapolation.rs, and the Integrator
-//! contract over every method in tests/contract.rs.
+//! run; for CVODE's BDF and ARKStep's DIRK, VDPOL (CVODE's BDF is the partner of the others
+//! there). Each row carries its method's bounds (measured, see the comments); what only one
+//! method has is tested in tests/radau5.rs, tests/rodas5p.rs and tests/extrapolation.rs, and
+//! the Integrator contract over every method in tests/contract.rs. The homemade methods on
+//! the stickslip library's spring-slider are the workspace's tests/integrators_on_model.rs.
 
 use std::ops::RangeInclusive;
 
-use stickslip::integrate::{
-    ErrorKind, Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, Stats, Step,
-    StepEvent, Task, Tolerance,
+use stickslip_ode::integrate::{
+    Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, Stats, Step, StepEvent, Task,
+    Tolerance,
 };
-use stickslip::model::{Drr, DrrParams, Friction};
-use stickslip::solver::{build_default, Method};
+use stickslip_ode::solver::{build_default, Method};
 
 mod common;
-use common::{
-    drr_cycles, observed_orders, sci, Forced, Oscillator, ProtheroRobinson, Tan, VanDerPol, Warped,
-};
+use common::{observed_orders, sci, Forced, Oscillator, ProtheroRobinson, Tan, VanDerPol, Warped};
 
 /// Settings of a method that a case turns (each method's defaults otherwise).
 #[derive(Debug, Clone, Copy, Default)]
@@ -264,14 +261,6 @@ struct DenseCase {
     end_slope: Option<f64>,
 }
 
-/// The spring-slider case of a method.
-struct DrrCase {
-    /// The method's settings.
-    knobs: Knobs,
-    /// Bound on the accepted steps over t ∈ [0, 100] (each rtol).
-    max_steps: u64,
-}
-
 /// A method's row of the table.
 struct Row {
     /// Fixed-step order cases.
@@ -282,8 +271,6 @@ struct Row {
     vdpol: Vdpol,
     /// Dense-output cases.
     dense: Vec<DenseCase>,
-    /// The spring-slider at γ = 1e8.
-    drr: Option<DrrCase>,
 }
 
 /// Steps halving from 0.2.
@@ -359,8 +346,6 @@ fn radau5() -> Row {
                 end_slope: None,
             })
             .into(),
-        // Measured: 1339 and 2871 steps (CVODE: 6727 and 12097).
-        drr: Some(DrrCase { knobs: Knobs::default(), max_steps: 10_000 }),
     }
 }
 
@@ -435,8 +420,6 @@ fn rodas5p() -> Row {
                 end_slope: None,
             })
             .into(),
-        // Measured: 1711 and 4393 steps (CVODE: 6727 and 12097).
-        drr: Some(DrrCase { knobs: autonomous, max_steps: 15_000 }),
     }
 }
 
@@ -500,8 +483,6 @@ fn extrapolation_row() -> Row {
             },
         },
         dense: extrapolation_dense(),
-        // Measured: 283 and 396 steps (CVODE: 6727 and 12097).
-        drr: Some(DrrCase { knobs: Knobs::default(), max_steps: 2000 }),
     }
 }
 
@@ -550,7 +531,6 @@ fn cvode_bdf() -> Row {
             counts: |s| assert!(s.jac_evals <= s.lin_setups, "{s:?}"),
         },
         dense: Vec::new(),
-        drr: None,
     }
 }
 
@@ -574,7 +554,6 @@ fn arkode_dirk() -> Row {
             counts: |s| assert!(s.jac_evals <= s.lin_setups, "{s:?}"),
         },
         dense: Vec::new(),
-        drr: None,
     }
 }
 
@@ -870,84 +849,6 @@ fn dense_output(method: Method) {
     }
 }
 
-/// The spring-slider at γ = 1e8 from the scene default start: v = 0.5, θ at its fixed-point
-/// value, u on the slow manifold.
-fn drr_start() -> (Drr, [f64; 3]) {
-    let drr = Drr::new(DrrParams::new(1e8, 0.8, 1.0, Friction::Log));
-    let (w, theta) = (0.5f64.ln(), drr.fixed_point()[2]);
-    (drr, [drr.manifold_u(w, theta), w, theta])
-}
-
-/// The spring-slider's tolerances: atol = rtol/100 on each component.
-fn drr_options(rtol: f64) -> Options {
-    Options::new(rtol, Tolerance::PerComponent(vec![rtol * 1e-2; 3]))
-}
-
-/// Without re-basing, the arrest after the first slip needs steps below the spacing of t: a
-/// typed step underflow just after t = 5 (as for CVODE).
-fn drr_needs_rebasing(method: Method, knobs: Knobs) {
-    let (drr, y0) = drr_start();
-    let mut plain = Subject::build(method, knobs, drr, &y0, &drr_options(1e-8), None);
-    let integ = plain.integ();
-    let error = loop {
-        match integ.advance(100.0, Task::OneStep) {
-            Ok(step) => assert!(step.t < 100.0, "expected a step underflow in the first arrest"),
-            Err(e) => break e,
-        }
-    };
-    println!(
-        "{method} without re-basing: {:?} at t = {} after {} steps",
-        error.kind,
-        error.t,
-        integ.stats().steps
-    );
-    assert_eq!(error.kind, ErrorKind::StepUnderflow, "{error}");
-    assert!(error.t > 5.0 && error.t < 5.1 && error.state.iter().all(|v| v.is_finite()), "{error}");
-}
-
-/// The spring-slider at γ = 1e8 over t ∈ [0, 100], re-basing time after each slip peak: the
-/// peaks of CVODE's BDF, the same at rtol 1e-10 within 1e-6 (measured: within 3e-8; CVODE's
-/// second peak moves by 2e-6 between the two tolerances).
-fn drr_at_gamma_1e8_from_the_slow_manifold(method: Method) {
-    let case = row(method).drr.expect("a spring-slider case");
-    drr_needs_rebasing(method, case.knobs);
-    let (drr, y0) = drr_start();
-    for rtol in [1e-8, 1e-10] {
-        let mut ours = Subject::build(method, case.knobs, drr, &y0, &drr_options(rtol), None);
-        let (steps, peaks) = drr_cycles(ours.integ(), 100.0).unwrap_or_else(|e| panic!("{e}"));
-        let s = ours.integ().stats();
-        let mut cvode = build_default(Method::CvodeBdf, drr, 0.0, &y0, &drr_options(rtol)).unwrap();
-        let (cvode_steps, cvode_peaks) =
-            drr_cycles(cvode.as_mut(), 100.0).unwrap_or_else(|e| panic!("{e}"));
-        println!(
-            "DRR γ = 1e8, rtol {rtol:e}, t ∈ [0, 100]: {method} {steps} steps ({} attempts, {} \
-             rejected), {} RHS, {} Jacobians, {} LU, {} restarts, switches {:?}, peaks at \
-             {peaks:.9?}; CVODE {cvode_steps} steps, {} RHS, peaks at {cvode_peaks:.9?}",
-            s.step_attempts,
-            s.err_test_fails,
-            s.rhs_evals,
-            s.jac_evals,
-            s.lin_setups,
-            s.reinits,
-            ours.switches(),
-            cvode.stats().rhs_evals,
-        );
-        assert_eq!(s.steps, steps);
-        assert_eq!(s.reinits, peaks.len() as u64);
-        assert_eq!(peaks.len(), cvode_peaks.len());
-        assert!(!peaks.is_empty());
-        if let Some((switches, _)) = ours.switches() {
-            assert!(switches > 0, "the method must switch schemes");
-        }
-        assert!(steps < case.max_steps, "{steps} steps");
-        if rtol <= 1e-10 {
-            for (a, b) in peaks.iter().zip(&cvode_peaks) {
-                assert!(((a - b) / b).abs() < 1e-6, "peaks {peaks:?} vs CVODE {cvode_peaks:?}");
-            }
-        }
-    }
-}
-
 /// One test module per method, one test per check it runs.
 macro_rules! suite {
     ($($module:ident: $method:ident => [$($check:ident),*];)*) => {$(
@@ -955,7 +856,7 @@ macro_rules! suite {
             $(
                 #[test]
                 fn $check() {
-                    super::$check(stickslip::solver::Method::$method);
+                    super::$check(stickslip_ode::solver::Method::$method);
                 }
             )*
         }
@@ -967,22 +868,19 @@ suite! {
         fixed_step_order,
         prothero_robinson,
         van_der_pol,
-        dense_output,
-        drr_at_gamma_1e8_from_the_slow_manifold
+        dense_output
     ];
     rodas5p: Rodas5p => [
         fixed_step_order,
         prothero_robinson,
         van_der_pol,
-        dense_output,
-        drr_at_gamma_1e8_from_the_slow_manifold
+        dense_output
     ];
     extrapolation: Extrapolation => [
         fixed_step_order,
         prothero_robinson,
         van_der_pol,
-        dense_output,
-        drr_at_gamma_1e8_from_the_slow_manifold
+        dense_output
     ];
     cvode_bdf: CvodeBdf => [van_der_pol];
     arkode_dirk: ArkodeDirk => [van_der_pol];

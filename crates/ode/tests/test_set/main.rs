@@ -5,9 +5,9 @@
 //! significant correct digits measured for it (minus 0.5 digit of margin), or the typed error
 //! the method returns; see docs/test-set.md for the table and the reasons.
 //!
-//! Print the measured table: `cargo test --release --test test_set -- --ignored --nocapture print_table`.
+//! Print the measured table: `cargo test --release -p stickslip-ode --test test_set -- --ignored --nocapture print_table`.
 //! The slow cells (MEDAKZO below rtol 1e-4, ARKStep's DIRK at 1e-10) run with
-//! `cargo test --release --test test_set -- --ignored slow_cells`.
+//! `cargo test --release -p stickslip-ode --test test_set -- --ignored slow_cells`.
 
 // The reference values are quoted digit for digit from the Test Set's solut routines.
 #![allow(clippy::excessive_precision)]
@@ -32,8 +32,8 @@ use orego::Orego;
 use pollu::Pollu;
 use problem::{run, scd_of, TestProblem, MEASURED};
 use rober::Rober;
-use stickslip::integrate::{ErrorKind, JacobianMatrix};
-use stickslip::solver::Method;
+use stickslip_ode::integrate::{ErrorKind, JacobianMatrix};
+use stickslip_ode::solver::Method;
 use vdpol::Vdpol;
 
 /// One measured cell: the scd, or the error kind and message.
@@ -134,7 +134,7 @@ fn extrapolation_on_the_test_set() {
 }
 
 /// The cells of more than about a second each (see `expected::is_slow`), about 4 minutes:
-/// `cargo test --release --test test_set -- --ignored slow_cells`.
+/// `cargo test --release -p stickslip-ode --test test_set -- --ignored slow_cells`.
 #[test]
 #[ignore = "about 4 minutes; run with --ignored"]
 fn slow_cells() {

@@ -1,12 +1,12 @@
 //! SUNDIALS' Robertson examples (`cvode/serial/cvRoberts_dns.c`,
 //! `arkode/C_serial/ark_robertson_root.c`) replayed through the safe wrappers with identical
-//! settings, and their output printed as the C programs print it: the `robertson` subcommand,
-//! tests/sundials_examples.rs (against the examples' own output files) and the robertson
-//! benchmark.
+//! settings, and their output printed as the C programs print it: crates/ode/tests/
+//! sundials_examples.rs checks them against the examples' own output files; the `stickslip
+//! robertson` command prints them and the robertson benchmark times them.
 
-use stickslip::integrate::{Options, SolverError, Stats, StepEvent, Task, Tolerance};
-use stickslip::model::robertson::{roots, Robertson};
-use stickslip::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
+use super::{roots, Robertson};
+use crate::integrate::{Options, SolverError, Stats, StepEvent, Task, Tolerance};
+use crate::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
 
 /// One printed line of an example: the time, the state and, after a root return, which roots
 /// were found.

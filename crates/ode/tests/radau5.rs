@@ -1,9 +1,10 @@
 //! The homemade Radau IIA (order 5) integrator: its dense derivatives and Jacobian counts, and
-//! the failures its own knobs produce (the orders, Prothero–Robinson, VDPOL, dense output and
-//! the DRR model at γ = 1e8 are tests/methods.rs, run over every homemade method; the
-//! Integrator contract is tests/contract.rs, run over every method).
+//! the failures its own knobs produce (the orders, Prothero–Robinson, VDPOL and dense output
+//! are tests/methods.rs, run over every homemade method; the Integrator contract is
+//! tests/contract.rs, run over every method; the library's model at γ = 1e8 is the workspace's
+//! tests/integrators_on_model.rs).
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, Integrator, Options, Radau5, Task, Tolerance, ToleranceTransform,
 };
 

@@ -10,7 +10,7 @@
 //! data/test_set/medakzo.txt. Test Set tolerances: rtol = atol.
 
 use super::problem::TestProblem;
-use stickslip::integrate::{JacobianMatrix, OdeSystem};
+use stickslip_ode::integrate::{JacobianMatrix, OdeSystem};
 
 #[derive(Debug, Clone, Copy)]
 pub struct Medakzo;
@@ -94,7 +94,7 @@ impl TestProblem for Medakzo {
         (0..2 * N).map(|i| if i % 2 == 0 { 0.0 } else { 1.0 }).collect()
     }
     fn reference() -> Vec<f64> {
-        let text = include_str!("../../data/test_set/medakzo.txt");
+        let text = include_str!("../../../../data/test_set/medakzo.txt");
         let values: Vec<f64> = text
             .lines()
             .filter(|l| !l.starts_with('#') && !l.trim().is_empty())

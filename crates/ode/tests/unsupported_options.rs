@@ -2,10 +2,10 @@
 //! silently ignored), and the default step budget lets a whole stiff integration finish in one
 //! `advance` call for every stiff method.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, Extrapolation, Integrator, Options, Radau5, Rodas5p, SolverError, Task, Tolerance,
 };
-use stickslip::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
+use stickslip_ode::sundials::{ArkMethod, ArkSettings, CvodeSettings, Solver};
 
 mod common;
 use common::VanDerPol;

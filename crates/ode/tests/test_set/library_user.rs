@@ -12,8 +12,8 @@ use crate::problem::{run, scd_of, AllImplicit, TestProblem};
 use crate::rober::Rober;
 use crate::vdpol::Vdpol;
 use crate::RTOLS;
-use stickslip::integrate::{Integrator, Options, Task, Tolerance};
-use stickslip::solver::{self, Method, MethodSettings};
+use stickslip_ode::integrate::{Integrator, Options, Task, Tolerance};
+use stickslip_ode::solver::{self, Method, MethodSettings};
 
 /// The cells of `P` with `method` that miss the bound, as lines naming them.
 fn misses<P: TestProblem>(method: Method) -> Vec<String> {
@@ -109,7 +109,7 @@ fn row<P: TestProblem>(method: Method) -> String {
 }
 
 /// Prints the 108 cells' digits (docs/test-set.md, "Through solver::build"):
-/// `cargo test --release --test test_set -- --ignored --nocapture print_library_cells`.
+/// `cargo test --release -p stickslip-ode --test test_set -- --ignored --nocapture print_library_cells`.
 #[test]
 #[ignore = "prints the table; run with --ignored --nocapture"]
 fn print_library_cells() {
@@ -137,7 +137,7 @@ fn without_stop_time<P: TestProblem>(method: Method, rtol: f64) -> f64 {
 }
 
 /// Prints what a run without the stop time loses (docs/library.md, "Integrate"):
-/// `cargo test --release --test test_set -- --ignored --nocapture print_without_stop_time`.
+/// `cargo test --release -p stickslip-ode --test test_set -- --ignored --nocapture print_without_stop_time`.
 #[test]
 #[ignore = "prints the table; run with --ignored --nocapture"]
 fn print_without_stop_time() {

@@ -6,20 +6,20 @@
 //!   t, order, last step, step count, y and the three sensitivities to the printed digits, with
 //!   the simultaneous and the staggered-1 corrector; the staggered corrector, which has no
 //!   shipped output, agrees with the simultaneous one within the example's tolerances;
-//! - on Robertson and on a small, stiff spring-slider with rate-and-state friction that is
+//! - on Robertson and on a small, stiff friction block with rate-and-state friction that is
 //!   restarted at a load-point velocity step, the sensitivities agree with central
 //!   differences of y within 1e-6 relative, with the simultaneous and the staggered corrector;
 //! - failures are typed errors: no analytic Jacobian, wrong initial sensitivities, non-finite
 //!   ∂f/∂p, a panic in ∂f/∂p.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, JacobianMatrix, OdeSystem, Options, ParametricSystem, SolverError, Task, Tolerance,
 };
-use stickslip::sundials::{
+use stickslip_ode::robertson::examples::c_exponential;
+use stickslip_ode::sundials::{
     self, CvodeSettings, SensitivityCorrector, SensitivitySettings, SensitivitySolver,
     SensitivityTolerance, Solver,
 };
-use stickslip_cli::robertson_examples::c_exponential;
 
 // ---------------------------------------------------------------------------------------------
 // Robertson's kinetics with its three rates as parameters, coded as cvsRoberts_FSA_dns.c does.
@@ -423,18 +423,18 @@ fn robertson_sensitivities_equal_central_differences() {
     }
 }
 
-/// A stiff spring-slider with rate-and-state friction (ageing law) driven at a load-point
+/// A stiff friction block with rate-and-state friction (ageing law) driven at a load-point
 /// velocity that steps: y = (μ, ln θ), p = (a, b, d_c, k, μ0), V0 = 1 µm/s,
 /// μ = μ0 + a ln(V/V0) + b ln(V0 θ/d_c), dμ/dt = k (V_lp − V), dθ/dt = 1 − V θ/d_c. With
 /// a = 0.005, b = 0.008, d_c = 10 µm and k = 0.1 per µm (330 k_c) the machine's rate k V/a is
-/// 200 times the state's V/d_c at 10 µm/s. A test system, not the lab model.
+/// 200 times the state's V/d_c at 10 µm/s. A test system defined here.
 #[derive(Debug, Clone)]
-struct SpringSlider {
+struct FrictionBlock {
     p: [f64; 5],
     v_lp: f64,
 }
 
-impl SpringSlider {
+impl FrictionBlock {
     const P: [f64; 5] = [0.005, 0.008, 10.0, 0.1, 0.6];
 
     /// Slip rate V and ln(V/V0) = z at y.
@@ -455,7 +455,7 @@ impl SpringSlider {
     }
 }
 
-impl OdeSystem for SpringSlider {
+impl OdeSystem for FrictionBlock {
     fn dim(&self) -> usize {
         2
     }
@@ -480,7 +480,7 @@ impl OdeSystem for SpringSlider {
     }
 }
 
-impl ParametricSystem for SpringSlider {
+impl ParametricSystem for FrictionBlock {
     fn n_params(&self) -> usize {
         5
     }
@@ -511,25 +511,25 @@ impl ParametricSystem for SpringSlider {
 /// 1 µm/s on (5, 25]; outputs on both sides of the step at t = 5, within the transients (the
 /// sensitivities that decay to zero at steady state are still well above the differences'
 /// noise).
-const SLIDER_SEGMENTS: [(f64, f64); 2] = [(5.0, 10.0), (25.0, 1.0)];
-const SLIDER_TIMES: [f64; 8] = [0.5, 2.0, 5.0, 5.5, 7.0, 10.0, 15.0, 25.0];
+const BLOCK_SEGMENTS: [(f64, f64); 2] = [(5.0, 10.0), (25.0, 1.0)];
+const BLOCK_TIMES: [f64; 8] = [0.5, 2.0, 5.0, 5.5, 7.0, 10.0, 15.0, 25.0];
 
-/// y at [`SLIDER_TIMES`] by plain CVODE at rtol 1e-13 with the parameters `p`, a new solver
+/// y at [`BLOCK_TIMES`] by plain CVODE at rtol 1e-13 with the parameters `p`, a new solver
 /// per segment (started where the last ended).
-fn slider_y(p: &[f64]) -> Vec<Vec<f64>> {
-    let mut system = SpringSlider { p: SpringSlider::P, v_lp: 3.0 };
+fn block_y(p: &[f64]) -> Vec<Vec<f64>> {
+    let mut system = FrictionBlock { p: FrictionBlock::P, v_lp: 3.0 };
     system.set_params(p);
     let (y, _) = system.steady(3.0);
     let mut y = y.to_vec();
     let (mut t0, mut out) = (0.0, Vec::new());
-    for (t_end, v_lp) in SLIDER_SEGMENTS {
-        let system = SpringSlider { v_lp, ..system.clone() };
+    for (t_end, v_lp) in BLOCK_SEGMENTS {
+        let system = FrictionBlock { v_lp, ..system.clone() };
         let mut options = Options::new(1.0e-13, Tolerance::Scalar(1.0e-15));
         options.stop_time = Some(t_end);
         let mut solver = Solver::cvode(system, CvodeSettings::default(), t0, &y, &options)
             .expect("valid settings");
-        for t in SLIDER_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
-            solver.advance(*t, Task::Normal).expect("the slider runs");
+        for t in BLOCK_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
+            solver.advance(*t, Task::Normal).expect("the block runs");
             out.push(solver.state().to_vec());
         }
         (t0, y) = (t_end, solver.state().to_vec());
@@ -537,26 +537,26 @@ fn slider_y(p: &[f64]) -> Vec<Vec<f64>> {
     out
 }
 
-/// The sensitivities at [`SLIDER_TIMES`] through the wrapper, restarted at the step with
+/// The sensitivities at [`BLOCK_TIMES`] through the wrapper, restarted at the step with
 /// `reinit_with` (y and s go on; only V_lp changes).
-fn slider_s(corrector: SensitivityCorrector) -> Vec<Vec<f64>> {
-    let system = SpringSlider { p: SpringSlider::P, v_lp: SLIDER_SEGMENTS[0].1 };
+fn block_s(corrector: SensitivityCorrector) -> Vec<Vec<f64>> {
+    let system = FrictionBlock { p: FrictionBlock::P, v_lp: BLOCK_SEGMENTS[0].1 };
     let (y0, s0) = system.steady(3.0);
     let mut options = Options::new(1.0e-10, Tolerance::Scalar(1.0e-13));
-    options.stop_time = Some(SLIDER_SEGMENTS[0].0);
+    options.stop_time = Some(BLOCK_SEGMENTS[0].0);
     let settings = SensitivitySettings { corrector, ..SensitivitySettings::default() };
     let mut solver =
         SensitivitySolver::new(system, &settings, 0.0, &y0, &s0, &options).expect("valid settings");
     let mut out = Vec::new();
     let mut t0 = 0.0;
-    for (segment, (t_end, v_lp)) in SLIDER_SEGMENTS.into_iter().enumerate() {
+    for (segment, (t_end, v_lp)) in BLOCK_SEGMENTS.into_iter().enumerate() {
         if segment > 0 {
             let (y, s) = (solver.state().to_vec(), solver.sensitivities().to_vec());
             solver.reinit_with(t0, &y, &s, |system| system.v_lp = v_lp).expect("a valid restart");
             solver.set_stop_time(t_end).expect("a valid stop time");
         }
-        for t in SLIDER_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
-            solver.advance(*t, Task::Normal).expect("the slider runs");
+        for t in BLOCK_TIMES.iter().filter(|t| **t > t0 && **t <= t_end) {
+            solver.advance(*t, Task::Normal).expect("the block runs");
             out.push(solver.sensitivities().to_vec());
         }
         t0 = t_end;
@@ -566,16 +566,16 @@ fn slider_s(corrector: SensitivityCorrector) -> Vec<Vec<f64>> {
 }
 
 #[test]
-fn spring_slider_sensitivities_equal_central_differences_across_a_velocity_step() {
-    // μ hardly depends on k while the slider follows the load point (∂μ/∂k·k/μ ≈ 8e-6 at
+fn friction_block_sensitivities_equal_central_differences_across_a_velocity_step() {
+    // μ hardly depends on k while the block follows the load point (∂μ/∂k·k/μ ≈ 8e-6 at
     // t = 2), so the differences need a large step to rise above the runs' own error (with
     // h = 1e-4·k they miss ∂μ/∂k by 4e-5, with 1e-3·k by 2e-6); the fourth-order formula
     // keeps the truncation error of h = 1e-2·p_j near (1e-2)^4.
-    let cd = central_differences(&SpringSlider::P, 1.0e-2, slider_y);
+    let cd = central_differences(&FrictionBlock::P, 1.0e-2, block_y);
     for corrector in [SensitivityCorrector::Simultaneous, SensitivityCorrector::Staggered] {
-        let (worst, at) = worst_relative(&slider_s(corrector), &cd, 2, &[9]);
+        let (worst, at) = worst_relative(&block_s(corrector), &cd, 2, &[9]);
         // ∂ln θ/∂μ0 = 0: μ0 shifts μ and leaves V, hence θ, alone.
-        println!("spring-slider, {corrector:?}: worst relative difference {worst:.2e} ({at})");
+        println!("friction block, {corrector:?}: worst relative difference {worst:.2e} ({at})");
         assert!(worst < 1.0e-6, "{corrector:?}: {worst:e} at {at}");
     }
 }

@@ -1,6 +1,6 @@
 //! Robertson's chemical kinetics, the stiff test problem of SUNDIALS' examples
-//! `cvode/serial/cvRoberts_dns.c` and `arkode/C_serial/ark_robertson_root.c` (replayed by
-//! the `stickslip robertson` command, `stickslip_cli::robertson_examples`).
+//! `cvode/serial/cvRoberts_dns.c` and `arkode/C_serial/ark_robertson_root.c`, which
+//! [`examples`] replays through the wrappers.
 //!
 //! dy1/dt = −0.04 y1 + 1e4 y2 y3, dy2/dt = 0.04 y1 − 1e4 y2 y3 − 3e7 y2², dy3/dt = 3e7 y2²,
 //! y(0) = (1, 0, 0); roots g1 = y1 − 1e-4, g2 = y3 − 0.01.
@@ -9,6 +9,8 @@
 //! /usr/share/doc/libsundials-dev/examples).
 
 use crate::integrate::{JacobianMatrix, OdeSystem, Roots};
+
+pub mod examples;
 
 /// The Robertson system.
 #[derive(Debug, Clone, Copy, Default)]

@@ -8,7 +8,7 @@
 //! 1.01e-19, rtol = h0 = 1.1e-18, atol = 1.1e-40". Test Set tolerances: atol = 1.7e-24.
 
 use super::problem::TestProblem;
-use stickslip::integrate::{JacobianMatrix, OdeSystem};
+use stickslip_ode::integrate::{JacobianMatrix, OdeSystem};
 
 #[derive(Debug, Clone, Copy)]
 pub struct E5;

@@ -3,11 +3,11 @@
 //! accurately than when weighed relative to its size; and scales that are all relative give
 //! the same integration, bit for bit, as no scales.
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorScale, Extrapolation, Integrator, OdeSystem, Options, Radau5, Rodas5p, Task, Tolerance,
 };
 
-/// Logistic growth written for w = ln v: w' = 1 − e^(w − 20), from w(0) = 19 towards 20.
+/// Logistic growth written for w = ln x: w' = 1 − e^(w − 20), from w(0) = 19 towards 20.
 struct LogLogistic;
 
 impl OdeSystem for LogLogistic {

@@ -1,14 +1,14 @@
 //! Behaviour of the safe SUNDIALS wrappers: every method, options, roots, dense output,
 //! restarts, statistics and typed errors (panics, NaN, work limits, step underflow, bad input).
 
-use stickslip::integrate::{
+use stickslip_ode::integrate::{
     ErrorKind, ImexSystem, JacobianMatrix, OdeSystem, Options, Roots, StepEvent, Task, Tolerance,
 };
-use stickslip::model::robertson::Robertson;
-use stickslip::sundials::{
+use stickslip_ode::robertson::examples as robertson;
+use stickslip_ode::robertson::Robertson;
+use stickslip_ode::sundials::{
     self, ArkMethod, ArkSettings, CvodeMethod, CvodeSettings, DirkTable, ErkTable, Solver,
 };
-use stickslip_cli::robertson_examples as robertson;
 
 mod common;
 use common::{Decay, Oscillator, ProtheroRobinson};
