@@ -23,9 +23,8 @@ fn compare(scene: &str, file: &Path, extra: &[&str]) -> (Option<i32>, String, St
     common::compare_cli(Path::new(scene), file, extra)
 }
 
-/// The QDYN file with each row's time multiplied by `factor`.
-fn stretched(factor: f64) -> String {
-    let text = std::fs::read_to_string(OUTPUT).unwrap();
+/// A QDYN file (its text) with each row's time multiplied by `factor`.
+fn stretched_text(text: &str, factor: f64) -> String {
     let mut out = String::new();
     for line in text.lines() {
         if line.starts_with('#') {
@@ -38,6 +37,11 @@ fn stretched(factor: f64) -> String {
         out.push('\n');
     }
     out
+}
+
+/// QDYN's trajectory file with each row's time multiplied by `factor`.
+fn stretched(factor: f64) -> String {
+    stretched_text(&std::fs::read_to_string(OUTPUT).unwrap(), factor)
 }
 
 /// The QDYN samples in the scene's variables (u from the force balance).
@@ -155,4 +159,60 @@ fn an_offset_u_and_a_qdyn_file_against_the_wrong_scene_are_refused_naming_the_ca
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("line 5: tau = 5932128 Pa, but the scene's friction"), "{err}");
     assert!(err.contains("other friction parameters than the scene"), "{err}");
+}
+
+/// `stickslip run data/qdyn/cut_b_slip.in --qdyn-output DIR` (40 periods, 1.8 s): its
+/// output_ot_0 and output_vmax cut to their first 100 000 lines (25 events; their times tie
+/// from line 88 677 on, t ~ 1.02e8 s printed with 14 digits), and output_ox.
+fn own_qdyn_output() -> (PathBuf, PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("stickslip-compare-own-{}", std::process::id()));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["run", "data/qdyn/cut_b_slip.in", "--qdyn-output", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let head = |name: &str| {
+        let text = std::fs::read_to_string(dir.join(name)).unwrap();
+        let cut: String = text.lines().take(100_000).map(|l| format!("{l}\n")).collect();
+        temp_file(&format!("own_{name}"), &cut)
+    };
+    (head("output_ot_0"), head("output_vmax"), dir.join("output_ox"))
+}
+
+#[test]
+fn stickslips_own_qdyn_output_with_tied_times_agrees_at_1e_6_and_its_stretch_disagrees() {
+    let scene = "data/qdyn/cut_b_slip.in";
+    let (ot, vmax, ox) = own_qdyn_output();
+    let (code, out, err) = compare(scene, &ot, &["--tolerance", "1e-6", "--json"]);
+    assert_eq!(code, Some(0), "{out}\n{err}");
+    // The tied rows are merged, said once.
+    let notes: Vec<&str> = err.lines().filter(|l| l.contains("rows left out")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    assert!(notes[0].contains("10 rows left out: 10 runs of rows print the same time"), "{err}");
+    assert!(notes[0].contains("the first at line 88677"), "{err}");
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(c["events"], serde_json::json!([25, 25, 25]), "{c}");
+    // The reference's own accuracy, estimated in phase, is far below the tolerance.
+    for (q, a) in c["reference"]["accuracy"].as_object().unwrap() {
+        assert!(a.as_f64().unwrap() < 1e-9, "{q}: {a}");
+    }
+    // ln v_max within V's printed 7 digits (5e-8 … 5e-7 relative).
+    let ln_v_max = c["worst_per_quantity"].as_array().unwrap().iter();
+    let ln_v_max = ln_v_max.filter(|q| q["quantity"] == "ln_v_max").next().unwrap();
+    assert!(ln_v_max["deviation"].as_f64().unwrap() < 5e-7, "{ln_v_max}");
+    // output_vmax: the same rows, named for what it is.
+    let (code, out, err) = compare(scene, &vmax, &["--tolerance", "1e-6"]);
+    assert_eq!(code, Some(0), "{out}\n{err}");
+    assert!(err.contains("is QDYN's output_vmax (the state at the velocity maximum)"), "{err}");
+    // output_ox: named, and the file to give instead.
+    let (code, _, err) = compare(scene, &ox, &[]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("this is QDYN's output_ox: snapshots of the whole fault"), "{err}");
+    assert!(err.contains("give output_ot_0 from the same run"), "{err}");
+    // Its time stretched by a relative 1e-4: a period error.
+    let text = std::fs::read_to_string(&ot).unwrap();
+    let file = temp_file("own_stretched", &stretched_text(&text, 1.0 + 1e-4));
+    let (code, out, err) = compare(scene, &file, &["--tolerance", "1e-6"]);
+    assert_eq!(code, Some(3), "{out}\n{err}");
+    assert!(out.contains("period error: the period differs by 1.00e-4"), "{out}");
 }
