@@ -197,8 +197,8 @@ fn stickslips_own_qdyn_output_with_tied_times_agrees_at_1e_6_and_its_stretch_dis
         assert!(a.as_f64().unwrap() < 1e-9, "{q}: {a}");
     }
     // ln v_max within V's printed 7 digits (5e-8 … 5e-7 relative).
-    let ln_v_max = c["worst_per_quantity"].as_array().unwrap().iter();
-    let ln_v_max = ln_v_max.filter(|q| q["quantity"] == "ln_v_max").next().unwrap();
+    let worst = c["worst_per_quantity"].as_array().unwrap();
+    let ln_v_max = worst.iter().find(|q| q["quantity"] == "ln_v_max").unwrap();
     assert!(ln_v_max["deviation"].as_f64().unwrap() < 5e-7, "{ln_v_max}");
     // output_vmax: the same rows, named for what it is.
     let (code, out, err) = compare(scene, &vmax, &["--tolerance", "1e-6"]);

@@ -228,7 +228,7 @@ fn side(
     let n = own.len().min(user_events.len());
     let anchor = anchors(&user.t, user_events, n);
     // The states at the user's times shifted per event, and the events located on them.
-    let align = |shift: &[f64]| -> Result<(Vec<[f64; 3]>, u64, Vec<SampledEvent>), CompareError> {
+    let align = |shift: &[f64]| -> Result<Side, CompareError> {
         let targets: Vec<f64> =
             user.t.iter().zip(&anchor).map(|(t, a)| a.map_or(*t, |k| t + shift[k])).collect();
         let (in_phase, rebases) = reference_states(drr, method, rtol, start, y0, &targets)?;
@@ -253,7 +253,7 @@ fn side(
                     .unwrap_or(own[k])
             })
             .collect();
-        Ok((in_phase, rebases, aligned))
+        Ok(Side { own: own.clone(), aligned, in_phase, rebases })
     };
     // First from the peaks on the reference's own steps, whose parabola may be off by far more
     // than the reference's error where its steps are coarse (4.7e-8 at a first event: 2.5e-7
@@ -261,10 +261,9 @@ fn side(
     // the shifted times is the user's, shifted: the samples then sit at the same phase of
     // both events, and the interpolation's bias is common to both.
     let shift: Vec<f64> = (0..n).map(|k| own[k].peak - user_events[k].peak).collect();
-    let (_, _, first) = align(&shift)?;
+    let first = align(&shift)?.aligned;
     let shift: Vec<f64> = (0..n).map(|k| first[k].peak - user_events[k].peak).collect();
-    let (in_phase, rebases, aligned) = align(&shift)?;
-    Ok(Side { own, aligned, in_phase, rebases })
+    align(&shift)
 }
 
 /// The compared quantities of event k (see [`EVENT_QUANTITIES`]): (name, value, relative).
