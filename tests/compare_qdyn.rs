@@ -1,7 +1,9 @@
 //! `stickslip compare --against` with QDYN's own output, and the checks that refuse at once a
 //! file that does not fit the scene (issue #37): QDYN's cut-off-law trajectory
 //! (data/reference/qdyn_trajectory/) against the scene its qdyn.in maps to, the same file with
-//! its time column altered, and the same samples in SI units or offset as a CSV.
+//! its time column altered, and the same samples in SI units or offset as a CSV; and
+//! stickslip's own `--qdyn-output` (issue #45): tied times, output_vmax and output_ox, and the
+//! reference's accuracy estimated in phase.
 
 mod common;
 
@@ -161,28 +163,48 @@ fn an_offset_u_and_a_qdyn_file_against_the_wrong_scene_are_refused_naming_the_ca
     assert!(err.contains("other friction parameters than the scene"), "{err}");
 }
 
-/// `stickslip run data/qdyn/cut_b_slip.in --qdyn-output DIR` (40 periods, 1.8 s): its
-/// output_ot_0 and output_vmax cut to their first 100 000 lines (25 events; their times tie
-/// from line 88 677 on, t ~ 1.02e8 s printed with 14 digits), and output_ox.
-fn own_qdyn_output() -> (PathBuf, PathBuf, PathBuf) {
-    let dir = std::env::temp_dir().join(format!("stickslip-compare-own-{}", std::process::id()));
+/// `stickslip run data/qdyn/CASE.in --qdyn-output DIR` (40 periods, 1–2 s): its output_ot_0
+/// and output_vmax cut to their first `lines` lines, and output_ox.
+fn own_qdyn_output(case: &str, lines: usize) -> (PathBuf, PathBuf, PathBuf) {
+    let dir =
+        std::env::temp_dir().join(format!("stickslip-compare-own-{case}-{}", std::process::id()));
+    let scene = format!("data/qdyn/{case}.in");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
-        .args(["run", "data/qdyn/cut_b_slip.in", "--qdyn-output", dir.to_str().unwrap()])
+        .args(["run", &scene, "--qdyn-output", dir.to_str().unwrap()])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let head = |name: &str| {
         let text = std::fs::read_to_string(dir.join(name)).unwrap();
-        let cut: String = text.lines().take(100_000).map(|l| format!("{l}\n")).collect();
-        temp_file(&format!("own_{name}"), &cut)
+        let cut: String = text.lines().take(lines).map(|l| format!("{l}\n")).collect();
+        temp_file(&format!("own_{case}_{name}"), &cut)
     };
     (head("output_ot_0"), head("output_vmax"), dir.join("output_ox"))
+}
+
+/// The reference's own accuracy estimated in phase: the first events of two files where it was
+/// estimated at equal times from peaks located on the reference's own steps, and so measured
+/// those peaks' error times a steep slope (no verdict at 1e-6: cut_a_ageing 2.6e-7 in ln v
+/// 0.32 after its first peak, classic_ageing 1.5e-6 in ln v_max at its second event).
+#[test]
+fn the_references_accuracy_is_estimated_in_phase_so_own_output_gets_a_verdict_at_1e_6() {
+    for (case, lines) in [("cut_a_ageing", 15_000), ("classic_ageing", 12_000)] {
+        let (ot, _, _) = own_qdyn_output(case, lines);
+        let scene = format!("data/qdyn/{case}.in");
+        let (code, out, err) = compare(&scene, &ot, &["--tolerance", "1e-6", "--json"]);
+        assert_eq!(code, Some(0), "{case}: {out}\n{err}");
+        let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+        for (q, a) in c["reference"]["accuracy"].as_object().unwrap() {
+            assert!(a.as_f64().unwrap() < 1e-9, "{case}: {q}: {a}");
+        }
+    }
 }
 
 #[test]
 fn stickslips_own_qdyn_output_with_tied_times_agrees_at_1e_6_and_its_stretch_disagrees() {
     let scene = "data/qdyn/cut_b_slip.in";
-    let (ot, vmax, ox) = own_qdyn_output();
+    // Cut to 25 events; its times tie from line 88 677 on (t ~ 1.02e8 s, 14 printed digits).
+    let (ot, vmax, ox) = own_qdyn_output("cut_b_slip", 100_000);
     let (code, out, err) = compare(scene, &ot, &["--tolerance", "1e-6", "--json"]);
     assert_eq!(code, Some(0), "{out}\n{err}");
     // The tied rows are merged, said once.
