@@ -27,7 +27,7 @@ pub const OT_FIRST_LINE: &str = "# macroscopic values:";
 /// The first header line of QDYN's `output_vmax`.
 pub const VMAX_FIRST_LINE: &str = "# values at max(V) location:";
 /// How each snapshot of QDYN's `output_ox` starts.
-pub const OX_HEADER_START: &str = "# t x y z ";
+pub const OX_HEADER_START: &str = "# t x y z";
 
 /// Which of QDYN's output files a text is, recognised by its first line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,7 +37,8 @@ pub enum QdynFile {
     /// `output_vmax`: the time series at the location of the velocity maximum (eight
     /// columns); for a spring-block, its one element.
     Vmax,
-    /// `output_ox`: snapshots of the whole fault every NTOUT_OX steps (ten columns).
+    /// `output_ox`: snapshots of the whole fault every NTOUT_OX steps (refused: not a time
+    /// series).
     Ox,
 }
 
@@ -49,39 +50,26 @@ impl QdynFile {
             Some(QdynFile::Ot)
         } else if first == VMAX_FIRST_LINE {
             Some(QdynFile::Vmax)
-        } else if first.starts_with(OX_HEADER_START.trim_end()) {
+        } else if first.starts_with(OX_HEADER_START) {
             Some(QdynFile::Ox)
         } else {
             None
         }
     }
 
-    /// QDYN's file name.
-    pub fn name(self) -> &'static str {
+    /// A time series' columns (QDYN's names) and where t, V, Θ and τ are among them; None
+    /// for `output_ox`, snapshots of the fault rather than a time series.
+    fn layout(self) -> Option<(&'static [&'static str], [usize; 4])> {
         match self {
-            QdynFile::Ot => "output_ot",
-            QdynFile::Vmax => "output_vmax",
-            QdynFile::Ox => "output_ox",
-        }
-    }
-
-    /// The columns of a row, QDYN's names.
-    fn columns(self) -> &'static [&'static str] {
-        match self {
-            QdynFile::Ot => {
-                &["t", "pot", "pot_rate", "V", "theta", "tau", "dtau_dt", "slip", "sigma"]
-            }
-            QdynFile::Vmax => &["t", "ivmax", "v", "theta", "tau", "dtau_dt", "slip", "sigma"],
-            QdynFile::Ox => &["t", "x", "y", "z", "v", "theta", "tau", "tau_dot", "slip", "sigma"],
-        }
-    }
-
-    /// The columns of t, V, Θ and τ.
-    fn read(self) -> [usize; 4] {
-        match self {
-            QdynFile::Ot => [0, 3, 4, 5],
-            QdynFile::Vmax => [0, 2, 3, 4],
-            QdynFile::Ox => [0, 4, 5, 6],
+            QdynFile::Ot => Some((
+                &["t", "pot", "pot_rate", "V", "theta", "tau", "dtau_dt", "slip", "sigma"],
+                [0, 3, 4, 5],
+            )),
+            QdynFile::Vmax => Some((
+                &["t", "ivmax", "v", "theta", "tau", "dtau_dt", "slip", "sigma"],
+                [0, 2, 3, 4],
+            )),
+            QdynFile::Ox => None,
         }
     }
 }
@@ -140,12 +128,10 @@ fn fortran_number(cell: &str) -> Option<f64> {
 /// text whose first line is none of QDYN's headers is read as `output_ot_*`.
 pub fn read_qdyn_output(text: &str) -> Result<QdynOutput, InputError> {
     let kind = QdynFile::recognise(text).unwrap_or(QdynFile::Ot);
-    let names = kind.columns();
-    let [ct, cv, cs, ctau] = kind.read();
-    if kind == QdynFile::Ox {
+    let Some((names, [ct, cv, cs, ctau])) = kind.layout() else {
         let rows = text.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')).count();
         return Err(InputError::QdynSnapshots { rows });
-    }
+    };
     let mut out = QdynOutput {
         file: kind,
         t: vec![],
