@@ -17,7 +17,7 @@ fn fig1() -> scene::Scene {
 fn methods_agree_on_fig1_and_the_table_flags_nothing() {
     let c = compare::methods(&fig1(), &[Method::CvodeBdf, Method::ArkodeDirk, Method::Radau5]);
     assert!(c.runs.iter().all(|(_, status)| status == "Periodic"), "{:?}", c.runs);
-    let period = c.rows.iter().find(|r| r.quantity == "period").unwrap();
+    let period = c.rows.iter().find(|r| r.quantity == compare::Quantity::Period).unwrap();
     assert!(period.spread.unwrap() < period.allowed && period.outliers.is_empty(), "{period:?}");
 }
 
@@ -27,7 +27,7 @@ fn a_failing_method_is_reported_not_averaged() {
     s.analyses.cycle.as_mut().unwrap().max_steps = Some(5000);
     let c = compare::methods(&s, &[Method::CvodeBdf, Method::ArkodeErk]);
     assert!(c.runs[1].1.starts_with("error:"), "{:?}", c.runs);
-    let period = c.rows.iter().find(|r| r.quantity == "period").unwrap();
+    let period = c.rows.iter().find(|r| r.quantity == compare::Quantity::Period).unwrap();
     assert_eq!(period.values[1].1, None);
     assert_eq!(period.spread, None, "one value has no spread");
 }
@@ -181,7 +181,7 @@ fn a_user_report_is_checked_key_by_key_and_strictly() {
     };
     let c = compare::against_report(&s, &cycle, 1e-6, None).unwrap();
     let beyond: Vec<&str> =
-        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
+        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.name()).collect();
     assert_eq!(beyond, vec!["period"]);
     assert_eq!(c.verdict, compare::Verdict::Disagrees);
     let e = compare::read_user_data(r#"{"cycle": {"perod": 18.1}}"#).unwrap_err().to_string();
@@ -227,10 +227,8 @@ fn reference_error_by_cycle() {
         let y = integ.state();
         former.push([y[0], y[1], y[2]]);
     }
-    let w: Vec<f64> = truth.iter().map(|y| y[1]).collect();
     let origin = |i: usize| format!("t = {}", times[i]);
-    let u: Vec<f64> = truth.iter().map(|y| y[0]).collect();
-    let events = compare::sampled::sampled_events(&times, &w, &u, &origin).unwrap();
+    let events = compare::sampled::sampled_events(&times, &truth, &origin).unwrap();
     // A cycle: from one event's start (upward crossing of v = 1) to the next's.
     for (k, c) in events.windows(2).enumerate() {
         let within = |r: &[[f64; 3]]| {
@@ -245,5 +243,57 @@ fn reference_error_by_cycle() {
             within(&clocked),
             within(&former)
         );
+    }
+}
+
+/// compare/'s files import one way: each `super::name` in a file of compare/ names a sibling
+/// file (never an item of mod.rs, which declares them), and the siblings' graph has no circle.
+#[test]
+fn compare_files_import_without_a_circle() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/stickslip/src/compare");
+    let mut graph = std::collections::BTreeMap::<String, Vec<String>>::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+        if name == "mod" {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        let mut uses = Vec::new();
+        for line in text.lines().map(|l| l.split("//").next().unwrap_or("")) {
+            for (i, _) in line.match_indices("super::") {
+                let used: String = line[i + 7..]
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                // `use super::*;` inside a file's own tests module is the file itself.
+                if !used.is_empty() && used != name {
+                    uses.push(used);
+                }
+            }
+        }
+        graph.insert(name, uses);
+    }
+    assert!(graph.len() >= 9, "{graph:?}");
+    for (file, uses) in &graph {
+        for used in uses {
+            assert!(
+                graph.contains_key(used),
+                "compare/{file}.rs uses super::{used}, not a sibling file"
+            );
+        }
+    }
+    // Remove files that use no remaining file until none is left; a remainder is a circle.
+    let mut left = graph.clone();
+    while !left.is_empty() {
+        let leaves: Vec<String> = left
+            .iter()
+            .filter(|(_, uses)| uses.iter().all(|u| !left.contains_key(u)))
+            .map(|(f, _)| f.clone())
+            .collect();
+        assert!(!leaves.is_empty(), "compare/ imports in a circle among {:?}", left.keys());
+        for f in leaves {
+            left.remove(&f);
+        }
     }
 }

@@ -87,10 +87,8 @@ fn an_accurate_field_trajectory_agrees_at_1e_minus_6_and_a_stretched_one_names_t
     let report =
         stickslip::engine::run(&field(), stickslip::engine::RunOptions::default()).unwrap();
     let period = report.cycle.unwrap().values.unwrap().main.period;
-    let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
-    let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
     let origin = |i: usize| format!("step {i}");
-    let events = compare::sampled::sampled_events(&times, &w, &u, &origin).unwrap();
+    let events = compare::sampled::sampled_events(&times, &states, &origin).unwrap();
     assert!(events.len() >= 25, "{} events", events.len());
     let recurrence = events[events.len() - 1].peak - events[events.len() - 2].peak;
     let period_error = (recurrence / period - 1.0).abs();
@@ -227,7 +225,7 @@ fn a_report_t0_from_a_tight_run_agrees_at_5e_minus_9_and_an_unresolvable_toleran
         ("rodas5p", "radau5")
     );
     let beyond: Vec<&str> =
-        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.as_str()).collect();
+        c.rows.iter().filter(|r| r.beyond_tolerance).map(|r| r.quantity.name()).collect();
     assert_eq!(beyond, vec!["t0"]);
     // Through the CLI: exit 0, then exit 1 (no verdict) at a tolerance no reference resolves.
     let file = dir.join("tight.json");

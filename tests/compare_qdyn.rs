@@ -1,7 +1,9 @@
 //! `stickslip compare --against` with QDYN's own output, and the checks that refuse at once a
 //! file that does not fit the scene (issue #37): QDYN's cut-off-law trajectory
 //! (data/reference/qdyn_trajectory/) against the scene its qdyn.in maps to, the same file with
-//! its time column altered, and the same samples in SI units or offset as a CSV.
+//! its time column altered, and the same samples in SI units or offset as a CSV; and
+//! stickslip's own `--qdyn-output` (issue #45): tied times, output_vmax and output_ox, and the
+//! reference's accuracy estimated in phase.
 
 mod common;
 
@@ -23,9 +25,8 @@ fn compare(scene: &str, file: &Path, extra: &[&str]) -> (Option<i32>, String, St
     common::compare_cli(Path::new(scene), file, extra)
 }
 
-/// The QDYN file with each row's time multiplied by `factor`.
-fn stretched(factor: f64) -> String {
-    let text = std::fs::read_to_string(OUTPUT).unwrap();
+/// A QDYN file (its text) with each row's time multiplied by `factor`.
+fn stretched_text(text: &str, factor: f64) -> String {
     let mut out = String::new();
     for line in text.lines() {
         if line.starts_with('#') {
@@ -38,6 +39,11 @@ fn stretched(factor: f64) -> String {
         out.push('\n');
     }
     out
+}
+
+/// QDYN's trajectory file with each row's time multiplied by `factor`.
+fn stretched(factor: f64) -> String {
+    stretched_text(&std::fs::read_to_string(OUTPUT).unwrap(), factor)
 }
 
 /// The QDYN samples in the scene's variables (u from the force balance).
@@ -155,4 +161,80 @@ fn an_offset_u_and_a_qdyn_file_against_the_wrong_scene_are_refused_naming_the_ca
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("line 5: tau = 5932128 Pa, but the scene's friction"), "{err}");
     assert!(err.contains("other friction parameters than the scene"), "{err}");
+}
+
+/// `stickslip run data/qdyn/CASE.in --qdyn-output DIR` (40 periods, 1–2 s): its output_ot_0
+/// and output_vmax cut to their first `lines` lines, and output_ox.
+fn own_qdyn_output(case: &str, lines: usize) -> (PathBuf, PathBuf, PathBuf) {
+    let dir =
+        std::env::temp_dir().join(format!("stickslip-compare-own-{case}-{}", std::process::id()));
+    let scene = format!("data/qdyn/{case}.in");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .args(["run", &scene, "--qdyn-output", dir.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let head = |name: &str| {
+        let text = std::fs::read_to_string(dir.join(name)).unwrap();
+        let cut: String = text.lines().take(lines).map(|l| format!("{l}\n")).collect();
+        temp_file(&format!("own_{case}_{name}"), &cut)
+    };
+    (head("output_ot_0"), head("output_vmax"), dir.join("output_ox"))
+}
+
+/// The reference's own accuracy estimated in phase: the first events of two files where it was
+/// estimated at equal times from peaks located on the reference's own steps, and so measured
+/// those peaks' error times a steep slope (no verdict at 1e-6: cut_a_ageing 2.6e-7 in ln v
+/// 0.32 after its first peak, classic_ageing 1.5e-6 in ln v_max at its second event).
+#[test]
+fn the_references_accuracy_is_estimated_in_phase_so_own_output_gets_a_verdict_at_1e_6() {
+    for (case, lines) in [("cut_a_ageing", 15_000), ("classic_ageing", 12_000)] {
+        let (ot, _, _) = own_qdyn_output(case, lines);
+        let scene = format!("data/qdyn/{case}.in");
+        let (code, out, err) = compare(&scene, &ot, &["--tolerance", "1e-6", "--json"]);
+        assert_eq!(code, Some(0), "{case}: {out}\n{err}");
+        let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+        for (q, a) in c["reference"]["accuracy"].as_object().unwrap() {
+            assert!(a.as_f64().unwrap() < 1e-9, "{case}: {q}: {a}");
+        }
+    }
+}
+
+#[test]
+fn stickslips_own_qdyn_output_with_tied_times_agrees_at_1e_6_and_its_stretch_disagrees() {
+    let scene = "data/qdyn/cut_b_slip.in";
+    // Cut to 25 events; its times tie from line 88 677 on (t ~ 1.02e8 s, 14 printed digits).
+    let (ot, vmax, ox) = own_qdyn_output("cut_b_slip", 100_000);
+    let (code, out, err) = compare(scene, &ot, &["--tolerance", "1e-6", "--json"]);
+    assert_eq!(code, Some(0), "{out}\n{err}");
+    // The tied rows are merged, said once.
+    let notes: Vec<&str> = err.lines().filter(|l| l.contains("rows left out")).collect();
+    assert_eq!(notes.len(), 1, "{err}");
+    assert!(notes[0].contains("10 rows left out: 10 runs of rows print the same time"), "{err}");
+    assert!(notes[0].contains("the first at line 88677"), "{err}");
+    let c: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(c["events"], serde_json::json!([25, 25, 25]), "{c}");
+    // The reference's own accuracy, estimated in phase, is far below the tolerance.
+    for (q, a) in c["reference"]["accuracy"].as_object().unwrap() {
+        assert!(a.as_f64().unwrap() < 1e-9, "{q}: {a}");
+    }
+    // ln v_max within V's printed 7 digits (5e-8 … 5e-7 relative).
+    let worst = c["worst_per_quantity"].as_array().unwrap();
+    let ln_v_max = worst.iter().find(|q| q["quantity"] == "ln_v_max").unwrap();
+    assert!(ln_v_max["deviation"].as_f64().unwrap() < 5e-7, "{ln_v_max}");
+    // output_vmax: the same rows, named for what it is.
+    let (code, out, err) = compare(scene, &vmax, &["--tolerance", "1e-6"]);
+    assert_eq!(code, Some(0), "{out}\n{err}");
+    assert!(err.contains("is QDYN's output_vmax (the state at the velocity maximum)"), "{err}");
+    // output_ox: named, and the file to give instead.
+    let (code, _, err) = compare(scene, &ox, &[]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("this is QDYN's output_ox: snapshots of the whole fault"), "{err}");
+    assert!(err.contains("give output_ot_0 from the same run"), "{err}");
+    // Its time stretched by a relative 1e-4: a period error.
+    let text = std::fs::read_to_string(&ot).unwrap();
+    let file = temp_file("own_stretched", &stretched_text(&text, 1.0 + 1e-4));
+    let (code, out, err) = compare(scene, &file, &["--tolerance", "1e-6"]);
+    assert_eq!(code, Some(3), "{out}\n{err}");
+    assert!(out.contains("period error: the period differs by 1.00e-4"), "{out}");
 }

@@ -53,9 +53,7 @@ fn compare_against(
             trajectory_verdict(scene, &t, tolerance, reference_method, json, &named)?
         }
         compare::UserData::Qdyn(q) => {
-            if let Some(line) = &q.repeated_last {
-                eprintln!("note: {}: {line}, the last row, repeats the row before it at a later time (QDYN writes its last state again at TMAX when its solver stops); it is left out", file.display());
-            }
+            qdyn_notes(file, &q);
             let t = compare::qdyn::to_trajectory(scene, &q).map_err(|e| named(&e))?;
             trajectory_verdict(scene, &t, tolerance, reference_method, json, &named)?
         }
@@ -100,6 +98,25 @@ fn compare_against(
                 file.display()
             ),
         )),
+    }
+}
+
+/// What was done to a QDYN file before it is compared, on stderr: which file it is, and the
+/// rows left out (a repeated last row, rows that print the same time).
+fn qdyn_notes(file: &std::path::Path, q: &compare::qdyn::QdynOutput) {
+    let name = file.display();
+    if q.file == compare::qdyn::QdynFile::Vmax {
+        eprintln!("note: {name} is QDYN's output_vmax (the state at the velocity maximum): for a spring-block its one element, the same time series as output_ot_0");
+    }
+    if let Some(line) = &q.repeated_last {
+        eprintln!("note: {name}: {line}, the last row, repeats the row before it at a later time (QDYN writes its last state again at TMAX when its solver stops); it is left out");
+    }
+    let tied = &q.tied;
+    if let Some(first) = &tied.first {
+        eprintln!(
+            "note: {name}: {} rows left out: {} runs of rows print the same time (QDYN prints t with 14 digits, coarser than its fastest steps late in a run; the first at {first}); of each run the middle row is kept (docs/compare.md)",
+            tied.rows_left_out, tied.runs
+        );
     }
 }
 

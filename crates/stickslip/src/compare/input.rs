@@ -1,6 +1,9 @@
-//! Reading a user's file: a trajectory (CSV or JSON columns) or a report (JSON with a
-//! `cycle` object). Every error names where (file line, or JSON path), the column and the value.
+//! Reading a user's trajectory (CSV or JSON columns) or report (JSON with a `cycle` object),
+//! and the errors of every reader (QDYN's files too, [`super::qdyn`]). Every error names where
+//! (file line, or JSON path), the column and the value. Which reader a file needs is decided
+//! in [`super::user_data`].
 
+use super::quantity::Quantity;
 use serde::de::IgnoredAny;
 use serde::Deserialize;
 
@@ -93,26 +96,25 @@ pub struct UserCycle {
 }
 
 impl UserCycle {
-    /// The value the user gave for a compared key.
-    pub fn get(&self, key: &str) -> Option<f64> {
-        match key {
-            "period" => self.period,
-            "t0" => self.t0,
-            "slip_half_width" => self.slip_half_width,
-            "ln_v_max" => self.ln_v_max,
-            "ln_v_min" => self.ln_v_min,
-            "u_at_v_max" => self.u_at_v_max,
-            "theta_at_v_max" => self.theta_at_v_max,
-            "slip" => self.slip,
-            _ => None,
+    /// The value the user gave for a compared quantity.
+    pub fn get(&self, quantity: Quantity) -> Option<f64> {
+        match quantity {
+            Quantity::Period => self.period,
+            Quantity::T0 => self.t0,
+            Quantity::SlipHalfWidth => self.slip_half_width,
+            Quantity::LnVMax => self.ln_v_max,
+            Quantity::LnVMin => self.ln_v_min,
+            Quantity::UAtVMax => self.u_at_v_max,
+            Quantity::ThetaAtVMax => self.theta_at_v_max,
+            Quantity::Slip => self.slip,
         }
     }
 }
 
 /// A user's report: other top-level keys (a whole stickslip report) are ignored.
 #[derive(Debug, Clone, Deserialize)]
-struct UserReport {
-    cycle: UserCycle,
+pub(super) struct UserReport {
+    pub(super) cycle: UserCycle,
 }
 
 /// The largest user file read (bytes): with [`MAX_SAMPLES`], it bounds the comparison's
@@ -121,18 +123,6 @@ pub const MAX_FILE_BYTES: u64 = 256 << 20;
 
 /// The most samples a trajectory may have.
 pub const MAX_SAMPLES: usize = 2_000_000;
-
-/// A user's file: a trajectory or a report.
-#[derive(Debug, Clone, PartialEq)]
-pub enum UserData {
-    /// t, u, v, θ samples.
-    Trajectory(Trajectory),
-    /// QDYN's `output_ot_*`, in SI units ([`super::qdyn::to_trajectory`] turns it into the
-    /// scene's variables).
-    Qdyn(super::qdyn::QdynOutput),
-    /// The `cycle` object of a report.
-    Report(UserCycle),
-}
 
 /// Why a user's file cannot be read; each message says where (file line for CSV, index or
 /// JSON path for JSON), the column and the value.
@@ -150,7 +140,7 @@ pub enum InputError {
         message: String,
     },
     /// A report's `cycle` with none of the compared keys.
-    #[error("report: cycle has none of the compared keys {} (all absent or null)", super::QUANTITIES.join(", "))]
+    #[error("report: cycle has none of the compared keys {} (all absent or null)", Quantity::ALL.map(Quantity::name).join(", "))]
     NoComparedKey,
     /// A JSON trajectory lacks one of the columns.
     #[error("JSON trajectory: missing array \"{column}\" (need t, u, v, theta; or a report with \"cycle\")")]
@@ -226,6 +216,20 @@ pub enum InputError {
         /// The value.
         value: f64,
     },
+    /// QDYN's `output_ox`: snapshots of the fault, not a time series.
+    #[error("this is QDYN's output_ox: snapshots of the whole fault every NTOUT_OX steps ({rows} rows here), not a time series; give output_ot_0 from the same run (its time series, a row every NTOUT_OT steps), or output_vmax")]
+    QdynSnapshots {
+        /// The data rows in the file.
+        rows: usize,
+    },
+    /// QDYN's `output_vmax` of a fault with several elements.
+    #[error("{at}: ivmax = {ivmax}: this output_vmax follows the velocity maximum over several fault elements, so it is not a spring-block's time series; compare a spring-block's (MESHDIM = 0) output_ot_0 or output_vmax")]
+    QdynElements {
+        /// Where the row is.
+        at: String,
+        /// The element of the maximum.
+        ivmax: f64,
+    },
     /// A time that is not finite.
     #[error("{at}: column t = {t} must be finite")]
     TimeNotFinite {
@@ -264,31 +268,8 @@ pub enum InputError {
     },
 }
 
-/// Reads a user's CSV or JSON file; errors say what is wrong and where (file lines for CSV,
-/// JSON paths for JSON), naming the column and the value.
-pub fn read_user_data(text: &str) -> Result<UserData, InputError> {
-    if super::qdyn::is_qdyn_output(text) {
-        return super::qdyn::read_qdyn_output(text).map(UserData::Qdyn);
-    }
-    if text.trim_start().starts_with('{') {
-        let json: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| InputError::Json(e.to_string()))?;
-        if json.get("cycle").is_some() {
-            let report: UserReport = serde_path_to_error::deserialize(&json).map_err(|e| {
-                let path = e.path().to_string();
-                InputError::ReportKey { path, message: e.into_inner().to_string() }
-            })?;
-            if super::QUANTITIES.iter().all(|k| report.cycle.get(k).is_none()) {
-                return Err(InputError::NoComparedKey);
-            }
-            return Ok(UserData::Report(report.cycle));
-        }
-        return read_json_trajectory(&json).and_then(check).map(UserData::Trajectory);
-    }
-    read_csv(text).and_then(check).map(UserData::Trajectory)
-}
-
-fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputError> {
+/// A JSON trajectory: `{"t": [...], "u": [...], "v": [...], "theta": [...]}`.
+pub(super) fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputError> {
     let column = |column: &'static str| -> Result<Vec<f64>, InputError> {
         json.get(column)
             .and_then(|c| c.as_array())
@@ -318,7 +299,8 @@ fn read_json_trajectory(json: &serde_json::Value) -> Result<Trajectory, InputErr
     Ok(Trajectory { t, y, origin, u_from_force_balance: false })
 }
 
-fn read_csv(text: &str) -> Result<Trajectory, InputError> {
+/// A CSV trajectory: a header naming t, u, v, theta (any order), then one sample per line.
+pub(super) fn read_csv(text: &str) -> Result<Trajectory, InputError> {
     let mut lines = text
         .lines()
         .enumerate()
@@ -384,7 +366,8 @@ pub(super) fn check_times(t: &[f64], origin: &[String]) -> Result<(), InputError
     Ok(())
 }
 
-fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
+/// At least two samples, times finite and increasing, u and θ finite, v finite and > 0.
+pub(super) fn check(trajectory: Trajectory) -> Result<Trajectory, InputError> {
     check_times(&trajectory.t, &trajectory.origin)?;
     let names = ["u", "v", "theta"];
     for (i, y) in trajectory.y.iter().enumerate() {

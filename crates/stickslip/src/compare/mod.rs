@@ -3,69 +3,45 @@
 //!
 //! User trajectories are CSV with a header `t,u,v,theta` (any order, extra columns ignored,
 //! `#` comment lines allowed) or JSON `{"t": [...], "u": [...], "v": [...], "theta": [...]}`;
-//! times must increase ([`input`]); they are compared event by event, then between events in
-//! phase ([`trajectory`], events on samples: [`sampled`], the reference runs: [`reference`](mod@reference)).
-//! A user report is JSON with a `cycle` object holding keys of docs/reports.md. See
+//! times must increase ([`input`]; QDYN's files: [`qdyn`]; which is which: [`user_data`]);
+//! they are compared event by event, then between events in phase ([`trajectory`], events on
+//! samples: [`sampled`], the reference runs: [`reference`](mod@reference)). A user report is
+//! JSON with a `cycle` object holding keys of docs/reports.md ([`Quantity`]). See
 //! docs/compare.md.
+//!
+//! The files import one way, each only from files listed before it (no circle; tests/compare.rs
+//! checks it): quantity, sampled; input; scale; qdyn, error; user_data, reference; trajectory;
+//! this module.
 
+pub mod error;
 pub mod input;
 pub mod qdyn;
+pub mod quantity;
 pub mod reference;
 pub mod sampled;
 pub mod scale;
 pub mod trajectory;
+pub mod user_data;
 
-pub use input::{read_user_data, InputError, Trajectory, UserCycle, UserData};
+pub use error::CompareError;
+pub use input::{InputError, Trajectory, UserCycle};
+pub use quantity::Quantity;
 pub use sampled::SamplingError;
 pub use scale::SceneMismatch;
-pub use trajectory::{against_trajectory, CompareError, TrajectoryComparison, Verdict};
+pub use trajectory::{against_trajectory, TrajectoryComparison, Verdict};
+pub use user_data::{read_user_data, UserData};
 
 use crate::engine;
 use crate::report::Report;
 use crate::scene::{Method, Scene, SolverSpec};
+use quantity::within;
 use serde::Serialize;
-
-/// Quantities compared between methods or against a user's report (cycle keys).
-const QUANTITIES: [&str; 8] = [
-    "period",
-    "t0",
-    "slip_half_width",
-    "ln_v_max",
-    "ln_v_min",
-    "u_at_v_max",
-    "theta_at_v_max",
-    "slip",
-];
-
-/// The scale a difference in `key` is measured against: the value itself for durations and
-/// the slip (positive, with their own units), max(|value|, 1) for ln v, u and θ (offsets).
-fn scale(key: &str, value: f64) -> f64 {
-    match key {
-        "period" | "t0" | "slip_half_width" | "slip" => value.abs().max(f64::MIN_POSITIVE),
-        _ => value.abs().max(1.0),
-    }
-}
-
-fn quantity(report: &Report, key: &str) -> Option<f64> {
-    let v = report.cycle.as_ref()?.values?;
-    match key {
-        "period" => Some(v.main.period),
-        "t0" => Some(v.main.t0),
-        "slip_half_width" => v.main.slip_half_width,
-        "ln_v_max" => Some(v.main.ln_v_max),
-        "ln_v_min" => Some(v.main.ln_v_min),
-        "u_at_v_max" => Some(v.extremes.u_at_v_max),
-        "theta_at_v_max" => Some(v.extremes.theta_at_v_max),
-        "slip" => Some(v.main.slip),
-        _ => None,
-    }
-}
 
 /// One quantity across methods.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct QuantityRow {
     /// The report key.
-    pub quantity: String,
+    pub quantity: Quantity,
     /// Value per method (null where the method found no periodic cycle).
     pub values: Vec<(String, Option<f64>)>,
     /// (max − min) over the methods that have a value, relative to the median (durations,
@@ -126,18 +102,18 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
         }
     }
     let allowed = (1e3 * scene.solver.rtol).max(1e-9);
-    let rows = QUANTITIES
-        .iter()
-        .map(|&key| {
+    let rows = Quantity::ALL
+        .into_iter()
+        .map(|key| {
             let values: Vec<(String, Option<f64>)> = methods
                 .iter()
                 .zip(&reports)
-                .map(|(m, r)| (m.name().to_string(), r.as_ref().and_then(|r| quantity(r, key))))
+                .map(|(m, r)| (m.name().to_string(), r.as_ref().and_then(|r| key.of_report(r))))
                 .collect();
             let present: Vec<f64> = values.iter().filter_map(|(_, v)| *v).collect();
             let (spread, outliers) = if present.len() >= 2 {
                 let mid = median(present.clone());
-                let scale = scale(key, mid);
+                let scale = key.scale(mid);
                 let (lo, hi) = present
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
@@ -150,7 +126,7 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
             } else {
                 (None, Vec::new())
             };
-            QuantityRow { quantity: key.into(), values, spread, allowed, outliers }
+            QuantityRow { quantity: key, values, spread, allowed, outliers }
         })
         .collect();
     MethodComparison { runs, rows, wall_time_s: times }
@@ -160,7 +136,7 @@ pub fn methods(scene: &Scene, methods: &[Method]) -> MethodComparison {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ReportRow {
     /// The report key.
-    pub quantity: String,
+    pub quantity: Quantity,
     /// The user's value.
     pub user: f64,
     /// Ours.
@@ -242,24 +218,24 @@ pub fn against_report(
             cycle_run(scene, check_method, check_rtol).map_err(CompareError::ReferenceRun)?;
         let mut rows = Vec::new();
         let mut inaccurate = Vec::new();
-        for key in QUANTITIES {
+        for key in Quantity::ALL {
             let Some(theirs) = user.get(key) else { continue };
-            let (Some(mine), Some(checked)) = (quantity(&ours, key), quantity(&check, key)) else {
+            let (Some(mine), Some(checked)) = (key.of_report(&ours), key.of_report(&check)) else {
                 inaccurate.push((format!("{key} (not computed by the reference)"), f64::NAN));
                 continue;
             };
-            let deviation = (theirs - mine).abs() / scale(key, mine);
-            let reference_accuracy = (checked - mine).abs() / scale(key, mine);
-            if !trajectory::within(reference_accuracy, tolerance / 10.0) {
-                inaccurate.push((key.to_string(), reference_accuracy));
+            let deviation = (theirs - mine).abs() / key.scale(mine);
+            let reference_accuracy = (checked - mine).abs() / key.scale(mine);
+            if !within(reference_accuracy, tolerance / 10.0) {
+                inaccurate.push((key.name().to_string(), reference_accuracy));
             }
             rows.push(ReportRow {
-                quantity: key.into(),
+                quantity: key,
                 user: theirs,
                 reference: mine,
                 deviation,
                 reference_accuracy,
-                beyond_tolerance: !trajectory::within(deviation, tolerance),
+                beyond_tolerance: !within(deviation, tolerance),
             });
         }
         if inaccurate.is_empty() {

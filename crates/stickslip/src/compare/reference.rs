@@ -3,8 +3,8 @@
 //! local clock, global time kept as a double-double), so it does not drift from clock
 //! rounding at any length.
 
+use super::error::CompareError;
 use super::scale::{event_budget, SceneMismatch, MAX_REFERENCE_STEPS};
-use super::trajectory::CompareError;
 use crate::engine;
 use crate::integrate::{Clock, SolverError, Time};
 use crate::model::Drr;

@@ -13,7 +13,7 @@
 //!   scene spans thousands of the scene's cycles).
 
 use super::input::Trajectory;
-use super::trajectory::within;
+use super::quantity::within;
 use crate::model::Drr;
 use crate::scene::Scene;
 

@@ -16,11 +16,12 @@
 //! between samples is then common to both), and the state between events (v < 1, where no
 //! slip's steepness can swamp it) is compared at the same time from the same event's peak.
 
+use super::error::CompareError;
 use super::input::Trajectory;
+use super::quantity::within;
 use super::reference::{reference_recurrence, reference_states, reference_steps};
-use super::sampled::{sampled_events, SampledEvent, SamplingError};
-use super::scale::{first_sample_fits, SceneMismatch};
-use crate::integrate::SolverError;
+use super::sampled::{sampled_events, SampledEvent};
+use super::scale::first_sample_fits;
 use crate::model::Drr;
 use crate::scene::{Method, Scene};
 use serde::Serialize;
@@ -182,46 +183,6 @@ fn state_deviation(user: &[f64; 3], reference: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Why a comparison cannot be made: bad input (exit 2) or a failed or inaccurate reference
-/// (exit 1).
-#[derive(Debug, thiserror::Error)]
-pub enum CompareError {
-    /// The user's data cannot be compared (sampled too coarsely); the message says why.
-    #[error("{0}")]
-    Input(SamplingError),
-    /// The reference's events cannot be located even on its own steps.
-    #[error("the reference could not be resolved: {0}")]
-    UnresolvedReference(SamplingError),
-    /// The reference integration failed.
-    #[error("reference run failed: {0}")]
-    Reference(SolverError),
-    /// The reference run of a report comparison failed.
-    #[error("reference run failed: {0}")]
-    ReferenceRun(crate::engine::RunError),
-    /// The file does not fit the scene (other units, an offset u, too long a span).
-    #[error("{0}")]
-    Mismatch(#[from] SceneMismatch),
-    /// The reference's own accuracy is not below tolerance/10 for some quantities.
-    #[error(
-        "the reference's own accuracy is not below tolerance/10 = {:.1e} for {}, so no verdict; \
-         use a larger --tolerance (for a report, or another --reference-method)",
-        tolerance / 10.0,
-        quantities.iter().map(|(q, a)| format!("{q} ({a:.1e})")).collect::<Vec<_>>().join(", ")
-    )]
-    InaccurateReference {
-        /// The quantities and their accuracy.
-        quantities: Vec<(String, f64)>,
-        /// The tolerance asked for.
-        tolerance: f64,
-    },
-}
-
-impl From<SolverError> for CompareError {
-    fn from(e: SolverError) -> Self {
-        Self::Reference(e)
-    }
-}
-
 /// One reference method processed against the user's samples.
 struct Side {
     /// Its events on its own steps.
@@ -262,42 +223,47 @@ fn side(
 ) -> Result<Side, CompareError> {
     let (start, last) = (user.t[0], *user.t.last().expect("two samples"));
     let (fine, states) = reference_steps(drr, method, rtol, start, y0, last, user_events.len())?;
-    let w: Vec<f64> = states.iter().map(|y| y[1]).collect();
-    let u: Vec<f64> = states.iter().map(|y| y[0]).collect();
     let origin = |i: usize| format!("reference at t = {}", fine[i]);
-    let own = sampled_events(&fine, &w, &u, &origin).map_err(CompareError::UnresolvedReference)?;
+    let own = sampled_events(&fine, &states, &origin).map_err(CompareError::UnresolvedReference)?;
     let n = own.len().min(user_events.len());
     let anchor = anchors(&user.t, user_events, n);
-    let shift: Vec<f64> = (0..n).map(|k| own[k].peak - user_events[k].peak).collect();
-    let targets: Vec<f64> =
-        user.t.iter().zip(&anchor).map(|(t, a)| a.map_or(*t, |k| t + shift[k])).collect();
-    let (in_phase, rebases) = reference_states(drr, method, rtol, start, y0, &targets)?;
-    let aligned = (0..n)
-        .map(|k| {
-            // The samples anchored on event k: a contiguous range, the anchors increasing.
-            let first = anchor.partition_point(|a| a.is_some_and(|a| a < k));
-            let window: Vec<usize> =
-                (first..user.t.len()).take_while(|&i| anchor[i] == Some(k)).collect();
-            let pick = |x: &dyn Fn(usize) -> f64| window.iter().map(|&i| x(i)).collect::<Vec<_>>();
-            let located = sampled_events(
-                &pick(&|i| targets[i]),
-                &pick(&|i| in_phase[i][1]),
-                &pick(&|i| in_phase[i][0]),
-                &|k| user.origin[window[k]].clone(),
-            );
-            // Where the reference cannot be located on the user's times (far off the user's
-            // event), on its own steps.
-            located
-                .ok()
-                .and_then(|e| {
-                    e.into_iter().min_by(|a, b| {
-                        (a.peak - own[k].peak).abs().total_cmp(&(b.peak - own[k].peak).abs())
+    // The states at the user's times shifted per event, and the events located on them.
+    let align = |shift: &[f64]| -> Result<Side, CompareError> {
+        let targets: Vec<f64> =
+            user.t.iter().zip(&anchor).map(|(t, a)| a.map_or(*t, |k| t + shift[k])).collect();
+        let (in_phase, rebases) = reference_states(drr, method, rtol, start, y0, &targets)?;
+        let aligned = (0..n)
+            .map(|k| {
+                // The samples anchored on event k: a contiguous range, the anchors increasing.
+                let first = anchor.partition_point(|a| a.is_some_and(|a| a < k));
+                let window: Vec<usize> =
+                    (first..user.t.len()).take_while(|&i| anchor[i] == Some(k)).collect();
+                let times: Vec<f64> = window.iter().map(|&i| targets[i]).collect();
+                let states: Vec<[f64; 3]> = window.iter().map(|&i| in_phase[i]).collect();
+                let located = sampled_events(&times, &states, &|k| user.origin[window[k]].clone());
+                // Where the reference cannot be located on the user's times (far off the
+                // user's event), on its own steps.
+                located
+                    .ok()
+                    .and_then(|e| {
+                        e.into_iter().min_by(|a, b| {
+                            (a.peak - own[k].peak).abs().total_cmp(&(b.peak - own[k].peak).abs())
+                        })
                     })
-                })
-                .unwrap_or(own[k])
-        })
-        .collect();
-    Ok(Side { own, aligned, in_phase, rebases })
+                    .unwrap_or(own[k])
+            })
+            .collect();
+        Ok(Side { own: own.clone(), aligned, in_phase, rebases })
+    };
+    // First from the peaks on the reference's own steps, whose parabola may be off by far more
+    // than the reference's error where its steps are coarse (4.7e-8 at a first event: 2.5e-7
+    // in ln v where it falls fast after the peak); then corrected so that the peak located on
+    // the shifted times is the user's, shifted: the samples then sit at the same phase of
+    // both events, and the interpolation's bias is common to both.
+    let shift: Vec<f64> = (0..n).map(|k| own[k].peak - user_events[k].peak).collect();
+    let first = align(&shift)?.aligned;
+    let shift: Vec<f64> = (0..n).map(|k| first[k].peak - user_events[k].peak).collect();
+    align(&shift)
 }
 
 /// The compared quantities of event k (see [`EVENT_QUANTITIES`]): (name, value, relative).
@@ -317,11 +283,6 @@ fn event_quantities(
         ("slip", e.slip, true),
     ]);
     q
-}
-
-/// Whether `x` ≤ `limit`; false for NaN, which is never within a limit.
-pub(crate) fn within(x: f64, limit: f64) -> bool {
-    x <= limit
 }
 
 fn deviation(user: f64, reference: f64, relative: bool) -> f64 {
@@ -349,15 +310,13 @@ pub fn against_trajectory(
     let start = user.t[0];
     let uw: Vec<[f64; 3]> = user.y.iter().map(|y| [y[0], y[1].ln(), y[2]]).collect();
     let y0 = uw[0];
-    let w_user: Vec<f64> = uw.iter().map(|y| y[1]).collect();
-    let u_user: Vec<f64> = uw.iter().map(|y| y[0]).collect();
-    let user_events = sampled_events(&user.t, &w_user, &u_user, &|i| user.origin[i].clone())
-        .map_err(CompareError::Input)?;
+    let user_events =
+        sampled_events(&user.t, &uw, &|i| user.origin[i].clone()).map_err(CompareError::Input)?;
     let reference = side(drr, Method::Radau5, rtol, user, y0, &user_events)?;
     let check = side(drr, Method::Rodas5p, check_rtol, user, y0, &user_events)?;
     let n = reference.aligned.len();
     // Samples between events: the user's v < 1.
-    let between: Vec<usize> = (0..user.t.len()).filter(|&i| w_user[i] < 0.0).collect();
+    let between: Vec<usize> = (0..user.t.len()).filter(|&i| uw[i][1] < 0.0).collect();
     // The reference's own accuracy per quantity: its difference from the check run.
     let mut accuracy: BTreeMap<String, f64> = BTreeMap::new();
     for k in 0..n.min(check.aligned.len()) {
