@@ -68,3 +68,27 @@ pub fn sign_warnings(parameters: &[FittedParameter], a_minus_b: &AMinusB) -> Vec
     }
     warnings
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parameter(name: &str, value: f64) -> FittedParameter {
+        FittedParameter { name: name.into(), value, standard_error: 1e-4, initial: 0.01, unit: "" }
+    }
+
+    /// A negative b and a flipped a − b are flagged; a plain fit is not.
+    #[test]
+    fn negative_b_and_a_flipped_a_minus_b_are_flagged() {
+        let d = |initial, value| AMinusB { value, standard_error: 1e-4, initial };
+        assert!(sign_warnings(
+            &[parameter("a", 0.01), parameter("b_1", 0.012)],
+            &d(-0.001, -0.002)
+        )
+        .is_empty());
+        let w = sign_warnings(&[parameter("a", 0.01), parameter("b_1", -0.002)], &d(-0.001, 0.012));
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w[0].contains("b_1") && w[0].contains("< 0"), "{w:?}");
+        assert!(w[1].contains("changed sign") && w[1].contains("velocity strengthening"), "{w:?}");
+    }
+}

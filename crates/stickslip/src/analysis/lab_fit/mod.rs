@@ -233,19 +233,23 @@ pub struct FitLimits {
     pub max_evaluations: usize,
     /// At most this much wall time (checked during every evaluation).
     pub max_time: Duration,
-    /// An evaluation that takes more than this many times the first's internal steps ends
-    /// the fit (at least [`MIN_STEP_BUDGET`] steps).
+    /// An evaluation that takes more than this many times the first's internal steps, and
+    /// more than `min_step_budget`, ends the fit.
     pub cost_factor: u64,
+    /// The smallest step budget of an evaluation after the first.
+    pub min_step_budget: u64,
 }
-
-/// The smallest step budget of an evaluation after the first.
-pub const MIN_STEP_BUDGET: u64 = 20_000;
 
 impl Default for FitLimits {
     /// 200 evaluations (a fit of six parameters converges in 20 to 100), 600 s, an
-    /// evaluation 50× the first's steps.
+    /// evaluation 50× the first's steps and over 20 000.
     fn default() -> Self {
-        Self { max_evaluations: 200, max_time: Duration::from_secs(600), cost_factor: 50 }
+        Self {
+            max_evaluations: 200,
+            max_time: Duration::from_secs(600),
+            cost_factor: 50,
+            min_step_budget: 20_000,
+        }
     }
 }
 
@@ -585,7 +589,10 @@ impl Problem<'_> {
         let params = self.params_at(&self.x);
         let trend = self.trend_at(&self.x);
         let budget = Budget {
-            steps: self.first_steps.get().map(|s| (limits.cost_factor * s).max(MIN_STEP_BUDGET)),
+            steps: self
+                .first_steps
+                .get()
+                .map(|s| (limits.cost_factor * s).max(limits.min_step_budget)),
             deadline: Some(self.deadline),
         };
         let f = match friction_sensitivities(
