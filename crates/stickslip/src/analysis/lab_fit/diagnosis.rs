@@ -18,10 +18,10 @@ pub fn at_start(
     let y0 = start.steady_state(loading.segments[0].velocity);
     let run = lab::run(start, loading, &y0, solver, &Output::Times(vec![]), &mut |_| {});
     let Ok(outcome) = run else {
-        return FitError::Solver { stage: "starting", source };
+        return FitError::Solver { stage: "starting", source: Box::new(source) };
     };
     let Some(blow_up) = outcome.blow_up else {
-        return FitError::Solver { stage: "starting", source };
+        return FitError::Solver { stage: "starting", source: Box::new(source) };
     };
     let segments = loading.segments.len();
     let j = loading.segments.iter().rposition(|s| s.t_start <= blow_up.t_start).unwrap_or(0);

@@ -1,6 +1,6 @@
 //! Fitting the lab model ([`crate::model::lab`]) to a friction record: a, b_i, D_c,i, k, μ0
-//! and an optional linear trend, by Levenberg–Marquardt with the exact Jacobian from CVODES'
-//! forward sensitivities.
+//! and an optional linear trend, by Levenberg–Marquardt with the exact Jacobian from
+//! forward sensitivities (CVODES', or the state and its sensitivity equations as one system).
 //!
 //! The residuals are r_i = μ_model(t_i) + trend·(x_lp(t_i) − x_lp(t_0)) − μ_data(t_i), the
 //! model started at steady sliding at the first segment's velocity. ∂μ/∂p comes from the
@@ -212,7 +212,7 @@ pub enum FitError {
         /// "starting" or "fitted".
         stage: &'static str,
         /// Where and why.
-        source: SensitivityError,
+        source: Box<SensitivityError>,
     },
     /// The model at the starting values blows up in finite time (the message says when and
     /// what to change).
@@ -332,7 +332,9 @@ pub fn fit(
         match cached {
             Some(e) if e.x == x => e,
             _ => problem.evaluate().map_err(|f| match f {
-                Failure::Solver(source) => FitError::Solver { stage: "fitted", source },
+                Failure::Solver(source) => {
+                    FitError::Solver { stage: "fitted", source: Box::new(source) }
+                }
                 Failure::Stopped(stop) => FitError::Stopped(stop.message),
             })?,
         }

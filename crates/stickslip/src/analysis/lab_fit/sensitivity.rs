@@ -56,7 +56,7 @@ impl SensitivityRoute {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Budget {
     /// At most about this many internal steps (checked after each output time; each call is
-    /// also limited to it). None: [`FIRST_EVALUATION_STEPS_PER_CALL`] per call, no total.
+    /// also limited to it). None: `FIRST_EVALUATION_STEPS_PER_CALL` (100 000) per call, no total.
     pub steps: Option<u64>,
     /// Stop when this instant has passed (checked after each output time).
     pub deadline: Option<Instant>,
@@ -225,7 +225,7 @@ pub fn friction_sensitivities(
                 z.extend_from_slice(&s);
                 let mut atol = vec![solver.atol; n];
                 for scale in &scales {
-                    atol.extend(std::iter::repeat(solver.atol / scale).take(n));
+                    atol.extend(std::iter::repeat_n(solver.atol / scale, n));
                 }
                 let options = Options {
                     stop_time: Some(t1 - t0),

@@ -29,7 +29,7 @@ pub fn check_displacement(t: &[f64], x: &[f64], loading: &Loading) -> Result<(),
             continue;
         }
         let (slope, se) = slope(&inside);
-        if !(se <= 0.1 * seg.velocity) {
+        if se.is_nan() || se > 0.1 * seg.velocity {
             continue;
         }
         judged.push((j, seg.velocity, slope));
