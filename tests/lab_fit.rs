@@ -4,7 +4,10 @@
 
 use nalgebra::{DMatrix, DVector};
 use stickslip::analysis::lab::{self, LabSolver, Output};
-use stickslip::analysis::lab_fit::{self, statistics, FitParameter, FitSettings, FrictionRecord};
+use stickslip::analysis::lab_fit::{
+    self, statistics, Budget, FitError, FitLimits, FitParameter, FitSettings, FrictionRecord,
+    Termination,
+};
 use stickslip::analysis::noise::rng::Rng;
 use stickslip::model::{LabLaw, LabParameter, LabParams, LabState, Loading, Segment};
 use stickslip::solver::Method;
@@ -58,6 +61,7 @@ fn sensitivities_equal_central_differences() {
             &times,
             &varied,
             &LabSolver { rtol: 1e-13, atol: 1e-13, ..tight() },
+            &Budget::default(),
         )
         .unwrap();
         let mu = forward(&p, &loading, &times);
@@ -137,10 +141,10 @@ fn synthetic_fits_recover_the_parameters_within_three_standard_errors() {
         let settings = FitSettings {
             params: names.iter().map(|n| FitParameter::parse(n, 1).unwrap()).collect(),
             solver: tight(),
-            patience: 100,
+            limits: FitLimits::default(),
         };
         let out = lab_fit::fit(&start, &step_loading(), &record, &settings).unwrap();
-        assert!(out.converged, "{law:?}: {}", out.termination);
+        assert!(out.converged, "{law:?}: {:?}", out.termination);
         let exact = [truth.a, truth.states[0].b, truth.states[0].d_c];
         for (fitted, exact) in out.parameters.iter().zip(exact) {
             let z = (fitted.value - exact) / fitted.standard_error;
@@ -165,7 +169,11 @@ fn synthetic_fits_recover_the_parameters_within_three_standard_errors() {
             );
             assert!((ratio - 1.0).abs() < 0.1, "{}: ratio {ratio}", fitted.name);
         }
-        assert!(out.lag1_autocorrelation.abs() < 0.2 && out.warnings.is_empty());
+        assert!(out.lag1_autocorrelation.abs() < 0.2);
+        // The start (a 30 % high, b 20 % low) is velocity strengthening, the truth weakening:
+        // the one warning is the flipped a − b.
+        assert_eq!(out.warnings.len(), 1, "{:?}", out.warnings);
+        assert!(out.warnings[0].contains("a − b changed sign"), "{:?}", out.warnings);
     }
 }
 
@@ -194,7 +202,15 @@ fn loading_from_the_records_displacement() {
     let params: Vec<FitParameter> =
         ["a", "b_1", "d_c_1"].iter().map(|n| FitParameter::parse(n, 1).unwrap()).collect();
     let fit = |loading| {
-        stickslip::engine::lab::fit(&scene, &record, "synthetic", params.clone(), loading).unwrap()
+        stickslip::engine::lab::fit(
+            &scene,
+            &record,
+            "synthetic",
+            params.clone(),
+            loading,
+            FitLimits::default(),
+        )
+        .unwrap()
     };
     let (from_scene, from_data) = (
         fit(stickslip::engine::lab::FitLoading::Scene),
@@ -221,7 +237,7 @@ fn autocorrelated_residuals_are_warned_about() {
     let settings = FitSettings {
         params: ["a", "b_1", "d_c_1"].iter().map(|n| FitParameter::parse(n, 1).unwrap()).collect(),
         solver: tight(),
-        patience: 100,
+        limits: FitLimits::default(),
     };
     let out = lab_fit::fit(&start, &step_loading(), &record, &settings).unwrap();
     assert!(out.lag1_autocorrelation > 0.5, "{}", out.lag1_autocorrelation);
@@ -235,7 +251,7 @@ fn bad_requests_name_the_fix() {
     let fit = |names: &[&str]| {
         let params =
             names.iter().map(|n| FitParameter::parse(n, 1)).collect::<Result<Vec<_>, _>>()?;
-        let settings = FitSettings { params, solver: tight(), patience: 10 };
+        let settings = FitSettings { params, solver: tight(), limits: FitLimits::default() };
         lab_fit::fit(&p, &step_loading(), &record, &settings).map(|_| ()).map_err(|e| e.to_string())
     };
     assert!(fit(&["b_2"]).unwrap_err().contains("state variables 1 to 1"));
@@ -269,9 +285,10 @@ fn basalt_step_fits_agree_with_an_independent_scipy_fit() {
             "a,b_1,d_c_1,k,mu0,trend",
             "t=Time(s),x_lp=Displ(microns),mu=Friction",
             stickslip::engine::lab::FitLoading::Scene,
+            FitLimits::default(),
         )
         .unwrap();
-        assert!(report.outcome.converged, "{law}: {}", report.outcome.termination);
+        assert!(report.outcome.converged, "{law}: {:?}", report.outcome.termination);
         let scipy = &reference["cases"][format!("basalt_{law}")]["scipy"];
         for p in &report.outcome.parameters {
             let value = scipy["values"][&p.name].as_f64().unwrap();
@@ -328,5 +345,228 @@ fn the_cli_fits_the_basalt_step_and_refuses_bad_requests() {
         assert!(stderr.contains(says), "{stderr}");
         assert!(!svg.exists() && !json.exists());
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The basalt scene (`data/scenes/lab-basalt-b819.json`) with `law` and `solver` replaced.
+fn basalt_scene(law: &str, solver: &str) -> stickslip::scene::lab::LabScene {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let text = std::fs::read_to_string(format!("{root}/data/scenes/lab-basalt-b819.json")).unwrap();
+    let text = text
+        .replace("\"law\": \"slip\"", &format!("\"law\": \"{law}\""))
+        .replace("{\"method\": \"cvode-bdf\", \"rtol\": 1e-10}", solver);
+    let stickslip::scene::AnyScene::Lab(scene) =
+        stickslip::scene::parse_any(&text, "b819").unwrap()
+    else {
+        panic!("a lab scene")
+    };
+    *scene
+}
+
+fn fit_basalt(
+    scene: &stickslip::scene::lab::LabScene,
+    limits: FitLimits,
+) -> Result<stickslip::report::lab_fit::FitReport, FitError> {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let data =
+        std::path::PathBuf::from(format!("{root}/data/lab/velstep4_BRAVA_expb819_basalt.txt"));
+    stickslip::engine::lab::fit_file(
+        scene,
+        &data,
+        "a,b_1,d_c_1,k,mu0,trend",
+        "t=Time(s),x_lp=Displ(microns),mu=Friction",
+        stickslip::engine::lab::FitLoading::Scene,
+        limits,
+    )
+}
+
+/// The fit integrates with the scene's method and says which: radau5 and rodas5p (the state
+/// and its sensitivity equations as one system) agree with cvode-bdf (CVODES' sensitivities)
+/// within 0.01 standard errors on every parameter of the basalt step; arkode-imex is refused
+/// with the reason.
+#[test]
+fn the_fit_runs_the_scenes_method() {
+    let default = fit_basalt(
+        &basalt_scene("slip", "{\"method\": \"cvode-bdf\", \"rtol\": 1e-10}"),
+        FitLimits::default(),
+    )
+    .unwrap();
+    assert_eq!(default.sensitivities, "cvodes");
+    for method in ["radau5", "rodas5p"] {
+        let scene = basalt_scene("slip", &format!("{{\"method\": \"{method}\", \"rtol\": 1e-10}}"));
+        let report = fit_basalt(&scene, FitLimits::default()).unwrap();
+        assert_eq!(report.solver.method.name(), method);
+        assert_eq!(report.sensitivities, "one-system");
+        assert!(report.outcome.converged);
+        for (a, b) in default.outcome.parameters.iter().zip(&report.outcome.parameters) {
+            let off = (a.value - b.value) / a.standard_error;
+            eprintln!("{method} {}: {:+.1e} standard errors from cvode-bdf's", a.name, off);
+            assert!(off.abs() < 0.01, "{method} {}: {off} standard errors", a.name);
+            assert!((a.standard_error / b.standard_error - 1.0).abs() < 1e-3);
+        }
+    }
+    let imex = basalt_scene("slip", "{\"method\": \"arkode-imex\"}");
+    match fit_basalt(&imex, FitLimits::default()) {
+        Err(FitError::BadInput(m)) => {
+            assert!(m.contains("arkode-imex") && m.contains("arkode-dirk"), "{m}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The limits end a fit: `max_evaluations` is obeyed, an evaluation far costlier than the
+/// first stops it naming the parameter values, and a time limit stops even the first.
+#[test]
+fn limits_stop_the_fit() {
+    let scene = basalt_scene("ageing", "{\"method\": \"cvode-bdf\", \"rtol\": 1e-10}");
+    let five = FitLimits { max_evaluations: 5, ..FitLimits::default() };
+    let o = fit_basalt(&scene, five).unwrap().outcome;
+    assert_eq!(
+        (o.evaluations, o.termination, o.converged),
+        (5, Termination::MaxEvaluations, false)
+    );
+    assert!(o.stopped.unwrap().contains("--max-evaluations 5"));
+    // Any evaluation costlier than the first (some are: the ageing fit's steps vary).
+    let strict = FitLimits { cost_factor: 1, min_step_budget: 1, ..FitLimits::default() };
+    let o = fit_basalt(&scene, strict).unwrap().outcome;
+    assert_eq!(o.termination, Termination::ExpensiveEvaluation);
+    let why = o.stopped.unwrap();
+    assert!(why.contains("a = ") && why.contains("d_c_1 = ") && why.contains("µm"), "{why}");
+    let instant =
+        FitLimits { max_time: std::time::Duration::from_nanos(1), ..FitLimits::default() };
+    match fit_basalt(&scene, instant) {
+        Err(FitError::Stopped(m)) => assert!(m.contains("--max-time"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A blow-up at the starting values is said as such, with what to change.
+#[test]
+fn a_blow_up_at_the_start_says_what_to_change() {
+    let mut scene = basalt_scene("slip", "{\"method\": \"cvode-bdf\", \"rtol\": 1e-10}");
+    scene.params.a = 0.005;
+    scene.params.k = 1e-4;
+    match fit_basalt(&scene, FitLimits::default()) {
+        Err(FitError::BlowUp(m)) => {
+            assert!(m.contains("blows up in finite time") && m.contains("segment 2 of 2"), "{m}");
+            assert!(m.contains("critical stiffness"), "{m}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The report's `model` pastes back into a scene; `termination` is a documented word.
+#[test]
+fn the_reports_model_is_a_scene_model() {
+    let scene = basalt_scene("slip", "{\"method\": \"cvode-bdf\", \"rtol\": 1e-10}");
+    let report = fit_basalt(&scene, FitLimits::default()).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&report.to_json()).unwrap();
+    assert_eq!(json["termination"], "converged");
+    assert_eq!(json["model"]["kind"], "lab");
+    let text = serde_json::json!({
+        "name": "refit",
+        "model": json["model"],
+        "loading": {"segments": [{"t_start": 0, "velocity": 1}], "t_end": 10}
+    })
+    .to_string();
+    let stickslip::scene::AnyScene::Lab(again) =
+        stickslip::scene::parse_any(&text, "refit").unwrap()
+    else {
+        panic!("a lab scene")
+    };
+    assert_eq!(again.params, report.outcome.model);
+    let d = &report.outcome.a_minus_b;
+    assert!((d.value - (report.outcome.model.a - report.outcome.model.states[0].b)).abs() < 1e-15);
+    assert!(d.standard_error > 0.0 && d.standard_error < 1e-4);
+}
+
+/// On the command line: the basalt scene with its second velocity typed 10× too large ends at
+/// once (exit 2, naming the segment); a record in metres against the scene's µm exits 2
+/// naming the units; `--max-evaluations 5` exits 4 with the report; `--series` writes the
+/// record beside the fit.
+#[test]
+fn the_cli_refuses_inconsistent_units_and_obeys_its_limits() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dir = std::env::temp_dir().join(format!("stickslip-fit-limits-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene =
+        std::fs::read_to_string(format!("{root}/data/scenes/lab-basalt-b819.json")).unwrap();
+    let typo = dir.join("typo.json");
+    std::fs::write(&typo, scene.replace("\"velocity\": 10.0308", "\"velocity\": 100.308")).unwrap();
+    let record =
+        std::fs::read_to_string(format!("{root}/data/lab/velstep4_BRAVA_expb819_basalt.txt"))
+            .unwrap();
+    let metres = dir.join("metres.txt");
+    let converted: Vec<String> = record
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            let mut f: Vec<String> = l.split('\t').map(String::from).collect();
+            if i > 0 {
+                f[1] = format!("{:e}", f[1].parse::<f64>().unwrap() * 1e-6);
+            }
+            f.join("\t")
+        })
+        .collect();
+    std::fs::write(&metres, converted.join("\n")).unwrap();
+    let fit = |scene: &std::path::Path, data: &std::path::Path, extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+            .current_dir(root)
+            .arg("fit")
+            .arg(scene)
+            .arg("--data")
+            .arg(data)
+            .args(["--params", "a,b_1,d_c_1,k,mu0,trend", "--columns"])
+            .arg("t=Time(s),x_lp=Displ(microns),mu=Friction")
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let basalt = std::path::Path::new("data/scenes/lab-basalt-b819.json");
+    let record = std::path::Path::new("data/lab/velstep4_BRAVA_expb819_basalt.txt");
+    let out = fit(&typo, record, &[]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("segment 2 of 2") && stderr.contains("100.308"), "{stderr}");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stickslip"))
+        .current_dir(root)
+        .args(["fit", "data/scenes/lab-basalt-b819.json", "--data"])
+        .arg(&metres)
+        .args(["--params", "a,b_1,d_c_1", "--columns", "t=Time(s),x_lp=Displ(microns),mu=Friction"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("metres") && stderr.contains("µm"), "{stderr}");
+    let (series, report) = (dir.join("fit.csv"), dir.join("fit.json"));
+    let out = fit(
+        basalt,
+        record,
+        &[
+            "--max-evaluations",
+            "5",
+            "--series",
+            series.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("--max-evaluations 5"), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(
+        (json["evaluations"].as_u64(), json["termination"].as_str()),
+        (Some(5), Some("max_evaluations"))
+    );
+    let csv = std::fs::read_to_string(&series).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("t,mu_measured,mu_fitted,residual"));
+    let rows: Vec<Vec<f64>> =
+        lines.map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 5849);
+    assert!(rows.iter().all(|r| (r[3] - (r[2] - r[1])).abs() < 1e-15));
+    assert_eq!(rows[0][0], 11607.7);
     std::fs::remove_dir_all(&dir).unwrap();
 }

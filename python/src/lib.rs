@@ -351,8 +351,15 @@ fn fit_scene(
     let cancel = Cancel::new();
     let name = scene.name.clone();
     let outcome = off_the_gil(py, &cancel, move || {
-        engine::lab::fit_file(&scene, std::path::Path::new(&data), &params, &columns, loading)
-            .map_err(Box::new)
+        engine::lab::fit_file(
+            &scene,
+            std::path::Path::new(&data),
+            &params,
+            &columns,
+            loading,
+            stickslip::analysis::lab_fit::FitLimits::default(),
+        )
+        .map_err(Box::new)
     })?;
     let report = outcome.map_err(|e| match *e {
         stickslip::analysis::lab_fit::FitError::BadInput(m) => PyValueError::new_err(m),

@@ -3,7 +3,7 @@
 
 use super::Failure;
 use std::path::PathBuf;
-use stickslip::analysis::lab_fit::FitError;
+use stickslip::analysis::lab_fit::{FitError, FitLimits};
 use stickslip::engine::lab::{self, FitLoading};
 use stickslip::scene::{self, AnyScene};
 
@@ -37,6 +37,15 @@ pub struct FitArgs {
     /// Draw the record, the fit and the residuals to FILE (SVG).
     #[arg(long, value_name = "FILE.svg")]
     pub figure: Option<PathBuf>,
+    /// Write t, μ measured, μ fitted and the residual (μ fitted − μ measured) to FILE (CSV).
+    #[arg(long, value_name = "FILE.csv")]
+    pub series: Option<PathBuf>,
+    /// Stop after N model evaluations (the report then holds the best point reached, exit 4).
+    #[arg(long, value_name = "N", default_value_t = FitLimits::default().max_evaluations)]
+    pub max_evaluations: usize,
+    /// Stop after S seconds of wall time (the report then holds the best point reached, exit 4).
+    #[arg(long, value_name = "S", default_value_t = FitLimits::default().max_time.as_secs_f64())]
+    pub max_time: f64,
 }
 
 /// The `--loading` choices.
@@ -62,16 +71,41 @@ pub fn command(args: FitArgs) -> Result<(), Failure> {
         LoadingSource::Scene => FitLoading::Scene,
         LoadingSource::Data => FitLoading::Data,
     };
-    let report = lab::fit_file(&scene, &args.data, &args.params, &args.columns, loading).map_err(
-        |e| match e {
+    if !(args.max_time.is_finite() && args.max_time > 0.0) {
+        return Err(bad(format!(
+            "--max-time {}: give a positive number of seconds",
+            args.max_time
+        )));
+    }
+    let limits = FitLimits {
+        max_evaluations: args.max_evaluations,
+        max_time: std::time::Duration::from_secs_f64(args.max_time),
+        ..FitLimits::default()
+    };
+    let report = lab::fit_file(&scene, &args.data, &args.params, &args.columns, loading, limits)
+        .map_err(|e| match e {
             FitError::BadInput(m) => bad(m),
+            FitError::Stopped(m) => Failure(4, format!("fit of scene {}: {m}", scene.name)),
             other => Failure(1, format!("fit of scene {}: {other}", scene.name)),
-        },
-    )?;
+        })?;
     if let Some(file) = &args.figure {
         crate::figure::fit::data_fit_and_residuals(&scene.name, &report.outcome)
             .write(file)
             .map_err(|e| Failure(1, format!("--figure: {e}")))?;
     }
-    super::deliver_report(&report.to_json(), &report.summary(), args.json, args.out.as_deref())
+    if let Some(file) = &args.series {
+        stickslip::report::write_atomic(file, &report.series_csv())
+            .map_err(|e| Failure(1, format!("--series: cannot write {}: {e}", file.display())))?;
+    }
+    super::deliver_report(&report.to_json(), &report.summary(), args.json, args.out.as_deref())?;
+    match &report.outcome.stopped {
+        Some(why) => Err(Failure(
+            4,
+            format!(
+                "fit of scene {}: stopped: {why} (the report holds the best point reached)",
+                scene.name
+            ),
+        )),
+        None => Ok(()),
+    }
 }

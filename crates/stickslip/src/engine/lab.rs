@@ -3,7 +3,8 @@
 
 use crate::analysis::lab::{self, LabRunError};
 use crate::analysis::lab_fit::{
-    self, ColumnNames, FitError, FitParameter, FitSettings, FrictionRecord,
+    self, ColumnNames, FitError, FitLimits, FitParameter, FitSettings, FrictionRecord,
+    SensitivityRoute,
 };
 use crate::analysis::time_series::SeriesSink;
 use crate::model::Loading;
@@ -79,14 +80,15 @@ pub enum FitLoading {
 }
 
 /// Fits `scene`'s lab model to `record` (`stickslip fit`): the scene gives the starting
-/// values, the tolerances and (with [`FitLoading::Scene`]) the loading; `data` names the record
-/// in the report.
+/// values, the solver and (with [`FitLoading::Scene`]) the loading; `data` names the record
+/// in the report; `limits` caps the work.
 pub fn fit(
     scene: &LabScene,
     record: &FrictionRecord,
     data: &str,
     params: Vec<FitParameter>,
     loading: FitLoading,
+    limits: FitLimits,
 ) -> Result<FitReport, FitError> {
     let history = match loading {
         FitLoading::Scene => scene.loading.clone(),
@@ -107,7 +109,8 @@ pub fn fit(
             "a fit starts at steady sliding at the first segment's velocity: give \"initial\": \"steady\" in the scene".into(),
         ));
     }
-    let settings = FitSettings { params, solver: scene.solver.clone(), patience: 100 };
+    let route = SensitivityRoute::for_method(scene.solver.method).map_err(FitError::BadInput)?;
+    let settings = FitSettings { params, solver: scene.solver.clone(), limits };
     let outcome = lab_fit::fit(&scene.params, &history, record, &settings)?;
     Ok(FitReport {
         stickslip_version: env!("CARGO_PKG_VERSION"),
@@ -119,6 +122,7 @@ pub fn fit(
             FitLoading::Data => "data",
         },
         solver: scene.solver.clone(),
+        sensitivities: route.name(),
         outcome,
     })
 }
@@ -132,6 +136,7 @@ pub fn fit_file(
     params: &str,
     columns: &str,
     loading: FitLoading,
+    limits: FitLimits,
 ) -> Result<FitReport, FitError> {
     let n = scene.params.states.len();
     let params = params
@@ -142,5 +147,5 @@ pub fn fit_file(
     let names = ColumnNames::parse(columns).map_err(FitError::BadInput)?;
     let record = FrictionRecord::read(data, &names, loading == FitLoading::Data)
         .map_err(|e| FitError::BadInput(format!("--data: {e}")))?;
-    fit(scene, &record, &data.display().to_string(), params, loading)
+    fit(scene, &record, &data.display().to_string(), params, loading, limits)
 }
