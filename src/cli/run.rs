@@ -51,7 +51,7 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
-    let text = qdyn::scene_text(path.as_deref(), text).map_err(|e| Failure(2, e))?;
+    let (text, intervals) = qdyn::read(path.as_deref(), text).map_err(|e| Failure(2, e))?;
     if print_scene {
         println!("{text}");
         return Ok(());
@@ -79,11 +79,12 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
                 engine::run_with(scene, echo, threads, &update)
                     .map_err(|e| failed(&scene.name, e))?
             } else {
-                let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
+                let qdyn =
+                    qdyn_output.as_deref().map(|d| qdyn::sink(scene, d, intervals)).transpose();
                 let qdyn = qdyn.map_err(|e| Failure(2, e))?;
                 run_writing_series(scene, echo, threads, &update, &series, qdyn)?
             };
-            not_converged = report.cycle.as_ref().and_then(|c| unconverged(&scene.name, c));
+            not_converged = report.cycle.as_ref().and_then(|c| unconverged(scene, c));
             (report.to_json(), report.summary(), scene.analyses.noise.is_some())
         }
         scene::AnyScene::Other(_) if !series.is_empty() || qdyn_output.is_some() => {
@@ -133,10 +134,23 @@ fn run_lab(
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
-/// limit, and what to raise.
-fn unconverged(name: &str, c: &stickslip::analysis::cycle::CycleReport) -> Option<String> {
+/// limit, and what to raise; or, for a start on the fixed point, that nothing happens.
+fn unconverged(
+    scene: &scene::Scene,
+    c: &stickslip::analysis::cycle::CycleReport,
+) -> Option<String> {
     if c.status != stickslip::analysis::cycle::CycleStatus::NotConverged {
         return None;
+    }
+    let name = &scene.name;
+    if scene.loading.is_none() && stickslip::model::Drr::new(scene.params).at_rest(&scene.initial) {
+        return Some(format!(
+            "scene {name}: cycle: the run starts on the fixed point (v = 1, θ = {:e}: steady \
+             sliding at the loading rate), where the state never changes, so no cycle forms; \
+             perturb the start, e.g. \"initial\": {{\"v\": 0.5}} (with model.dimensional: \
+             \"velocity\", half of v0) (exit code 4)",
+            scene.initial[2]
+        ));
     }
     let limit = c.stopped_by.unwrap_or("max_cycles");
     Some(format!(

@@ -1,6 +1,8 @@
 //! QDYN's output files for a spring-block (`stickslip run … --qdyn-output DIR`): `output_ot_0`
 //! (the time series at the block), `output_vmax` (the same at the fastest point: the block)
-//! and `output_ox` (snapshots: the first and the last row), with QDYN's headers, columns and
+//! and `output_ox` (snapshots), thinned as QDYN thins them when the run comes from a qdyn.in
+//! (every `NTOUT_OT`-th step and every `NTOUT`-th, each with the first and the last; without
+//! one, every row and the first and last snapshots), with QDYN's headers, columns and
 //! Fortran formats (`E24.14` for time, `E15.7` for the rest, `I15` for `ivmax`) and its SI
 //! units, so that pyqdyn's `read_output` reads them unchanged. The layout is copied from files
 //! QDYN wrote (data/reference/qdyn_output/, its README says how they were made).
@@ -13,6 +15,7 @@
 use crate::analysis::time_series::SeriesSink;
 use crate::model::scales::PhysicalScales;
 use crate::model::Friction;
+use crate::scene::qdyn_input::QdynOutputIntervals;
 use crate::scene::Scene;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -119,21 +122,47 @@ struct Indices {
     slip: usize,
 }
 
-/// Writes QDYN's three files in a directory as rows arrive; nothing is kept but the last row
-/// (for the final snapshot).
+/// The size of the files above which [`QdynOutputSink`] announces its estimate: 100 MB.
+pub const LARGE_OUTPUT_BYTES: u64 = 100_000_000;
+
+/// The written size at which the estimate is first made (then at each doubling): 4 MB.
+const FIRST_ESTIMATE_BYTES: u64 = 4_000_000;
+
+/// Where the rows go and what is announced about their size.
 pub struct QdynOutputSink {
     columns: QdynColumns,
     ot: BufWriter<File>,
     vmax: BufWriter<File>,
     ox: BufWriter<File>,
     indices: Option<Indices>,
-    last: Option<[f64; 9]>,
+    /// QDYN's intervals, in rows (every row a step); None: every row, first and last
+    /// snapshots.
+    intervals: Option<QdynOutputIntervals>,
+    /// The last row received, and whether it went to the time series and to a snapshot.
+    last: Option<([f64; 9], bool, bool)>,
     rows: u64,
+    /// The end of the run (the time column's unit), for the size estimate.
+    t_max: f64,
+    bytes: u64,
+    next_estimate: u64,
+    /// Receives the size estimate, once, when it exceeds [`LARGE_OUTPUT_BYTES`].
+    announce: Box<dyn FnMut(&str)>,
+    announced: bool,
 }
 
 impl QdynOutputSink {
     /// Creates `dir` (if needed) and its files `output_ot_0`, `output_vmax`, `output_ox`.
-    pub fn create(dir: &Path, columns: QdynColumns) -> io::Result<Self> {
+    /// `intervals`: QDYN's `NTOUT_OT` and `NTOUT` of the run's qdyn.in (every row is then one
+    /// integrator step), or None. `t_max` is the run's end in the time column's unit; once
+    /// the files written so far, extrapolated to it, exceed [`LARGE_OUTPUT_BYTES`], `announce`
+    /// receives the estimate (once).
+    pub fn create(
+        dir: &Path,
+        columns: QdynColumns,
+        intervals: Option<QdynOutputIntervals>,
+        t_max: f64,
+        announce: Box<dyn FnMut(&str)>,
+    ) -> io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let file = |name: &str| File::create(dir.join(name)).map(BufWriter::new);
         Ok(Self {
@@ -142,18 +171,70 @@ impl QdynOutputSink {
             vmax: file("output_vmax")?,
             ox: file("output_ox")?,
             indices: None,
+            intervals,
             last: None,
             rows: 0,
+            t_max,
+            bytes: 0,
+            next_estimate: FIRST_ESTIMATE_BYTES,
+            announce,
+            announced: false,
         })
     }
 
     fn snapshot(&mut self, q: &[f64; 9]) -> io::Result<()> {
-        self.ox.write_all(OX_HEADER.as_bytes())?;
         let mut line = fortran_e(q[0], 24, 14) + &fortran_e(0.0, 24, 14);
         for x in [0.0, 0.0, q[3], q[4], q[5], q[6], q[7], q[8]] {
             line += &fortran_e(x, 15, 7);
         }
-        writeln!(self.ox, "{line}")
+        self.ox.write_all(OX_HEADER.as_bytes())?;
+        writeln!(self.ox, "{line}")?;
+        self.bytes += (OX_HEADER.len() + line.len() + 1) as u64;
+        Ok(())
+    }
+
+    /// One row of `output_ot_0` and of `output_vmax`.
+    fn time_series(&mut self, q: &[f64; 9]) -> io::Result<()> {
+        let mut ot = fortran_e(q[0], 24, 14);
+        let mut vmax = ot.clone() + &format!("{:>15}", 1);
+        for (k, x) in q.iter().enumerate().skip(1) {
+            let field = fortran_e(*x, 15, 7);
+            if k >= 3 {
+                vmax += &field;
+            }
+            ot += &field;
+        }
+        writeln!(self.ot, "{ot}")?;
+        writeln!(self.vmax, "{vmax}")?;
+        self.bytes += (ot.len() + vmax.len() + 2) as u64;
+        Ok(())
+    }
+
+    /// Announces the files' size extrapolated to t_max from what was written by time `t`,
+    /// when it is large (checked at 4 MB written and at each doubling).
+    fn estimate(&mut self, t: f64) {
+        if self.announced || self.bytes < self.next_estimate || !(t > 0.0) {
+            return;
+        }
+        self.next_estimate *= 2;
+        let expected = self.bytes as f64 * (self.t_max / t).max(1.0);
+        if expected > LARGE_OUTPUT_BYTES as f64 {
+            self.announced = true;
+            let thin = match self.intervals {
+                Some(i) => format!(
+                    "the qdyn.in's NTOUT_OT (line 8, now {}) writes every NTOUT_OT-th step",
+                    i.time_series
+                ),
+                None => "the time_series option \"every\": N writes every N-th step".into(),
+            };
+            (self.announce)(&format!(
+                "--qdyn-output: the files will hold about {:.0} MB by t = {:e} s at the rate so \
+                 far ({:.0} MB by t = {t:e} s); {thin}",
+                expected / 1e6,
+                self.t_max,
+                self.bytes as f64 / 1e6
+            ));
+        }
     }
 }
 
@@ -172,7 +253,9 @@ impl SeriesSink for QdynOutputSink {
             slip: find("slip")?,
         });
         self.ot.write_all(OT_HEADER.as_bytes())?;
-        self.vmax.write_all(VMAX_HEADER.as_bytes())
+        self.vmax.write_all(VMAX_HEADER.as_bytes())?;
+        self.bytes += (OT_HEADER.len() + VMAX_HEADER.len()) as u64;
+        Ok(())
     }
 
     fn row(&mut self, values: &[f64]) -> io::Result<()> {
@@ -182,28 +265,35 @@ impl SeriesSink for QdynOutputSink {
             .columns
             .values(values[i.t], values[i.theta], values[i.v], values[i.stress], values[i.slip])
             .ok_or_else(|| invalid("QDYN's τ = σμ needs μ's absolute level"))?;
-        let mut ot = fortran_e(q[0], 24, 14);
-        let mut vmax = ot.clone() + &format!("{:>15}", 1);
-        for (k, x) in q.iter().enumerate().skip(1) {
-            let field = fortran_e(*x, 15, 7);
-            if k >= 3 {
-                vmax += &field;
+        // Row k is step k: QDYN writes step 0 and every n-th.
+        let (series, snapshot) = match self.intervals {
+            Some(i) => {
+                (self.rows.is_multiple_of(i.time_series), self.rows.is_multiple_of(i.snapshots))
             }
-            ot += &field;
+            None => (true, self.rows == 0),
+        };
+        if series {
+            self.time_series(&q)?;
         }
-        writeln!(self.ot, "{ot}")?;
-        writeln!(self.vmax, "{vmax}")?;
-        if self.rows == 0 {
+        if snapshot {
             self.snapshot(&q)?;
         }
         self.rows += 1;
-        self.last = Some(q);
+        self.last = Some((q, series, snapshot));
+        self.estimate(q[0]);
         Ok(())
     }
 
+    /// Writes the last row where it was not written (QDYN writes its last step to each
+    /// file), and flushes.
     fn finish(&mut self) -> io::Result<()> {
-        if let (Some(q), true) = (self.last, self.rows > 1) {
-            self.snapshot(&q)?;
+        if let Some((q, series, snapshot)) = self.last {
+            if !series {
+                self.time_series(&q)?;
+            }
+            if !snapshot {
+                self.snapshot(&q)?;
+            }
         }
         self.ot.flush()?;
         self.vmax.flush()?;
