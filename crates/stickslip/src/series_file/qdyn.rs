@@ -220,17 +220,26 @@ impl QdynOutputSink {
         let expected = self.bytes as f64 * (self.t_max / t).max(1.0);
         if expected > LARGE_OUTPUT_BYTES as f64 {
             self.announced = true;
+            // The interval that would bring the files near the announced size.
+            let n = (expected / LARGE_OUTPUT_BYTES as f64).ceil();
             let thin = match self.intervals {
                 Some(i) => format!(
-                    "the qdyn.in's NTOUT_OT (line 8, now {}) writes every NTOUT_OT-th step",
-                    i.time_series
+                    "the qdyn.in's NTOUT_OT (line 8, now {}) writes every NTOUT_OT-th step: \
+                     NTOUT_OT = {} gives about {} MB",
+                    i.time_series,
+                    n * i.time_series as f64,
+                    LARGE_OUTPUT_BYTES / 1_000_000
                 ),
-                None => "the time_series option \"every\": N writes every N-th step".into(),
+                None => format!(
+                    "the time_series option \"every\": N writes every N-th step: N = {n} times \
+                     the scene's gives about {} MB",
+                    LARGE_OUTPUT_BYTES / 1_000_000
+                ),
             };
             (self.announce)(&format!(
-                "--qdyn-output: the files will hold about {:.0} MB by t = {:e} s at the rate so \
-                 far ({:.0} MB by t = {t:e} s); {thin}",
-                expected / 1e6,
+                "--qdyn-output: the files will hold about {:.3} GB by t = {:e} s at the rate so \
+                 far ({:.1} MB by t = {t:.4e} s); {thin}",
+                expected / 1e9,
                 self.t_max,
                 self.bytes as f64 / 1e6
             ));
@@ -303,7 +312,100 @@ impl SeriesSink for QdynOutputSink {
 
 #[cfg(test)]
 mod tests {
-    use super::fortran_e;
+    use super::*;
+
+    /// A sink on the SI field scene (t_max = 1e9 s) writing to a fresh directory, with the
+    /// announcements collected in `said`.
+    fn sink(
+        name: &str,
+        intervals: Option<QdynOutputIntervals>,
+    ) -> (QdynOutputSink, std::path::PathBuf, std::rc::Rc<std::cell::RefCell<Vec<String>>>) {
+        let scene = crate::scene::parse(
+            r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
+                "dimensional": {"sigma": 1e7, "a": 0.01, "b": 0.015, "d_c": 1e-4, "v0": 1e-9,
+                    "mu0": 0.6, "v_ref": 1e-6, "length": 120, "shear_modulus": 3e10,
+                    "shear_wave_speed": 3e3}},
+                "analyses": [{"time_series": {"t_max": 1e9}}]}"#,
+            "test",
+        )
+        .unwrap();
+        let dir =
+            std::env::temp_dir().join(format!("stickslip-qdyn-{name}-{}", std::process::id()));
+        let said = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        let log = said.clone();
+        let announce = Box::new(move |m: &str| log.borrow_mut().push(m.to_string()));
+        let columns = QdynColumns::for_scene(&scene).unwrap();
+        (QdynOutputSink::create(&dir, columns, intervals, 1e9, announce).unwrap(), dir, said)
+    }
+
+    /// Feeds `n` rows at t = 0, 1, … (units of D_c/v0 = 1e5 s) and finishes.
+    fn feed(sink: &mut QdynOutputSink, n: u64) {
+        let columns = ["t", "u", "v", "theta", "ln_v", "slip", "stress"];
+        sink.begin(&columns).unwrap();
+        for k in 0..n {
+            sink.row(&[k as f64, 0.0, 1.0, 0.0, 0.0, k as f64, 0.0]).unwrap();
+        }
+        sink.finish().unwrap();
+    }
+
+    fn data_lines(path: &std::path::Path) -> Vec<String> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(String::from)
+            .collect()
+    }
+
+    #[test]
+    fn ntout_thins_the_files_as_qdyn_does() {
+        // NTOUT_OT = 10, NTOUT = 40 over steps 0 … 104: time series at 0, 10, …, 100 and the
+        // last (104); snapshots at 0, 40, 80 and the last.
+        let intervals = QdynOutputIntervals { time_series: 10, snapshots: 40 };
+        let (mut s, dir, said) = sink("thin", Some(intervals));
+        feed(&mut s, 105);
+        let t = |line: &String| line[..24].trim().parse::<f64>().unwrap() / 1e5;
+        let ot: Vec<f64> = data_lines(&dir.join("output_ot_0")).iter().map(t).collect();
+        let expected: Vec<f64> = (0..=10).map(|k| 10.0 * k as f64).chain([104.0]).collect();
+        assert_eq!(ot, expected);
+        assert_eq!(data_lines(&dir.join("output_vmax")).len(), expected.len());
+        let ox: Vec<f64> = data_lines(&dir.join("output_ox")).iter().map(t).collect();
+        assert_eq!(ox, [0.0, 40.0, 80.0, 104.0]);
+        assert!(said.borrow().is_empty(), "a small file is not announced: {:?}", said.borrow());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn without_intervals_every_row_and_the_first_and_last_snapshots() {
+        let (mut s, dir, _) = sink("all", None);
+        feed(&mut s, 7);
+        assert_eq!(data_lines(&dir.join("output_ot_0")).len(), 7);
+        assert_eq!(data_lines(&dir.join("output_ox")).len(), 2);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_large_expected_size_is_announced_once() {
+        // 30 000 rows at t = k·1e5 s, ~275 bytes each (8 MB). With t_max = 1e9 s the rows are
+        // past t_max when 4 MB are written, so the estimate is what was written: not
+        // announced. With t_max = 1e13 s the rate extrapolates to ~1e4 GB: announced, once.
+        let (mut s, dir, said) = sink("small", None);
+        feed(&mut s, 30_000);
+        assert!(said.borrow().is_empty(), "{:?}", said.borrow());
+        std::fs::remove_dir_all(&dir).ok();
+        let (mut s, dir, said) =
+            sink("large", Some(QdynOutputIntervals { time_series: 1, snapshots: 1000 }));
+        s.t_max = 1e13;
+        feed(&mut s, 30_000);
+        let said = said.borrow();
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(
+            said[0].contains("GB by t = 1e13 s") && said[0].contains("NTOUT_OT"),
+            "{}",
+            said[0]
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn fortran_e_matches_qdyns_fields() {
