@@ -360,7 +360,7 @@ fn map(lines: &mut Lines) -> Result<Mapped, QdynInputError> {
     // QDYN lists the peaks of V above V_TH (output_iasp) where IASP = 1, and uses V_TH for
     // nothing else: there it is the file's event threshold; elsewhere the default holds.
     let event_threshold = if iasp == 1 {
-        if !(v_th > v_pl) {
+        if v_th <= v_pl {
             return Err(speeds.error(5, format!("{v_th} must be above V_PL = {v_pl:e} m/s with IASP = 1 (QDYN lists the peaks of V above V_TH; an event is an episode of V above V_PL peaking above V_TH), e.g. 1e-2 (m/s, pyqdyn's default)")));
         }
         Some(v_th / v_pl)

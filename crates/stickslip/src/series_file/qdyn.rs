@@ -213,7 +213,7 @@ impl QdynOutputSink {
     /// Announces the files' size extrapolated to t_max from what was written by time `t`,
     /// when it is large (checked at 4 MB written and at each doubling).
     fn estimate(&mut self, t: f64) {
-        if self.announced || self.bytes < self.next_estimate || !(t > 0.0) {
+        if self.announced || self.bytes < self.next_estimate || t <= 0.0 {
             return;
         }
         self.next_estimate *= 2;
