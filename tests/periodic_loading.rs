@@ -13,7 +13,7 @@ fn inertial(method: &str, loading: &str) -> String {
         r#"{{"name": "forced", "model": {{"gamma": 10, "xi": 0.8, "epsilon": 1.0{loading}}},
         "initial": {{"u": 0.0, "v": 1.2, "theta": 0.0}},
         "solver": {{"method": "{method}", "rtol": 1e-10}},
-        "analyses": [{{"time_series": {{"t_max": 120}}}}]}}"#
+        "analyses": [{{"time_series": {{"t_max": 120, "event_threshold": 1.01}}}}]}}"#
     )
 }
 

@@ -270,21 +270,26 @@ fn a_time_series_alone_names_the_integrator_family() {
 }
 
 #[test]
-fn event_threshold_selects_the_episodes() {
+fn event_threshold_selects_the_episodes_by_their_peak() {
     let run = |ts: &str| {
         let text = field_scene(ts).replace("1e-12", "1e-8");
         engine::run(&scene::parse(&text, "test").unwrap(), engine::RunOptions::default()).unwrap()
     };
-    let one = run(r#"{"t_max": 300}"#);
+    let default = run(r#"{"t_max": 300}"#);
     let high = run(r#"{"t_max": 300, "event_threshold": 1e4}"#);
-    let (e1, e4) = (one.events.unwrap(), high.events.unwrap());
-    assert_eq!(e1.len(), e4.len(), "every slip passes v = 1e4");
-    for (a, b) in e1.iter().zip(&e4) {
-        assert!(b.values.t_start > a.values.t_start && b.values.t_end < a.values.t_end);
-        assert!(b.values.duration < a.values.duration && b.values.slip < a.values.slip);
-        assert!((b.values.t_peak - a.values.t_peak).abs() < 1e-9, "one peak");
+    let above = run(r#"{"t_max": 300, "event_threshold": 1e9}"#);
+    let (e2, e4) = (default.events.unwrap(), high.events.unwrap());
+    assert_eq!(default.time_series.unwrap().event_threshold, 100.0, "the default");
+    assert!(e2.len() >= 5, "{} events", e2.len());
+    assert_eq!(e2, e4, "every slip peaks above v = 1e4: the same episodes, from v = 1 to v = 1");
+    for e in &e2 {
+        assert!(e.values.v_max > 1e4 && e.values.stress_drop > 0.0, "{e:?}");
+        assert!(!e.started_before_run, "the run starts at v = 0.5");
     }
-    assert_eq!(high.time_series.unwrap().event_threshold, 1e4);
+    // No slip peaks above v = 1e9 (v_max = 1.43e8): no event, none under way at the end.
+    let above_series = above.time_series.unwrap();
+    assert_eq!(above_series.event_threshold, 1e9);
+    assert!(above.events.unwrap().is_empty() && !above_series.in_event_at_end);
 }
 
 #[test]
@@ -312,6 +317,7 @@ fn dimensional_input_adds_physical_columns_and_keys() {
         "steps",
         "rebases",
         "event_threshold",
+        "event_threshold_physical",
         "event_count",
         "in_event_at_end",
         "final_state",

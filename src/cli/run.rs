@@ -51,7 +51,7 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
         Some(p) => (read_scene_text(p)?, p.display().to_string()),
         None => (EARTHQUAKE.to_string(), "<built-in earthquake>".to_string()),
     };
-    let text = qdyn::scene_text(path.as_deref(), text).map_err(|e| Failure(2, e))?;
+    let (text, intervals) = qdyn::read(path.as_deref(), text).map_err(|e| Failure(2, e))?;
     if print_scene {
         println!("{text}");
         return Ok(());
@@ -74,7 +74,7 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
             if scene.analyses.time_series.is_none() {
                 refuse_series_files(&scene.name, &series, qdyn_output.is_some())?;
             }
-            let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d)).transpose();
+            let qdyn = qdyn_output.as_deref().map(|d| qdyn::sink(scene, d, intervals)).transpose();
             qdyn.map_err(|e| Failure(2, e))?
         }
         scene::AnyScene::Other(_) if !series.is_empty() || qdyn_output.is_some() => {
@@ -109,8 +109,10 @@ pub fn run_command(args: RunArgs) -> Result<(), Failure> {
             .map_err(|e| Failure(1, format!("--figure: {e}")))?;
     }
     deliver_report(&report.to_json(), &report.summary(), json, out.as_deref())?;
-    let not_converged = match &report {
-        report::AnyReport::Drr(r) => r.cycle.as_ref().and_then(|c| unconverged(scene.name(), c)),
+    let not_converged = match (&scene, &report) {
+        (scene::AnyScene::Drr(s), report::AnyReport::Drr(r)) => {
+            r.cycle.as_ref().and_then(|c| unconverged(s, c))
+        }
         _ => None,
     };
     match not_converged {
@@ -140,10 +142,23 @@ fn refuse_series_files(name: &str, files: &[PathBuf], qdyn: bool) -> Result<(), 
 }
 
 /// The exit-4 message of a cycle analysis that stopped at a limit before converging: which
-/// limit, and what to raise.
-fn unconverged(name: &str, c: &stickslip::analysis::cycle::CycleReport) -> Option<String> {
+/// limit, and what to raise; or, for a start on the fixed point, that nothing happens.
+fn unconverged(
+    scene: &scene::Scene,
+    c: &stickslip::analysis::cycle::CycleReport,
+) -> Option<String> {
     if c.status != stickslip::analysis::cycle::CycleStatus::NotConverged {
         return None;
+    }
+    let name = &scene.name;
+    if scene.loading.is_none() && stickslip::model::Drr::new(scene.params).at_rest(&scene.initial) {
+        return Some(format!(
+            "scene {name}: cycle: the run starts on the fixed point (v = 1, θ = {:e}: steady \
+             sliding at the loading rate), where the state never changes, so no cycle forms; \
+             perturb the start, e.g. \"initial\": {{\"v\": 0.5}} (with model.dimensional: \
+             \"velocity\", half of v0) (exit code 4)",
+            scene.initial[2]
+        ));
     }
     let limit = c.stopped_by.unwrap_or("max_cycles");
     Some(format!(

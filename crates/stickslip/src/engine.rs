@@ -722,7 +722,7 @@ fn time_series_step(
         runaway_v,
         t_max,
         sampling: o.sampling(),
-        event_threshold: o.event_threshold.unwrap_or(1.0),
+        event_threshold: o.event_threshold(),
         max_steps: o.max_steps.unwrap_or(time_series::options::DEFAULT_MAX_STEPS),
         w_tolerance: (scene.solver.rtol, scene.solver.atol[W]),
     };

@@ -174,6 +174,7 @@ mod tests {
                     recurrence: None,
                 },
                 physical: None,
+                started_before_run: false,
             })
             .collect()
     }

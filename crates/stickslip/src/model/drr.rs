@@ -192,6 +192,15 @@ impl Drr {
         [-(theta + f1 + p.eta) / p.xi, 0.0, theta]
     }
 
+    /// Whether `y` is a rest point of the unforced system: its right-hand side is exactly
+    /// zero, so the state never changes (a start on the fixed point, v = 1 with θ at its
+    /// steady value, where nothing happens).
+    pub fn at_rest(&self, y: &[f64; 3]) -> bool {
+        let mut dydt = [0.0; 3];
+        OdeSystem::rhs(self, 0.0, y, &mut dydt);
+        dydt.iter().all(|d| *d == 0.0)
+    }
+
     /// The distance to the slow manifold, G = u + (Φ + η v)/ξ (θ + f(v) + η v for the paper's
     /// laws; dv/dt = −γ² G).
     pub fn manifold_offset(&self, y: &[f64]) -> f64 {

@@ -237,13 +237,21 @@ fn unit(si: bool, si_name: &str, quantity: &str) -> String {
 
 fn time_series(t: &TimeSeriesReport, events: Option<&[Event]>, si: bool) -> String {
     let mut s = format!(
-        "time series: t = 0 … {:e}{}, {} rows ({} steps), {} events above v = {}{}\n",
+        "time series: t = 0 … {:e}{}, {} rows ({} steps), {} events (episodes above v = 1 \
+         peaking above v = {}{}){}{}\n",
         t.t_max,
         t.t_max_physical.map_or(String::new(), |p| format!(" ({p:e}{})", unit(si, "s", "time"))),
         t.rows,
         t.steps,
         t.event_count,
         t.event_threshold,
+        t.event_threshold_physical
+            .map_or(String::new(), |p| format!(", {p:e}{}", unit(si, "m/s", "velocity"))),
+        if events.is_some_and(|e| e.first().is_some_and(|e| e.started_before_run)) {
+            ", the first under way at t = 0"
+        } else {
+            ""
+        },
         if t.in_event_at_end { " (one more under way at the end)" } else { "" }
     );
     if let Some(last) = events.and_then(|e| e.last()) {

@@ -1,6 +1,8 @@
 //! QDYN's output files for a spring-block (`stickslip run … --qdyn-output DIR`): `output_ot_0`
 //! (the time series at the block), `output_vmax` (the same at the fastest point: the block)
-//! and `output_ox` (snapshots: the first and the last row), with QDYN's headers, columns and
+//! and `output_ox` (snapshots), thinned as QDYN thins them when the run comes from a qdyn.in
+//! (every `NTOUT_OT`-th step and every `NTOUT`-th, each with the first and the last; without
+//! one, every row and the first and last snapshots), with QDYN's headers, columns and
 //! Fortran formats (`E24.14` for time, `E15.7` for the rest, `I15` for `ivmax`) and its SI
 //! units, so that pyqdyn's `read_output` reads them unchanged. The layout is copied from files
 //! QDYN wrote (data/reference/qdyn_output/, its README says how they were made).
@@ -13,6 +15,7 @@
 use crate::analysis::time_series::SeriesSink;
 use crate::model::scales::PhysicalScales;
 use crate::model::Friction;
+use crate::scene::qdyn_input::QdynOutputIntervals;
 use crate::scene::Scene;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -119,21 +122,47 @@ struct Indices {
     slip: usize,
 }
 
-/// Writes QDYN's three files in a directory as rows arrive; nothing is kept but the last row
-/// (for the final snapshot).
+/// The size of the files above which [`QdynOutputSink`] announces its estimate: 100 MB.
+pub const LARGE_OUTPUT_BYTES: u64 = 100_000_000;
+
+/// The written size at which the estimate is first made (then at each doubling): 4 MB.
+const FIRST_ESTIMATE_BYTES: u64 = 4_000_000;
+
+/// Where the rows go and what is announced about their size.
 pub struct QdynOutputSink {
     columns: QdynColumns,
     ot: BufWriter<File>,
     vmax: BufWriter<File>,
     ox: BufWriter<File>,
     indices: Option<Indices>,
-    last: Option<[f64; 9]>,
+    /// QDYN's intervals, in rows (every row a step); None: every row, first and last
+    /// snapshots.
+    intervals: Option<QdynOutputIntervals>,
+    /// The last row received, and whether it went to the time series and to a snapshot.
+    last: Option<([f64; 9], bool, bool)>,
     rows: u64,
+    /// The end of the run (the time column's unit), for the size estimate.
+    t_max: f64,
+    bytes: u64,
+    next_estimate: u64,
+    /// Receives the size estimate, once, when it exceeds [`LARGE_OUTPUT_BYTES`].
+    announce: Box<dyn FnMut(&str)>,
+    announced: bool,
 }
 
 impl QdynOutputSink {
     /// Creates `dir` (if needed) and its files `output_ot_0`, `output_vmax`, `output_ox`.
-    pub fn create(dir: &Path, columns: QdynColumns) -> io::Result<Self> {
+    /// `intervals`: QDYN's `NTOUT_OT` and `NTOUT` of the run's qdyn.in (every row is then one
+    /// integrator step), or None. `t_max` is the run's end in the time column's unit; once
+    /// the files written so far, extrapolated to it, exceed [`LARGE_OUTPUT_BYTES`], `announce`
+    /// receives the estimate (once).
+    pub fn create(
+        dir: &Path,
+        columns: QdynColumns,
+        intervals: Option<QdynOutputIntervals>,
+        t_max: f64,
+        announce: Box<dyn FnMut(&str)>,
+    ) -> io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let file = |name: &str| File::create(dir.join(name)).map(BufWriter::new);
         Ok(Self {
@@ -142,18 +171,79 @@ impl QdynOutputSink {
             vmax: file("output_vmax")?,
             ox: file("output_ox")?,
             indices: None,
+            intervals,
             last: None,
             rows: 0,
+            t_max,
+            bytes: 0,
+            next_estimate: FIRST_ESTIMATE_BYTES,
+            announce,
+            announced: false,
         })
     }
 
     fn snapshot(&mut self, q: &[f64; 9]) -> io::Result<()> {
-        self.ox.write_all(OX_HEADER.as_bytes())?;
         let mut line = fortran_e(q[0], 24, 14) + &fortran_e(0.0, 24, 14);
         for x in [0.0, 0.0, q[3], q[4], q[5], q[6], q[7], q[8]] {
             line += &fortran_e(x, 15, 7);
         }
-        writeln!(self.ox, "{line}")
+        self.ox.write_all(OX_HEADER.as_bytes())?;
+        writeln!(self.ox, "{line}")?;
+        self.bytes += (OX_HEADER.len() + line.len() + 1) as u64;
+        Ok(())
+    }
+
+    /// One row of `output_ot_0` and of `output_vmax`.
+    fn time_series(&mut self, q: &[f64; 9]) -> io::Result<()> {
+        let mut ot = fortran_e(q[0], 24, 14);
+        let mut vmax = ot.clone() + &format!("{:>15}", 1);
+        for (k, x) in q.iter().enumerate().skip(1) {
+            let field = fortran_e(*x, 15, 7);
+            if k >= 3 {
+                vmax += &field;
+            }
+            ot += &field;
+        }
+        writeln!(self.ot, "{ot}")?;
+        writeln!(self.vmax, "{vmax}")?;
+        self.bytes += (ot.len() + vmax.len() + 2) as u64;
+        Ok(())
+    }
+
+    /// Announces the files' size extrapolated to t_max from what was written by time `t`,
+    /// when it is large (checked at 4 MB written and at each doubling).
+    fn estimate(&mut self, t: f64) {
+        if self.announced || self.bytes < self.next_estimate || t <= 0.0 {
+            return;
+        }
+        self.next_estimate *= 2;
+        let expected = self.bytes as f64 * (self.t_max / t).max(1.0);
+        if expected > LARGE_OUTPUT_BYTES as f64 {
+            self.announced = true;
+            // The interval that would bring the files near the announced size.
+            let n = (expected / LARGE_OUTPUT_BYTES as f64).ceil();
+            let thin = match self.intervals {
+                Some(i) => format!(
+                    "the qdyn.in's NTOUT_OT (line 8, now {}) writes every NTOUT_OT-th step: \
+                     NTOUT_OT = {} gives about {} MB",
+                    i.time_series,
+                    n * i.time_series as f64,
+                    LARGE_OUTPUT_BYTES / 1_000_000
+                ),
+                None => format!(
+                    "the time_series option \"every\": N writes every N-th step: N = {n} times \
+                     the scene's gives about {} MB",
+                    LARGE_OUTPUT_BYTES / 1_000_000
+                ),
+            };
+            (self.announce)(&format!(
+                "--qdyn-output: the files will hold about {:.3} GB by t = {:e} s at the rate so \
+                 far ({:.1} MB by t = {t:.4e} s); {thin}",
+                expected / 1e9,
+                self.t_max,
+                self.bytes as f64 / 1e6
+            ));
+        }
     }
 }
 
@@ -172,7 +262,9 @@ impl SeriesSink for QdynOutputSink {
             slip: find("slip")?,
         });
         self.ot.write_all(OT_HEADER.as_bytes())?;
-        self.vmax.write_all(VMAX_HEADER.as_bytes())
+        self.vmax.write_all(VMAX_HEADER.as_bytes())?;
+        self.bytes += (OT_HEADER.len() + VMAX_HEADER.len()) as u64;
+        Ok(())
     }
 
     fn row(&mut self, values: &[f64]) -> io::Result<()> {
@@ -182,28 +274,35 @@ impl SeriesSink for QdynOutputSink {
             .columns
             .values(values[i.t], values[i.theta], values[i.v], values[i.stress], values[i.slip])
             .ok_or_else(|| invalid("QDYN's τ = σμ needs μ's absolute level"))?;
-        let mut ot = fortran_e(q[0], 24, 14);
-        let mut vmax = ot.clone() + &format!("{:>15}", 1);
-        for (k, x) in q.iter().enumerate().skip(1) {
-            let field = fortran_e(*x, 15, 7);
-            if k >= 3 {
-                vmax += &field;
+        // Row k is step k: QDYN writes step 0 and every n-th.
+        let (series, snapshot) = match self.intervals {
+            Some(i) => {
+                (self.rows.is_multiple_of(i.time_series), self.rows.is_multiple_of(i.snapshots))
             }
-            ot += &field;
+            None => (true, self.rows == 0),
+        };
+        if series {
+            self.time_series(&q)?;
         }
-        writeln!(self.ot, "{ot}")?;
-        writeln!(self.vmax, "{vmax}")?;
-        if self.rows == 0 {
+        if snapshot {
             self.snapshot(&q)?;
         }
         self.rows += 1;
-        self.last = Some(q);
+        self.last = Some((q, series, snapshot));
+        self.estimate(q[0]);
         Ok(())
     }
 
+    /// Writes the last row where it was not written (QDYN writes its last step to each
+    /// file), and flushes.
     fn finish(&mut self) -> io::Result<()> {
-        if let (Some(q), true) = (self.last, self.rows > 1) {
-            self.snapshot(&q)?;
+        if let Some((q, series, snapshot)) = self.last {
+            if !series {
+                self.time_series(&q)?;
+            }
+            if !snapshot {
+                self.snapshot(&q)?;
+            }
         }
         self.ot.flush()?;
         self.vmax.flush()?;
@@ -213,7 +312,100 @@ impl SeriesSink for QdynOutputSink {
 
 #[cfg(test)]
 mod tests {
-    use super::fortran_e;
+    use super::*;
+
+    /// A sink on the SI field scene (t_max = 1e9 s) writing to a fresh directory, with the
+    /// announcements collected in `said`.
+    fn sink(
+        name: &str,
+        intervals: Option<QdynOutputIntervals>,
+    ) -> (QdynOutputSink, std::path::PathBuf, std::rc::Rc<std::cell::RefCell<Vec<String>>>) {
+        let scene = crate::scene::parse(
+            r#"{"name": "si", "model": {"inertia": false, "state_law": "ageing",
+                "dimensional": {"sigma": 1e7, "a": 0.01, "b": 0.015, "d_c": 1e-4, "v0": 1e-9,
+                    "mu0": 0.6, "v_ref": 1e-6, "length": 120, "shear_modulus": 3e10,
+                    "shear_wave_speed": 3e3}},
+                "analyses": [{"time_series": {"t_max": 1e9}}]}"#,
+            "test",
+        )
+        .unwrap();
+        let dir =
+            std::env::temp_dir().join(format!("stickslip-qdyn-{name}-{}", std::process::id()));
+        let said = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        let log = said.clone();
+        let announce = Box::new(move |m: &str| log.borrow_mut().push(m.to_string()));
+        let columns = QdynColumns::for_scene(&scene).unwrap();
+        (QdynOutputSink::create(&dir, columns, intervals, 1e9, announce).unwrap(), dir, said)
+    }
+
+    /// Feeds `n` rows at t = 0, 1, … (units of D_c/v0 = 1e5 s) and finishes.
+    fn feed(sink: &mut QdynOutputSink, n: u64) {
+        let columns = ["t", "u", "v", "theta", "ln_v", "slip", "stress"];
+        sink.begin(&columns).unwrap();
+        for k in 0..n {
+            sink.row(&[k as f64, 0.0, 1.0, 0.0, 0.0, k as f64, 0.0]).unwrap();
+        }
+        sink.finish().unwrap();
+    }
+
+    fn data_lines(path: &std::path::Path) -> Vec<String> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(String::from)
+            .collect()
+    }
+
+    #[test]
+    fn ntout_thins_the_files_as_qdyn_does() {
+        // NTOUT_OT = 10, NTOUT = 40 over steps 0 … 104: time series at 0, 10, …, 100 and the
+        // last (104); snapshots at 0, 40, 80 and the last.
+        let intervals = QdynOutputIntervals { time_series: 10, snapshots: 40 };
+        let (mut s, dir, said) = sink("thin", Some(intervals));
+        feed(&mut s, 105);
+        let t = |line: &String| line[..24].trim().parse::<f64>().unwrap() / 1e5;
+        let ot: Vec<f64> = data_lines(&dir.join("output_ot_0")).iter().map(t).collect();
+        let expected: Vec<f64> = (0..=10).map(|k| 10.0 * k as f64).chain([104.0]).collect();
+        assert_eq!(ot, expected);
+        assert_eq!(data_lines(&dir.join("output_vmax")).len(), expected.len());
+        let ox: Vec<f64> = data_lines(&dir.join("output_ox")).iter().map(t).collect();
+        assert_eq!(ox, [0.0, 40.0, 80.0, 104.0]);
+        assert!(said.borrow().is_empty(), "a small file is not announced: {:?}", said.borrow());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn without_intervals_every_row_and_the_first_and_last_snapshots() {
+        let (mut s, dir, _) = sink("all", None);
+        feed(&mut s, 7);
+        assert_eq!(data_lines(&dir.join("output_ot_0")).len(), 7);
+        assert_eq!(data_lines(&dir.join("output_ox")).len(), 2);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_large_expected_size_is_announced_once() {
+        // 30 000 rows at t = k·1e5 s, ~275 bytes each (8 MB). With t_max = 1e9 s the rows are
+        // past t_max when 4 MB are written, so the estimate is what was written: not
+        // announced. With t_max = 1e13 s the rate extrapolates to ~1e4 GB: announced, once.
+        let (mut s, dir, said) = sink("small", None);
+        feed(&mut s, 30_000);
+        assert!(said.borrow().is_empty(), "{:?}", said.borrow());
+        std::fs::remove_dir_all(&dir).ok();
+        let (mut s, dir, said) =
+            sink("large", Some(QdynOutputIntervals { time_series: 1, snapshots: 1000 }));
+        s.t_max = 1e13;
+        feed(&mut s, 30_000);
+        let said = said.borrow();
+        assert_eq!(said.len(), 1, "{said:?}");
+        assert!(
+            said[0].contains("GB by t = 1e13 s") && said[0].contains("NTOUT_OT"),
+            "{}",
+            said[0]
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn fortran_e_matches_qdyns_fields() {

@@ -16,12 +16,16 @@
 //! (counted in `merged_rows`), so that the rows' times increase strictly, as readers of a
 //! trajectory (e.g. `compare --against`) require.
 //!
-//! Events are located on the state as in the cycle analysis: an event starts where v rises
-//! through `event_threshold` and ends where it falls back through it (crossings of
-//! w = ln v_threshold, refined on the integrator's dense output); its peak is the largest
-//! maximum of w inside it (where the dense output's dw/dt changes sign). A run that starts
-//! with v above the threshold does not count that first partial episode, and an event still
-//! open at t_max is not catalogued (`in_event_at_end`).
+//! Events are located on the state as in the cycle analysis: an episode starts where v rises
+//! through 1 (the loading velocity) and ends where it falls back through it (crossings of
+//! w = 0, refined on the integrator's dense output); its peak is the largest maximum of w
+//! inside it (where the dense output's dw/dt changes sign). An episode is an event when its
+//! peak exceeds `event_threshold` (e.g. 100·V_pl, or QDYN's V_TH): creep around steady sliding
+//! and slow transients are not events, and every event's slip exceeds the loading's over it
+//! (v > 1 throughout), so its stress drop is positive. A run that starts with v above 1 is
+//! inside an episode from t = 0: if its peak exceeds the threshold it is catalogued, flagged
+//! `started_before_run` (its start, slip, duration and stress drop count from t = 0). An event
+//! still open at t_max is not catalogued (`in_event_at_end`).
 //!
 //! With a runaway threshold (`runaway_v`) the run ends where ln v rises through it,
 //! located like the events' crossings (root finding on w in the dense output), and the
@@ -50,7 +54,7 @@ pub struct TimeSeriesSettings {
     pub t_max: f64,
     /// Which rows to write.
     pub sampling: Sampling,
-    /// The slip rate v above which the block is in an event.
+    /// The peak slip rate v an episode of v above 1 must exceed to be an event.
     pub event_threshold: f64,
     /// Fail after this many integrator steps.
     pub max_steps: u64,
@@ -75,11 +79,12 @@ pub const ABSOLUTE_COLUMNS: [&str; 2] = ["tau_phys", "mu"];
 /// One event's quantities (dimensionless, or in physical units in [`Event::physical`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct EventValues {
-    /// Absolute time of the upward crossing of the threshold.
+    /// Absolute time of the upward crossing of v = 1 (0 for an event under way at the
+    /// start, [`Event::started_before_run`]).
     pub t_start: f64,
     /// Absolute time of the slip-rate maximum.
     pub t_peak: f64,
-    /// Absolute time of the downward crossing of the threshold.
+    /// Absolute time of the downward crossing of v = 1.
     pub t_end: f64,
     /// The largest slip rate.
     pub v_max: f64,
@@ -104,6 +109,9 @@ pub struct Event {
     /// The same keys in the input's units, with dimensional input.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub physical: Option<EventValues>,
+    /// Whether the event was under way at t = 0 (the run started with v above 1): its start
+    /// is the run's, and its slip, duration and stress drop count from t = 0 only.
+    pub started_before_run: bool,
 }
 
 /// The "time_series" section of a report.
@@ -126,11 +134,15 @@ pub struct TimeSeriesReport {
     pub steps: u64,
     /// Re-bases of the local clock.
     pub rebases: u64,
-    /// The event threshold (v, dimensionless).
+    /// The event threshold: the peak v (dimensionless) an episode above v = 1 must exceed.
     pub event_threshold: f64,
+    /// The event threshold in the input's velocity unit, with dimensional input.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub event_threshold_physical: Option<f64>,
     /// Events catalogued (the report's `events`).
     pub event_count: usize,
-    /// Whether an event was still under way at t_max (not catalogued).
+    /// Whether an event (an episode whose peak so far exceeds the threshold) was still under
+    /// way at t_max (not catalogued).
     pub in_event_at_end: bool,
     /// The state (u, v, θ) at t_max.
     pub final_state: [f64; 3],
@@ -162,7 +174,7 @@ struct Sample {
     d: [f64; 3],
 }
 
-/// An event under way.
+/// An episode of v above 1 under way.
 #[derive(Debug, Clone, Copy)]
 struct OpenEvent {
     start: Time,
@@ -170,6 +182,8 @@ struct OpenEvent {
     peak: Time,
     w_peak: f64,
     rise_rate: f64,
+    /// Whether it was under way at t = 0.
+    started_before_run: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -263,9 +277,17 @@ pub fn run(
         clock: Clock::new(integ, Time::new(0.0)),
         drr,
         settings,
-        level: settings.event_threshold.ln(),
+        peak_level: settings.event_threshold.ln(),
         prev,
-        open: None,
+        // A start at v ≥ 1 is inside an episode from t = 0 (before the run if v > 1).
+        open: (y0[W] >= 0.0).then_some(OpenEvent {
+            start: Time::new(0.0),
+            y_start: y0,
+            peak: Time::new(0.0),
+            w_peak: y0[W],
+            rise_rate: 0.0,
+            started_before_run: y0[W] > 0.0,
+        }),
         events: Vec::new(),
         scales,
         last_peak: None,
@@ -301,8 +323,9 @@ pub fn run(
         steps,
         rebases,
         event_threshold: settings.event_threshold,
+        event_threshold_physical: scales.map(|s| s.velocity(settings.event_threshold)),
         event_count: events.len(),
-        in_event_at_end: open.is_some(),
+        in_event_at_end: open.is_some_and(|e| e.w_peak > settings.event_threshold.ln()),
         final_state: [final_state[U], final_state[W].exp(), final_state[THETA]],
     };
     let runaway = settings.runaway_v.map(|v| {
@@ -317,8 +340,8 @@ struct Run<'a, 's> {
     clock: Clock<'a>,
     drr: &'a Drr,
     settings: &'a TimeSeriesSettings,
-    /// ln of the event threshold.
-    level: f64,
+    /// ln of the event threshold (an episode's peak w must exceed it).
+    peak_level: f64,
     prev: Sample,
     open: Option<OpenEvent>,
     events: Vec<Event>,
@@ -464,11 +487,11 @@ impl Run<'_, '_> {
         Ok(())
     }
 
-    /// Crossings of the threshold and maxima of w inside the step prev → next, up to local
-    /// time `until`; updates the catalogue. Returns the event's rise rate when its peak moved
-    /// in this step.
+    /// Crossings of v = 1 and maxima of w inside the step prev → next, up to local time
+    /// `until`; updates the catalogue. Returns the episode's rise rate when its peak moved in
+    /// this step.
     fn events(&mut self, next: &Sample, until: f64) -> Result<Option<f64>, AnalysisError> {
-        let (p, span, level) = (self.prev, (self.prev.t, next.t), self.level);
+        let (p, span, level) = (self.prev, (self.prev.t, next.t), 0.0);
         let mut found = Vec::new();
         if p.y[W] < level && next.y[W] >= level {
             found.push((events::refine(self.clock.integrator(), span, 0, W, level)?, Crossing::Up));
@@ -495,6 +518,7 @@ impl Run<'_, '_> {
                         peak: at,
                         w_peak: y[W],
                         rise_rate: 0.0,
+                        started_before_run: false,
                     });
                 }
                 Crossing::Max => {
@@ -522,7 +546,12 @@ impl Run<'_, '_> {
         Ok(peaked.and(self.open.map(|e| e.rise_rate)))
     }
 
+    /// Ends the episode `e` at `end` (state `y`): catalogued if its peak exceeds the
+    /// threshold.
     fn close(&mut self, e: OpenEvent, end: Time, y: [f64; 3]) {
+        if e.w_peak <= self.peak_level {
+            return;
+        }
         let duration = end.since(e.start);
         let recurrence = self.last_peak.map(|p| e.peak.since(p));
         let values = EventValues {
@@ -545,7 +574,7 @@ impl Run<'_, '_> {
             stress_drop: s.stress_drop(e.y_start[U], y[U]),
             recurrence: recurrence.map(|r| s.time(r)),
         });
-        self.events.push(Event { values, physical });
+        self.events.push(Event { values, physical, started_before_run: e.started_before_run });
         self.last_peak = Some(e.peak);
     }
 }

@@ -18,8 +18,8 @@ pub struct TimeSeriesOptions {
     /// Write N rows uniform in time from 0 to t_max (dense output) instead of the steps.
     #[serde(default)]
     pub points: Option<u64>,
-    /// The slip rate v (dimensionless, units of v0) above which the block is in an event
-    /// (default 1).
+    /// The peak slip rate v (dimensionless, units of v0) an episode of v above 1 (faster
+    /// than the loading) must exceed to be an event (default [`DEFAULT_EVENT_THRESHOLD`]).
     #[serde(default)]
     pub event_threshold: Option<f64>,
     /// Fail after this many integrator steps (default 1e9).
@@ -48,6 +48,12 @@ pub enum Sampling {
 
 /// The default step budget: 1e9 steps (a γ = 1e8 cycle takes ~1e4).
 pub const DEFAULT_MAX_STEPS: u64 = 1_000_000_000;
+
+/// The default event threshold: an episode of v above 1 is an event when its peak exceeds
+/// 100 v0 (100·V_pl), the rule QDYN's users compare peaks by (data/qdyn/periodic_reference.py):
+/// far above the creep transients of a few V_pl and far below a slip event's peak (1.4e8 V_pl
+/// on the field scene of docs/from-qdyn.md).
+pub const DEFAULT_EVENT_THRESHOLD: f64 = 100.0;
 
 /// The largest `points`: 1e9 rows (~90 GB of binary output).
 pub const MAX_POINTS: u64 = 1_000_000_000;
@@ -93,12 +99,13 @@ impl TimeSeriesOptions {
             }
         }
         if let Some(v) = o.event_threshold {
-            if !(v.is_finite() && v > 0.0) {
+            if !(v.is_finite() && v > 1.0) {
                 return Err(InvalidOption::new(
                     "event_threshold",
                     format!(
-                        "{v} must be a slip rate v > 0 (dimensionless, in units of v0), e.g. 1 \
-                         (the default) or 100"
+                        "{v} must be a peak slip rate v above 1 (dimensionless, in units of v0, \
+                         the loading velocity: every excursion above v = 1 whose peak exceeds it \
+                         is an event), e.g. 100 (the default) or 1e4"
                     ),
                 ));
             }
@@ -119,6 +126,11 @@ impl TimeSeriesOptions {
             return Err(InvalidOption::new("max_steps", "0 must be ≥ 1, e.g. 1e8"));
         }
         Ok(o)
+    }
+
+    /// The event threshold asked for, or [`DEFAULT_EVENT_THRESHOLD`].
+    pub fn event_threshold(&self) -> f64 {
+        self.event_threshold.unwrap_or(DEFAULT_EVENT_THRESHOLD)
     }
 
     /// The rows asked for.
@@ -148,6 +160,7 @@ mod tests {
         assert_eq!(field_of(json!({"t_max": 10.0, "points": 1})), "points");
         assert_eq!(field_of(json!({"t_max": 10.0, "points": 10, "every": 2})), "points");
         assert_eq!(field_of(json!({"t_max": 10.0, "event_threshold": 0.0})), "event_threshold");
+        assert_eq!(field_of(json!({"t_max": 10.0, "event_threshold": 1.0})), "event_threshold");
         assert_eq!(field_of(json!({"t_max": 10.0, "max_steps": 0})), "max_steps");
         assert_eq!(field_of(json!({"t_max": 10.0, "runaway_velocity": 0.0})), "runaway_velocity");
         let unknown = TimeSeriesOptions::from_json(json!({"t_max": 1.0, "tmax": 2})).unwrap_err();
