@@ -13,6 +13,12 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Default)]
 pub struct Cancel(Arc<AtomicBool>);
 
+impl From<LabError> for RunError {
+    fn from(e: LabError) -> Self {
+        RunError::Lab(Box::new(e))
+    }
+}
+
 impl RunError {
     /// Whether the input is at fault rather than the computation (an option that does not fit
     /// the computed orbit, named by its field; [`EngineError::is_bad_input`]): the CLI's exit
@@ -55,9 +61,9 @@ pub enum RunError {
     /// The run failed: the analysis at fault, where and why.
     #[error(transparent)]
     Failed(#[from] EngineError),
-    /// A laboratory run failed.
+    /// A laboratory run failed (boxed: it is large).
     #[error(transparent)]
-    Lab(#[from] LabError),
+    Lab(Box<LabError>),
     /// The caller cancelled the run ([`Cancel::cancel`]) before it finished.
     #[error("the run was cancelled")]
     Cancelled,
