@@ -372,9 +372,9 @@ fn cycle_cancellable(
 /// progress of ensembles; [`RunOptions`]); none of them changes a number of the report.
 ///
 /// The report's type follows the scene's: a spring-slider [`Scene`] gives a [`Report`], a
-/// saddle-node or van der Pol [`OtherScene`] a [`ModelReport`], a laboratory
-/// [`LabScene`](crate::scene::lab::LabScene) a [`LabReport`](crate::report::lab::LabReport),
-/// and a scene of any kind ([`AnyScene`], what `scene::parse_any` gives) an [`AnyReport`].
+/// saddle-node or van der Pol [`OtherScene`] a [`ModelReport`], a laboratory [`LabScene`] a
+/// [`LabReport`], and a scene of any kind ([`AnyScene`], what `scene::parse_any` gives) an
+/// [`AnyReport`].
 ///
 /// For the spring-slider the pipeline is the linear analysis, the cycle, shooting and
 /// continuation, the time series, the analyses of the recorded cycle (asymptotics, lyapunov),
